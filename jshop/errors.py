@@ -1,0 +1,53 @@
+"""User-facing errors: each names the place in the input it is about."""
+from __future__ import annotations
+
+from typing import Optional
+
+
+class HtnError(Exception):
+    """An error in the user's input, printed as ``file:line:col: message``.
+
+    The command line catches these once, prints them on one line (plus the
+    offending source line when it is known) and exits with code 2.
+    """
+
+    def __init__(self, message: str, file: Optional[str] = None,
+                 line: Optional[int] = None, col: Optional[int] = None):
+        super().__init__(message)
+        self.message = message
+        self.file = file
+        self.line = line
+        self.col = col
+
+    @classmethod
+    def at(cls, pos, message: str) -> "HtnError":
+        if pos is None:
+            return cls(message)
+        return cls(message, pos.file, pos.line, pos.col)
+
+    def location(self) -> str:
+        parts = [p for p in (self.file, self.line, self.col) if p is not None]
+        return ":".join(str(p) for p in parts)
+
+    def __str__(self) -> str:
+        loc = self.location()
+        return f"{loc}: {self.message}" if loc else self.message
+
+    def source_line(self) -> Optional[str]:
+        """The offending line of the input file with a caret, if readable."""
+        if not self.file or not self.line:
+            return None
+        try:
+            with open(self.file, encoding="utf-8", errors="replace") as fh:
+                for i, text in enumerate(fh, 1):
+                    if i == self.line:
+                        text = text.rstrip("\n\r").expandtabs(1)
+                        caret = " " * max((self.col or 1) - 1, 0) + "^"
+                        return f"  {text}\n  {caret}"
+        except OSError:
+            return None
+        return None
+
+
+class PlanningError(HtnError):
+    """Raised during search, e.g. an operator cost that is not a number."""

@@ -1,0 +1,199 @@
+"""Functions callable with ``(call f ...)``: JSHOP2's standard library (manual
+appendix A) and user functions loaded from a Python file.
+
+A user function file is plain Python: every public top-level function is
+callable from a domain by its name, case-insensitively. Arguments arrive as
+plain Python values (numbers as ``float``, symbols as lower-case ``str``, lists
+as Python lists, ``nil`` as ``[]``) and the return value is converted back the
+same way (``None``/``False`` become ``nil``, ``True`` becomes ``1.0``). A
+function used as a ``:sort-by`` comparator takes two such values and returns a
+negative, zero or positive int (manual appendix B).
+"""
+from __future__ import annotations
+
+import importlib.util
+import inspect
+import math
+from typing import Any, Callable
+
+from .errors import HtnError
+from .terms import NIL, Dotted, term_str
+
+TRUE = 1.0
+
+
+def _num(x: Any, fn: str) -> float:
+    if type(x) is not float:
+        raise HtnError(f"call {fn}: expected a number, got {term_str(x)}")
+    return x
+
+
+def _plus(args):
+    s = 0.0
+    for a in args:
+        s += _num(a, "+")
+    return s
+
+
+def _mult(args):
+    s = 1.0
+    for a in args:
+        s *= _num(a, "*")
+    return s
+
+
+def _fold(op, name):
+    def f(args):
+        res = _num(args[0], name)
+        for a in args[1:]:
+            res = op(res, _num(a, name))
+        return res
+    return f
+
+
+def _div(a, b):
+    if b == 0.0:
+        # Java double division: x/0 is +-Infinity, 0/0 is NaN
+        if a == 0.0 or a != a:
+            return math.nan
+        return math.copysign(math.inf, a) * math.copysign(1.0, b)
+    return a / b
+
+
+def _pow(a, b):
+    try:
+        return math.pow(a, b)
+    except (OverflowError, ValueError):
+        return math.nan if a < 0 else math.inf
+
+
+def _chain(test, name):
+    def f(args):
+        for a, b in zip(args, args[1:]):
+            if not test(_num(a, name), _num(b, name)):
+                return NIL
+        return TRUE
+    return f
+
+
+def _equal(args):
+    for a, b in zip(args, args[1:]):
+        if not (a == b and type(a) is type(b)):
+            return NIL
+    return TRUE
+
+
+def _not_equal(args):
+    for a, b in zip(args, args[1:]):
+        if a == b and type(a) is type(b):
+            return NIL
+    return TRUE
+
+
+def _member(args):
+    if len(args) < 2 or type(args[1]) is not tuple:
+        raise HtnError("call member: the second argument must be a list")
+    x = args[0]
+    for y in args[1]:
+        if x == y and type(x) is type(y):
+            return TRUE
+    return NIL
+
+
+STDLIB: dict[str, Callable] = {
+    "+": _plus,
+    "-": _fold(lambda a, b: a - b, "-"),
+    "*": _mult,
+    "/": _fold(_div, "/"),
+    "^": _fold(_pow, "^"),
+    "<": _chain(lambda a, b: a < b, "<"),
+    "<=": _chain(lambda a, b: a <= b, "<="),
+    ">": _chain(lambda a, b: a > b, ">"),
+    ">=": _chain(lambda a, b: a >= b, ">="),
+    "=": _equal,
+    "!=": _not_equal,
+    "member": _member,
+}
+
+# Names JSHOP2 prints for standard functions inside an unevaluated call term.
+STDLIB_JAVA_NAMES = {
+    "+": "StdLib.plus", "-": "StdLib.minus", "*": "StdLib.mult",
+    "/": "StdLib.div", "^": "StdLib.power", "<": "StdLib.less",
+    "<=": "StdLib.lessEq", ">": "StdLib.more", ">=": "StdLib.moreEq",
+    "=": "StdLib.equal", "!=": "StdLib.notEq", "member": "StdLib.member",
+}
+
+
+def to_python(t: Any) -> Any:
+    """Convert a ground term to the plain value a user function receives."""
+    tt = type(t)
+    if tt is tuple:
+        return [to_python(x) for x in t]
+    if tt is Dotted:
+        return [to_python(x) for x in t.items] + [to_python(t.tail)]
+    return t
+
+
+def from_python(v: Any) -> Any:
+    """Convert a user function's return value back to a term."""
+    if v is None or v is False:
+        return NIL
+    if v is True:
+        return TRUE
+    if isinstance(v, (int, float)):
+        return float(v)
+    if isinstance(v, str):
+        return v.lower()
+    if isinstance(v, (list, tuple)):
+        return tuple(from_python(x) for x in v)
+    raise HtnError(f"a user function returned {v!r}, which is not a term")
+
+
+def wrap_user_function(name: str, fn: Callable) -> Callable:
+    def call(args):
+        try:
+            result = fn(*[to_python(a) for a in args])
+        except HtnError:
+            raise
+        except Exception as exc:  # the user's code failed: report, no traceback
+            raise HtnError(f"function {name} raised {type(exc).__name__}: {exc}")
+        return from_python(result)
+    call.__name__ = name
+    return call
+
+
+class FunctionTable:
+    """Maps call names (case-insensitive) to callables on term tuples."""
+
+    def __init__(self):
+        self.calls: dict[str, Callable] = dict(STDLIB)
+        self.user: dict[str, Callable] = {}
+        self.source: str | None = None
+
+    def lookup(self, name: str) -> Callable | None:
+        return self.calls.get(name.lower())
+
+    def comparator(self, name: str) -> Callable | None:
+        return self.user.get(name.lower())
+
+    def load_file(self, path: str) -> None:
+        """Load every public top-level function of a Python file."""
+        import os
+        if not os.path.isfile(path):
+            raise HtnError("functions file not found", path)
+        spec = importlib.util.spec_from_file_location("_htn_user_functions", path)
+        module = importlib.util.module_from_spec(spec)
+        try:
+            spec.loader.exec_module(module)
+        except SyntaxError as exc:
+            raise HtnError(f"syntax error: {exc.msg}", path, exc.lineno, exc.offset)
+        except Exception as exc:
+            raise HtnError(f"loading failed: {type(exc).__name__}: {exc}", path)
+        self.source = path
+        for name, fn in vars(module).items():
+            if name.startswith("_") or not inspect.isfunction(fn):
+                continue
+            if fn.__module__ != module.__name__:
+                continue  # imported helpers are not the file's own functions
+            self.user[name.lower()] = fn
+            self.calls[name.lower()] = wrap_user_function(name, fn)

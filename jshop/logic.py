@@ -1,0 +1,317 @@
+"""The logic engine: satisfiers of logical expressions in a state (manual 5.1.2).
+
+Each expression is compiled once into a function ``sat(env)`` that lazily yields
+extended bindings (Python lists indexed by variable number), in the order the
+Java JSHOP2 finds them: state atoms in insertion order, then axioms in
+definition order; conjunctions left to right with backtracking; disjunctions
+disjunct by disjunct. Laziness matters: the planner keeps a precondition's
+generator open while it searches below one binding, exactly as JSHOP2 keeps its
+precondition iterator, and the state is restored before the next binding.
+
+Axioms follow 3.6: a later branch is tried only if no earlier branch had a
+satisfier. ``:first`` keeps the first satisfier, ``:sort-by`` sorts all of them
+with Java's sort algorithm (see :func:`java_sort`).
+"""
+from __future__ import annotations
+
+from functools import cmp_to_key
+from typing import Callable, Iterator
+
+from . import syntax as S
+from .errors import HtnError, PlanningError
+from .terms import NIL, Dotted, Var, subst, unify, term_str
+
+Sat = Callable[[list], Iterator[list]]
+
+
+def _unify_args(pattern: tuple, args: tuple, env: list) -> bool:
+    if len(pattern) != len(args):
+        return False
+    for p, t in zip(pattern, args):
+        if not unify(p, t, env):
+            return False
+    return True
+
+
+def atom_from_term(t, pos) -> tuple[str, tuple]:
+    """A list term ``(p a1 .. an)`` used as an atom (manual 3.14)."""
+    if type(t) is tuple and t and type(t[0]) is str:
+        return t[0], t[1:]
+    raise PlanningError.at(pos, f"a variable used as an atom is bound to {term_str(t)}, "
+                           "which is not an atom")
+
+
+class Logic:
+    """Compiles expressions of one domain against one (mutable) state."""
+
+    def __init__(self, domain: S.Domain, state, functions=None):
+        self.domain = domain
+        self.state = state
+        self.functions = functions
+        self._axioms: dict[str, list] = {}
+        for pred, axs in domain.axioms.items():
+            self._axioms[pred] = [(ax, [self.precondition(b.pre) for b in ax.branches])
+                                  for ax in axs]
+
+    # ------------------------------------------------------------ preconditions
+    def precondition(self, pre: S.Precondition) -> Sat:
+        sat = self.expr(pre.expr)
+        if pre.first:
+            def first(env, sat=sat):
+                for e in sat(env):
+                    yield e
+                    return
+            return first
+        if pre.sort_var is not None:
+            return self._sorted(sat, pre)
+        return sat
+
+    def _sorted(self, sat: Sat, pre: S.Precondition) -> Sat:
+        idx = pre.sort_var.index
+        name = pre.comparator
+        if name in ("<", ">"):
+            sign = 1 if name == "<" else -1
+
+            def cmp(a, b):
+                x, y = a[idx], b[idx]
+                if type(x) is not float or type(y) is not float:
+                    raise PlanningError.at(pre.pos, f":sort-by {name} needs numbers, got "
+                                           f"{term_str(x)} and {term_str(y)}")
+                return sign * ((x > y) - (x < y))
+        else:
+            from .functions import to_python
+            user = self.functions.comparator(name) if self.functions else None
+            if user is None:
+                raise HtnError.at(pre.pos, f"undefined comparator '{name}'")
+
+            def cmp(a, b):
+                try:
+                    r = user(to_python(a[idx]), to_python(b[idx]))
+                except Exception as exc:
+                    raise PlanningError.at(pre.pos, f"comparator {name} raised "
+                                           f"{type(exc).__name__}: {exc}")
+                return int(r)
+
+        def sorted_sat(env):
+            yield from java_sort(list(sat(env)), cmp)
+        return sorted_sat
+
+    # ------------------------------------------------------------ expressions
+    def expr(self, e) -> Sat:
+        method = getattr(self, "_" + type(e).__name__.lower())
+        return method(e)
+
+    def _and(self, e: S.And) -> Sat:
+        sats = [self.expr(x) for x in e.items]
+        if not sats:
+            return _true
+        chain = sats[-1]
+        for s in reversed(sats[:-1]):
+            chain = _conj(s, chain)
+        return chain
+
+    def _or(self, e: S.Or) -> Sat:
+        sats = [self.expr(x) for x in e.items]
+
+        def disj(env):
+            for s in sats:
+                yield from s(env)
+        return disj
+
+    def _not(self, e: S.Not) -> Sat:
+        sat = self.expr(e.expr)
+
+        def neg(env):
+            for _ in sat(env):
+                return
+            yield env
+        return neg
+
+    def _forall(self, e: S.ForAll) -> Sat:
+        cond, then = self.expr(e.cond), self.expr(e.then)
+
+        def forall(env):
+            for c in cond(env):
+                for _ in then(c):
+                    break
+                else:
+                    return
+            yield env
+        return forall
+
+    def _assign(self, e: S.Assign) -> Sat:
+        idx, term = e.var.index, e.term
+
+        def assign(env):
+            if env[idx] is not None:  # JSHOP2 merges: an earlier binding wins
+                yield env
+                return
+            new = env[:]
+            new[idx] = subst(term, env)
+            yield new
+        return assign
+
+    def _callexpr(self, e: S.CallExpr) -> Sat:
+        call = e.call
+
+        def callexpr(env):
+            v = subst(call, env)
+            if type(v) is tuple and not v:
+                return
+            yield env
+        return callexpr
+
+    def _varatom(self, e: S.VarAtom) -> Sat:
+        idx, pos = e.var.index, e.pos
+
+        def varatom(env):
+            t = env[idx]
+            if t is None:
+                raise PlanningError.at(pos, f"variable {e.var.name} is used as an atom "
+                                       "but is not bound")
+            pred, args = atom_from_term(t, pos)
+            yield from self.match(pred, args, env)
+        return varatom
+
+    def _atom(self, e: S.Atom) -> Sat:
+        pred, pattern = e.pred, e.args
+        match = self.match
+
+        def atom(env):
+            return match(pred, subst(pattern, env), env)
+        return atom
+
+    # ------------------------------------------------------------ atoms
+    def match(self, pred: str, bound: tuple, env: list) -> Iterator[list]:
+        """Satisfiers of the atom ``(pred . bound)``: state atoms, then axioms."""
+        state = self.state
+        if _ground_flat(bound):
+            if state.has(pred, bound):
+                yield env
+        else:
+            yield from _scan(state.bucket(pred), bound, env)
+        axioms = self._axioms.get(pred)
+        if axioms:
+            yield from self._prove(axioms, bound, env)
+
+    def _prove(self, axioms, bound: tuple, env: list) -> Iterator[list]:
+        for ax, branches in axioms:
+            aenv = [None] * ax.nvars
+            if not _unify_args(ax.head.args, bound, aenv):
+                continue
+            for sat in branches:
+                found = False
+                for nb in sat(aenv):
+                    head = subst(ax.head.args, nb)
+                    new = env[:]
+                    if _unify_args(bound, head, new):
+                        found = True
+                        yield new
+                if found:
+                    break
+
+
+def _true(env):
+    yield env
+
+
+def _conj(first: Sat, rest: Sat) -> Sat:
+    def conj(env):
+        for e in first(env):
+            yield from rest(e)
+    return conj
+
+
+def _ground_flat(args: tuple) -> bool:
+    for a in args:
+        ta = type(a)
+        if ta is not str and ta is not float:
+            if ta is tuple or ta is Dotted:
+                from .terms import is_ground
+                if not is_ground(a):
+                    return False
+            else:
+                return False
+    return True
+
+
+def _scan(lst: list, bound: tuple, env: list) -> Iterator[list]:
+    """Match a non-ground pattern against a live list of atoms, in order.
+
+    Iterating the live list by index is deliberate: it reproduces JSHOP2's
+    behaviour when a forall effect deletes atoms while it enumerates them.
+    """
+    n = len(bound)
+    consts = []
+    binds = []
+    others = []
+    seen = set()
+    for i, t in enumerate(bound):
+        tt = type(t)
+        if tt is str or tt is float:
+            consts.append((i, t))
+        elif tt is Var and t.index not in seen:
+            seen.add(t.index)
+            binds.append((i, t.index))
+        else:
+            others.append((i, t))
+    for args in lst:
+        if len(args) != n:
+            continue
+        for i, c in consts:
+            if args[i] != c:
+                break
+        else:
+            new = env[:]
+            for i, k in binds:
+                new[k] = args[i]
+            if others:
+                ok = True
+                for i, t in others:
+                    if not unify(t, args[i], new):
+                        ok = False
+                        break
+                if not ok:
+                    continue
+            yield new
+
+
+# ------------------------------------------------------------ Java's sort
+
+def java_sort(a: list, cmp) -> list:
+    """Sort like Java 17's ``Arrays.sort(Object[], Comparator)``.
+
+    JSHOP2 sorts ``:sort-by`` bindings with it. For fewer than 32 elements Java's
+    TimSort is a binary insertion sort after one run scan; that is ported here
+    step by step, because with an inconsistent comparator (the corpus's
+    MyComparator) only the exact algorithm gives JSHOP2's order. Longer inputs
+    use Python's stable TimSort, which agrees with Java for every consistent
+    comparator.
+    """
+    n = len(a)
+    if n < 2:
+        return a
+    if n >= 32:
+        return sorted(a, key=cmp_to_key(cmp))
+    run = 1
+    if cmp(a[1], a[0]) < 0:
+        run = 2
+        while run < n and cmp(a[run], a[run - 1]) < 0:
+            run += 1
+        a[:run] = a[:run][::-1]
+    else:
+        run = 2
+        while run < n and cmp(a[run], a[run - 1]) >= 0:
+            run += 1
+    for start in range(run, n):
+        pivot = a[start]
+        left, right = 0, start
+        while left < right:
+            mid = (left + right) >> 1
+            if cmp(pivot, a[mid]) < 0:
+                right = mid
+            else:
+                left = mid + 1
+        a[left + 1:start + 1] = a[left:start]
+        a[left] = pivot
+    return a

@@ -1,0 +1,235 @@
+"""The parsed JSHOP2 language: domains, problems and their parts (manual 3.3-3.12).
+
+Every element keeps ``pos``, a :class:`Pos` pointing at its source text, so that
+any later error or warning can name ``file:line:col``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Optional
+
+from .terms import Var
+
+
+@dataclass(frozen=True)
+class Pos:
+    file: str
+    line: int
+    col: int
+
+    def __str__(self) -> str:
+        return f"{self.file}:{self.line}:{self.col}"
+
+
+# ------------------------------------------------------ logical expressions
+
+@dataclass
+class Atom:
+    """A logical atom ``(p t1 .. tn)`` (3.3); ``args`` is a tuple of terms."""
+    pred: str
+    args: tuple
+    pos: Optional[Pos] = None
+
+
+@dataclass
+class VarAtom:
+    """A variable standing for an atom, bound at planning time (3.14)."""
+    var: Var
+    pos: Optional[Pos] = None
+
+
+@dataclass
+class And:
+    items: list
+    pos: Optional[Pos] = None
+
+
+@dataclass
+class Or:
+    items: list
+    pos: Optional[Pos] = None
+
+
+@dataclass
+class Not:
+    expr: Any
+    pos: Optional[Pos] = None
+
+
+@dataclass
+class ForAll:
+    """``(forall V Y Z)``: every satisfier of Y must satisfy Z (3.4.5)."""
+    vars: list
+    cond: Any
+    then: Any
+    pos: Optional[Pos] = None
+
+
+@dataclass
+class Assign:
+    var: Var
+    term: Any
+    pos: Optional[Pos] = None
+
+
+@dataclass
+class CallExpr:
+    """A call expression: true unless the call returns NIL (3.4.7)."""
+    call: Any  # a CallTerm
+    pos: Optional[Pos] = None
+
+
+@dataclass
+class Precondition:
+    """A logical precondition (3.5): plain, ``:first`` or ``:sort-by``."""
+    expr: Any
+    first: bool = False
+    sort_var: Optional[Var] = None
+    comparator: Optional[str] = None   # '<', '>' or a user function name
+    pos: Optional[Pos] = None
+
+
+# ------------------------------------------------------ operator effects
+
+@dataclass
+class Protection:
+    atom: Any  # Atom or VarAtom
+    pos: Optional[Pos] = None
+
+
+@dataclass
+class EffectForAll:
+    """``(forall V Y (a1 .. an))`` in a delete or add list (3.9)."""
+    vars: list
+    cond: Any
+    atoms: list
+    pos: Optional[Pos] = None
+
+
+@dataclass
+class Effects:
+    """A delete or add list: a list of elements, or one variable (3.14)."""
+    items: list = field(default_factory=list)
+    var: Optional[Var] = None
+
+
+# ------------------------------------------------------ tasks
+
+@dataclass
+class TaskAtom:
+    name: str
+    args: tuple
+    immediate: bool = False
+    pos: Optional[Pos] = None
+
+    @property
+    def primitive(self) -> bool:
+        return self.name.startswith("!")
+
+
+@dataclass
+class TaskList:
+    """A task list (3.8): ``items`` are TaskAtoms and nested TaskLists."""
+    items: list
+    ordered: bool = True
+    pos: Optional[Pos] = None
+
+
+# ------------------------------------------------------ domain elements
+
+@dataclass
+class Operator:
+    head: TaskAtom
+    pre: Precondition
+    delete: Effects
+    add: Effects
+    cost: Any            # a term; default 1.0
+    nvars: int = 0
+    pos: Optional[Pos] = None
+
+    @property
+    def name(self) -> str:
+        return self.head.name
+
+    @property
+    def internal(self) -> bool:
+        return self.head.name.startswith("!!")
+
+
+@dataclass
+class Branch:
+    label: str
+    pre: Precondition
+    tasks: TaskList
+    pos: Optional[Pos] = None
+
+
+@dataclass
+class Method:
+    head: TaskAtom
+    branches: list
+    nvars: int = 0
+    index: int = 0
+    pos: Optional[Pos] = None
+
+    @property
+    def name(self) -> str:
+        return self.head.name
+
+
+@dataclass
+class AxiomBranch:
+    label: str
+    pre: Precondition
+    pos: Optional[Pos] = None
+
+
+@dataclass
+class Axiom:
+    head: Atom
+    branches: list
+    nvars: int = 0
+    pos: Optional[Pos] = None
+
+
+@dataclass
+class Domain:
+    name: str
+    operators: dict = field(default_factory=dict)   # name -> [Operator]
+    methods: dict = field(default_factory=dict)     # name -> [Method]
+    axioms: dict = field(default_factory=dict)      # pred -> [Axiom]
+    file: str = ""
+    pos: Optional[Pos] = None
+
+    def elements(self):
+        for ops in self.operators.values():
+            yield from ops
+        for ms in self.methods.values():
+            yield from ms
+        for axs in self.axioms.values():
+            yield from axs
+
+    @property
+    def n_methods(self) -> int:
+        return sum(len(v) for v in self.methods.values())
+
+    @property
+    def n_operators(self) -> int:
+        return sum(len(v) for v in self.operators.values())
+
+
+@dataclass
+class ProblemInstance:
+    """One state/task-list pair of a ``defproblem`` (3.12)."""
+    state: list      # [Atom], ground
+    tasks: TaskList
+    pos: Optional[Pos] = None
+
+
+@dataclass
+class Problem:
+    name: str
+    domain_name: str
+    instances: list
+    file: str = ""
+    pos: Optional[Pos] = None

@@ -1,0 +1,290 @@
+"""Terms of the JSHOP2 language (manual section 3.2) and one-way unification.
+
+Representation, chosen so that ground terms are plain hashable Python values:
+
+* a constant symbol is a lower-case ``str``;
+* a number is a ``float`` (JSHOP2 keeps every number as a Java double);
+* a proper list term is a ``tuple`` of terms; ``NIL`` (the empty list) is ``()``;
+* an improper (dotted) list ``(a b . c)`` is a :class:`Dotted`, always
+  normalised so that its tail is not itself a list;
+* a variable symbol is a :class:`Var`, numbered within its domain element
+  (manual 5.1.1: the scope of a variable is its method, operator or axiom);
+* a call term ``(call f t1 .. tn)`` is a :class:`CallTerm`; it is replaced by
+  its value as soon as its arguments are ground (manual 3.2.2).
+
+Unification follows JSHOP2's ``findUnifier``: it is one-way. Variables of the
+pattern get bound; a variable on the other side matches anything and binds
+nothing, which is why bindings propagate only downwards in the task network.
+"""
+from __future__ import annotations
+
+from typing import Any, Callable, Sequence
+
+NIL: tuple = ()
+
+
+class Var:
+    """A variable symbol; ``index`` is its slot in the element's binding."""
+
+    __slots__ = ("name", "index")
+
+    def __init__(self, name: str, index: int = -1):
+        self.name = name
+        self.index = index
+
+    def __repr__(self) -> str:
+        return f"Var({self.name!r}, {self.index})"
+
+
+class Dotted:
+    """An improper list ``(i1 .. in . tail)`` whose tail is not a list."""
+
+    __slots__ = ("items", "tail", "_hash")
+
+    def __init__(self, items: tuple, tail: Any):
+        self.items = items
+        self.tail = tail
+        self._hash = None
+
+    def __eq__(self, other: object) -> bool:
+        return (type(other) is Dotted and self.items == other.items
+                and self.tail == other.tail)
+
+    def __hash__(self) -> int:
+        if self._hash is None:
+            self._hash = hash((self.items, "."), ) ^ hash(self.tail)
+        return self._hash
+
+    def __repr__(self) -> str:
+        return f"Dotted({self.items!r}, {self.tail!r})"
+
+
+def make_list(items: Sequence, tail: Any = NIL) -> Any:
+    """Build the list term ``(items . tail)``, normalising nested tails."""
+    items = tuple(items)
+    if type(tail) is tuple:
+        return items + tail
+    if type(tail) is Dotted:
+        return Dotted(items + tail.items, tail.tail)
+    if not items:
+        return tail
+    return Dotted(items, tail)
+
+
+class CallTerm:
+    """``(call f args..)``: ``func`` maps a tuple of ground terms to a term."""
+
+    __slots__ = ("name", "func", "args", "pos")
+
+    def __init__(self, name: str, func: Callable, args: tuple, pos=None):
+        self.name = name
+        self.func = func
+        self.args = args
+        self.pos = pos
+
+    def __repr__(self) -> str:
+        return f"CallTerm({self.name!r}, {self.args!r})"
+
+
+def is_ground(t: Any) -> bool:
+    tt = type(t)
+    if tt is str or tt is float:
+        return True
+    if tt is tuple:
+        for x in t:
+            if not is_ground(x):
+                return False
+        return True
+    if tt is Dotted:
+        return is_ground(t.items) and is_ground(t.tail)
+    return False  # Var or an unevaluated CallTerm
+
+
+def subst(t: Any, env: list) -> Any:
+    """Apply a binding to a term, evaluating call terms that became ground."""
+    tt = type(t)
+    if tt is str or tt is float:
+        return t
+    if tt is Var:
+        v = env[t.index]
+        return t if v is None else v
+    if tt is tuple:
+        return tuple([subst(x, env) for x in t])
+    if tt is CallTerm:
+        args = tuple([subst(x, env) for x in t.args])
+        if is_ground(args):
+            return t.func(args)
+        return CallTerm(t.name, t.func, args, t.pos)
+    if tt is Dotted:
+        return make_list([subst(x, env) for x in t.items], subst(t.tail, env))
+    return t
+
+
+def unify(p: Any, t: Any, env: list) -> bool:
+    """Extend ``env`` (in place) so that pattern ``p`` matches term ``t``.
+
+    Mirrors JSHOP2's ``Term.findUnifier``: a variable in ``t`` matches
+    anything and binds nothing; a bound pattern variable must equal ``t``.
+    """
+    tp = type(p)
+    if tp is Var:
+        if type(t) is Var:
+            return True
+        v = env[p.index]
+        if v is None:
+            env[p.index] = t
+            return True
+        return v == t and type(v) is type(t)
+    tt = type(t)
+    if tt is Var:
+        return True
+    if tp is str:
+        return tt is str and p == t
+    if tp is float:
+        return tt is float and p == t
+    if tp is tuple:
+        if tt is tuple:
+            if len(p) != len(t):
+                return False
+            for a, b in zip(p, t):
+                if not unify(a, b, env):
+                    return False
+            return True
+        if tt is Dotted:
+            return _unify_dotted(Dotted(p, NIL), t, env)
+        return False
+    if tp is Dotted:
+        if tt is tuple or tt is Dotted:
+            return _unify_dotted(p, t, env)
+        return False
+    if tp is CallTerm:
+        v = subst(p, env)
+        if type(v) is CallTerm:
+            return False
+        return unify(v, t, env)
+    return False
+
+
+def _unify_dotted(p: Dotted, t: Any, env: list) -> bool:
+    """Unify cons by cons, as JSHOP2's ``List.findUnifierList`` does."""
+    pi, pt = p.items, p.tail
+    if type(t) is tuple:
+        ti, tt_ = t, NIL
+    else:
+        ti, tt_ = t.items, t.tail
+    n = len(pi)
+    for k in range(n):
+        if k >= len(ti):
+            # the rest of t is its tail: a variable matches, anything else fails
+            if type(tt_) is Var:
+                return True
+            return False
+        if not unify(pi[k], ti[k], env):
+            return False
+    rest = make_list(ti[n:], tt_)
+    return unify(pt, rest, env)
+
+
+# --------------------------------------------------------------- printing
+
+def java_double(x: float) -> str:
+    """Format a float as Java's ``String.valueOf(double)`` does.
+
+    Uses Python's shortest round-trip digits; JDK 17's algorithm can print a
+    longer digit string for a few rare values (fixed in JDK 19), which is a
+    known, documented deviation.
+    """
+    if x != x:
+        return "NaN"
+    if x in (float("inf"), float("-inf")):
+        return "Infinity" if x > 0 else "-Infinity"
+    if x == 0.0:
+        return "-0.0" if str(x).startswith("-") else "0.0"
+    a = abs(x)
+    if 1e-3 <= a < 1e7:
+        s = repr(x)
+        if "e" in s or "E" in s:  # repr switches to exponent form at 1e16 only
+            s = f"{x:.17f}".rstrip("0")
+        if "." not in s:
+            s += ".0"
+        if s.endswith("."):
+            s += "0"
+        return s
+    digits, exp = _shortest_digits(a)
+    mant = digits[0] + "." + (digits[1:] or "0")
+    return ("-" if x < 0 else "") + f"{mant}E{exp}"
+
+
+def _shortest_digits(a: float) -> tuple[str, int]:
+    s = f"{a:.17e}"
+    # find the shortest precision that round-trips
+    for prec in range(0, 18):
+        cand = f"{a:.{prec}e}"
+        if float(cand) == a:
+            s = cand
+            break
+    mant, exp = s.split("e")
+    digits = mant.replace(".", "").rstrip("0") or "0"
+    return digits, int(exp)
+
+
+def term_str(t: Any) -> str:
+    """Print a term exactly as JSHOP2's ``toString`` does."""
+    tt = type(t)
+    if tt is str:
+        return t
+    if tt is float:
+        return java_double(t)
+    if tt is tuple:
+        if not t:
+            return "NIL"
+        return "(" + " ".join([term_str(x) for x in t]) + ")"
+    if tt is Dotted:
+        return ("(" + " ".join([term_str(x) for x in t.items]) + " . "
+                + term_str(t.tail) + ")")
+    if tt is Var:
+        return f"VAR{t.index}"
+    if tt is CallTerm:
+        inner = " ".join([term_str(x) for x in t.args])
+        return f"(CALL {t.name} {inner})" if inner else f"(CALL {t.name})"
+    return str(t)
+
+
+def atom_str(name: str, args: Sequence) -> str:
+    """Print a predicate or task instance: ``(name a1 .. an)``."""
+    if not args:
+        return f"({name})"
+    return "(" + name + " " + " ".join([term_str(a) for a in args]) + ")"
+
+
+def source_str(t: Any) -> str:
+    """Print a term as JSHOP2 source text (variables by name)."""
+    tt = type(t)
+    if tt is Var:
+        return t.name
+    if tt is tuple:
+        return "(" + " ".join(source_str(x) for x in t) + ")" if t else "nil"
+    if tt is Dotted:
+        return ("(" + " ".join(source_str(x) for x in t.items) + " . "
+                + source_str(t.tail) + ")")
+    if tt is CallTerm:
+        return "(call " + " ".join([t.name] + [source_str(x) for x in t.args]) + ")"
+    return term_str(t)
+
+
+def variables(t: Any, out: list) -> list:
+    """Append the variable occurrences of ``t`` to ``out`` in textual order."""
+    tt = type(t)
+    if tt is Var:
+        out.append(t)
+    elif tt is tuple:
+        for x in t:
+            variables(x, out)
+    elif tt is Dotted:
+        for x in t.items:
+            variables(x, out)
+        variables(t.tail, out)
+    elif tt is CallTerm:
+        for x in t.args:
+            variables(x, out)
+    return out

@@ -1,0 +1,154 @@
+"""Task trees: the decomposition behind one plan (the paper's task network).
+
+A :class:`TaskTree` node is a task with its bound arguments, what decomposed it
+(the method and branch label) or achieved it (the operator, with its plan step
+index), its children in order, and a stable path such as
+``bring_object/fetch_object/grasp_object``; when siblings share a name, each
+gets ``:call N`` (1-based) appended, as in the plan-transformations paper:
+``transport/transporting :call 2/delivering``.
+
+The planner takes a snapshot of the task network when it finds a plan, so each
+plan's tree holds only the decompositions of that plan, never those of a branch
+the search backtracked over.
+"""
+from __future__ import annotations
+
+from collections import Counter
+from dataclasses import dataclass, field
+from typing import Any, Iterator, Optional
+
+from .terms import atom_str, term_str
+
+
+@dataclass
+class TaskTree:
+    """One node of a task tree; the root is the problem's task list."""
+    name: str
+    args: tuple = ()
+    path: str = ""
+    method: Optional[str] = None       # method head name that decomposed it
+    branch: Optional[str] = None       # that method's branch label
+    step: Optional[int] = None         # index in the plan, for primitive tasks
+    children: list = field(default_factory=list)
+
+    @property
+    def primitive(self) -> bool:
+        return self.name.startswith("!")
+
+    @property
+    def task(self) -> str:
+        return atom_str(self.name, self.args) if self.name else "(root)"
+
+    def walk(self) -> Iterator["TaskTree"]:
+        yield self
+        for c in self.children:
+            yield from c.walk()
+
+    def leaves(self) -> list["TaskTree"]:
+        return [n for n in self.walk() if n.step is not None]
+
+    def find(self, path: str) -> Optional["TaskTree"]:
+        for n in self.walk():
+            if n.path == path:
+                return n
+        return None
+
+    def to_dict(self) -> dict[str, Any]:
+        d: dict[str, Any] = {"task": self.task, "name": self.name,
+                             "args": [term_str(a) for a in self.args], "path": self.path}
+        if self.method is not None:
+            d["method"] = self.method
+            d["branch"] = self.branch
+        if self.step is not None:
+            d["step"] = self.step
+        if self.children:
+            d["children"] = [c.to_dict() for c in self.children]
+        return d
+
+    def to_text(self, indent: str = "") -> str:
+        """A plain, stable text rendering (used for golden files)."""
+        lines = []
+        for child in self.children:
+            lines.extend(_text_lines(child, ""))
+        return "\n".join(lines) + "\n"
+
+    def to_dot(self) -> str:
+        """Graphviz DOT of the tree."""
+        out = ["digraph task_tree {", '  node [shape=box, fontname="monospace"];']
+        ids: dict[int, str] = {}
+        for i, n in enumerate(self.walk()):
+            ids[id(n)] = f"n{i}"
+            label = n.task if n.name else "root"
+            if n.method:
+                label += f"\\n[{n.branch}]"
+            shape = ', style=rounded' if n.step is not None else ""
+            out.append(f'  n{i} [label="{_dot_escape(label)}"{shape}];')
+        for n in self.walk():
+            for c in n.children:
+                out.append(f"  {ids[id(n)]} -> {ids[id(c)]};")
+        out.append("}")
+        return "\n".join(out) + "\n"
+
+
+def _dot_escape(s: str) -> str:
+    return s.replace("\\", "\\\\").replace('"', '\\"').replace("\\\\n", "\\n")
+
+
+def _text_lines(n: TaskTree, indent: str) -> list[str]:
+    if n.step is not None:
+        head = f"{indent}{n.task}  #{n.step}"
+    elif n.method:
+        head = f"{indent}{n.task}  [{n.branch}]"
+    else:
+        head = f"{indent}{n.task}"
+    head += f"  @{n.path}"
+    lines = [head]
+    for c in n.children:
+        lines.extend(_text_lines(c, indent + "  "))
+    return lines
+
+
+def snapshot(root, steps) -> TaskTree:
+    """Build the tree of the current task network (a planner ``Node``)."""
+    tree = TaskTree(name="", path="")
+    tree.children = _children(root, "")
+    return tree
+
+
+def _flatten(node) -> list:
+    """The task nodes of a task list, nested lists flattened in order."""
+    out = []
+    stack = [iter(node.subtasks or ())]
+    while stack:
+        for child in stack[-1]:
+            if child.task is not None:
+                out.append(child)
+            else:
+                stack.append(iter(child.subtasks))
+            break
+        else:
+            stack.pop()
+    return out
+
+
+def _children(node, prefix: str) -> list:
+    kids = _flatten(node)
+    counts = Counter(k.task.name for k in kids)
+    seen: Counter = Counter()
+    result = []
+    for k in kids:
+        name = k.task.name
+        seen[name] += 1
+        label = name if counts[name] == 1 else f"{name} :call {seen[name]}"
+        path = f"{prefix}/{label}" if prefix else label
+        t = TaskTree(name=name, args=k.task.args, path=path)
+        how = k.how
+        if isinstance(how, int):
+            t.step = how
+        elif how is not None:
+            method, branch = how
+            t.method = method.name
+            t.branch = method.branches[branch].label
+            t.children = _children(k, path)
+        result.append(t)
+    return result
