@@ -164,10 +164,15 @@ class Planner:
 
     # ------------------------------------------------------------ driver
     def plans(self, timeout: Optional[float] = None) -> Iterator[Plan]:
-        """Stream plans in JSHOP2's order until exhausted or ``timeout``."""
+        """Stream plans in JSHOP2's order until exhausted or ``timeout``.
+
+        ``stats.elapsed`` counts search time only, not the time the consumer
+        spends between plans; ``timeout`` is measured the same way.
+        """
         stats = self.stats
-        stats.started = time.perf_counter()
-        deadline = None if timeout is None else stats.started + timeout
+        clock = time.perf_counter
+        t0 = stats.started = clock()
+        spent = 0.0
         stack = [self._frame(self.root)]
         push, pop = stack.append, stack.pop
         ticks = 0
@@ -184,20 +189,23 @@ class Planner:
                                 index=stats.plans_found - 1)
                     if self.record_trees:
                         plan.tree = snapshot(self.root, plan.steps)
-                    stats.elapsed = time.perf_counter() - stats.started
+                    spent += clock() - t0
+                    stats.elapsed = spent
+                    t0 = None          # the consumer's time is not search time
                     yield plan
+                    t0 = clock()
                     continue
                 push(self._frame(req))
                 ticks += 1
-                if deadline is not None and not ticks & 255:
-                    if time.perf_counter() > deadline:
+                if timeout is not None and not ticks & 255:
+                    if spent + clock() - t0 > timeout:
                         stats.timed_out = True
                         return
         except KeyboardInterrupt:
             stats.interrupted = True
             raise
         finally:
-            stats.elapsed = time.perf_counter() - stats.started
+            stats.elapsed = spent + (clock() - t0 if t0 is not None else 0.0)
             for frame in reversed(stack):
                 frame.close()
 

@@ -1,0 +1,1 @@
+"""The ``htn`` command line: parses arguments and prints; no planning logic."""
