@@ -19,7 +19,8 @@ from typing import Callable, Iterator
 
 from . import syntax as S
 from .errors import HtnError, PlanningError
-from .terms import NIL, Dotted, Var, subst, unify, term_str
+from .compile import GENERIC, binder, head_unifier, scanner
+from .terms import Var, is_ground, subst, term_str, unify
 
 Sat = Callable[[list], Iterator[list]]
 
@@ -50,7 +51,8 @@ class Logic:
         self.functions = functions
         self._axioms: dict[str, list] = {}
         for pred, axs in domain.axioms.items():
-            self._axioms[pred] = [(ax, [self.precondition(b.pre) for b in ax.branches])
+            self._axioms[pred] = [(ax, head_unifier(ax.head.args), binder(ax.head.args),
+                                   [self.precondition(b.pre) for b in ax.branches])
                                   for ax in axs]
 
     # ------------------------------------------------------------ preconditions
@@ -140,22 +142,22 @@ class Logic:
         return forall
 
     def _assign(self, e: S.Assign) -> Sat:
-        idx, term = e.var.index, e.term
+        idx, bind = e.var.index, binder((e.term,))
 
         def assign(env):
             if env[idx] is not None:  # JSHOP2 merges: an earlier binding wins
                 yield env
                 return
             new = env[:]
-            new[idx] = subst(term, env)
+            new[idx] = bind(env)[1][0]
             yield new
         return assign
 
     def _callexpr(self, e: S.CallExpr) -> Sat:
-        call = e.call
+        bind = binder((e.call,))
 
         def callexpr(env):
-            v = subst(call, env)
+            v = bind(env)[1][0]
             if type(v) is tuple and not v:
                 return
             yield env
@@ -174,18 +176,37 @@ class Logic:
         return varatom
 
     def _atom(self, e: S.Atom) -> Sat:
-        pred, pattern = e.pred, e.args
-        match = self.match
+        pred = e.pred
+        bind = binder(e.args)
+        state = self.state
+        axioms_of = self._axioms.get
+        prove = self._prove
+
+        scanners: dict = {}
+        args = e.args
 
         def atom(env):
-            return match(pred, subst(pattern, env), env)
+            key, bound = bind(env)
+            if key is None:
+                if state.has(pred, bound):
+                    yield env
+            elif key >= GENERIC:
+                yield from _scan(state.bucket(pred), bound, env)
+            else:
+                scan = scanners.get(key)
+                if scan is None:
+                    scan = scanners[key] = scanner(args, key)
+                yield from scan(state.bucket(pred), bound, env)
+            axioms = axioms_of(pred)
+            if axioms:
+                yield from prove(axioms, bound, env)
         return atom
 
     # ------------------------------------------------------------ atoms
     def match(self, pred: str, bound: tuple, env: list) -> Iterator[list]:
         """Satisfiers of the atom ``(pred . bound)``: state atoms, then axioms."""
         state = self.state
-        if _ground_flat(bound):
+        if is_ground(bound):
             if state.has(pred, bound):
                 yield env
         else:
@@ -195,14 +216,14 @@ class Logic:
             yield from self._prove(axioms, bound, env)
 
     def _prove(self, axioms, bound: tuple, env: list) -> Iterator[list]:
-        for ax, branches in axioms:
+        for ax, unify_head, bind_head, branches in axioms:
             aenv = [None] * ax.nvars
-            if not _unify_args(ax.head.args, bound, aenv):
+            if not unify_head(bound, aenv):
                 continue
             for sat in branches:
                 found = False
                 for nb in sat(aenv):
-                    head = subst(ax.head.args, nb)
+                    head = bind_head(nb)[1]
                     new = env[:]
                     if _unify_args(bound, head, new):
                         found = True
@@ -222,19 +243,6 @@ def _conj(first: Sat, rest: Sat) -> Sat:
     return conj
 
 
-def _ground_flat(args: tuple) -> bool:
-    for a in args:
-        ta = type(a)
-        if ta is not str and ta is not float:
-            if ta is tuple or ta is Dotted:
-                from .terms import is_ground
-                if not is_ground(a):
-                    return False
-            else:
-                return False
-    return True
-
-
 def _scan(lst: list, bound: tuple, env: list) -> Iterator[list]:
     """Match a non-ground pattern against a live list of atoms, in order.
 
@@ -246,7 +254,8 @@ def _scan(lst: list, bound: tuple, env: list) -> Iterator[list]:
     binds = []
     others = []
     seen = set()
-    for i, t in enumerate(bound):
+    i = 0
+    for t in bound:
         tt = type(t)
         if tt is str or tt is float:
             consts.append((i, t))
@@ -255,6 +264,24 @@ def _scan(lst: list, bound: tuple, env: list) -> Iterator[list]:
             binds.append((i, t.index))
         else:
             others.append((i, t))
+        i += 1
+    if not others and len(consts) == 1:
+        (ci, c), = consts
+        for args in lst:
+            if len(args) == n and args[ci] == c:
+                new = env[:]
+                for i, k in binds:
+                    new[k] = args[i]
+                yield new
+        return
+    if not others and not consts:
+        for args in lst:
+            if len(args) == n:
+                new = env[:]
+                for i, k in binds:
+                    new[k] = args[i]
+                yield new
+        return
     for args in lst:
         if len(args) != n:
             continue

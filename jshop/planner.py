@@ -35,7 +35,8 @@ from .errors import PlanningError
 from .logic import Logic, atom_from_term
 from .plan import Plan, Step
 from .state import Change, State
-from .terms import Var, subst, term_str, unify
+from .compile import binder, head_unifier
+from .terms import subst, term_str, unify
 from .tree import TaskTree, snapshot
 
 _PLAN = object()
@@ -63,13 +64,14 @@ class Node:
     ``how`` records what reduced an atomic node (for the task tree): a
     ``(method, branch_index)`` pair or the index of the plan step.
     """
-    __slots__ = ("task", "subtasks", "ordered", "how")
+    __slots__ = ("task", "subtasks", "ordered", "how", "done")
 
     def __init__(self, task=None, subtasks=None, ordered=True):
         self.task = task
         self.subtasks = subtasks
         self.ordered = ordered
         self.how = None
+        self.done = False   # a cached "every task below is achieved"
 
 
 def instantiate(tl, env: list) -> Node:
@@ -79,12 +81,37 @@ def instantiate(tl, env: list) -> Node:
     return Node(None, [instantiate(x, env) for x in tl.items], tl.ordered)
 
 
-def first_tasks(root: Node) -> list:
+def compile_tasks(tl):
+    """Compile a task list into ``env -> [Node]`` (its bound subtasks)."""
+    makers = []
+    for x in tl.items:
+        if isinstance(x, S.TaskAtom):
+            makers.append(_atom_maker(x))
+        else:
+            makers.append(_list_maker(x))
+    return lambda env: [make(env) for make in makers]
+
+
+def _atom_maker(t: S.TaskAtom):
+    bind, name, immediate = binder(t.args), t.name, t.immediate
+    return lambda env: Node(Task(name, bind(env)[1], immediate, t))
+
+
+def _list_maker(tl: S.TaskList):
+    subtasks, ordered = compile_tasks(tl), tl.ordered
+    return lambda env: Node(None, subtasks(env), ordered)
+
+
+def first_tasks(root: Node, trail: Optional[list] = None) -> list:
     """JSHOP2's ``TaskList.getFirst``, without recursion.
 
     An ordered list contributes the first tasks of its first non-empty member;
     an unordered list those of every member; an immediate task, wherever it is
     met, is then the only option.
+
+    A member found to have nothing left to do is marked ``done`` (and pushed on
+    ``trail``) so later calls skip it; the planner clears marks made below a
+    search frame when it backtracks into that frame.
     """
     res: list = []
     stack = [[root, 0, 0]]          # node, next member, len(res) on entry
@@ -99,6 +126,9 @@ def first_tasks(root: Node) -> list:
         subs = node.subtasks
         if i == len(subs):
             stack.pop()
+            if trail is not None and len(res) == n0 and stack:
+                node.done = True
+                trail.append(node)
             continue
         child = subs[i]
         frame[1] = i + 1
@@ -108,7 +138,7 @@ def first_tasks(root: Node) -> list:
             res.append(child)
             if node.ordered:
                 stack.pop()
-        elif child.subtasks:
+        elif child.subtasks and not child.done:
             stack.append([child, 0, 0])
     return res
 
@@ -151,9 +181,12 @@ class Planner:
         for atom in instance.state:
             self.state.add(atom.pred, atom.args)
         self.logic = Logic(domain, self.state, functions)
-        self._ops = {name: [(op, self.logic.precondition(op.pre)) for op in ops]
+        pre = self.logic.precondition
+        self._ops = {name: [(op, head_unifier(op.head.args), pre(op.pre), binder(op.head.args))
+                            for op in ops]
                      for name, ops in domain.operators.items()}
-        self._methods = {name: [(m, [self.logic.precondition(b.pre) for b in m.branches])
+        self._methods = {name: [(m, head_unifier(m.head.args),
+                                 [(pre(b.pre), compile_tasks(b.tasks)) for b in m.branches])
                                 for m in ms]
                          for name, ms in domain.methods.items()}
         self.stats = Stats()
@@ -161,6 +194,7 @@ class Planner:
         self._steps: list = []
         self._cost = 0.0
         self._forall_cache: dict = {}
+        self._trail: list = []     # nodes marked done, see first_tasks
 
     # ------------------------------------------------------------ driver
     def plans(self, timeout: Optional[float] = None) -> Iterator[Plan]:
@@ -217,7 +251,9 @@ class Planner:
         resumes this one) or ``_PLAN`` when the whole network is achieved.
         """
         self.stats.expansions += 1
-        options = first_tasks(chosen)
+        trail = self._trail
+        options = first_tasks(chosen, trail)
+        mark = len(trail)
         if not options:
             if chosen is not self.root:
                 yield self.root
@@ -229,9 +265,9 @@ class Planner:
             task = node.task
             if task.primitive:
                 node.subtasks = []
-                for op, pre in self._ops.get(task.name, ()):
+                for op, unify_head, pre, bind_head in self._ops.get(task.name, ()):
                     env = [None] * op.nvars
-                    if not _unify_args(op.head.args, task.args, env):
+                    if not unify_head(task.args, env):
                         continue
                     for nb in pre(env):
                         change, ok = self._apply(op, nb)
@@ -242,25 +278,29 @@ class Planner:
                                 raise PlanningError.at(op.pos, f"cost of {op.name} is "
                                                        f"{term_str(cost)}, not a number")
                             node.how = len(self._steps)
-                            self._steps.append((op.name, subst(op.head.args, nb), cost))
+                            self._steps.append((op.name, bind_head(nb)[1], cost))
                             self._cost += cost
                             yield self.root
+                            while len(trail) > mark:
+                                trail.pop().done = False
                             self._steps.pop()
                             self._cost -= cost
                         change.undo(state)
                 node.subtasks = None
                 node.how = None
             else:
-                for m, branches in self._methods.get(task.name, ()):
+                for m, unify_head, branches in self._methods.get(task.name, ()):
                     env = [None] * m.nvars
-                    if not _unify_args(m.head.args, task.args, env):
+                    if not unify_head(task.args, env):
                         continue
-                    for k, sat in enumerate(branches):
+                    for k, (sat, reduce) in enumerate(branches):
                         found = False
                         for nb in sat(env):
-                            node.subtasks = instantiate(m.branches[k].tasks, nb).subtasks
+                            node.subtasks = reduce(nb)
                             node.how = (m, k)
                             yield node
+                            while len(trail) > mark:
+                                trail.pop().done = False
                             found = True
                             node.subtasks = None
                             node.how = None
@@ -310,7 +350,7 @@ class Planner:
             return
         for item in eff.items:
             if isinstance(item, S.Atom):
-                yield item.pred, subst(item.args, env)
+                yield item.pred, binder(item.args)(env)[1]
             elif isinstance(item, S.VarAtom):
                 yield self._var_atom(item, env)
             elif isinstance(item, S.Protection):
@@ -324,7 +364,7 @@ class Planner:
     def _ground(self, a, env):
         if isinstance(a, S.VarAtom):
             return self._var_atom(a, env)
-        return a.pred, subst(a.args, env)
+        return a.pred, binder(a.args)(env)[1]
 
     def _var_atom(self, a: S.VarAtom, env):
         t = env[a.var.index]

@@ -1,0 +1,224 @@
+"""Compile argument tuples of the domain into fast Python functions.
+
+JSHOP2 compiles a domain to Java for speed (manual section 4); we do the same
+on a small scale for the two hottest operations on argument tuples:
+
+* :func:`binder` - apply a binding to a tuple of terms (``subst``), and
+* :func:`head_unifier` - unify a method's or operator's head with a task.
+
+Only "flat" tuples (constants and variables) are compiled; anything with a
+nested list or call term uses the generic functions in :mod:`jshop.terms`, so
+the semantics are exactly those of ``subst`` and ``unify``.
+"""
+from __future__ import annotations
+
+from typing import Callable
+
+from .terms import CallTerm, Var, is_ground, subst, unify
+
+
+def _flat(args: tuple) -> bool:
+    return all(type(a) in (str, float, Var) for a in args)
+
+
+_BINDERS: dict = {}
+_UNIFIERS: dict = {}
+
+
+def binder(args: tuple) -> Callable[[list], tuple]:
+    """Cached :func:`make_binder` (keyed by the domain's own tuple object)."""
+    hit = _BINDERS.get(id(args))
+    if hit is None or hit[0] is not args:
+        hit = _BINDERS[id(args)] = (args, make_binder(args))
+    return hit[1]
+
+
+def head_unifier(head: tuple) -> Callable[[tuple, list], bool]:
+    """Cached :func:`make_head_unifier`."""
+    hit = _UNIFIERS.get(id(head))
+    if hit is None or hit[0] is not head:
+        hit = _UNIFIERS[id(head)] = (head, make_head_unifier(head))
+    return hit[1]
+
+
+GENERIC = 1 << 30   # a scan key meaning "use the generic scanner"
+
+
+def make_binder(args: tuple) -> Callable[[list], tuple]:
+    """A function ``env -> (key, bound_args)`` equivalent to ``subst``.
+
+    ``key`` is None when the result is ground (the caller can then look the
+    atom up in the state's hash set). Otherwise it tells :func:`scanner` which
+    variables are unbound: bit j is set when the j-th distinct variable of
+    ``args`` is unbound; ``GENERIC`` or more when some element is bound to a
+    non-ground term, which needs full unification.
+    """
+    if not args:
+        return lambda env: (None, ())
+    consts = {}
+    parts = []       # expression of each element, bound
+    unbound = []     # same, but keeping unbound variables
+    tests = []       # groundness test of each non-constant element
+    keys = []        # key contribution of each non-constant element
+    lines = []
+    seen = set()
+    for i, a in enumerate(args):
+        ta = type(a)
+        if ta is Var:
+            name = f"x{a.index}"
+            if a.index not in seen:
+                bit = 1 << len(seen)
+                seen.add(a.index)
+                consts[f"v{a.index}"] = a
+                lines.append(f"    {name} = env[{a.index}]")
+                lines.append(f"    g{a.index} = {name} is not None and (type({name}) is str or "
+                             f"type({name}) is float or is_ground({name}))")
+                tests.append(f"g{a.index}")
+                keys.append(f"(0 if g{a.index} else {bit} if {name} is None else GENERIC)")
+            parts.append(name)
+            unbound.append(f"({name} if {name} is not None else v{a.index})")
+        elif ta is str or ta is float:
+            consts[f"c{i}"] = a
+            parts.append(f"c{i}")
+            unbound.append(f"c{i}")
+        else:  # nested list or call term: the generic substitution
+            consts[f"c{i}"] = a
+            lines.append(f"    y{i} = subst(c{i}, env)")
+            lines.append(f"    h{i} = is_ground(y{i})")
+            tests.append(f"h{i}")
+            keys.append(f"(0 if h{i} else GENERIC)")
+            parts.append(f"y{i}")
+            unbound.append(f"y{i}")
+    if not tests:
+        return lambda env: (None, args)
+    fast = _fast_path(args, consts)
+    src = ["def bind(env):", *fast, *lines,
+           f"    if {' and '.join(tests)}:",
+           f"        return None, ({', '.join(parts)},)",
+           f"    return {' | '.join(keys)}, ({', '.join(unbound)},)"]
+    ns = dict(consts, is_ground=is_ground, subst=subst, GENERIC=GENERIC)
+    exec("\n".join(src), ns)
+    return ns["bind"]
+
+
+def _fast_path(args: tuple, ns: dict) -> list:
+    """Source lines returning at once when every variable of ``args`` (call
+    arguments and nested lists included) is bound to a symbol or a number:
+    then every call can be evaluated inline and the result is ground."""
+    if all(type(a) in (str, float, Var) for a in args):
+        return []   # flat tuples are already handled well by the general code
+    seen: dict = {}
+    counter = [0]
+
+    def expr(t):
+        tt = type(t)
+        if tt is Var:
+            seen[t.index] = None
+            return f"f{t.index}"
+        if tt is str or tt is float:
+            name = f"k{counter[0]}"
+            counter[0] += 1
+            ns[name] = t
+            return name
+        if tt is tuple:
+            return "(" + "".join(expr(x) + ", " for x in t) + ")"
+        if tt is CallTerm:
+            name = f"fn{counter[0]}"
+            counter[0] += 1
+            ns[name] = t.func
+            return f"{name}((" + "".join(expr(x) + ", " for x in t.args) + "))"
+        raise _NoFastPath
+
+    try:
+        body = "(" + "".join(expr(a) + ", " for a in args) + ")"
+    except _NoFastPath:
+        return []
+    lines = [f"    f{i} = env[{i}]" for i in seen]
+    test = " and ".join(f"(type(f{i}) is str or type(f{i}) is float)" for i in seen) or "True"
+    return lines + [f"    if {test}:", f"        return None, {body}"]
+
+
+class _NoFastPath(Exception):
+    pass
+
+
+def make_scanner(args: tuple, key: int) -> Callable:
+    """A generator ``(atoms, bound, env) -> envs`` matching ``args`` whose
+    unbound variables are those of ``key`` (see :func:`make_binder`) against a
+    live list of atoms, in order; equivalent to unifying element by element."""
+    n = len(args)
+    conds = [f"len(a) == {n}"]
+    pre = []
+    assigns = []
+    first_pos: dict = {}
+    distinct = 0
+    for i, a in enumerate(args):
+        if type(a) is Var:
+            if a.index not in first_pos:
+                first_pos[a.index] = i
+                unbound = key & (1 << distinct)
+                distinct += 1
+                if unbound:
+                    assigns.append(f"new[{a.index}] = a[{i}]")
+                    continue
+            elif key & (1 << list(first_pos).index(a.index)):
+                conds.append(f"a[{i}] == a[{first_pos[a.index]}]")
+                continue
+        pre.append(f"    b{i} = bound[{i}]")
+        conds.append(f"a[{i}] == b{i}")
+    src = ["def scan(lst, bound, env):", *pre,
+           "    for a in lst:",
+           f"        if {' and '.join(conds)}:",
+           "            new = env[:]",
+           *[f"            {x}" for x in assigns],
+           "            yield new"]
+    ns: dict = {}
+    exec("\n".join(src), ns)
+    return ns["scan"]
+
+
+_SCANNERS: dict = {}
+
+
+def scanner(args: tuple, key: int) -> Callable:
+    """Cached :func:`make_scanner`."""
+    hit = _SCANNERS.get((id(args), key))
+    if hit is None or hit[0] is not args:
+        hit = _SCANNERS[(id(args), key)] = (args, make_scanner(args, key))
+    return hit[1]
+
+
+def make_head_unifier(head: tuple) -> Callable[[tuple, list], bool]:
+    """A function ``(task_args, env) -> bool`` equivalent to unifying each
+    head term with the task's term (a variable in the task binds nothing)."""
+    n = len(head)
+    if not all(type(a) in (str, float, Var) for a in head):
+        def generic(args, env, head=head, n=n):
+            if len(args) != n:
+                return False
+            for p, t in zip(head, args):
+                if not unify(p, t, env):
+                    return False
+            return True
+        return generic
+    ns: dict = {"Var": Var}
+    src = ["def unify_head(args, env):", f"    if len(args) != {n}:", "        return False"]
+    seen = set()
+    for i, a in enumerate(head):
+        src.append(f"    t = args[{i}]")
+        if type(a) is Var:
+            if a.index not in seen:
+                seen.add(a.index)
+                src.append(f"    if type(t) is not Var: env[{a.index}] = t")
+            else:
+                src += [f"    if type(t) is not Var:",
+                        f"        v = env[{a.index}]",
+                        f"        if v is None: env[{a.index}] = t",
+                        f"        elif not (v == t and type(v) is type(t)): return False"]
+        else:
+            ns[f"c{i}"] = a
+            src.append(f"    if type(t) is not Var and not (type(t) is type(c{i}) and t == c{i}):"
+                       " return False")
+    src.append("    return True")
+    exec("\n".join(src), ns)
+    return ns["unify_head"]

@@ -1,0 +1,30 @@
+"""Shared fixtures: where the JSHOP2 corpus is, and how to run ``htn``."""
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+SHARED = Path(os.environ.get("HTN_SHARED", ROOT.parent / "shared"))
+CORPUS = SHARED / "corpus" / "jshop2"
+FUNCTIONS = Path(__file__).resolve().parent / "functions"
+
+
+def corpus_available() -> bool:
+    return (CORPUS / "SUMMARY.md").is_file()
+
+
+needs_corpus = pytest.mark.skipif(
+    not corpus_available(),
+    reason=f"JSHOP2 corpus not found at {CORPUS} (set HTN_SHARED to the shared/ folder)")
+
+
+def run_htn(*args, timeout=600, input=None):
+    """Run the real command line in a subprocess; returns CompletedProcess."""
+    return subprocess.run([sys.executable, "-m", "cli.main", *map(str, args)],
+                          cwd=ROOT, capture_output=True, text=True, timeout=timeout,
+                          input=input)
