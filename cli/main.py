@@ -32,7 +32,9 @@ def cli():
 
 def _register():
     from .plan_cmd import plan
+    from .stats_cmd import stats
     cli.add_command(plan)
+    cli.add_command(stats)
 
 
 _register()

@@ -21,5 +21,6 @@ def _label(node) -> str:
     if node.step is not None:
         return f"[cyan]{text}[/cyan] [dim]step {node.step + 1}[/dim]"
     if node.method:
-        return f"[bold]{text}[/bold] [dim]{escape(node.branch)} · {escape(node.path)}[/dim]"
+        return (f"[bold]{text}[/bold] [dim]method #{node.method_index + 1}, branch "
+                f"{escape(node.branch)} · {escape(node.path)}[/dim]")
     return f"{text} [red](not decomposed)[/red]"

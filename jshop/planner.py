@@ -62,7 +62,7 @@ class Node:
     """A task list in the network; atomic while ``subtasks`` is None.
 
     ``how`` records what reduced an atomic node (for the task tree): a
-    ``(method, branch_index)`` pair or the index of the plan step.
+    ``(method, branch_index, method_index)`` triple or the plan step's index.
     """
     __slots__ = ("task", "subtasks", "ordered", "how", "done")
 
@@ -289,7 +289,8 @@ class Planner:
                 node.subtasks = None
                 node.how = None
             else:
-                for m, unify_head, branches in self._methods.get(task.name, ()):
+                for index, (m, unify_head, branches) in enumerate(
+                        self._methods.get(task.name, ())):
                     env = [None] * m.nvars
                     if not unify_head(task.args, env):
                         continue
@@ -297,7 +298,7 @@ class Planner:
                         found = False
                         for nb in sat(env):
                             node.subtasks = reduce(nb)
-                            node.how = (m, k)
+                            node.how = (m, k, index)
                             yield node
                             while len(trail) > mark:
                                 trail.pop().done = False

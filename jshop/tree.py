@@ -27,6 +27,7 @@ class TaskTree:
     args: tuple = ()
     path: str = ""
     method: Optional[str] = None       # method head name that decomposed it
+    method_index: Optional[int] = None  # which of the methods for that task (0-based)
     branch: Optional[str] = None       # that method's branch label
     step: Optional[int] = None         # index in the plan, for primitive tasks
     children: list = field(default_factory=list)
@@ -58,6 +59,7 @@ class TaskTree:
                              "args": [term_str(a) for a in self.args], "path": self.path}
         if self.method is not None:
             d["method"] = self.method
+            d["method_index"] = self.method_index
             d["branch"] = self.branch
         if self.step is not None:
             d["step"] = self.step
@@ -65,11 +67,21 @@ class TaskTree:
             d["children"] = [c.to_dict() for c in self.children]
         return d
 
-    def to_text(self, indent: str = "") -> str:
+    def to_text(self) -> str:
         """A plain, stable text rendering (used for golden files)."""
         lines = []
-        for child in self.children:
-            lines.extend(_text_lines(child, ""))
+        stack = [(c, 0) for c in reversed(self.children)]
+        while stack:
+            n, depth = stack.pop()
+            pad = "  " * depth
+            if n.step is not None:
+                how = f"step {n.step + 1}"
+            elif n.method is not None:
+                how = f"method {n.method}#{n.method_index + 1} branch {n.branch}"
+            else:
+                how = "not decomposed"
+            lines.append(f"{pad}{n.task}  [{how}]  @{n.path}")
+            stack.extend((c, depth + 1) for c in reversed(n.children))
         return "\n".join(lines) + "\n"
 
     def to_dot(self) -> str:
@@ -92,20 +104,6 @@ class TaskTree:
 
 def _dot_escape(s: str) -> str:
     return s.replace("\\", "\\\\").replace('"', '\\"').replace("\\\\n", "\\n")
-
-
-def _text_lines(n: TaskTree, indent: str) -> list[str]:
-    if n.step is not None:
-        head = f"{indent}{n.task}  #{n.step}"
-    elif n.method:
-        head = f"{indent}{n.task}  [{n.branch}]"
-    else:
-        head = f"{indent}{n.task}"
-    head += f"  @{n.path}"
-    lines = [head]
-    for c in n.children:
-        lines.extend(_text_lines(c, indent + "  "))
-    return lines
 
 
 def snapshot(root, steps) -> TaskTree:
@@ -132,23 +130,28 @@ def _flatten(node) -> list:
 
 
 def _children(node, prefix: str) -> list:
-    kids = _flatten(node)
-    counts = Counter(k.task.name for k in kids)
-    seen: Counter = Counter()
-    result = []
-    for k in kids:
-        name = k.task.name
-        seen[name] += 1
-        label = name if counts[name] == 1 else f"{name} :call {seen[name]}"
-        path = f"{prefix}/{label}" if prefix else label
-        t = TaskTree(name=name, args=k.task.args, path=path)
-        how = k.how
-        if isinstance(how, int):
-            t.step = how
-        elif how is not None:
-            method, branch = how
-            t.method = method.name
-            t.branch = method.branches[branch].label
-            t.children = _children(k, path)
-        result.append(t)
-    return result
+    """The subtrees below a network node, built without recursion."""
+    out: list = []
+    work = [(node, prefix, out)]
+    while work:
+        parent, path, sink = work.pop()
+        kids = _flatten(parent)
+        counts = Counter(k.task.name for k in kids)
+        seen: Counter = Counter()
+        for k in kids:
+            name = k.task.name
+            seen[name] += 1
+            label = name if counts[name] == 1 else f"{name} :call {seen[name]}"
+            kpath = f"{path}/{label}" if path else label
+            t = TaskTree(name=name, args=k.task.args, path=kpath)
+            how = k.how
+            if isinstance(how, int):
+                t.step = how
+            elif how is not None:
+                method, branch, index = how
+                t.method = method.name
+                t.method_index = index
+                t.branch = method.branches[branch].label
+                work.append((k, kpath, t.children))
+            sink.append(t)
+    return out

@@ -1,0 +1,91 @@
+"""``htn stats``: the planning paper's Table 1, for its scenarios or any problem."""
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+import click
+
+from jshop.errors import HtnError
+
+SCENARIOS = [("domains/domestic.jshop", "problems/bring_object.jshop"),
+             ("domains/domestic.jshop", "problems/guide_robot.jshop")]
+
+
+def find_project_file(rel: str) -> str:
+    """A shipped domain or problem: from the current directory or this checkout."""
+    for base in (Path.cwd(), Path(__file__).resolve().parent.parent):
+        if (base / rel).is_file():
+            return os.path.relpath(base / rel) if base == Path.cwd() else str(base / rel)
+    raise HtnError(f"cannot find {rel}: run htn stats from the project folder, or give "
+                   "DOMAIN PROBLEM", rel)
+
+
+@click.command("stats")
+@click.argument("files", nargs=-1, type=click.Path(dir_okay=False))
+@click.option("--repeat", type=click.IntRange(min=1), default=5, show_default=True,
+              help="Plan N times and report the median time.")
+@click.option("--json", "as_json", is_flag=True, help="Print JSON instead of a table.")
+@click.option("--functions", type=click.Path(dir_okay=False), metavar="FILE.py",
+              help="Python file with user functions for (call ...).")
+@click.option("--timeout", type=click.FloatRange(min=0, min_open=True), metavar="SECONDS",
+              help="Stop enumerating plans of a problem after this many seconds.")
+def stats(files, repeat, as_json, functions, timeout):
+    """Plan counts, planning time, shortest plan and domain size (Table 1).
+
+    \b
+    Without arguments: the paper's two scenarios (bring an object, guide a
+    robot) with the paper's figures beside ours. With arguments: the first is
+    a DOMAIN, the rest are PROBLEMs in it:
+      htn stats
+      htn stats domains/domestic.jshop problems/bring_coke.jshop problems/bring_two.jshop
+    """
+    from jshop.functions import FunctionTable
+    from jshop.stats import PAPER, scenario_stats
+
+    if len(files) == 1:
+        raise click.UsageError("give a DOMAIN and at least one PROBLEM (or no arguments)")
+    pairs = SCENARIOS if not files else [(files[0], p) for p in files[1:]]
+    if not files:
+        pairs = [(find_project_file(d), find_project_file(p)) for d, p in pairs]
+    table = FunctionTable()
+    if functions:
+        table.load_file(functions)
+    rows = [scenario_stats(d, p, table, repeat, timeout) for d, p in pairs]
+    if as_json:
+        click.echo(json.dumps({"scenarios": [r.as_dict() for r in rows]}, indent=1))
+        return
+    from rich import box
+    from rich.console import Console
+    from rich.table import Table
+
+    show_paper = not files
+    t = Table(title="Plan generation (cf. Table 1 of the planning paper)", box=box.ROUNDED)
+    t.add_column("", style="bold")
+    for r in rows:
+        t.add_column(Path(r.problem).stem, justify="right")
+
+    def paper(r, key, fmt="{}"):
+        ref = PAPER.get(Path(r.problem).stem) if show_paper else None
+        return f"  [dim](paper {fmt.format(ref[key])})[/dim]" if ref else ""
+
+    t.add_row("solution plans", *[f"{r.plans}{paper(r, 'plans')}" for r in rows])
+    t.add_row("distinct action sequences",
+              *[f"{r.distinct_plans}{paper(r, 'distinct_plans')}" for r in rows])
+    t.add_row("time to plan (all plans)",
+              *[f"{r.plan_ms:.2f} ms{paper(r, 'plan_s', '{:g} s')}" for r in rows])
+    t.add_row("minimum plan length",
+              *[f"{r.min_length if r.min_length is not None else '-'}{paper(r, 'min_length')}"
+                for r in rows])
+    t.add_row("methods / operators",
+              *[f"{r.methods} / {r.operators}"
+                + (f"  [dim](paper {PAPER[Path(r.problem).stem]['methods']} / "
+                   f"{PAPER[Path(r.problem).stem]['operators']})[/dim]"
+                   if show_paper and Path(r.problem).stem in PAPER else "") for r in rows])
+    console = Console()
+    console.print(t)
+    console.print(f"[dim]time: median of {repeat} run(s), parsing excluded; "
+                  f"domain {rows[0].domain}[/dim]")
+    if any(r.timed_out for r in rows):
+        console.print("[yellow]some problems timed out; their counts are partial[/yellow]")
