@@ -32,8 +32,10 @@ def cli():
 
 def _register():
     from .plan_cmd import plan
+    from .run_cmd import run
     from .stats_cmd import stats
     cli.add_command(plan)
+    cli.add_command(run)
     cli.add_command(stats)
 
 

@@ -25,7 +25,7 @@ GRAMMAR = Path(__file__).with_name("jshop2.lark")
 @lru_cache(maxsize=1)
 def _lark() -> Lark:
     return Lark(GRAMMAR.read_text(), parser="lalr", propagate_positions=True,
-                maybe_placeholders=False, cache=False)
+                maybe_placeholders=False, start=["start", "task_atom"])
 
 
 _TOKEN_NAMES = {
@@ -391,7 +391,7 @@ def parse_text(text: str, file: str = "<string>", functions: FunctionTable | Non
     """Parse a domain or problem from text; raise :class:`HtnError` on bad input."""
     functions = functions or FunctionTable()
     try:
-        tree = _lark().parse(text)
+        tree = _lark().parse(text, start="start")
     except UnexpectedCharacters as e:
         raise HtnError(f"unexpected character {text[e.pos_in_stream]!r}", file, e.line, e.column)
     except UnexpectedToken as e:
@@ -411,6 +411,21 @@ def parse_text(text: str, file: str = "<string>", functions: FunctionTable | Non
     except VisitError as e:
         if isinstance(e.orig_exc, HtnError):
             raise e.orig_exc from None
+        raise
+
+
+def parse_step(text: str, file: str = "<plan>", line: int = 1):
+    """Parse one plan step such as ``(!move_base jenny home kitchen)``."""
+    try:
+        tree = _lark().parse(text, start="task_atom")
+    except UnexpectedInput as e:
+        raise HtnError(f"not a plan step: {text.strip()!r}", file, line,
+                       getattr(e, "column", 1))
+    try:
+        return Builder(file, FunctionTable()).transform(tree)
+    except VisitError as e:
+        if isinstance(e.orig_exc, HtnError):
+            raise HtnError(e.orig_exc.message, file, line, 1) from None
         raise
 
 

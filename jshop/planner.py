@@ -310,6 +310,24 @@ class Planner:
             self.stats.backtracks += 1
 
     # ------------------------------------------------------------ operators
+    def apply_step(self, name: str, args: tuple) -> bool:
+        """Apply a ground plan step to this planner's state, as the search would.
+
+        The step's operator must unify with it and its precondition hold; the
+        first satisfier is used. Returns False (state unchanged) otherwise.
+        Used to keep a belief state during execution and to check plans.
+        """
+        for op, unify_head, pre, _bind in self._ops.get(name, ()):
+            env = [None] * op.nvars
+            if not unify_head(tuple(args), env):
+                continue
+            for nb in pre(env):
+                change, ok = self._apply(op, nb)
+                if ok:
+                    return True
+                change.undo(self.state)
+        return False
+
     def _apply(self, op: S.Operator, env: list):
         """Apply an operator (manual 5.2.1); False if it deletes a protected atom."""
         change = Change()

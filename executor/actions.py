@@ -1,0 +1,161 @@
+"""Action state machines: one per operator, one life cycle for all.
+
+As in the paper (section 4), every operator is executed by a small state
+machine with three states: **execute** the action, run its **monitor**, and
+**report**. The outcomes are one enum for every action:
+
+* ``finished``  - the action reports that it is done (feedback);
+* ``verified``  - its monitor observed the expected effect in the world;
+* ``failed``    - the action itself failed (internal error);
+* ``aborted``   - it finished, but the monitor did not observe the effect;
+* ``retrying``  - it will be tried again (up to the operator's retry limit).
+
+Registering an action for a new operator is a few lines::
+
+    @action("!wave")
+    class Wave(ActionMachine):
+        def execute(self, robot, hand):
+            return robot.wave(hand)
+        def monitor(self, robot, hand):
+            return robot.check_waving(hand)
+"""
+from __future__ import annotations
+
+from enum import Enum
+from typing import Callable, Optional
+
+from robot.interface import Check, Robot, SkillResult
+
+
+class Outcome(str, Enum):
+    FINISHED = "finished"
+    VERIFIED = "verified"
+    FAILED = "failed"
+    ABORTED = "aborted"
+    RETRYING = "retrying"
+
+
+class ActionMachine:
+    """Execute -> monitor -> report, for one operator instance.
+
+    Subclasses define :meth:`execute` (call a robot skill) and :meth:`monitor`
+    (check the world); arguments are the plan step's parameters.
+    """
+
+    name = ""
+
+    def execute(self, robot: Robot, *args) -> SkillResult:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def monitor(self, robot: Robot, *args) -> Check:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def run(self, robot: Robot, args: tuple, emit: Callable[[str, str], None]) -> Outcome:
+        """One attempt: the three states; returns verified, failed or aborted."""
+        try:
+            result = self.execute(robot, *args)
+        except TypeError as exc:  # wrong number of parameters in the plan step
+            emit(Outcome.FAILED.value, f"bad parameters: {exc}")
+            return Outcome.FAILED
+        if not result.ok:
+            emit(Outcome.FAILED.value, result.detail)
+            return Outcome.FAILED
+        emit(Outcome.FINISHED.value, result.detail)
+        check = self.monitor(robot, *args)
+        if check.ok:
+            emit(Outcome.VERIFIED.value, check.detail)
+            return Outcome.VERIFIED
+        emit(Outcome.ABORTED.value, check.detail)
+        return Outcome.ABORTED
+
+
+REGISTRY: dict[str, type] = {}
+
+
+def action(operator: str):
+    """Class decorator: register an :class:`ActionMachine` for an operator name."""
+    def register(cls):
+        cls.name = operator
+        REGISTRY[operator] = cls
+        return cls
+    return register
+
+
+def machine_for(operator: str) -> Optional[ActionMachine]:
+    cls = REGISTRY.get(operator)
+    return cls() if cls else None
+
+
+def _all(*checks: Check) -> Check:
+    bad = [c for c in checks if not c.ok]
+    return Check(not bad, "; ".join(c.detail for c in (bad or checks)))
+
+
+# ---------------------------------------------------------------- the domestic robot
+
+@action("!move_base")
+class MoveBase(ActionMachine):
+    def execute(self, robot, who, start, goal):
+        return robot.move_base(goal)
+
+    def monitor(self, robot, who, start, goal):
+        checks = [robot.check_base_at(goal), robot.check_no_collision()]
+        if robot.carrying:   # what the robot believes it carries must still be in the hand
+            checks.append(robot.check_in_gripper(robot.carrying))
+        return _all(*checks)
+
+
+@action("!detect_object")
+class DetectObject(ActionMachine):
+    def execute(self, robot, who, obj, furniture):
+        return robot.detect_object(obj, furniture)
+
+    def monitor(self, robot, who, obj, furniture):
+        return robot.check_detection(obj)
+
+
+@action("!grasp")
+class Grasp(ActionMachine):
+    def execute(self, robot, who, obj, furniture):
+        if not robot.has_detection(obj):   # e.g. on a retry: look again first
+            robot.detect_object(obj, furniture)
+        return robot.grasp(obj, furniture)
+
+    def monitor(self, robot, who, obj, furniture):
+        return robot.check_in_gripper(obj)
+
+
+@action("!place")
+class Place(ActionMachine):
+    def execute(self, robot, who, obj, furniture):
+        return robot.place_object(obj, furniture)
+
+    def monitor(self, robot, who, obj, furniture):
+        return robot.check_on(obj, furniture)
+
+
+@action("!find_person")
+class FindPerson(ActionMachine):
+    def execute(self, robot, who, person, place):
+        return robot.find_person(person)
+
+    def monitor(self, robot, who, person, place):
+        return robot.check_person_visible(person)
+
+
+@action("!hand_over")
+class HandOver(ActionMachine):
+    def execute(self, robot, who, obj, person):
+        return robot.hand_over(obj, person)
+
+    def monitor(self, robot, who, obj, person):
+        return robot.check_handed(obj, person)
+
+
+@action("!say")
+class Say(ActionMachine):
+    def execute(self, robot, who, message):
+        return robot.say(message)
+
+    def monitor(self, robot, who, message):
+        return robot.check_said(message)

@@ -1,0 +1,55 @@
+"""Execution settings: per-operator retry limits from a TOML file next to the
+domain (``domains/domestic.jshop`` -> ``domains/domestic.toml``), overridable
+on the command line."""
+from __future__ import annotations
+
+import os
+import tomllib
+
+from jshop.errors import HtnError
+
+
+def config_path(domain_path: str) -> str:
+    return os.path.splitext(domain_path)[0] + ".toml"
+
+
+def load_retries(domain_path: str) -> dict[str, int]:
+    """Retry limits by operator name ('!grasp'); missing file -> no retries."""
+    path = config_path(domain_path)
+    if not os.path.isfile(path):
+        return {}
+    try:
+        with open(path, "rb") as fh:
+            data = tomllib.load(fh)
+    except tomllib.TOMLDecodeError as exc:
+        raise HtnError(f"bad TOML: {exc}", path)
+    retries = data.get("retries", {})
+    out = {}
+    for name, n in retries.items():
+        if not isinstance(n, int) or n < 0:
+            raise HtnError(f"retries.{name} must be a non-negative integer", path)
+        out[_op(name)] = n
+    return out
+
+
+def parse_overrides(items) -> dict[str, int]:
+    """``grasp=3`` or ``!grasp=3`` pairs from ``--retries``."""
+    out = {}
+    for item in items:
+        for part in item.split(","):
+            name, sep, value = part.partition("=")
+            if not sep or not name.strip():
+                raise HtnError(f"--retries: expected OPERATOR=N, got '{part}'")
+            try:
+                n = int(value)
+            except ValueError:
+                raise HtnError(f"--retries: '{value}' is not a whole number")
+            if n < 0:
+                raise HtnError(f"--retries: {part} must not be negative")
+            out[_op(name.strip())] = n
+    return out
+
+
+def _op(name: str) -> str:
+    name = name.lower()
+    return name if name.startswith("!") else "!" + name

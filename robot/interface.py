@@ -1,0 +1,96 @@
+"""The robot interface: the skills the domain's operators need, and what the
+robot can observe of the world to monitor them.
+
+A skill returns a :class:`SkillResult`: ``ok`` is the robot's own belief that it
+finished (``False`` only for an internal failure, e.g. an unreachable arm
+pose). Whether the effect really happened is for a monitor to decide, using
+the ``observe``/``check_*`` methods, which look at the world itself.
+"""
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from dataclasses import dataclass, field
+from typing import Any, Optional
+
+
+@dataclass
+class SkillResult:
+    ok: bool
+    detail: str = ""
+    data: dict = field(default_factory=dict)
+
+
+@dataclass
+class Check:
+    """A monitor's observation: did the world show the expected effect?"""
+    ok: bool
+    detail: str = ""
+
+
+class Robot(ABC):
+    """Skills (act) and checks (observe) of a mobile manipulator."""
+
+    world: Any
+    sim_time: float = 0.0
+
+    # ---- skills
+    @abstractmethod
+    def move_base(self, place: str) -> SkillResult: ...
+
+    @abstractmethod
+    def detect_object(self, obj: str, furniture: str) -> SkillResult: ...
+
+    @abstractmethod
+    def grasp(self, obj: str, furniture: str) -> SkillResult: ...
+
+    @abstractmethod
+    def place_object(self, obj: str, furniture: str) -> SkillResult: ...
+
+    @abstractmethod
+    def find_person(self, person: str) -> SkillResult: ...
+
+    @abstractmethod
+    def hand_over(self, obj: str, person: str) -> SkillResult: ...
+
+    @abstractmethod
+    def say(self, message: str) -> SkillResult: ...
+
+    @abstractmethod
+    def hold(self) -> None:
+        """Stop all motion and keep the current pose (after a failure)."""
+
+    # ---- checks used by monitors
+    @abstractmethod
+    def check_base_at(self, place: str) -> Check: ...
+
+    @abstractmethod
+    def check_no_collision(self) -> Check: ...
+
+    @abstractmethod
+    def check_in_gripper(self, obj: str) -> Check: ...
+
+    @abstractmethod
+    def check_on(self, obj: str, furniture: str) -> Check: ...
+
+    @abstractmethod
+    def check_handed(self, obj: str, person: str) -> Check: ...
+
+    @abstractmethod
+    def check_person_visible(self, person: str) -> Check: ...
+
+    @abstractmethod
+    def check_detection(self, obj: str) -> Check: ...
+
+    @abstractmethod
+    def check_said(self, message: str) -> Check: ...
+
+    # ---- state estimation for replanning
+    @abstractmethod
+    def observe(self) -> list[tuple[str, tuple]]:
+        """Facts of the domain's dynamic predicates, as the robot perceives them."""
+
+    def close(self) -> None:
+        pass
+
+    def snapshot(self, path: str) -> Optional[str]:
+        return None
