@@ -81,6 +81,8 @@ def run(plan_file, sim, gui, snapshots, faults, seed, retries, replan, log_path,
     dom = load_domain(domain, table)
     prob = load_problem(problem, table)
     instance = prob.instances[0]
+    steps = pf.plans[plan_index - 1].steps
+    _check_steps(steps, dom, plan_file)
     world = world_from_state(instance.state)
     limits = load_retries(domain)
     limits.update(parse_overrides(retries))
@@ -96,7 +98,7 @@ def run(plan_file, sim, gui, snapshots, faults, seed, retries, replan, log_path,
         log.listeners.append(view.event)
     if snapshots:
         log.listeners.append(_snapshotter(robot, snapshots))
-    dispatcher = TaskDispatcher(robot, dom, instance, pf.plans[plan_index - 1].steps, limits, log,
+    dispatcher = TaskDispatcher(robot, dom, instance, steps, limits, log,
                                 replan=replan, functions=table)
     try:
         if isinstance(view, _LiveView):
@@ -114,6 +116,23 @@ def run(plan_file, sim, gui, snapshots, faults, seed, retries, replan, log_path,
     if summary.result == "interrupted":
         sys.exit(130)
     sys.exit(0 if summary.result == "verified" else 1)
+
+
+def _check_steps(steps, domain, plan_file) -> None:
+    """Every step must be an operator of the domain, with its arity, and have an
+    action state machine unless it is internal (!!)."""
+    from executor.actions import REGISTRY
+    for s in steps:
+        ops = domain.operators.get(s.name)
+        if not ops:
+            raise HtnError(f"unknown operator {s.name}: the domain has no such operator",
+                           plan_file, s.line, 1)
+        if all(len(o.head.args) != len(s.args) for o in ops):
+            raise HtnError(f"{s.name} takes {len(ops[0].head.args)} arguments, given "
+                           f"{len(s.args)}", plan_file, s.line, 1)
+        if not s.internal and s.name not in REGISTRY:
+            raise HtnError(f"no action state machine is registered for {s.name}",
+                           plan_file, s.line, 1)
 
 
 def _snapshotter(robot, folder):

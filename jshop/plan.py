@@ -15,6 +15,7 @@ class Step:
     name: str
     args: tuple
     cost: float = 1.0
+    line: int = 0            # line in a plan file it was read from (0: not read)
 
     @property
     def internal(self) -> bool:

@@ -68,7 +68,7 @@ def read_plan_file(path: str) -> PlanFile:
             if cost is None:
                 raise HtnError("plan step outside a plan (missing 'Plan cost:' line)", path, n, 1)
             atom = parse_step(text, path, n)
-            steps.append(Step(atom.name, atom.args))
+            steps.append(Step(atom.name, atom.args, line=n))
             continue
         raise HtnError(f"unexpected line in plan file: {text[:40]!r}", path, n, 1)
     if cost is not None:

@@ -54,7 +54,7 @@ class Faults:
     slip: float = 0.0     # object slips out of the gripper while it is lifted and carried
     nav: float = 0.0      # navigation stops short of the goal
     detect: float = 0.0   # object detection misses
-    moved: float = 0.0    # a person moves the object before the robot grasps it
+    moved: float = 0.0    # a person moves the object (once) just before the robot grasps it
 
     @classmethod
     def parse(cls, text: Optional[str]) -> "Faults":
@@ -121,6 +121,8 @@ class PyBulletRobot(Robot):
         self.rng = random.Random(seed)
         self.sim_time = 0.0
         self.spoken: list[str] = []
+        self.injected: list[dict] = []       # faults injected so far (for tests and logs)
+        self._moved: set = set()
         self.speech = speech
         self.detections: dict[str, tuple] = {}
         self.seen_persons: dict[str, tuple] = {}
@@ -280,10 +282,11 @@ class PyBulletRobot(Robot):
     def _arm_q(self) -> list[float]:
         return [self.p.getJointState(self.arm, j, physicsClientId=self.cid)[0] for j in ARM_JOINTS]
 
-    def _ik(self, pos, down: bool = True) -> Optional[list[float]]:
+    def _ik(self, pos, down: bool = True, yaw: Optional[float] = None) -> Optional[list[float]]:
         p, c = self.p, self.cid
-        orn = p.getQuaternionFromEuler((math.pi, 0.0, self.base[2])) if down else \
-            p.getQuaternionFromEuler((math.pi / 2, 0.0, self.base[2] - math.pi / 2))
+        yaw = self.base[2] if yaw is None else yaw
+        orn = p.getQuaternionFromEuler((math.pi, 0.0, yaw)) if down else \
+            p.getQuaternionFromEuler((math.pi / 2, 0.0, yaw - math.pi / 2))
         saved = self._arm_q()
         q = saved
         for _ in range(12):
@@ -305,8 +308,9 @@ class PyBulletRobot(Robot):
                 self.p.resetJointState(self.arm, j, u + (v - u) * a, physicsClientId=self.cid)
             self._step()
 
-    def _reach(self, pos, seconds: float = 1.0, down: bool = True) -> bool:
-        q = self._ik(pos, down)
+    def _reach(self, pos, seconds: float = 1.0, down: bool = True,
+               yaw: Optional[float] = None) -> bool:
+        q = self._ik(pos, down, yaw)
         if q is None:
             return False
         self._move_arm(q, seconds)
@@ -364,6 +368,7 @@ class PyBulletRobot(Robot):
         fraction = 1.0
         if self.faults.nav and self.rng.random() < self.faults.nav:
             fraction = self.rng.uniform(0.4, 0.85)
+            self._inject("nav", f"stops at {fraction:.0%} of the way to {place}")
         if math.hypot(goal.x - self.base[0], goal.y - self.base[1]) > 1e-3:
             if not self._face(goal.x, goal.y):
                 return SkillResult(True, "bumped into something while turning")
@@ -384,15 +389,17 @@ class PyBulletRobot(Robot):
         pixels = self._visible_pixels(obj, target)
         if self.faults.detect and self.rng.random() < self.faults.detect:
             pixels = 0
+            self._inject("detect", f"{obj} missed")
         if pixels >= 5:
             pos = self._body_pos(obj) + np.array([self.rng.gauss(0, 0.003), self.rng.gauss(0, 0.003), 0])
             self.detections[obj] = tuple(pos)
             detail = f"{obj} seen ({pixels} px)"
         else:
             detail = f"{obj} not seen"
-        if self.faults.moved and self.rng.random() < self.faults.moved:
-            self._move_object_elsewhere(obj, furniture)
         return SkillResult(True, detail, {"pixels": pixels})
+
+    def _inject(self, fault: str, detail: str) -> None:
+        self.injected.append({"fault": fault, "t": round(self.sim_time, 4), "detail": detail})
 
     def has_detection(self, obj: str) -> bool:
         return obj in self.detections
@@ -403,6 +410,7 @@ class PyBulletRobot(Robot):
         if not others:
             return
         dest = self.rng.choice(sorted(others))
+        self._inject("moved", f"{obj} taken from {furniture} to {dest}")
         used = sum(1 for t, _ in self._resting_objects() if t == dest)
         x, y, z = self._spot_on(dest, used + 1)
         self.p.resetBasePositionAndOrientation(self.body_of[obj], [x, y, z + CAN_HEIGHT / 2 + 0.002],
@@ -410,17 +418,22 @@ class PyBulletRobot(Robot):
         self._settle(0.2)
 
     def grasp(self, obj: str, furniture: str) -> SkillResult:
+        """Top grasp at the detected pose: open, descend, close, lift, carry."""
         if self.held is not None:
             return SkillResult(False, f"the hand already holds {self.held}")
         guess = self.detections.get(obj)
         if guess is None:
             return SkillResult(True, f"no detection of {obj} to grasp")
+        if self.faults.moved and obj not in self._moved and self.rng.random() < self.faults.moved:
+            self._moved.add(obj)   # somebody takes it away once, just before the grasp
+            self._move_object_elsewhere(obj, furniture)
         gx, gy, gz = guess
         self._face(gx, gy)
+        yaw = self._grasp_yaw(obj)
         self._set_fingers(0.04)
-        if not self._reach([gx, gy, gz + 0.15], 0.8):
+        if not self._reach([gx, gy, gz + 0.15], 0.8, yaw=yaw):
             return SkillResult(False, f"{obj} is out of the arm's reach")
-        if not self._reach([gx, gy, gz + 0.01], 0.6):
+        if not self._reach([gx, gy, gz + 0.01], 0.6, yaw=yaw):
             return SkillResult(False, f"{obj} is out of the arm's reach")
         for w_ in np.linspace(0.04, 0.028, 12):
             self._set_fingers(float(w_))
@@ -430,15 +443,28 @@ class PyBulletRobot(Robot):
         if self._fingers_touch(body):
             self.held = self.carrying = obj
             self._attach(body)
-        lift_ok = self._reach([gx, gy, gz + 0.12], 0.5)
         if self.held and self.faults.slip and self.rng.random() < self.faults.slip:
+            # it slips just after it leaves the surface, while being lifted
+            self._reach([gx, gy, gz + 0.03], 0.2, yaw=yaw)
+            self._inject("slip", f"{obj} slips out of the gripper")
             self._release()
             self._set_fingers(0.04)
+            self._settle(0.3)
+        lift_ok = self._reach([gx, gy, gz + 0.15], 0.5, yaw=yaw)
         self._carry_pose()
         self.detections.pop(obj, None)
         if not lift_ok:
             return SkillResult(False, "could not lift the arm")
         return SkillResult(True, "gripper closed")
+
+    def _grasp_yaw(self, obj: str) -> float:
+        """Close the fingers across the object: along the robot's side for an
+        upright can, across the axis of a can lying on its side."""
+        _, orn = self.p.getBasePositionAndOrientation(self.body_of[obj], physicsClientId=self.cid)
+        axis = self.p.getMatrixFromQuaternion(orn)[2::3]   # the cylinder's z axis in the world
+        if abs(axis[2]) > 0.7:
+            return self.base[2]
+        return math.atan2(axis[1], axis[0])
 
     def _carry_pose(self) -> None:
         """Hold the arm (and what it carries) close, to the left of the camera."""
