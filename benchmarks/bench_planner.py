@@ -20,7 +20,6 @@ end-to-end time.
 from __future__ import annotations
 
 import json
-import os
 import statistics
 import subprocess
 import sys

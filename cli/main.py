@@ -13,7 +13,7 @@ import click
 
 from jshop.errors import HtnError
 
-from .output import fail, warn
+from .output import fail
 
 CONTEXT = dict(help_option_names=["-h", "--help"], max_content_width=100)
 

@@ -1,7 +1,6 @@
 """``htn run PLAN --sim``: execute a plan with monitoring on the simulated robot."""
 from __future__ import annotations
 
-import json
 import os
 import sys
 

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 from . import syntax as S
 from .errors import HtnError
-from .parser import _walk_effects, _walk_expr, _walk_pre, _walk_term
+from .parser import _walk_expr, _walk_pre, _walk_term
 
 
 @dataclass

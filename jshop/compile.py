@@ -211,10 +211,10 @@ def make_head_unifier(head: tuple) -> Callable[[tuple, list], bool]:
                 seen.add(a.index)
                 src.append(f"    if type(t) is not Var: env[{a.index}] = t")
             else:
-                src += [f"    if type(t) is not Var:",
+                src += ["    if type(t) is not Var:",
                         f"        v = env[{a.index}]",
                         f"        if v is None: env[{a.index}] = t",
-                        f"        elif not (v == t and type(v) is type(t)): return False"]
+                        "        elif not (v == t and type(v) is type(t)): return False"]
         else:
             ns[f"c{i}"] = a
             src.append(f"    if type(t) is not Var and not (type(t) is type(c{i}) and t == c{i}):"

@@ -20,7 +20,7 @@ from typing import Callable, Iterator
 from . import syntax as S
 from .errors import HtnError, PlanningError
 from .compile import GENERIC, binder, head_unifier, scanner
-from .terms import Var, is_ground, subst, term_str, unify
+from .terms import Var, is_ground, term_str, unify
 
 Sat = Callable[[list], Iterator[list]]
 

@@ -1,7 +1,7 @@
 """Plans: sequences of ground operator instances with a cost (manual 3.13)."""
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any, Optional
 
 from .terms import atom_str, java_double

@@ -36,8 +36,8 @@ from .logic import Logic, atom_from_term
 from .plan import Plan, Step
 from .state import Change, State
 from .compile import binder, head_unifier
-from .terms import subst, term_str, unify
-from .tree import TaskTree, snapshot
+from .terms import subst, term_str
+from .tree import snapshot
 
 _PLAN = object()
 
@@ -396,25 +396,3 @@ class Planner:
         if sat is None:
             sat = self._forall_cache[id(item)] = self.logic.expr(item.cond)
         return sat
-
-
-def _unify_args(pattern: tuple, args: tuple, env: list) -> bool:
-    if len(pattern) != len(args):
-        return False
-    for p, t in zip(pattern, args):
-        if not unify(p, t, env):
-            return False
-    return True
-
-
-def find_plans(domain: S.Domain, problem: S.Problem, functions=None, limit: Optional[int] = 1,
-               timeout: Optional[float] = None, record_trees: bool = False):
-    """Convenience: plans of every instance of a problem, ``limit`` per instance."""
-    out = []
-    for inst in problem.instances:
-        planner = Planner(domain, inst, functions, record_trees)
-        for plan in planner.plans(timeout):
-            out.append(plan)
-            if limit is not None and len([p for p in out]) >= limit:
-                break
-    return out
