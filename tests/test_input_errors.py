@@ -1,0 +1,136 @@
+"""Bad input gets one line ``file:line:col: message``, exit code 2, no traceback."""
+from __future__ import annotations
+
+import pytest
+
+from conftest import ROOT, run_htn
+
+DOMAIN = """(defdomain d (
+  (:operator (!go ?a ?b) ((at ?a)) ((at ?a)) ((at ?b)))
+  (:method (travel ?to) ((at ?from)) ((!go ?from ?to)))))
+"""
+PROBLEM = "(defproblem p d ((at home)) ((travel work)))\n"
+
+
+def write(tmp_path, domain=DOMAIN, problem=PROBLEM):
+    d, p = tmp_path / "d.jshop", tmp_path / "p.jshop"
+    d.write_text(domain)
+    p.write_text(problem)
+    return d, p
+
+
+def check_error(result, prefix, message):
+    assert result.returncode == 2, result.stdout + result.stderr
+    assert "Traceback" not in result.stderr
+    first = result.stderr.splitlines()[0]
+    assert first.startswith(prefix), first
+    assert message in first, first
+
+
+def test_the_valid_files_plan(tmp_path):
+    d, p = write(tmp_path)
+    r = run_htn("plan", d, p, "-f", "jshop")
+    assert r.returncode == 0 and "(!go home work)" in r.stdout
+
+
+def test_missing_closing_parenthesis(tmp_path):
+    d, p = write(tmp_path, domain=DOMAIN.rstrip()[:-1])
+    check_error(run_htn("plan", d, p), f"{d}:", "unexpected end of file")
+
+
+def test_unexpected_token_points_at_it(tmp_path):
+    d, p = write(tmp_path, domain=DOMAIN.replace("(!go ?from ?to)", "(!go ?from ?to) )"))
+    check_error(run_htn("plan", d, p), f"{d}:3:", "unexpected")
+
+
+def test_unexpected_character(tmp_path):
+    d, p = write(tmp_path, domain=DOMAIN.replace("?to)))", "?to #)))"))
+    check_error(run_htn("plan", d, p), f"{d}:3:", "unexpected character")
+
+
+def test_unknown_task_in_the_problem(tmp_path):
+    d, p = write(tmp_path, problem="(defproblem p d ((at home))\n  ((fly work)))\n")
+    r = run_htn("plan", d, p)
+    check_error(r, f"{p}:2:5:", "unknown task 'fly'")
+    assert "^" in r.stderr   # the source line with a caret
+
+
+def test_unknown_operator_in_the_problem(tmp_path):
+    d, p = write(tmp_path, problem="(defproblem p d () ((!jump)))")
+    check_error(run_htn("plan", d, p), f"{p}:1:22:", "unknown primitive task '!jump'")
+
+
+def test_arity_mismatch_in_the_problem(tmp_path):
+    d, p = write(tmp_path, problem="(defproblem p d ((at home)) ((travel work now)))")
+    check_error(run_htn("plan", d, p), f"{p}:1:31:", "'travel' takes 1 argument, given 2")
+
+
+def test_arity_mismatch_in_a_method_body(tmp_path):
+    d, p = write(tmp_path, domain=DOMAIN.replace("((!go ?from ?to))", "((!go ?to))"))
+    check_error(run_htn("plan", d, p), f"{d}:3:", "'!go' takes 2 arguments, given 1")
+
+
+def test_undefined_function(tmp_path):
+    d, p = write(tmp_path, domain=DOMAIN.replace("((at ?from))", "((at ?from) (call Far ?from))"))
+    check_error(run_htn("plan", d, p), f"{d}:3:", "undefined function 'Far'")
+
+
+def test_undefined_comparator(tmp_path):
+    d, p = write(tmp_path, domain=DOMAIN.replace("((at ?from))", "(:sort-by ?from Nearest (at ?from))"))
+    check_error(run_htn("plan", d, p), f"{d}:3:", "undefined comparator 'Nearest'")
+
+
+def test_missing_files_and_swapped_files(tmp_path):
+    d, p = write(tmp_path)
+    check_error(run_htn("plan", tmp_path / "no.jshop", p), f"{tmp_path / 'no.jshop'}:", "no such file")
+    check_error(run_htn("plan", d, tmp_path / "no.jshop"), f"{tmp_path / 'no.jshop'}:", "no such file")
+    check_error(run_htn("plan", p, d), f"{p}:1:1:", "expected a (defdomain")
+    check_error(run_htn("plan", d, p, "--functions", tmp_path / "no.py"), f"{tmp_path / 'no.py'}:",
+                "not found")
+
+
+def test_functions_file_with_a_syntax_error(tmp_path):
+    d, p = write(tmp_path)
+    bad = tmp_path / "fns.py"
+    bad.write_text("def f(:\n")
+    check_error(run_htn("plan", d, p, "--functions", bad), f"{bad}:1:", "syntax error")
+
+
+def test_non_ground_initial_state(tmp_path):
+    d, p = write(tmp_path, problem="(defproblem p d ((at ?x)) ((travel work)))")
+    check_error(run_htn("plan", d, p), f"{p}:1:18:", "must be ground")
+
+
+@pytest.mark.parametrize("args", [["--plans", "0"], ["--format", "xml"], ["--timeout", "-1"],
+                                  ["--bogus"]])
+def test_bad_options(tmp_path, args):
+    d, p = write(tmp_path)
+    r = run_htn("plan", d, p, *args)
+    assert r.returncode == 2 and "Traceback" not in r.stderr
+    assert "Error" in r.stderr or "Usage" in r.stderr
+
+
+def test_warnings_for_likely_domain_bugs(tmp_path):
+    domain = """(defdomain d (
+  (:operator (!go ?a) () () ((at ?b)))
+  (:method (m) () ((!go x) (!missing)))))"""
+    d, p = write(tmp_path, domain=domain, problem="(defproblem p d () ((m)))")
+    r = run_htn("plan", d, p, "-f", "jshop")
+    assert r.returncode == 1          # no plan: (!missing) can never succeed
+    assert f"{d}:2:3: warning: operator !go: variable ?b" in r.stderr
+    assert f"{d}:3:29: warning: primitive task '!missing' has no operator" in r.stderr
+    quiet = run_htn("plan", d, p, "-f", "jshop", "--quiet")
+    assert quiet.stderr == ""
+
+
+def test_output_file_is_not_left_half_written(tmp_path):
+    d, p = write(tmp_path)
+    out = tmp_path / "plan.txt"
+    out.write_text("previous plan\n")
+    bad = tmp_path / "bad.jshop"
+    bad.write_text("(defproblem p d ((at home)) ((fly)))")
+    assert run_htn("plan", d, bad, "-o", out).returncode == 2
+    assert out.read_text() == "previous plan\n"      # untouched by a failed run
+    assert run_htn("plan", d, p, "-o", out).returncode == 0
+    assert out.read_text().splitlines()[1] == f"; domain: {d.name}"
+    assert [f.name for f in tmp_path.iterdir() if f.name.startswith(".htn-")] == []
