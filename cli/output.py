@@ -49,6 +49,21 @@ def atomic_write(path: str):
     os.replace(tmp, path)
 
 
+@contextmanager
+def deferred_interrupt():
+    """Hold back Ctrl-C while a unit of output is written, so that streams and
+    files only ever contain whole plans; the interrupt arrives right after."""
+    import signal
+    if not hasattr(signal, "pthread_sigmask"):
+        yield
+        return
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+
+
 def stdout_is_terminal() -> bool:
     try:
         return sys.stdout.isatty()

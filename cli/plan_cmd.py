@@ -8,7 +8,7 @@ import time
 
 import click
 
-from .output import atomic_write, stdout_is_terminal, warn
+from .output import atomic_write, deferred_interrupt, stdout_is_terminal, warn
 
 FORMATS = ["text", "jshop", "json"]
 
@@ -95,11 +95,12 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
             try:
                 for p in planner.plans(remaining):
                     p.instance = k
-                    render.plan(p)
-                    if out_fh:
-                        out_fh.write(p.to_jshop())
-                        out_fh.flush()
-                    found.append(p if (fmt == "json" or dot) else _light(p))
+                    with deferred_interrupt():
+                        render.plan(p)
+                        if out_fh:
+                            out_fh.write(p.to_jshop())
+                            out_fh.flush()
+                        found.append(p if (fmt == "json" or dot) else _light(p))
                     if limit is not None and planner.stats.plans_found >= limit:
                         break
             finally:
@@ -123,9 +124,9 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
         _write_dot(dot, found)
     render.finish(found, totals, domain, problem)
     if totals["timed_out"]:
-        warn(f"timed out after {timeout:g} s; {len(found)} plan(s) found")
+        warn(f"timed out after {timeout:g} s; {totals['plans_found']} plan(s) found")
     if interrupted:
-        warn(f"interrupted; {len(found)} plan(s) found")
+        warn(f"interrupted; {totals['plans_found']} plan(s) found")
         sys.exit(130)
     if not found:
         if fmt == "text":

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import os
+import signal
 import sys
 
 import click
@@ -105,6 +106,10 @@ def run(plan_file, sim, gui, snapshots, faults, seed, retries, replan, log_path,
                 summary = dispatcher.run()
         else:
             summary = dispatcher.run()
+        if summary.result == "interrupted":
+            # the robot holds and the log is complete: shut down in order,
+            # ignoring a second Ctrl-C
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
     finally:
         log.close()
         robot.close()
@@ -113,7 +118,12 @@ def run(plan_file, sim, gui, snapshots, faults, seed, retries, replan, log_path,
                f"{summary.sim_time:.1f} s simulated"
                + (f"; stopped at {summary.failed_step}" if summary.failed_step else ""))
     if summary.result == "interrupted":
-        sys.exit(130)
+        # Log closed, robot disconnected: leave at once. Interpreter shutdown
+        # after a Ctrl-C inside PyBullet was seen (rarely) to end by SIGINT
+        # instead of exit code 130.
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(130)
     sys.exit(0 if summary.result == "verified" else 1)
 
 

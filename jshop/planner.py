@@ -201,7 +201,7 @@ class Planner:
         """Stream plans in JSHOP2's order until exhausted or ``timeout``.
 
         ``stats.elapsed`` counts search time only, not the time the consumer
-        spends between plans; ``timeout`` is measured the same way.
+        spends between plans; ``timeout`` is wall-clock time since the start.
         """
         stats = self.stats
         clock = time.perf_counter
@@ -232,7 +232,7 @@ class Planner:
                 push(self._frame(req))
                 ticks += 1
                 if timeout is not None and not ticks & 255:
-                    if spent + clock() - t0 > timeout:
+                    if clock() - stats.started > timeout:   # wall clock, output included
                         stats.timed_out = True
                         return
         except KeyboardInterrupt:

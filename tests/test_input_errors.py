@@ -134,3 +134,27 @@ def test_output_file_is_not_left_half_written(tmp_path):
     assert run_htn("plan", d, p, "-o", out).returncode == 0
     assert out.read_text().splitlines()[1] == f"; domain: {d.name}"
     assert [f.name for f in tmp_path.iterdir() if f.name.startswith(".htn-")] == []
+
+
+def test_ctrl_c_on_a_streaming_all_keeps_whole_plans(tmp_path):
+    import signal
+    import subprocess
+    import sys
+    import time
+    d, p = write(tmp_path, domain="""(defdomain d ((:operator (!a) () () ())
+      (:method (m) () ((!a))) (:method (m) () ((!a) (m)))))""",
+                 problem="(defproblem p d () ((m)))")
+    out = tmp_path / "plans.txt"
+    proc = subprocess.Popen([sys.executable, "-m", "cli.main", "plan", str(d), str(p), "--all",
+                             "-f", "jshop", "-o", str(out)], cwd=ROOT, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    time.sleep(2.0)
+    proc.send_signal(signal.SIGINT)
+    stdout, stderr = proc.communicate(timeout=60)
+    assert proc.returncode == 130 and "Traceback" not in stderr
+    n = stdout.count("Plan cost:")
+    assert n > 10 and stdout.endswith("--------------------\n")
+    assert stdout.count("--------------------\n") == n
+    saved = out.read_text()          # the -o file holds the same whole plans
+    assert saved.count("Plan cost:") == n and saved.endswith("--------------------\n")
+    assert f"interrupted; {n} plan(s) found" in stderr
