@@ -178,6 +178,35 @@ def make_scanner(args: tuple, key: int) -> Callable:
 
 
 _SCANNERS: dict = {}
+_TERMS: dict = {}
+_CONJUNCTIONS: dict = {}
+
+
+def term_binder(term) -> Callable[[list], tuple]:
+    """Cached binder of a single term (keyed by the term object itself)."""
+    hit = _TERMS.get(id(term))
+    if hit is None or hit[0] is not term:
+        hit = _TERMS[id(term)] = (term, make_binder((term,)))
+    return hit[1]
+
+
+def conjunction(sats: list) -> Callable:
+    """Left-to-right backtracking over conjuncts as one generator of nested
+    loops (JSHOP2's generated conjunction classes do the same). The code is
+    generated once per number of conjuncts."""
+    n = len(sats)
+    make = _CONJUNCTIONS.get(n)
+    if make is None:
+        args = ", ".join(f"s{i}" for i in range(n))
+        lines = [f"def make({args}):", "    def conj(env):"]
+        for i in range(n - 1):
+            lines.append("    " * (i + 2) + f"for e{i + 1} in s{i}(e{i}):")
+        lines.append("    " * (n + 1) + f"yield from s{n - 1}(e{n - 1})")
+        lines.append("    return conj")
+        ns: dict = {}
+        exec("\n".join(lines).replace("(e0)", "(env)"), ns)
+        make = _CONJUNCTIONS[n] = ns["make"]
+    return make(*sats)
 
 
 def scanner(args: tuple, key: int) -> Callable:

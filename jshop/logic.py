@@ -19,7 +19,7 @@ from typing import Callable, Iterator
 
 from . import syntax as S
 from .errors import HtnError, PlanningError
-from .compile import GENERIC, binder, head_unifier, scanner
+from .compile import GENERIC, binder, conjunction, head_unifier, scanner, term_binder
 from .terms import Var, is_ground, term_str, unify
 
 Sat = Callable[[list], Iterator[list]]
@@ -107,10 +107,9 @@ class Logic:
         sats = [self.expr(x) for x in e.items]
         if not sats:
             return _true
-        chain = sats[-1]
-        for s in reversed(sats[:-1]):
-            chain = _conj(s, chain)
-        return chain
+        if len(sats) == 1:
+            return sats[0]
+        return conjunction(sats)
 
     def _or(self, e: S.Or) -> Sat:
         sats = [self.expr(x) for x in e.items]
@@ -142,7 +141,7 @@ class Logic:
         return forall
 
     def _assign(self, e: S.Assign) -> Sat:
-        idx, bind = e.var.index, binder((e.term,))
+        idx, bind = e.var.index, term_binder(e.term)
 
         def assign(env):
             if env[idx] is not None:  # JSHOP2 merges: an earlier binding wins
@@ -154,7 +153,7 @@ class Logic:
         return assign
 
     def _callexpr(self, e: S.CallExpr) -> Sat:
-        bind = binder((e.call,))
+        bind = term_binder(e.call)
 
         def callexpr(env):
             v = bind(env)[1][0]
@@ -234,13 +233,6 @@ class Logic:
 
 def _true(env):
     yield env
-
-
-def _conj(first: Sat, rest: Sat) -> Sat:
-    def conj(env):
-        for e in first(env):
-            yield from rest(e)
-    return conj
 
 
 def _scan(lst: list, bound: tuple, env: list) -> Iterator[list]:

@@ -27,6 +27,7 @@ ordered (nested ``:unordered`` lists keep their meaning).
 """
 from __future__ import annotations
 
+import gc
 import time
 from typing import Iterator, Optional
 
@@ -194,6 +195,7 @@ class Planner:
         self._steps: list = []
         self._cost = 0.0
         self._forall_cache: dict = {}
+        self._effects: dict = {}    # id(op) -> (plain deletes, plain adds, op)
         self._trail: list = []     # nodes marked done, see first_tasks
 
     # ------------------------------------------------------------ driver
@@ -205,6 +207,13 @@ class Planner:
         """
         stats = self.stats
         clock = time.perf_counter
+        # The search allocates many short-lived lists and generators but makes
+        # no reference cycles (the network is a tree, frames sit on an explicit
+        # stack), so reference counting frees everything; the cyclic collector
+        # would only rescan. It is paused while searching, never while the
+        # consumer runs.
+        gc_was_enabled = gc.isenabled()
+        gc.disable()
         t0 = stats.started = clock()
         spent = 0.0
         stack = [self._frame(self.root)]
@@ -226,7 +235,10 @@ class Planner:
                     spent += clock() - t0
                     stats.elapsed = spent
                     t0 = None          # the consumer's time is not search time
+                    if gc_was_enabled:
+                        gc.enable()
                     yield plan
+                    gc.disable()
                     t0 = clock()
                     continue
                 push(self._frame(req))
@@ -242,6 +254,8 @@ class Planner:
             stats.elapsed = spent + (clock() - t0 if t0 is not None else 0.0)
             for frame in reversed(stack):
                 frame.close()
+            if gc_was_enabled:
+                gc.enable()
 
     # ------------------------------------------------------------ one frame
     def _frame(self, chosen: Node):
@@ -328,10 +342,34 @@ class Planner:
                 change.undo(self.state)
         return False
 
+    def _plain(self, eff: S.Effects):
+        """``[(pred, binder)]`` for a list of plain atoms, else None (general case)."""
+        if eff.var is not None or not all(isinstance(i, S.Atom) for i in eff.items):
+            return None
+        return [(i.pred, binder(i.args)) for i in eff.items]
+
     def _apply(self, op: S.Operator, env: list):
         """Apply an operator (manual 5.2.1); False if it deletes a protected atom."""
         change = Change()
         state = self.state
+        plain = self._effects.get(id(op))
+        if plain is None:
+            plain = self._effects[id(op)] = (self._plain(op.delete), self._plain(op.add), op)
+        dels, adds, _ = plain
+        if dels is not None and adds is not None:
+            protections = state.protections
+            for pred, bind in dels:
+                args = bind(env)[1]
+                if (pred, args) in protections:
+                    return change, False
+                i = state.delete(pred, args)
+                if i != -1:
+                    change.deleted.append((pred, args, i))
+            for pred, bind in adds:
+                args = bind(env)[1]
+                if state.add(pred, args):
+                    change.added.append((pred, args))
+            return change, True
         for pred, args in self._effect_atoms(op.delete, env, op):
             if pred is None:  # a protection condition to cancel
                 p, a = args
