@@ -34,6 +34,9 @@ def atomic_write(path: str):
         from jshop.errors import HtnError
         raise HtnError("directory does not exist", path)
     fd, tmp = tempfile.mkstemp(prefix=".htn-", dir=directory)
+    umask = os.umask(0)
+    os.umask(umask)
+    os.chmod(tmp, 0o666 & ~umask)      # mkstemp makes 0600; a plan file is ordinary
     fh = os.fdopen(fd, "w", encoding="utf-8")
     try:
         yield fh

@@ -1,6 +1,7 @@
 """``htn plan DOMAIN PROBLEM``: find plans and print them."""
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import sys
@@ -73,50 +74,46 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
     limit = None if all_plans else n_plans
     record_trees = show_tree or bool(dot) or fmt == "json"
     render = _Renderer(fmt, show_tree)
-    writer = atomic_write(output) if output else None
-    out_fh = writer.__enter__() if writer else None
-    if out_fh:
-        out_fh.write(plan_file_header(domain, problem, output))
     found = []
     totals = {"plans_found": 0, "search_ms": 0.0, "expansions": 0,
               "operator_applications": 0, "backtracks": 0, "timed_out": False,
               "interrupted": False}
     started = time.perf_counter()
     interrupted = False
-    try:
-        for k, inst in enumerate(prob.instances):
-            remaining = None
-            if timeout is not None:
-                remaining = timeout - (time.perf_counter() - started)
-                if remaining <= 0:
+    # -o: Ctrl-C keeps the whole plans written so far; any other error leaves
+    # an earlier file untouched (atomic_write discards the temporary file)
+    with contextlib.ExitStack() as files:
+        out_fh = files.enter_context(atomic_write(output)) if output else None
+        if out_fh:
+            out_fh.write(plan_file_header(domain, problem, output))
+        try:
+            for k, inst in enumerate(prob.instances):
+                remaining = None
+                if timeout is not None:
+                    remaining = timeout - (time.perf_counter() - started)
+                    if remaining <= 0:
+                        totals["timed_out"] = True
+                        break
+                planner = Planner(dom, inst, table, record_trees=record_trees)
+                try:
+                    for p in planner.plans(remaining):
+                        p.instance = k
+                        with deferred_interrupt():
+                            render.plan(p)
+                            if out_fh:
+                                out_fh.write(p.to_jshop())
+                                out_fh.flush()
+                            found.append(p if (fmt == "json" or dot) else _light(p))
+                        if limit is not None and planner.stats.plans_found >= limit:
+                            break
+                finally:
+                    _add_stats(totals, planner.stats.as_dict())
+                if planner.stats.timed_out:
                     totals["timed_out"] = True
                     break
-            planner = Planner(dom, inst, table, record_trees=record_trees)
-            try:
-                for p in planner.plans(remaining):
-                    p.instance = k
-                    with deferred_interrupt():
-                        render.plan(p)
-                        if out_fh:
-                            out_fh.write(p.to_jshop())
-                            out_fh.flush()
-                        found.append(p if (fmt == "json" or dot) else _light(p))
-                    if limit is not None and planner.stats.plans_found >= limit:
-                        break
-            finally:
-                _add_stats(totals, planner.stats.as_dict())
-            if planner.stats.timed_out:
-                totals["timed_out"] = True
-                break
-    except KeyboardInterrupt:
-        interrupted = True
-        totals["interrupted"] = True
-    finally:
-        if writer:
-            if interrupted:
-                writer.__exit__(KeyboardInterrupt, KeyboardInterrupt(), None)
-            else:
-                writer.__exit__(None, None, None)
+        except KeyboardInterrupt:
+            interrupted = True
+            totals["interrupted"] = True
     lengths = [n for n in (getattr(p, "length", None) or len(p.steps) for p in found)]
     totals["shortest_plan"] = min(lengths) if lengths else None
     totals["search_ms"] = round(totals["search_ms"], 3)

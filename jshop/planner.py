@@ -65,14 +65,15 @@ class Node:
     ``how`` records what reduced an atomic node (for the task tree): a
     ``(method, branch_index, method_index)`` triple or the plan step's index.
     """
-    __slots__ = ("task", "subtasks", "ordered", "how", "done")
+    __slots__ = ("task", "subtasks", "ordered", "how", "done", "start")
 
     def __init__(self, task=None, subtasks=None, ordered=True):
         self.task = task
         self.subtasks = subtasks
         self.ordered = ordered
         self.how = None
-        self.done = False   # a cached "every task below is achieved"
+        self.done = False   # cached: every task below is achieved
+        self.start = 0      # cached: members before this index are achieved
 
 
 def instantiate(tl, env: list) -> Node:
@@ -110,16 +111,17 @@ def first_tasks(root: Node, trail: Optional[list] = None) -> list:
     an unordered list those of every member; an immediate task, wherever it is
     met, is then the only option.
 
-    A member found to have nothing left to do is marked ``done`` (and pushed on
-    ``trail``) so later calls skip it; the planner clears marks made below a
-    search frame when it backtracks into that frame.
+    With a ``trail``, what is found achieved is cached for later calls: a
+    member with nothing left is marked ``done``, and a list's ``start`` moves
+    past its achieved leading members. Each change is pushed on the trail; the
+    planner undoes those made below a search frame when it backtracks into it.
     """
     res: list = []
-    stack = [[root, 0, 0]]          # node, next member, len(res) on entry
+    stack = [[root, root.start, -1]]      # node, next member, len(res) on entry
     while stack:
         frame = stack[-1]
         node, i, n0 = frame
-        if i == 0:
+        if n0 < 0:
             frame[2] = n0 = len(res)
         elif node.ordered and len(res) != n0:
             stack.pop()
@@ -133,15 +135,29 @@ def first_tasks(root: Node, trail: Optional[list] = None) -> list:
             continue
         child = subs[i]
         frame[1] = i + 1
-        if child.subtasks is None:
+        cs = child.subtasks
+        if cs is None:
             if child.task.immediate:
                 return [child]
             res.append(child)
             if node.ordered:
                 stack.pop()
-        elif child.subtasks and not child.done:
-            stack.append([child, 0, 0])
+        elif cs and not child.done:
+            stack.append([child, child.start, -1])
+        elif trail is not None and i == node.start:
+            trail.append((node, i))
+            node.start = i + 1
     return res
+
+
+def _undo_marks(trail: list, mark: int) -> None:
+    """Forget what :func:`first_tasks` cached since ``mark``."""
+    while len(trail) > mark:
+        entry = trail.pop()
+        if type(entry) is tuple:
+            entry[0].start = entry[1]
+        else:
+            entry.done = False
 
 
 class Stats:
@@ -295,8 +311,8 @@ class Planner:
                             self._steps.append((op.name, bind_head(nb)[1], cost))
                             self._cost += cost
                             yield self.root
-                            while len(trail) > mark:
-                                trail.pop().done = False
+                            if len(trail) > mark:
+                                _undo_marks(trail, mark)
                             self._steps.pop()
                             self._cost -= cost
                         change.undo(state)
@@ -314,8 +330,8 @@ class Planner:
                             node.subtasks = reduce(nb)
                             node.how = (m, k, index)
                             yield node
-                            while len(trail) > mark:
-                                trail.pop().done = False
+                            if len(trail) > mark:
+                                _undo_marks(trail, mark)
                             found = True
                             node.subtasks = None
                             node.how = None

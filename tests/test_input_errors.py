@@ -158,3 +158,14 @@ def test_ctrl_c_on_a_streaming_all_keeps_whole_plans(tmp_path):
     saved = out.read_text()          # the -o file holds the same whole plans
     assert saved.count("Plan cost:") == n and saved.endswith("--------------------\n")
     assert f"interrupted; {n} plan(s) found" in stderr
+
+
+def test_an_error_during_search_leaves_the_output_file_untouched(tmp_path):
+    d, p = write(tmp_path, domain="(defdomain d ((:operator (!a) () () () expensive)))",
+                 problem="(defproblem p d () ((!a)))")
+    out = tmp_path / "plan.txt"
+    out.write_text("previous plan\n")
+    r = run_htn("plan", d, p, "-o", out)
+    check_error(r, f"{d}:1:", "cost of !a is expensive, not a number")
+    assert out.read_text() == "previous plan\n"
+    assert [f.name for f in tmp_path.iterdir() if f.name.startswith(".htn-")] == []
