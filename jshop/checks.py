@@ -33,14 +33,6 @@ def _arities(domain: S.Domain) -> dict[str, set[int]]:
     return out
 
 
-def _task_atoms(tl):
-    if isinstance(tl, S.TaskAtom):
-        yield tl
-    else:
-        for x in tl.items:
-            yield from _task_atoms(x)
-
-
 def _describe_task(t: S.TaskAtom) -> str:
     return "primitive task" if t.primitive else "task"
 
@@ -53,7 +45,7 @@ def check_problem(domain: S.Domain, problem: S.Problem) -> list[Warning_]:
                                  f"but the domain is '{domain.name}'"))
     arities = _arities(domain)
     for inst in problem.instances:
-        for t in _task_atoms(inst.tasks):
+        for t in S.task_atoms(inst.tasks):
             known = arities.get(t.name)
             if not known:
                 kind = "operator" if t.primitive else "method"
@@ -78,7 +70,7 @@ def check_domain(domain: S.Domain) -> list[Warning_]:
     for ms in domain.methods.values():
         for m in ms:
             for b in m.branches:
-                for t in _task_atoms(b.tasks):
+                for t in S.task_atoms(b.tasks):
                     known = arities.get(t.name)
                     if not known:
                         warnings.append(Warning_(t.pos, f"{_describe_task(t)} '{t.name}' has no "

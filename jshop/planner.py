@@ -37,7 +37,7 @@ from .logic import Logic, atom_from_term
 from .plan import Plan, Step
 from .state import Change, State
 from .compile import binder, head_unifier
-from .terms import subst, term_str
+from .terms import subst, term_str, variables
 from .tree import snapshot
 
 _PLAN = object()
@@ -74,13 +74,6 @@ class Node:
         self.how = None
         self.done = False   # cached: every task below is achieved
         self.start = 0      # cached: members before this index are achieved
-
-
-def instantiate(tl, env: list) -> Node:
-    """Bind a task list of the domain (``TaskList.bind`` in JSHOP2)."""
-    if isinstance(tl, S.TaskAtom):
-        return Node(Task(tl.name, subst(tl.args, env), tl.immediate, tl))
-    return Node(None, [instantiate(x, env) for x in tl.items], tl.ordered)
 
 
 def compile_tasks(tl):
@@ -207,7 +200,10 @@ class Planner:
                                 for m in ms]
                          for name, ms in domain.methods.items()}
         self.stats = Stats()
-        self.root = instantiate(instance.tasks, [])
+        # the problem's own variables (if any) stay unbound, like a method's
+        nvars = 1 + max((v.index for t in S.task_atoms(instance.tasks)
+                         for v in variables(t.args, [])), default=-1)
+        self.root = _list_maker(instance.tasks)([None] * nvars)
         self._steps: list = []
         self._cost = 0.0
         self._forall_cache: dict = {}

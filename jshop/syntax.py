@@ -135,6 +135,15 @@ class TaskList:
     pos: Optional[Pos] = None
 
 
+def task_atoms(tl):
+    """The task atoms of a task list (or a single atom), nested lists included."""
+    if isinstance(tl, TaskAtom):
+        yield tl
+        return
+    for x in tl.items:
+        yield from task_atoms(x)
+
+
 # ------------------------------------------------------ domain elements
 
 @dataclass

@@ -221,3 +221,9 @@ def test_infinite_plan_space_streams_with_a_timeout():
     for found, _ in enumerate(planner.plans(timeout=0.3), 1):
         pass
     assert planner.stats.timed_out and found > 10
+
+
+def test_variables_in_the_problem_task_list_stay_unbound():
+    d = "(defdomain d ((:operator (!take ?x) ((thing ?x)) () ())))"
+    assert plans(d, "(defproblem p d ((thing a) (thing b)) ((!take ?what)))") == [
+        ["(!take a)"], ["(!take b)"]]
