@@ -41,9 +41,12 @@ class TaskTree:
         return atom_str(self.name, self.args) if self.name else "(root)"
 
     def walk(self) -> Iterator["TaskTree"]:
-        yield self
-        for c in self.children:
-            yield from c.walk()
+        """Every node, depth first in order (iterative: trees can be thousands deep)."""
+        stack = [self]
+        while stack:
+            node = stack.pop()
+            yield node
+            stack.extend(reversed(node.children))
 
     def leaves(self) -> list["TaskTree"]:
         return [n for n in self.walk() if n.step is not None]
