@@ -7,13 +7,25 @@ Typical use::
     problem = load_problem("problems/bring_object.jshop")
     planner = Planner(domain, problem.instances[0])
     plan = next(planner.plans())
-"""
-from .errors import HtnError, PlanningError
-from .functions import FunctionTable
-from .parser import load_domain, load_problem, parse_text
-from .plan import Plan, Step
-from .planner import Planner
-from .tree import TaskTree
 
-__all__ = ["HtnError", "PlanningError", "FunctionTable", "load_domain", "load_problem",
-           "parse_text", "Plan", "Step", "Planner", "TaskTree"]
+The names below are imported on first use, so that importing ``jshop.errors``
+(as the command line does for ``htn --help``) does not load the parser.
+"""
+from importlib import import_module
+
+_EXPORTS = {
+    "HtnError": "errors", "PlanningError": "errors", "FunctionTable": "functions",
+    "load_domain": "parser", "load_problem": "parser", "parse_text": "parser",
+    "Plan": "plan", "Step": "plan", "Planner": "planner", "TaskTree": "tree",
+}
+
+__all__ = list(_EXPORTS)
+
+
+def __getattr__(name):
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module 'jshop' has no attribute {name!r}")
+    value = getattr(import_module(f".{module}", __name__), name)
+    globals()[name] = value
+    return value

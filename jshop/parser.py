@@ -25,7 +25,7 @@ GRAMMAR = Path(__file__).with_name("jshop2.lark")
 @lru_cache(maxsize=1)
 def _lark() -> Lark:
     return Lark(GRAMMAR.read_text(), parser="lalr", propagate_positions=True,
-                maybe_placeholders=False, start=["start", "task_atom"])
+                maybe_placeholders=False, start=["start", "task_atom"], cache=True)
 
 
 _TOKEN_NAMES = {
