@@ -34,9 +34,11 @@ def _register():
     from .plan_cmd import plan
     from .run_cmd import run
     from .stats_cmd import stats
+    from .transform_cmd import transform
     cli.add_command(plan)
     cli.add_command(run)
     cli.add_command(stats)
+    cli.add_command(transform)
 
 
 _register()

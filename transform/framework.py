@@ -1,0 +1,303 @@
+"""The plan transformation framework (Kazhoyan et al., Table I), over task trees.
+
+A plan's task tree is summarised as facts (:func:`tree_facts`); a
+transformation is registered with an **applicability rule**: a query atom
+answered, with the JSHOP2 axioms of a rules file, by this planner's own logic
+engine (the paper uses Prolog). Each satisfier is an input schema for the
+transformation function, which rewrites the plan's top-level task list
+(:class:`Workspace`); unlike the paper's code replacements it may merge, move
+or remove tasks. The rewritten task list is planned again with the domain, so
+every transformed plan is checked against the domain's operators (each step's
+precondition holds in sequence from the initial state); a transformation that
+breaks the plan, or makes it costlier on the chosen metric, is rolled back with
+the reason.
+
+API (as in the paper): :func:`register_transformation`,
+:func:`disable_transformation`, :func:`enable_transformation`,
+:func:`prioritize_transformation`, :func:`apply_all_transformations`. Rules can
+also come from plugins: the entry-point group ``htn.transformations`` names
+functions called with the framework to register theirs.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable, Optional
+
+from jshop import syntax as S
+from jshop.errors import HtnError
+from jshop.logic import Logic
+from jshop.parser import parse_text
+from jshop.planner import Planner
+from jshop.state import State
+
+RULES_FILE = Path(__file__).with_name("rules.jshop")
+
+
+# ------------------------------------------------------------------ workspace
+
+@dataclass
+class Unit:
+    """One entry of the top-level task list: task atoms that replace one or
+    more original top-level tasks (``paths``)."""
+    tasks: list                      # [S.TaskAtom]
+    paths: list                      # node paths of the original tasks it stands for
+    transformed_by: Optional[str] = None
+
+
+@dataclass
+class Workspace:
+    """A plan being transformed: domain, problem instance, top-level units,
+    and the plan and tree they currently give."""
+    domain: S.Domain
+    instance: S.ProblemInstance
+    units: list
+    plan: object = None
+    log: list = field(default_factory=list)     # (rule, status, detail)
+    frozen: set = field(default_factory=set)    # paths of rolled-back rewrites
+
+    @classmethod
+    def from_problem(cls, domain: S.Domain, instance: S.ProblemInstance) -> "Workspace":
+        plan = next(Planner(domain, instance, record_trees=True).plans(), None)
+        if plan is None:
+            raise HtnError.at(instance.pos, "the problem has no plan to transform")
+        units = []
+        for node, atom in zip(plan.tree.children, S.task_atoms(instance.tasks)):
+            units.append(Unit([atom], [node.path]))
+        return cls(domain, instance, units, plan)
+
+    def task_list(self) -> S.TaskList:
+        return S.TaskList([t for u in self.units for t in u.tasks])
+
+    def replan(self, units=None):
+        """The first plan of ``units`` (default: the current ones), or None."""
+        units = self.units if units is None else units
+        tasks = S.TaskList([t for u in units for t in u.tasks])
+        inst = S.ProblemInstance(self.instance.state, tasks, self.instance.pos)
+        return next(Planner(self.domain, inst, record_trees=True).plans(timeout=30.0), None)
+
+    def unit_of(self, path: str) -> Unit:
+        for u in self.units:
+            if path in u.paths:
+                return u
+        raise KeyError(path)
+
+
+# ------------------------------------------------------------------ facts
+
+def tree_facts(ws: Workspace) -> list[tuple[str, tuple]]:
+    """Facts about the current task list and its plan, for applicability rules.
+
+    Tasks are named by the path they had in the original plan's tree (the
+    current tree renumbers ``:call N`` as tasks are rewritten); the current
+    tree's top-level nodes follow the task list one for one.
+    """
+    containers = {a.args[0]: a.args[1] for a in ws.instance.state if a.pred == "container"}
+    facts: list = [("tray-at", a.args[:2]) for a in ws.instance.state if a.pred == "tray"]
+    nodes = iter(ws.plan.tree.children)
+    k = 0
+    for unit in ws.units:
+        unit_nodes = [next(nodes) for _ in unit.tasks]
+        if len(unit.tasks) != 1 or unit.tasks[0].name != "transporting" \
+                or unit.paths[0] in ws.frozen:
+            facts.extend(("transformed", (p,)) for p in unit.paths)
+            continue
+        (atom,), (path,), (node,) = unit.tasks, unit.paths, unit_nodes
+        obj, src, dst = atom.args
+        k += 1
+        facts.append(("transport", (path, obj, src, dst, float(k))))
+        if src in containers:
+            facts.append(("container-fetch", (path, src)))
+            facts.append(("fetch-area", (path, containers[src])))
+        else:
+            facts.append(("fetch-area", (path, src)))
+        facts.append(("deliver-area", (path, dst)))
+        arms = {ws.plan.steps[leaf.step].args[-1] for leaf in node.leaves()
+                if ws.plan.steps[leaf.step].name in ("!grasp", "!grasp-from", "!place")}
+        if len(arms) == 1:
+            facts.append(("one-arm", (path,)))
+    return facts
+
+
+# ------------------------------------------------------------------ metrics
+
+def navigation_distance(instance: S.ProblemInstance, plan) -> float:
+    """Sum of straight-line distances of the plan's !navigate steps."""
+    where = {a.args[0]: (a.args[1], a.args[2]) for a in instance.state if a.pred == "area"}
+    total = 0.0
+    for s in plan.steps:
+        if s.name == "!navigate" and s.args[0] in where and s.args[1] in where:
+            (x0, y0), (x1, y1) = where[s.args[0]], where[s.args[1]]
+            total += math.hypot(x1 - x0, y1 - y0)
+    return total
+
+
+METRICS: dict[str, Callable] = {
+    "navigation": navigation_distance,
+    "actions": lambda instance, plan: float(len(plan.steps)),
+}
+
+
+# ------------------------------------------------------------------ framework
+
+@dataclass
+class Transformation:
+    name: str
+    function: Callable          # (workspace, [schemas]) -> (description, paths) or None
+    rule: str                   # query atom, e.g. "(both-hands ?first ?second)"
+    enabled: bool = True
+
+
+class Framework:
+    """Registered transformations, their priorities, and how to apply them."""
+
+    def __init__(self, rules_file: Path = RULES_FILE):
+        self.rules_text = Path(rules_file).read_text()
+        self.transformations: list[Transformation] = []
+        self.priorities: list[tuple[str, str]] = []     # (superior, inferior) names
+
+    # -- the paper's API
+    def register_transformation(self, function: Callable, applicability_rule: str,
+                                name: Optional[str] = None) -> Transformation:
+        t = Transformation(name or function.__name__.replace("_", "-"), function,
+                           applicability_rule)
+        self.transformations = [x for x in self.transformations if x.name != t.name] + [t]
+        return t
+
+    def _find(self, which) -> Transformation:
+        for t in self.transformations:
+            if t.name == which or t.function is which:
+                return t
+        raise HtnError(f"no transformation named {which!r} is registered")
+
+    def disable_transformation(self, which) -> None:
+        self._find(which).enabled = False
+
+    def enable_transformation(self, which) -> None:
+        self._find(which).enabled = True
+
+    def prioritize_transformation(self, superior, inferior) -> None:
+        """Make ``superior`` be tried before ``inferior``, keeping every earlier
+        priority (the order is re-derived from all of them)."""
+        sup, inf = self._find(superior), self._find(inferior)
+        priorities = [(a, b) for a, b in self.priorities if (a, b) != (inf.name, sup.name)]
+        priorities.append((sup.name, inf.name))
+        order = list(self.transformations)
+        for _ in range(len(order) ** 2 + 1):
+            pos = {t.name: i for i, t in enumerate(order)}
+            wrong = [(a, b) for a, b in priorities
+                     if a in pos and b in pos and pos[a] > pos[b]]
+            if not wrong:
+                self.priorities, self.transformations = priorities, order
+                return
+            a, b = wrong[0]
+            moved = order.pop(pos[a])
+            order.insert(pos[b], moved)
+        raise HtnError(f"{sup.name} before {inf.name} contradicts the other priorities "
+                       f"{self.priorities}: they would form a cycle")
+
+    def apply_all_transformations(self, ws: Workspace, metric: str = "navigation") -> Workspace:
+        """Apply every enabled transformation, highest priority first, each as
+        often as its rule finds untransformed tasks; keep only those that leave
+        a valid plan that is not costlier on ``metric``."""
+        cost = METRICS[metric]
+        for t in self.transformations:
+            if not t.enabled:
+                continue
+            while True:
+                schemas = self.query(ws, t.rule)
+                if not schemas:
+                    break
+                before_units = list(ws.units)
+                before_cost = cost(ws.instance, ws.plan)
+                result = t.function(ws, schemas)
+                if not result:
+                    ws.units = before_units
+                    break
+                described, paths = result
+                plan = ws.replan()
+                if plan is None:
+                    ws.units = before_units
+                    ws.frozen.update(paths)
+                    ws.log.append((t.name, "rolled back", f"{described}: the transformed task "
+                                   "list has no valid plan"))
+                    continue
+                after_cost = cost(ws.instance, plan)
+                if after_cost > before_cost + 1e-9:
+                    ws.units = before_units
+                    ws.frozen.update(paths)
+                    ws.log.append((t.name, "rolled back", f"{described}: {metric} "
+                                   f"{before_cost:g} -> {after_cost:g}"))
+                    continue
+                ws.plan = plan
+                ws.log.append((t.name, "applied", f"{described}: {metric} "
+                               f"{before_cost:g} -> {after_cost:g}"))
+        return ws
+
+    def query(self, ws: Workspace, rule: str) -> list[dict]:
+        """All satisfiers of ``rule`` over the workspace's facts, as dicts."""
+        text = self.rules_text.rstrip().rstrip(")").rstrip().rstrip(")")
+        domain = parse_text(f"{text}\n    (:method (query) {rule} ())\n  )\n)\n", "<rules>")
+        (method,) = domain.methods["query"]
+        names = {}
+        for v in _vars_of(method.branches[0].pre.expr):
+            names.setdefault(v.name, v.index)
+        state = State()
+        for pred, args in tree_facts(ws):
+            state.add(pred, args)
+        logic = Logic(domain, state)
+        sat = logic.precondition(method.branches[0].pre)
+        out = []
+        for env in sat([None] * method.nvars):
+            out.append({name[1:]: env[i] for name, i in names.items()})
+        return out
+
+
+def _vars_of(expr) -> list:
+    from jshop.parser import _walk_expr
+    found: list = []
+    _walk_expr(expr, found.append)
+    return found
+
+
+_DEFAULT: Optional[Framework] = None
+
+
+def default_framework() -> Framework:
+    """The framework with the three built-in rules and any plugins registered,
+    priorities tray > container > both-hands."""
+    global _DEFAULT
+    if _DEFAULT is None:
+        from . import rules
+        fw = Framework()
+        rules.register(fw)
+        _load_plugins(fw)
+        _DEFAULT = fw
+    return _DEFAULT
+
+
+def _load_plugins(fw: Framework) -> None:
+    from importlib.metadata import entry_points
+    for ep in entry_points(group="htn.transformations"):
+        ep.load()(fw)
+
+
+def register_transformation(function, applicability_rule, name=None):
+    return default_framework().register_transformation(function, applicability_rule, name)
+
+
+def disable_transformation(which):
+    default_framework().disable_transformation(which)
+
+
+def enable_transformation(which):
+    default_framework().enable_transformation(which)
+
+
+def prioritize_transformation(superior, inferior):
+    default_framework().prioritize_transformation(superior, inferior)
+
+
+def apply_all_transformations(ws: Workspace, metric: str = "navigation") -> Workspace:
+    return default_framework().apply_all_transformations(ws, metric)
