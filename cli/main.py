@@ -34,11 +34,13 @@ def _register():
     from .plan_cmd import plan
     from .run_cmd import run
     from .stats_cmd import stats
+    from .evaluate_cmd import evaluate
     from .transform_cmd import transform
     cli.add_command(plan)
     cli.add_command(run)
     cli.add_command(stats)
     cli.add_command(transform)
+    cli.add_command(evaluate)
 
 
 _register()

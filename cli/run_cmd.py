@@ -130,7 +130,7 @@ def run(plan_file, sim, gui, snapshots, faults, seed, retries, replan, log_path,
 def _check_steps(steps, domain, plan_file) -> None:
     """Every step must be an operator of the domain, with its arity, and have an
     action state machine unless it is internal (!!)."""
-    from executor.actions import REGISTRY
+    from executor.actions import machine_for
     for s in steps:
         ops = domain.operators.get(s.name)
         if not ops:
@@ -139,7 +139,7 @@ def _check_steps(steps, domain, plan_file) -> None:
         if all(len(o.head.args) != len(s.args) for o in ops):
             raise HtnError(f"{s.name} takes {len(ops[0].head.args)} arguments, given "
                            f"{len(s.args)}", plan_file, s.line, 1)
-        if not s.internal and s.name not in REGISTRY:
+        if not s.internal and machine_for(s.name, domain.name) is None:
             raise HtnError(f"no action state machine is registered for {s.name}",
                            plan_file, s.line, 1)
 

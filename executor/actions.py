@@ -69,20 +69,22 @@ class ActionMachine:
         return Outcome.ABORTED
 
 
-REGISTRY: dict[str, type] = {}
+REGISTRY: dict[tuple, type] = {}      # (domain or None, operator) -> machine class
 
 
-def action(operator: str):
-    """Class decorator: register an :class:`ActionMachine` for an operator name."""
+def action(operator: str, domain: Optional[str] = None):
+    """Class decorator: register an :class:`ActionMachine` for an operator name,
+    for every domain or (``domain=``) for one domain whose operator of the same
+    name means something else."""
     def register(cls):
         cls.name = operator
-        REGISTRY[operator] = cls
+        REGISTRY[(domain, operator)] = cls
         return cls
     return register
 
 
-def machine_for(operator: str) -> Optional[ActionMachine]:
-    cls = REGISTRY.get(operator)
+def machine_for(operator: str, domain: Optional[str] = None) -> Optional[ActionMachine]:
+    cls = REGISTRY.get((domain, operator)) or REGISTRY.get((None, operator))
     return cls() if cls else None
 
 
@@ -159,3 +161,104 @@ class Say(ActionMachine):
 
     def monitor(self, robot, who, message):
         return robot.check_said(message)
+
+
+# ---------------------------------------------------------------- the kitchen (pick and place)
+
+@action("!navigate", domain="kitchen")
+class Navigate(ActionMachine):
+    def execute(self, robot, start, goal):
+        return robot.move_base(goal)
+
+    def monitor(self, robot, start, goal):
+        return robot.check_base_at(goal)
+
+
+@action("!look-for", domain="kitchen")
+class LookFor(ActionMachine):
+    def execute(self, robot, obj, area):
+        return robot.detect_object(obj, area)
+
+    def monitor(self, robot, obj, area):
+        return robot.check_detection(obj)
+
+
+@action("!grasp", domain="kitchen")
+class GraspWithArm(ActionMachine):
+    def execute(self, robot, obj, area, arm):
+        return robot.grasp(obj, area, arm)
+
+    def monitor(self, robot, obj, area, arm):
+        return robot.check_in_gripper(obj)
+
+
+@action("!grasp-from", domain="kitchen")
+class GraspFromContainer(ActionMachine):
+    def execute(self, robot, obj, container, arm):
+        return robot.grasp(obj, container, arm)
+
+    def monitor(self, robot, obj, container, arm):
+        return robot.check_in_gripper(obj)
+
+
+@action("!place", domain="kitchen")
+class PlaceWithArm(ActionMachine):
+    def execute(self, robot, obj, area, arm):
+        return robot.place_object(obj, area, arm)
+
+    def monitor(self, robot, obj, area, arm):
+        return robot.check_on(obj, area)
+
+
+@action("!open", domain="kitchen")
+class OpenContainer(ActionMachine):
+    def execute(self, robot, container):
+        return robot.open_container(container)
+
+    def monitor(self, robot, container):
+        return robot.check_opened(container, True)
+
+
+@action("!close", domain="kitchen")
+class CloseContainer(ActionMachine):
+    def execute(self, robot, container):
+        return robot.close_container(container)
+
+    def monitor(self, robot, container):
+        return robot.check_opened(container, False)
+
+
+@action("!put-on-tray", domain="kitchen")
+class PutOnTray(ActionMachine):
+    def execute(self, robot, obj, tray, arm):
+        return robot.put_on_tray(obj, tray, arm)
+
+    def monitor(self, robot, obj, tray, arm):
+        return robot.check_on_tray(obj, tray)
+
+
+@action("!lift-tray", domain="kitchen")
+class LiftTray(ActionMachine):
+    def execute(self, robot, tray):
+        return robot.lift_tray(tray)
+
+    def monitor(self, robot, tray):
+        return robot.check_tray_carried(tray, True)
+
+
+@action("!lower-tray", domain="kitchen")
+class LowerTray(ActionMachine):
+    def execute(self, robot, tray, area):
+        return robot.lower_tray(tray, area)
+
+    def monitor(self, robot, tray, area):
+        return robot.check_tray_carried(tray, False, area)
+
+
+@action("!take-from-tray", domain="kitchen")
+class TakeFromTray(ActionMachine):
+    def execute(self, robot, obj, tray, arm):
+        return robot.take_from_tray(obj, tray, arm)
+
+    def monitor(self, robot, obj, tray, arm):
+        return robot.check_in_gripper(obj)

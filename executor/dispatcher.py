@@ -55,16 +55,18 @@ def dynamic_predicates(domain: S.Domain) -> set[str]:
 class TaskExecutor:
     """Runs one plan step on the robot through its action state machine."""
 
-    def __init__(self, robot, retries: dict[str, int], log: EventLog):
+    def __init__(self, robot, retries: dict[str, int], log: EventLog,
+                 domain: Optional[str] = None):
         self.robot = robot
         self.retries = retries
         self.log = log
+        self.domain = domain
         self.retry_count = 0
 
     def execute(self, index: int, step) -> Outcome:
         name, args = step.name, tuple(step.args)
         action = str(step)
-        machine = machine_for(name)
+        machine = machine_for(name, self.domain)
         if machine is None:
             self.log.emit(index, action, Outcome.FAILED.value, 1,
                           f"no action state machine is registered for {name}")
@@ -103,7 +105,7 @@ class TaskDispatcher:
         self.replan = replan
         self.functions = functions
         self.max_replans = max_replans
-        self.executor = TaskExecutor(robot, retries, log)
+        self.executor = TaskExecutor(robot, retries, log, domain.name)
         self.belief = Planner(domain, S.ProblemInstance(instance.state, S.TaskList([])), functions)
 
     def run(self) -> RunSummary:

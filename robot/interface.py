@@ -84,6 +84,35 @@ class Robot(ABC):
     @abstractmethod
     def check_said(self, message: str) -> Check: ...
 
+    # ---- kitchen skills: arms, containers, a tray. A robot that lacks one
+    # reports it as an internal failure (the action ends "failed").
+    def open_container(self, container: str) -> SkillResult:
+        return SkillResult(False, f"{type(self).__name__} cannot open containers")
+
+    def close_container(self, container: str) -> SkillResult:
+        return SkillResult(False, f"{type(self).__name__} cannot close containers")
+
+    def put_on_tray(self, obj: str, tray: str, arm: Optional[str] = None) -> SkillResult:
+        return SkillResult(False, f"{type(self).__name__} cannot use a tray")
+
+    def lift_tray(self, tray: str) -> SkillResult:
+        return SkillResult(False, f"{type(self).__name__} cannot use a tray")
+
+    def lower_tray(self, tray: str, where: str) -> SkillResult:
+        return SkillResult(False, f"{type(self).__name__} cannot use a tray")
+
+    def take_from_tray(self, obj: str, tray: str, arm: Optional[str] = None) -> SkillResult:
+        return SkillResult(False, f"{type(self).__name__} cannot use a tray")
+
+    def check_opened(self, container: str, opened: bool) -> Check:
+        return Check(False, "not observable on this robot")
+
+    def check_on_tray(self, obj: str, tray: str) -> Check:
+        return Check(False, "not observable on this robot")
+
+    def check_tray_carried(self, tray: str, carried: bool, where: Optional[str] = None) -> Check:
+        return Check(False, "not observable on this robot")
+
     # ---- state estimation for replanning
     @abstractmethod
     def observe(self) -> list[tuple[str, tuple]]:
