@@ -61,6 +61,7 @@ def transform(domain, problem, rules, metric, output, as_json):
         "original": {"steps": len(original.steps), metric: cost(ws.instance, original)},
         "transformed": {"steps": len(ws.plan.steps), metric: cost(ws.instance, ws.plan),
                         "plan": ws.plan.lines()},
+        "tree": ws.annotated_tree().to_dict(),
     }
     if output:
         with atomic_write(output) as fh:

@@ -31,6 +31,8 @@ class TaskTree:
     branch: Optional[str] = None       # that method's branch label
     step: Optional[int] = None         # index in the plan, for primitive tasks
     children: list = field(default_factory=list)
+    outcome: Optional[str] = None      # after an execution or projection (annotate())
+    code_replacement: Optional[list] = None   # what a transformation put in its place
 
     @property
     def primitive(self) -> bool:
@@ -66,6 +68,10 @@ class TaskTree:
             d["branch"] = self.branch
         if self.step is not None:
             d["step"] = self.step
+        if self.outcome is not None:
+            d["outcome"] = self.outcome
+        if self.code_replacement is not None:
+            d["code_replacement"] = self.code_replacement
         if self.children:
             d["children"] = [c.to_dict() for c in self.children]
         return d
@@ -103,6 +109,22 @@ class TaskTree:
                 out.append(f"  {ids[id(n)]} -> {ids[id(c)]};")
         out.append("}")
         return "\n".join(out) + "\n"
+
+
+def annotate(tree: TaskTree, step_outcomes: dict) -> TaskTree:
+    """Set each node's outcome from an execution: a leaf gets its step's final
+    outcome (``verified``, ``aborted``, ``failed``, or ``not run``); a task is
+    ``verified`` when all its children are, else the first other outcome."""
+    order = list(tree.walk())
+    for node in reversed(order):          # children before parents
+        if node.step is not None:
+            node.outcome = step_outcomes.get(node.step, "not run")
+        elif node.children:
+            outs = [c.outcome for c in node.children]
+            node.outcome = next((o for o in outs if o != "verified"), "verified")
+        elif node.method is not None:      # decomposed into nothing: nothing to do
+            node.outcome = "verified"
+    return tree
 
 
 def _dot_escape(s: str) -> str:

@@ -230,3 +230,19 @@ def test_htn_evaluate_json_and_plots(tmp_path):
         assert {"original", "transformed", "change_pct", "p_value"} <= set(m)
         assert {"mean", "sd"} <= set(m["original"])
     assert all(open(p, "rb").read(4) == b"\x89PNG" for p in doc["plots"])
+
+
+def test_task_tree_annotated_by_a_projected_run():
+    from executor.config import load_retries
+    from transform.evaluate import projected_tree
+    ws = workspace("transport_four")
+    framework().apply_all_transformations(ws)
+    tree = ws.annotated_tree()
+    first = tree.children[0]
+    assert first.code_replacement and first.code_replacement[0].startswith("(searching milk")
+    tree, run = projected_tree(ws.domain, ws.instance, ws.plan, seed=3,
+                               retries=load_retries(DOMAIN))
+    assert run["result"] == "verified"
+    assert all(n.outcome == "verified" for n in tree.walk() if n is not tree)
+    d = tree.to_dict()["children"][0]
+    assert d["outcome"] == "verified" and "code_replacement" in d and "path" in d

@@ -25,9 +25,19 @@ def project(domain: S.Domain, instance: S.ProblemInstance, steps, seed: int,
     log = EventLog(None, clock=lambda: robot.sim_time)
     summary = TaskDispatcher(robot, domain, instance, steps, retries or {}, log).run()
     m = robot.metrics
+    outcomes = {e["step"]: e["event"] for e in log.events
+                if e["event"] in ("verified", "aborted", "failed") and e["step"] is not None}
     return {"navigation": m.navigation, "manipulation": m.manipulation,
             "actions": float(m.actions), "failures": m.failures / max(m.actions, 1),
-            "sim_time": m.sim_time, "result": summary.result}
+            "sim_time": m.sim_time, "result": summary.result, "outcomes": outcomes}
+
+
+def projected_tree(domain: S.Domain, instance: S.ProblemInstance, plan, seed: int = 0,
+                   retries: Optional[dict] = None):
+    """The plan's task tree annotated with the outcomes of one projected run."""
+    from jshop.tree import annotate
+    run = project(domain, instance, plan.steps, seed, retries=retries)
+    return annotate(plan.tree, run["outcomes"]), run
 
 
 @dataclass

@@ -70,6 +70,21 @@ class Workspace:
     def task_list(self) -> S.TaskList:
         return S.TaskList([t for u in self.units for t in u.tasks])
 
+    def annotated_tree(self):
+        """The current plan's tree; each top-level node rewritten by a
+        transformation carries the replacement tasks in its code-replacement
+        slot (the paper's mechanism, here filled in for inspection)."""
+        from jshop.terms import source_str
+        tree = self.plan.tree
+        nodes = iter(tree.children)
+        for unit in self.units:
+            for node in [next(nodes) for _ in unit.tasks]:
+                if unit.transformed_by:
+                    node.code_replacement = [
+                        "(" + " ".join([t.name, *[source_str(a) for a in t.args]]) + ")"
+                        for t in unit.tasks]
+        return tree
+
     def replan(self, units=None):
         """The first plan of ``units`` (default: the current ones), or None."""
         units = self.units if units is None else units
