@@ -246,3 +246,29 @@ def test_task_tree_annotated_by_a_projected_run():
     assert all(n.outcome == "verified" for n in tree.walk() if n is not tree)
     d = tree.to_dict()["children"][0]
     assert d["outcome"] == "verified" and "code_replacement" in d and "path" in d
+
+
+def test_plugins_register_through_the_entry_point_group(monkeypatch):
+    import importlib.metadata
+    from transform import framework as F
+
+    def register(fw):
+        fw.register_transformation(lambda ws, schemas: None, "(transport ?t ?o ?f ?d ?k)",
+                                   "plugin-rule")
+
+    class EP:
+        def load(self):
+            return register
+
+    seen = {}
+
+    def entry_points(group=None):
+        seen["group"] = group
+        return [EP()]
+
+    monkeypatch.setattr(importlib.metadata, "entry_points", entry_points)
+    monkeypatch.setattr(F, "_DEFAULT", None)
+    fw = F.default_framework()
+    assert seen["group"] == "htn.transformations"
+    assert [t.name for t in fw.transformations][-1] == "plugin-rule"
+    monkeypatch.setattr(F, "_DEFAULT", None)
