@@ -10,7 +10,9 @@ or remove tasks. The rewritten task list is planned again with the domain, so
 every transformed plan is checked against the domain's operators (each step's
 precondition holds in sequence from the initial state); a transformation that
 breaks the plan, or makes it costlier on the chosen metric, is rolled back with
-the reason.
+the reason. Costs are re-projected: the mean of a metric over projected runs
+of the plan (:func:`projected`), as the paper projects plans before executing
+them.
 
 API (as in the paper): :func:`register_transformation`,
 :func:`disable_transformation`, :func:`enable_transformation`,
@@ -21,6 +23,7 @@ functions called with the framework to register theirs.
 from __future__ import annotations
 
 import math
+import statistics
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Optional
@@ -148,9 +151,29 @@ def navigation_distance(instance: S.ProblemInstance, plan) -> float:
     return total
 
 
+PROJECTION_SEEDS = range(64)
+
+
+def projected(metric: str) -> Callable:
+    """A cost: the mean of ``metric`` over projected runs of the plan on the
+    projection robot, with the same seeds for every plan (a paired comparison,
+    so the same plan always gets the same cost)."""
+    def cost(ws: "Workspace", plan) -> float:
+        from executor.config import load_retries
+        from .evaluate import project
+        retries = load_retries(ws.domain.file) if ws.domain.file else {}
+        runs = [project(ws.domain, ws.instance, plan.steps, seed, retries=retries)
+                for seed in PROJECTION_SEEDS]
+        return statistics.fmean(r[metric] for r in runs)
+    return cost
+
+
+# cost functions (workspace, plan) -> float used to roll back costlier rewrites
 METRICS: dict[str, Callable] = {
-    "navigation": navigation_distance,
-    "actions": lambda instance, plan: float(len(plan.steps)),
+    "navigation": projected("navigation"),
+    "manipulation": projected("manipulation"),
+    "actions": projected("actions"),
+    "navigation-static": lambda ws, plan: navigation_distance(ws.instance, plan),
 }
 
 
@@ -225,7 +248,7 @@ class Framework:
                 if not schemas:
                     break
                 before_units = list(ws.units)
-                before_cost = cost(ws.instance, ws.plan)
+                before_cost = cost(ws, ws.plan)
                 result = t.function(ws, schemas)
                 if not result:
                     ws.units = before_units
@@ -238,7 +261,7 @@ class Framework:
                     ws.log.append((t.name, "rolled back", f"{described}: the transformed task "
                                    "list has no valid plan"))
                     continue
-                after_cost = cost(ws.instance, plan)
+                after_cost = cost(ws, plan)
                 if after_cost > before_cost + 1e-9:
                     ws.units = before_units
                     ws.frozen.update(paths)
