@@ -74,7 +74,8 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
     limit = None if all_plans else n_plans
     record_trees = show_tree or bool(dot) or fmt == "json"
     render = _Renderer(fmt, show_tree)
-    found = []
+    found = []      # whole plans, kept only when --format json or --dot needs them
+    lengths = []    # of every plan streamed (memory stays flat for --all)
     totals = {"plans_found": 0, "search_ms": 0.0, "expansions": 0,
               "operator_applications": 0, "backtracks": 0, "timed_out": False,
               "interrupted": False}
@@ -103,7 +104,9 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
                             if out_fh:
                                 out_fh.write(p.to_jshop())
                                 out_fh.flush()
-                            found.append(p if (fmt == "json" or dot) else _light(p))
+                            lengths.append(len(p.steps))
+                        if fmt == "json" or dot:
+                            found.append(p)
                         if limit is not None and planner.stats.plans_found >= limit:
                             break
                 finally:
@@ -114,33 +117,20 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
         except KeyboardInterrupt:
             interrupted = True
             totals["interrupted"] = True
-    lengths = [n for n in (getattr(p, "length", None) or len(p.steps) for p in found)]
     totals["shortest_plan"] = min(lengths) if lengths else None
     totals["search_ms"] = round(totals["search_ms"], 3)
     if dot:
         _write_dot(dot, found)
-    render.finish(found, totals, domain, problem)
+    render.finish(found, totals, domain, problem, any_plan=bool(lengths))
     if totals["timed_out"]:
         warn(f"timed out after {timeout:g} s; {totals['plans_found']} plan(s) found")
     if interrupted:
         warn(f"interrupted; {totals['plans_found']} plan(s) found")
         sys.exit(130)
-    if not found:
+    if not lengths:
         if fmt == "text":
             warn("no plan found")
         sys.exit(1)
-
-
-class _Light:
-    """What is kept of a streamed plan when only statistics are needed later."""
-    __slots__ = ("length",)
-
-    def __init__(self, length):
-        self.length = length
-
-
-def _light(p):
-    return _Light(len(p.steps))
 
 
 def _add_stats(totals: dict, s: dict) -> None:
@@ -204,7 +194,7 @@ class _Renderer:
             from .tree_view import rich_tree
             c.print(rich_tree(p.tree))
 
-    def finish(self, plans, totals: dict, domain: str, problem: str) -> None:
+    def finish(self, plans, totals: dict, domain: str, problem: str, any_plan: bool) -> None:
         if self.fmt == "json":
             doc = {
                 "domain": domain,
@@ -222,4 +212,4 @@ class _Renderer:
             self.console.print(
                 f"[bold]{totals['plans_found']}[/bold] plan(s) found; search "
                 f"{totals['search_ms']:.1f} ms{extra}; {totals['expansions']} expansions, "
-                f"{totals['backtracks']} backtracks", style="green" if plans else "red")
+                f"{totals['backtracks']} backtracks", style="green" if any_plan else "red")
