@@ -1,4 +1,4 @@
-"""Benchmark: executing bring_object on the PyBullet robot in DIRECT mode.
+"""Benchmark: executing a plan on the PyBullet robot in DIRECT mode.
 
 Reports simulated seconds per wall-clock second (the real-time factor) of the
 execution itself and of the whole run including building the world, and the
@@ -6,6 +6,9 @@ process's peak memory. Target: at least 20x faster than real time. Run::
 
     python benchmarks/bench_sim.py               # 5 runs of bring_object
     python benchmarks/bench_sim.py --runs 10 --problem guide_robot
+    python benchmarks/bench_sim.py --problem set_table_and_clean_up --transformed
+
+Kitchen problems (``(area ...)`` facts) run on the two-armed kitchen robot.
 """
 from __future__ import annotations
 
@@ -25,23 +28,35 @@ sys.path.insert(0, str(ROOT))
 @click.option("--problem", default="bring_object", show_default=True)
 @click.option("--runs", default=5, show_default=True)
 @click.option("--faults", default="", help="e.g. slip=0.3,nav=0.3")
-def main(problem, runs, faults):
+@click.option("--transformed", is_flag=True,
+              help="Kitchen problems: run the plan after the plan transformations.")
+def main(problem, runs, faults, transformed):
     """Time plan execution in the simulation; print the real-time factor."""
     from executor.config import load_retries
     from executor.dispatcher import TaskDispatcher
     from executor.log import EventLog
     from jshop import Planner, load_domain, load_problem
     from robot.pybullet_sim import Faults, PyBulletRobot
-    from robot.world import world_from_state
+    from robot.world import is_kitchen_state, kitchen_world_from_state, world_from_state
 
-    domain = str(ROOT / "domains" / "domestic.jshop")
-    dom = load_domain(domain)
     inst = load_problem(str(ROOT / "problems" / f"{problem}.jshop")).instances[0]
-    plan = next(Planner(dom, inst).plans())
+    kitchen = is_kitchen_state(inst.state)
+    domain = str(ROOT / "domains" / ("kitchen.jshop" if kitchen else "domestic.jshop"))
+    dom = load_domain(domain)
+    if transformed:
+        from transform.framework import Workspace, default_framework
+        plan = default_framework().apply_all_transformations(Workspace.from_problem(dom, inst)).plan
+    else:
+        plan = next(Planner(dom, inst).plans())
+    if kitchen:
+        from robot.kitchen_sim import KitchenRobot as Sim
+        make_world = kitchen_world_from_state
+    else:
+        Sim, make_world = PyBulletRobot, world_from_state
     exec_factor, total_factor, sims = [], [], []
     for seed in range(runs):
         t0 = time.perf_counter()
-        robot = PyBulletRobot(world_from_state(inst.state), faults=Faults.parse(faults), seed=seed)
+        robot = Sim(make_world(inst.state), faults=Faults.parse(faults), seed=seed)
         built = time.perf_counter()
         start_sim = robot.sim_time
         log = EventLog(None, clock=lambda: robot.sim_time)

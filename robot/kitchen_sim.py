@@ -28,11 +28,13 @@ from typing import Optional
 
 import numpy as np
 
+from jshop.errors import HtnError
+
 from .interface import Check, SkillResult
 from .pybullet_sim import (ARM_JOINTS, BASE_SPEED, BASE_Z, DT, FINGERS, POSE_TOLERANCE,
                            TURN_SPEED, YAW_TOLERANCE, Faults, PyBulletRobot, _angle_diff,
                            _yaw_quat, quiet_fds)
-from .world import TABLE_GAP, World
+from .world import World
 
 ARM_HOMES = {   # tucked to the robot's sides, out of the head camera's view
     "left": (1.5, -0.3, 0.0, -2.6, 0.0, 2.2, 0.785),
@@ -121,7 +123,6 @@ class KitchenRobot(PyBulletRobot):
             else:
                 spot = self._free_spot(t.on, None, r)
                 if spot is None:
-                    from jshop.errors import HtnError
                     raise HtnError(f"no room for {t.name} on the table of {t.on}")
                 x, y, z = spot
             self.body_of[t.name] = self._make_object(r, h, rgba, x, y, z + h / 2 + 0.002)
@@ -560,8 +561,24 @@ class KitchenRobot(PyBulletRobot):
         guess = self.detections.get(obj)
         if guess is None:
             return SkillResult(True, f"no detection of {obj} to grasp")
+        if self.faults.moved and obj not in self._moved and self.rng.random() < self.faults.moved:
+            self._moved.add(obj)   # somebody takes it away once, just before the grasp
+            self._move_object_elsewhere(obj, self._area_of(where))
         with self._using(arm):
             return self._top_grasp(obj, guess)
+
+    def _move_object_elsewhere(self, obj: str, area: str) -> None:
+        """Fault: somebody takes the object to a free spot on another table."""
+        for other in sorted(a for a in self.furniture_top if a != area):
+            spot = self._free_spot(other, None, self.radius[obj], skip=(obj,))
+            if spot is not None:
+                x, y, z = spot
+                self._inject("moved", f"{obj} taken from {area} to {other}")
+                self.p.resetBasePositionAndOrientation(
+                    self.body_of[obj], [x, y, z + self.height[obj] / 2 + 0.002], [0, 0, 0, 1],
+                    physicsClientId=self.cid)
+                self._settle(0.2)
+                return
 
     def _top_grasp(self, obj: str, guess) -> SkillResult:
         gx, gy, gz = guess
@@ -686,9 +703,6 @@ class KitchenRobot(PyBulletRobot):
         return self._pull(d, 0.0, "closed")
 
     # ---- the tray
-    def _tray_area(self, tray: str) -> Optional[str]:
-        return next((a for a in self.furniture_top if self._on_table(self.trays[tray], a)), None)
-
     def put_on_tray(self, obj: str, tray: str, arm: Optional[str] = None) -> SkillResult:
         arm = arm if arm in self.ARMS else next(
             (a for a in self.ARMS if self.arm_held[a] == obj), None)
@@ -737,7 +751,6 @@ class KitchenRobot(PyBulletRobot):
         rims = self._rims(pos, orn)
         above = {a: [r[0], r[1], r[2] + 0.1] for a, r in rims.items()}
         lifted = {a: [r[0], r[1], r[2] + 0.12] for a, r in rims.items()}
-        goals = {}
         for stage in (above, rims):
             qs = {a: self._ik_for(a, stage[a]) for a in self.ARMS}
             if any(q is None for q in qs.values()):
@@ -772,7 +785,7 @@ class KitchenRobot(PyBulletRobot):
         p, c = self.p, self.cid
         top = self.furniture_top[where]
         yaw = self.base[2]
-        taken = [f for f in self._footprints(where, skip=self._on_tray(tray))]
+        taken = self._footprints(where, skip=self._on_tray(tray))
         for v in (0.0, -0.1, 0.1, -0.2, 0.2, -0.3, 0.3):
             if any(math.hypot(TRAY_U + du - tu, v + dv - tv) < tr + 0.1
                    for du in (-0.07, 0.07) for dv in (-0.09, 0.09) for tu, tv, tr in taken):
@@ -876,6 +889,8 @@ class KitchenRobot(PyBulletRobot):
                     abs(_angle_diff(pl.theta, yaw)) <= YAW_TOLERANCE:
                 facts.append(("robot-at", (pl.name,)))
                 break
+        else:   # stopped on the way: a new area where the robot stands
+            facts += [("area", ("here", round(x, 3), round(y, 3))), ("robot-at", ("here",))]
         for arm in self.ARMS:
             obj = self.arm_held[arm]
             if obj is not None and self.check_in_gripper(obj).ok:
