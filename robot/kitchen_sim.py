@@ -32,9 +32,8 @@ from jshop.errors import HtnError
 
 from .interface import Check, SkillResult
 from .pybullet_sim import (ARM_JOINTS, BASE_SPEED, BASE_Z, DT, FINGERS, POSE_TOLERANCE,
-                           TURN_SPEED, YAW_TOLERANCE, Faults, PyBulletRobot, _angle_diff,
+                           TURN_SPEED, YAW_TOLERANCE, PyBulletRobot, _angle_diff,
                            _yaw_quat, quiet_fds)
-from .world import World
 
 ARM_HOMES = {   # tucked to the robot's sides, out of the head camera's view
     "left": (1.5, -0.3, 0.0, -2.6, 0.0, 2.2, 0.785),
@@ -84,18 +83,10 @@ class KitchenRobot(PyBulletRobot):
 
     ARMS = ("left", "right")
 
-    def __init__(self, world: World, gui: bool = False, faults: Optional[Faults] = None,
-                 seed: int = 0):
-        super().__init__(world, gui=gui, faults=faults, seed=seed)
-
     # ------------------------------------------------------------ building
     def _build(self) -> None:
         p, c, w = self.p, self.cid, self.world
-        p.setGravity(0, 0, -9.81, physicsClientId=c)
-        p.setTimeStep(DT, physicsClientId=c)
-        self.plane = p.loadURDF("plane.urdf", physicsClientId=c)
-        self.body_of: dict[str, int] = {}
-        self.furniture_top: dict[str, float] = {}
+        self._build_ground()
         self.drawers: dict[str, Drawer] = {}
         self.trays: dict[str, int] = {}
         self.radius: dict[str, float] = {}
@@ -376,43 +367,17 @@ class KitchenRobot(PyBulletRobot):
             p.stepSimulation(physicsClientId=c)
         self.sim_time += n * DT
 
-    def _put_base(self, x: float, y: float, yaw: float) -> None:
-        p, c = self.p, self.cid
-        yaw = _angle_diff(yaw, 0.0)
-        self.base = [x, y, yaw]
-        q = _yaw_quat(p, yaw)
-        p.resetBasePositionAndOrientation(self.husky, [x, y, BASE_Z], q, physicsClientId=c)
-        for arm, body in self.arm_body.items():
-            p.resetBasePositionAndOrientation(body, self._arm_mount(arm), q, physicsClientId=c)
+    def _mounted(self) -> list:
+        return [(body, self._arm_mount(arm)) for arm, body in self.arm_body.items()]
 
-    def _turn_to(self, yaw: float) -> bool:
-        """Turn in place with a smooth (cosine) speed profile."""
-        x, y, start = self.base
-        delta = _angle_diff(yaw, start)
-        speed = TRAY_TURN_SPEED if self.hold_tray else TURN_SPEED
-        n = max(1, int(abs(delta) / (speed * DT)))
-        for i in range(1, n + 1):
-            self._put_base(x, y, start + delta * (0.5 - 0.5 * math.cos(math.pi * i / n)))
-            self._step()
-            if i % 12 == 0 and self._base_contacts():
-                return False
-        return True
+    def _speeds(self) -> tuple[float, float]:
+        """Slower with the tray, so what stands on it does not slide."""
+        return (TRAY_BASE_SPEED, TRAY_TURN_SPEED) if self.hold_tray else (BASE_SPEED, TURN_SPEED)
 
-    def _drive(self, gx: float, gy: float, fraction: float = 1.0) -> bool:
-        """Drive straight with a smooth (cosine) speed profile; slower with the tray."""
-        x0, y0, yaw = self.base
-        dist = math.hypot(gx - x0, gy - y0) * fraction
-        speed = TRAY_BASE_SPEED if self.hold_tray else BASE_SPEED
-        n = max(1, int(dist / (speed * DT)))
-        norm = math.hypot(gx - x0, gy - y0) or 1.0
-        ux, uy = (gx - x0) / norm, (gy - y0) / norm
-        for i in range(1, n + 1):
-            d = dist * (0.5 - 0.5 * math.cos(math.pi * i / n))
-            self._put_base(x0 + ux * d, y0 + uy * d, yaw)
-            self._step()
-            if i % 12 == 0 and self._base_contacts():
-                return False
-        return True
+    @staticmethod
+    def _ramp(k: float) -> float:
+        """A smooth (cosine) speed profile: no jerk at start and stop."""
+        return 0.5 - 0.5 * math.cos(math.pi * k)
 
     def _carried_bodies(self) -> set:
         out = {self.body_of[o] for o in self.arm_held.values() if o}

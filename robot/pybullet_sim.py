@@ -137,13 +137,18 @@ class PyBulletRobot(Robot):
         self.bodies_named = {v: k for k, v in self.body_of.items()}
 
     # ------------------------------------------------------------ building
-    def _build(self) -> None:
-        p, c, w = self.p, self.cid, self.world
+    def _build_ground(self) -> None:
+        """Gravity, the clock and the floor; no bodies named yet."""
+        p, c = self.p, self.cid
         p.setGravity(0, 0, -9.81, physicsClientId=c)
         p.setTimeStep(DT, physicsClientId=c)
         self.plane = p.loadURDF("plane.urdf", physicsClientId=c)
         self.body_of: dict[str, int] = {}
         self.furniture_top: dict[str, float] = {}
+
+    def _build(self) -> None:
+        p, c, w = self.p, self.cid, self.world
+        self._build_ground()
         for f in w.furniture.values():
             if f.kind in ("tray",):
                 bid = p.loadURDF("tray/traybox.urdf", [f.x, f.y, 0.0], useFixedBase=True,
@@ -226,14 +231,28 @@ class PyBulletRobot(Robot):
         self.base = [x, y, yaw]
         q = _yaw_quat(p, yaw)
         p.resetBasePositionAndOrientation(self.husky, [x, y, BASE_Z], q, physicsClientId=c)
-        p.resetBasePositionAndOrientation(self.arm, self._mount_pos(), q, physicsClientId=c)
+        for body, pos in self._mounted():
+            p.resetBasePositionAndOrientation(body, pos, q, physicsClientId=c)
+
+    def _mounted(self) -> list:
+        """(body, position) of what is mounted on the base, for its current pose."""
+        return [(self.arm, self._mount_pos())]
+
+    def _speeds(self) -> tuple[float, float]:
+        """Base speed (m/s) and turning speed (rad/s)."""
+        return BASE_SPEED, TURN_SPEED
+
+    @staticmethod
+    def _ramp(k: float) -> float:
+        """Fraction of a base motion done after fraction ``k`` of its time."""
+        return k
 
     def _turn_to(self, yaw: float) -> bool:
         x, y, start = self.base
         delta = _angle_diff(yaw, start)
-        n = max(1, int(abs(delta) / (TURN_SPEED * DT)))
+        n = max(1, int(abs(delta) / (self._speeds()[1] * DT)))
         for i in range(1, n + 1):
-            self._put_base(x, y, start + delta * i / n)
+            self._put_base(x, y, start + delta * self._ramp(i / n))
             self._step()
             if i % 12 == 0 and self._base_contacts():
                 return False
@@ -242,12 +261,12 @@ class PyBulletRobot(Robot):
     def _drive(self, gx: float, gy: float, fraction: float = 1.0) -> bool:
         x0, y0, yaw = self.base
         dist = math.hypot(gx - x0, gy - y0) * fraction
-        n = max(1, int(dist / (BASE_SPEED * DT)))
+        n = max(1, int(dist / (self._speeds()[0] * DT)))
         ux, uy = (gx - x0), (gy - y0)
         norm = math.hypot(ux, uy) or 1.0
         ux, uy = ux / norm, uy / norm
         for i in range(1, n + 1):
-            d = dist * i / n
+            d = dist * self._ramp(i / n)
             self._put_base(x0 + ux * d, y0 + uy * d, yaw)
             self._step()
             if i % 12 == 0 and self._base_contacts():
