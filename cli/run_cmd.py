@@ -47,12 +47,19 @@ def run(plan_file, sim, gui, snapshots, faults, seed, retries, replan, log_path,
     (finished / verified / failed / aborted / retrying). Exit code 0 when every
     action is verified, 1 when execution failed or was aborted, 130 on Ctrl-C.
 
+    The simulated world is built from the problem's initial state: the
+    domestic robot (one arm) for problems with locations and furniture, the
+    kitchen robot (two arms, tables per area, drawers, trays) for problems
+    with (area ...) facts.
+
     \b
     Examples:
       htn plan domains/domestic.jshop problems/bring_object.jshop -o plan.txt
       htn run plan.txt --sim
       htn run plan.txt --sim --faults slip=0.5,nav=0.3 --seed 4 --log run.jsonl
       htn run plan.txt --sim --faults moved=1 --replan
+      htn transform domains/kitchen.jshop problems/set_table_and_clean_up.jshop -o t.txt
+      htn run t.txt --sim
     """
     from executor.config import load_retries, parse_overrides
     from executor.dispatcher import TaskDispatcher

@@ -151,8 +151,12 @@ def kitchen_world_from_state(atoms) -> World:
     """
     w = World()
     areas: dict[str, tuple] = {}
+    said: dict[tuple, object] = {}     # (predicate, first argument) -> position in the file
+    start_pos = None
     for a in atoms:
         p, args, pos = a.pred, a.args, a.pos
+        if args:
+            said[(p, args[0])] = pos
         try:
             if p == "area":
                 areas[args[0]] = (_num(args, 1, p, pos), _num(args, 2, p, pos))
@@ -167,7 +171,7 @@ def kitchen_world_from_state(atoms) -> World:
             elif p == "opened":
                 w.opened.add(args[0])
             elif p == "robot-at":
-                w.robot_at = args[0]
+                w.robot_at, start_pos = args[0], pos
             elif p == "free":
                 w.free_arms += (args[0],)
             elif p == "holding":
@@ -178,17 +182,22 @@ def kitchen_world_from_state(atoms) -> World:
     if w.robot_at is None:
         raise HtnError("the initial state has no (robot-at AREA) fact")
     if w.robot_at not in areas:
-        raise HtnError(f"the robot is at '{w.robot_at}', which has no (area {w.robot_at} x y) fact")
-    for name, where in [*w.containers.items(), *w.trays.items()]:
-        if where not in areas:
-            raise HtnError(f"{name} is at '{where}', which has no (area {where} x y) fact")
+        raise HtnError.at(start_pos, f"the robot is at '{w.robot_at}', which has no "
+                                     f"(area {w.robot_at} x y) fact")
+    for kind, table in (("container", w.containers), ("tray", w.trays)):
+        for name, where in table.items():
+            if where not in areas:
+                raise HtnError.at(said.get((kind, name)),
+                                  f"{name} is at '{where}', which has no (area {where} x y) fact")
     for t in w.things.values():
         if t.on not in areas and t.on not in w.containers:
-            raise HtnError(f"{t.name} is at '{t.on}', which is neither an area nor a container")
+            raise HtnError.at(said.get(("at", t.name), said.get(("in", t.name))),
+                              f"{t.name} is at '{t.on}', which is neither an area nor a container")
     # every area gets a table, but the robot's start is just a pose unless
     # something stands there
     used = {t.on for t in w.things.values()} | set(w.containers.values()) | set(w.trays.values())
-    tables = _layout_tables(areas, [a for a in areas if a != w.robot_at or a in used])
+    tables = _layout_tables(areas, [a for a in areas if a != w.robot_at or a in used],
+                            {a: said.get(("area", a)) for a in areas})
     for name, (x, y) in areas.items():
         yaw = tables[name][2] if name in tables else 0.0
         w.places[name] = Place(name, x, y, yaw)
@@ -239,7 +248,7 @@ def _rect_seg_dist(rect, a, b) -> float:
     return min(_seg_dist(a, b, c, d) for c, d in zip(rect, rect[1:] + rect[:1]))
 
 
-def _layout_tables(areas: dict, with_table: list) -> dict:
+def _layout_tables(areas: dict, with_table: list, where_said: dict) -> dict:
     """Headings for the areas' tables: each table keeps clear of every straight
     drive between areas and of the tables placed before it."""
     drives = [(areas[a], areas[b]) for i, a in enumerate(areas) for b in list(areas)[i + 1:]]
@@ -266,8 +275,9 @@ def _layout_tables(areas: dict, with_table: list) -> dict:
             if clear >= 0.25:
                 break
         if best[0] < 0:
-            raise HtnError(f"cannot lay out the simulated kitchen: the table of area '{name}' "
-                           "would block a drive or another table (areas too close together?)")
+            raise HtnError.at(where_said.get(name),
+                              f"cannot lay out the simulated kitchen: the table of area '{name}' "
+                              "would block a drive or another table (areas too close together?)")
         _, yaw, rect = best
         ux, uy = math.cos(yaw), math.sin(yaw)
         mid = TABLE_GAP + TABLE_DEPTH / 2

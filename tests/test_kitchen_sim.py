@@ -221,4 +221,21 @@ def test_areas_too_close_for_tables_are_a_clear_error(tmp_path):
     assert run_htn("plan", DOMAIN, prob, "-o", plan).returncode == 0
     r = run_htn("run", plan, "--sim")
     assert r.returncode == 2
-    assert "cannot lay out the simulated kitchen" in r.stderr and "Traceback" not in r.stderr
+    first = r.stderr.splitlines()[0]
+    assert first.startswith(f"{prob}:2:4: cannot lay out the simulated kitchen: the table of "
+                            "area 'a'"), r.stderr
+    assert "Traceback" not in r.stderr
+
+
+def test_an_object_nowhere_is_a_clear_error(tmp_path):
+    prob = tmp_path / "nowhere.jshop"
+    prob.write_text("""(defproblem nowhere kitchen
+  ((area a 0.0 0.0) (area start 3.0 0.0)
+   (at cup nowhere) (robot-at start) (free left) (free right))
+  ((transporting cup a start)))""")
+    plan = tmp_path / "plan.txt"
+    plan.write_text("Plan cost: 1.0\n\n(!navigate start a)\n--------------------\n")
+    r = run_htn("run", plan, "--sim", "--domain", DOMAIN, "--problem", prob)
+    assert r.returncode == 2
+    assert r.stderr.splitlines()[0] == (f"{prob}:3:4: cup is at 'nowhere', which is neither "
+                                        "an area nor a container")
