@@ -117,6 +117,10 @@ def compare(domain_path: str, problem_path: str, runs: int, seed: int = 0, worke
     return comp
 
 
+UNITS = {"navigation": "m per run", "manipulation": "m per run", "actions": "per run",
+         "failures": "failed / attempted actions"}
+
+
 def plot(comp: Comparison, folder: str) -> list[str]:
     """Bar charts of each metric's mean and standard deviation, with and
     without transformation (like the paper's Fig. 8 and 9). Returns the files."""
@@ -135,6 +139,8 @@ def plot(comp: Comparison, folder: str) -> list[str]:
         ax.bar(["original", "transformed"], means, yerr=sds, capsize=6,
                color=["#9aa5b1", "#2f7ebc"])
         ax.set_title(f"{metric}\n{s['change_pct']:+.1f}%, p={s['p_value']:.2g}", fontsize=10)
+        ax.set_ylabel(UNITS[metric])
+        ax.set_ylim(bottom=0)   # a rate or distance below zero would only be the error bar
     fig.suptitle(f"{name}: {comp.runs} projected runs each; applied: "
                  f"{', '.join(comp.applied) or 'none'}", fontsize=11)
     fig.tight_layout()
