@@ -82,6 +82,7 @@ class KitchenRobot(PyBulletRobot):
     """The simulated two-armed kitchen robot; ``gui=True`` opens a window."""
 
     ARMS = ("left", "right")
+    CAMERA_PIXELS = (160, 120)   # finer than the domestic robot's: spoons are thin
 
     # ------------------------------------------------------------ building
     def _build(self) -> None:
@@ -242,7 +243,7 @@ class KitchenRobot(PyBulletRobot):
                         out.append((u + du, v + dv, 0.12))
         for t in self.world.things:
             if t in self.body_of and t not in skip and t not in self.arm_held.values():
-                pos = self._pos(self.body_of[t])
+                pos = self._body_pos(t)
                 u, v = self._to_area(area, pos[0], pos[1])
                 if 0.4 < u < 1.7 and abs(v) < 0.9:
                     out.append((u, v, self.radius[t]))
@@ -419,14 +420,14 @@ class KitchenRobot(PyBulletRobot):
         for t in self.world.things:
             if t in self.arm_held.values():
                 continue
-            pos = self._pos(self.body_of[t])
+            pos = self._body_pos(t)
             if self._touching(self.body_of[t], bid) and pos[2] > tp[2] and \
                     math.hypot(*(pos[:2] - tp[:2])) < 0.25:
                 out.append(t)
         return out
 
     def _in_drawer(self, obj: str, d: Drawer) -> bool:
-        pos = self._pos(self.body_of[obj])
+        pos = self._body_pos(obj)
         dp = self._pos(d.body)
         u, v = self._to_area(d.area, pos[0], pos[1])
         du, dv = self._to_area(d.area, dp[0], dp[1])
@@ -446,26 +447,13 @@ class KitchenRobot(PyBulletRobot):
         x, y = self._to_world(area, 0.85, 0.0)
         return [x, y, self.furniture_top.get(area, 0.6)]
 
-    def _visible_pixels(self, name: str, target) -> int:
-        p, c = self.p, self.cid
-        x, y, yaw = self.base
-        eye = [x + 0.1 * math.cos(yaw), y + 0.1 * math.sin(yaw), 1.45]
-        view = p.computeViewMatrix(eye, list(target), [0, 0, 1], physicsClientId=c)
-        proj = p.computeProjectionMatrixFOV(70, 4 / 3, 0.1, 8.0, physicsClientId=c)
-        img = p.getCameraImage(160, 120, view, proj, renderer=p.ER_TINY_RENDERER, physicsClientId=c)
-        seg = np.asarray(img[4]).reshape(120, 160)
-        return int(np.count_nonzero((seg & ((1 << 24) - 1)) == self.body_of[name]))
-
     # ------------------------------------------------------------ skills
     def move_base(self, place: str) -> SkillResult:
         """Back away from the table, drive to a pose in front of the goal's
         table, turn to face it and drive up to it: turning in place next to a
         table (or an open drawer) would sweep the arms through it."""
         goal = self.world.place(place)
-        fraction = 1.0
-        if self.faults.nav and self.rng.random() < self.faults.nav:
-            fraction = self.rng.uniform(0.4, 0.85)
-            self._inject("nav", f"stops at {fraction:.0%} of the way to {place}")
+        fraction = self._nav_fault(place)
         x, y, yaw = self.base
         here = next((a for a, pl in self.world.places.items()
                      if math.hypot(pl.x - x, pl.y - y) <= POSE_TOLERANCE), None)
@@ -498,20 +486,14 @@ class KitchenRobot(PyBulletRobot):
             return SkillResult(False, f"unknown object {obj}")
         area = self._area_of(where)
         target = self._look_target(area)
-        pixels = self._visible_pixels(obj, target)
-        if self.faults.detect and self.rng.random() < self.faults.detect:
-            pixels = 0
-            self._inject("detect", f"{obj} missed")
+        pixels = self._look(obj, target)
         if pixels >= 5:
-            pos = self._pos(self.body_of[obj]) + np.array(
-                [self.rng.gauss(0, 0.003), self.rng.gauss(0, 0.003), 0])
-            self.detections[obj] = tuple(pos)
             return SkillResult(True, f"{obj} seen ({pixels} px)", {"pixels": pixels})
         for d in self.drawers.values():
-            if d.area == area and d.out < 0.02 and self._visible_pixels(f"{d.name}-housing", target) >= 5:
-                if self._in_drawer(obj, d):
-                    self.believed_in[obj] = d.name
-                    return SkillResult(True, f"{obj} is in the closed {d.name}")
+            if d.area == area and d.out < 0.02 and self._in_drawer(obj, d) and \
+                    self._visible_pixels(f"{d.name}-housing", target) >= 5:
+                self.believed_in[obj] = d.name
+                return SkillResult(True, f"{obj} is in the closed {d.name}")
         return SkillResult(True, f"{obj} not seen")
 
     def grasp(self, obj: str, where: str, arm: Optional[str] = None) -> SkillResult:
@@ -639,8 +621,7 @@ class KitchenRobot(PyBulletRobot):
             if q1 is None:
                 self._rest_pose()
                 return SkillResult(False, f"the {arm} arm cannot reach where {d.name} is {verb}")
-            first = d.out
-            n = max(1, int(abs(goal - first) / (0.2 * DT)))
+            n = max(1, int(abs(goal - d.out) / (0.2 * DT)))
             for i in range(1, n + 1):
                 k = i / n
                 self._command(arm, [a + (b - a) * k for a, b in zip(q0, q1)])
@@ -671,11 +652,13 @@ class KitchenRobot(PyBulletRobot):
     def put_on_tray(self, obj: str, tray: str, arm: Optional[str] = None) -> SkillResult:
         arm = arm if arm in self.ARMS else next(
             (a for a in self.ARMS if self.arm_held[a] == obj), None)
-        if arm is None or self.arm_held[arm] != obj or tray not in self.trays:
+        if tray not in self.trays:
+            return SkillResult(False, f"no tray {tray}")
+        if arm is None or self.arm_held[arm] != obj:
             return SkillResult(True, f"{obj} is not in the {arm or 'robot'}'s hand")
         p, c = self.p, self.cid
         tpos, torn = p.getBasePositionAndOrientation(self.trays[tray], physicsClientId=c)
-        on = [self._pos(self.body_of[t]) for t in self._on_tray(tray)]
+        on = [self._body_pos(t) for t in self._on_tray(tray)]
         for du, dv in sorted(TRAY_SPOTS, key=lambda s: -s[1] * SIDE[arm]):
             x, y = p.multiplyTransforms(tpos, torn, [du, dv, 0], [0, 0, 0, 1])[0][:2]
             if all(math.hypot(x - o[0], y - o[1]) > 0.07 for o in on) and \
@@ -690,13 +673,10 @@ class KitchenRobot(PyBulletRobot):
             return SkillResult(False, f"the {arm or 'robot'}'s hand is not free")
         if tray not in self.trays or obj not in self.body_of:
             return SkillResult(False, f"unknown tray or object {tray}/{obj}")
-        target = list(self._pos(self.trays[tray]))
-        if self._visible_pixels(obj, target) < 5:
+        if self._visible_pixels(obj, list(self._body_pos(tray))) < 5:
             return SkillResult(True, f"{obj} is not seen on {tray}")
-        guess = self._pos(self.body_of[obj]) + np.array(
-            [self.rng.gauss(0, 0.003), self.rng.gauss(0, 0.003), 0])
         with self._using(arm):
-            return self._top_grasp(obj, tuple(guess))
+            return self._top_grasp(obj, self._noisy_pos(obj))
 
     def _rims(self, pos, orn) -> dict:
         """Where each hand holds the tray (posed at pos, orn): the middle of its side rim."""
@@ -798,7 +778,7 @@ class KitchenRobot(PyBulletRobot):
         arm = next((a for a in self.ARMS if self.arm_held[a] == obj), None)
         if arm is None:
             return Check(False, f"{obj} is in neither hand")
-        pos = self._pos(self.body_of[obj])
+        pos = self._body_pos(obj)
         d = float(np.linalg.norm(pos - self._ee_of(arm)))
         lifted = pos[2] > max(self.furniture_top.values(), default=0.0) + 0.1
         ok = d < 0.06 and lifted and self.arm_grip[arm] is not None

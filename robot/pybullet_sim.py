@@ -369,25 +369,38 @@ class PyBulletRobot(Robot):
                                                             physicsClientId=self.cid)[0])
 
     # ------------------------------------------------------------ perception
+    CAMERA_PIXELS = (96, 72)   # width, height of the head camera's image
+
     def _visible_pixels(self, name: str, target) -> int:
         """Pixels of ``name`` in the head camera's segmentation image, looking at ``target``."""
         p, c = self.p, self.cid
         x, y, _ = self.base
+        w_, h_ = self.CAMERA_PIXELS
         eye = [x + 0.1 * math.cos(self.base[2]), y + 0.1 * math.sin(self.base[2]), CAMERA_HEIGHT]
         view = p.computeViewMatrix(eye, list(target), [0, 0, 1], physicsClientId=c)
         proj = p.computeProjectionMatrixFOV(70, 4 / 3, 0.1, 8.0, physicsClientId=c)
-        img = p.getCameraImage(96, 72, view, proj, renderer=p.ER_TINY_RENDERER,
+        img = p.getCameraImage(w_, h_, view, proj, renderer=p.ER_TINY_RENDERER,
                                physicsClientId=c)
-        seg = np.asarray(img[4]).reshape(72, 96)
+        seg = np.asarray(img[4]).reshape(h_, w_)
         return int(np.count_nonzero((seg & ((1 << 24) - 1)) == self.body_of[name]))
+
+    def _noisy_pos(self, name: str) -> tuple:
+        """Where perception puts a body: its position with a few millimetres of noise."""
+        return tuple(self._body_pos(name) + np.array(
+            [self.rng.gauss(0, 0.003), self.rng.gauss(0, 0.003), 0]))
+
+    def _nav_fault(self, place: str) -> float:
+        """The fraction of the way to ``place`` a drive gets (1.0 without a fault)."""
+        if self.faults.nav and self.rng.random() < self.faults.nav:
+            fraction = self.rng.uniform(0.4, 0.85)
+            self._inject("nav", f"stops at {fraction:.0%} of the way to {place}")
+            return fraction
+        return 1.0
 
     # ------------------------------------------------------------ skills
     def move_base(self, place: str) -> SkillResult:
         goal = self.world.place(place)
-        fraction = 1.0
-        if self.faults.nav and self.rng.random() < self.faults.nav:
-            fraction = self.rng.uniform(0.4, 0.85)
-            self._inject("nav", f"stops at {fraction:.0%} of the way to {place}")
+        fraction = self._nav_fault(place)
         if math.hypot(goal.x - self.base[0], goal.y - self.base[1]) > 1e-3:
             if not self._face(goal.x, goal.y):
                 return SkillResult(True, "bumped into something while turning")
@@ -405,17 +418,20 @@ class PyBulletRobot(Robot):
         target = self._body_pos(furniture)
         target[2] = self.furniture_top[furniture]
         self._face(target[0], target[1])
+        pixels = self._look(obj, target)
+        detail = f"{obj} seen ({pixels} px)" if pixels >= 5 else f"{obj} not seen"
+        return SkillResult(True, detail, {"pixels": pixels})
+
+    def _look(self, obj: str, target) -> int:
+        """Look at ``target`` for ``obj``; record a detection when it is seen
+        (5 pixels or more). Returns the pixels (0 after a detection fault)."""
         pixels = self._visible_pixels(obj, target)
         if self.faults.detect and self.rng.random() < self.faults.detect:
             pixels = 0
             self._inject("detect", f"{obj} missed")
         if pixels >= 5:
-            pos = self._body_pos(obj) + np.array([self.rng.gauss(0, 0.003), self.rng.gauss(0, 0.003), 0])
-            self.detections[obj] = tuple(pos)
-            detail = f"{obj} seen ({pixels} px)"
-        else:
-            detail = f"{obj} not seen"
-        return SkillResult(True, detail, {"pixels": pixels})
+            self.detections[obj] = self._noisy_pos(obj)
+        return pixels
 
     def _inject(self, fault: str, detail: str) -> None:
         self.injected.append({"fault": fault, "t": round(self.sim_time, 4), "detail": detail})
