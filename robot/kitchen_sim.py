@@ -31,7 +31,7 @@ import numpy as np
 from jshop.errors import HtnError
 
 from .interface import Check, SkillResult
-from .pybullet_sim import (ARM_JOINTS, BASE_SPEED, BASE_Z, DT, FINGERS, POSE_TOLERANCE,
+from .pybullet_sim import (ARM_JOINTS, BASE_SPEED, BASE_Z, DT, EE_LINK, FINGERS, POSE_TOLERANCE,
                            TURN_SPEED, YAW_TOLERANCE, PyBulletRobot, _angle_diff,
                            _yaw_quat, quiet_fds)
 
@@ -64,7 +64,6 @@ DOCK = 0.35                         # backing away from a table before turning
 class Drawer:
     name: str
     area: str
-    housing: int
     body: int
     out: float = 0.0                # how far it is pulled out (m)
 
@@ -193,7 +192,7 @@ class KitchenRobot(PyBulletRobot):
                               0.0, [x, y, top], yaw, (0.55, 0.4, 0.25, 1))
         body = self._boxes(self._open_box(hu, hv, hz), 0.0, [x, y, top + 0.001], yaw,
                            (0.75, 0.6, 0.4, 1))
-        d = Drawer(name, area, housing, body)
+        d = Drawer(name, area, body)
         self.drawers[name] = d
         self.body_of[name] = body
         self.body_of[f"{name}-housing"] = housing
@@ -237,10 +236,7 @@ class KitchenRobot(PyBulletRobot):
         for name, bid in self.trays.items():
             pos = self._pos(bid)
             if self._on_table(bid, area):
-                u, v = self._to_area(area, pos[0], pos[1])
-                for du in (-0.07, 0.07):
-                    for dv in (-0.09, 0.09):
-                        out.append((u + du, v + dv, 0.12))
+                out += self._tray_discs(*self._to_area(area, pos[0], pos[1]))
         for t in self.world.things:
             if t in self.body_of and t not in skip and t not in self.arm_held.values():
                 pos = self._body_pos(t)
@@ -355,7 +351,8 @@ class KitchenRobot(PyBulletRobot):
         p, c = self.p, self.cid
         for _ in range(n):
             if self.hold_tray is not None:
-                ee_pos, ee_orn = p.getLinkState(self.arm_body["left"], 11, physicsClientId=c)[4:6]
+                ee_pos, ee_orn = p.getLinkState(self.arm_body["left"], EE_LINK,
+                                                physicsClientId=c)[4:6]
                 pos, orn = p.multiplyTransforms(ee_pos, ee_orn, *self.hold_tray.rel)
                 p.changeConstraint(self.hold_tray.constraint, jointChildPivot=pos,
                                    jointChildFrameOrientation=orn, maxForce=300,
@@ -696,20 +693,19 @@ class KitchenRobot(PyBulletRobot):
         rims = self._rims(pos, orn)
         above = {a: [r[0], r[1], r[2] + 0.1] for a, r in rims.items()}
         lifted = {a: [r[0], r[1], r[2] + 0.12] for a, r in rims.items()}
+        for a in self.ARMS:
+            self._set_fingers_of(a, 0.04)
         for stage in (above, rims):
             qs = {a: self._ik_for(a, stage[a]) for a in self.ARMS}
             if any(q is None for q in qs.values()):
                 self._home_both()
                 return SkillResult(False, f"{tray} is out of reach of both arms")
-            for a in self.ARMS:
-                self._set_fingers_of(a, 0.04)
             self._move_arms(qs, 0.8)
-        for a in self.ARMS:   # the hands hold the rims: no contact forces between them
-            for link in (*FINGERS, 8, 7, 6):
-                p.setCollisionFilterPair(self.arm_body[a], bid, link, -1, 0, physicsClientId=c)
+        self._hands_touch_tray(bid, False)   # they hold its rims: no contact forces
+        for a in self.ARMS:
             self._set_fingers_of(a, 0.004)
         self._step(6)
-        ee_pos, ee_orn = p.getLinkState(self.arm_body["left"], 11, physicsClientId=c)[4:6]
+        ee_pos, ee_orn = p.getLinkState(self.arm_body["left"], EE_LINK, physicsClientId=c)[4:6]
         inv = p.invertTransform(ee_pos, ee_orn)
         rel = p.multiplyTransforms(inv[0], inv[1], pos, orn)
         cid = p.createConstraint(bid, -1, -1, -1, p.JOINT_FIXED, [0, 0, 0], [0, 0, 0], pos,
@@ -717,7 +713,8 @@ class KitchenRobot(PyBulletRobot):
         self.hold_tray = Hold(tray, cid, rel, tuple(self._on_tray(tray)))
         goals = {a: self._ik_for(a, lifted[a]) for a in self.ARMS}
         if any(q is None for q in goals.values()):
-            return SkillResult(False, "cannot lift the tray")
+            self._let_go_of_tray()
+            return SkillResult(False, f"the arms cannot lift {tray}")
         self._move_arms(goals, 1.0)
         self._step(24)
         return SkillResult(True, f"{tray} lifted with both hands")
@@ -727,13 +724,13 @@ class KitchenRobot(PyBulletRobot):
             return SkillResult(True, f"{tray} is not in the hands")
         if where not in self.furniture_top:
             return SkillResult(False, f"no table at {where}")
-        p, c = self.p, self.cid
+        p = self.p
         top = self.furniture_top[where]
         yaw = self.base[2]
         taken = self._footprints(where, skip=self._on_tray(tray))
         for v in (0.0, -0.1, 0.1, -0.2, 0.2, -0.3, 0.3):
-            if any(math.hypot(TRAY_U + du - tu, v + dv - tv) < tr + 0.1
-                   for du in (-0.07, 0.07) for dv in (-0.09, 0.09) for tu, tv, tr in taken):
+            if any(math.hypot(u - tu, w - tv) < tr + 0.1
+                   for u, w, _ in self._tray_discs(TRAY_U, v) for tu, tv, tr in taken):
                 continue
             x, y = self._to_world(where, TRAY_U, v)
             pos, orn = [x, y, top + 0.004], _yaw_quat(p, yaw)
@@ -746,19 +743,31 @@ class KitchenRobot(PyBulletRobot):
         else:
             return SkillResult(False, f"no free place for {tray} within reach on {where}")
         self._move_arms({"left": left, "right": right}, 1.2)
-        p.removeConstraint(self.hold_tray.constraint, physicsClientId=c)
+        self._let_go_of_tray()
+        self._home_both()
+        return SkillResult(True, f"{tray} lowered onto {where}")
+
+    def _tray_discs(self, u: float, v: float) -> list[tuple[float, float, float]]:
+        """Four discs (u, v, radius) covering a tray centred at (u, v) of an area."""
+        return [(u + du, v + dv, 0.12) for du in (-0.07, 0.07) for dv in (-0.09, 0.09)]
+
+    def _hands_touch_tray(self, tray_body: int, touch: bool) -> None:
+        for a in self.ARMS:
+            for link in (*FINGERS, 8, 7, 6):
+                self.p.setCollisionFilterPair(self.arm_body[a], tray_body, link, -1, int(touch),
+                                              physicsClientId=self.cid)
+
+    def _let_go_of_tray(self) -> None:
+        """Release the tray where it is: let it settle, open and raise both hands."""
+        bid = self.trays[self.hold_tray.tray]
+        self.p.removeConstraint(self.hold_tray.constraint, physicsClientId=self.cid)
         self.hold_tray = None
         self._settle(0.3)
-        bid = self.trays[tray]
         for a in self.ARMS:
             self._set_fingers_of(a, 0.04)
         ups = {a: self._ik_for(a, [*self._ee_of(a)[:2], self._ee_of(a)[2] + 0.1]) for a in self.ARMS}
         self._move_arms({a: q for a, q in ups.items() if q is not None}, 0.4)
-        for a in self.ARMS:
-            for link in (*FINGERS, 8, 7, 6):
-                p.setCollisionFilterPair(self.arm_body[a], bid, link, -1, 1, physicsClientId=c)
-        self._home_both()
-        return SkillResult(True, f"{tray} lowered onto {where}")
+        self._hands_touch_tray(bid, True)
 
     def _set_fingers_of(self, arm: str, width: float) -> None:
         self.f_cmd[arm] = width
@@ -766,7 +775,8 @@ class KitchenRobot(PyBulletRobot):
             self.p.resetJointState(self.arm_body[arm], j, width, physicsClientId=self.cid)
 
     def _ee_of(self, arm: str) -> np.ndarray:
-        return np.array(self.p.getLinkState(self.arm_body[arm], 11, physicsClientId=self.cid)[4])
+        return np.array(self.p.getLinkState(self.arm_body[arm], EE_LINK,
+                                            physicsClientId=self.cid)[4])
 
     def _home_both(self) -> None:
         self._move_arms({a: ARM_HOMES[a] for a in self.ARMS}, 0.8)
