@@ -177,7 +177,8 @@ class ProjectionRobot(Robot):
 
     def detect_object(self, obj: str, where: str) -> SkillResult:
         failed = self._act("detect")
-        if not failed and self.where.get(obj) in (where, *self._contents_of(where)):
+        if not failed and (self.where.get(obj) in (where, *self._contents_of(where))
+                           or self.trays.get(obj) == where):
             self.detections.add(obj)
         return SkillResult(True, "looked")
 

@@ -71,12 +71,13 @@ def test_transformed_set_table_and_clean_up_runs_verified_in_pybullet(tmp_path):
     for step in ("(!lift-tray tray1)", "(!grasp bowl2 sink_area right)", "(!close drawer)"):
         assert step in text   # tray, both-hands and container rewrites are in the plan
     assert text.count("(!open drawer)") == 1
+    assert text.count("(!look-for tray1 kitchen_island)") == 5   # before each load and the lift
     r = run_htn("run", plan, "--sim", "--log", log)
     assert r.returncode == 0, r.stdout + r.stderr
-    assert r.stdout.splitlines()[-1].startswith("verified: 43 of 43 steps verified")
+    assert r.stdout.splitlines()[-1].startswith("verified: 48 of 48 steps verified")
     events = [json.loads(line) for line in log.read_text().splitlines()]
     done = [e for e in events if e["event"] in ("verified", "aborted", "failed")]
-    assert [e["event"] for e in done] == ["verified"] * 43
+    assert [e["event"] for e in done] == ["verified"] * 48
 
 
 @pytest.mark.parametrize("which", ["original", "transformed"])
