@@ -36,8 +36,9 @@ def main(problem, runs, faults, transformed):
     from executor.dispatcher import TaskDispatcher
     from executor.log import EventLog
     from jshop import Planner, load_domain, load_problem
-    from robot.pybullet_sim import Faults, PyBulletRobot
-    from robot.world import is_kitchen_state, kitchen_world_from_state, world_from_state
+    from robot import simulated_robot
+    from robot.pybullet_sim import Faults
+    from robot.world import is_kitchen_state
 
     inst = load_problem(str(ROOT / "problems" / f"{problem}.jshop")).instances[0]
     kitchen = is_kitchen_state(inst.state)
@@ -48,15 +49,10 @@ def main(problem, runs, faults, transformed):
         plan = default_framework().apply_all_transformations(Workspace.from_problem(dom, inst)).plan
     else:
         plan = next(Planner(dom, inst).plans())
-    if kitchen:
-        from robot.kitchen_sim import KitchenRobot as Sim
-        make_world = kitchen_world_from_state
-    else:
-        Sim, make_world = PyBulletRobot, world_from_state
     exec_factor, total_factor, sims = [], [], []
     for seed in range(runs):
         t0 = time.perf_counter()
-        robot = Sim(make_world(inst.state), faults=Faults.parse(faults), seed=seed)
+        robot = simulated_robot(inst.state, faults=Faults.parse(faults), seed=seed)
         built = time.perf_counter()
         start_sim = robot.sim_time
         log = EventLog(None, clock=lambda: robot.sim_time)

@@ -68,7 +68,6 @@ def run(plan_file, sim, gui, snapshots, faults, seed, retries, replan, log_path,
     from jshop.parser import load_domain, load_problem
     from jshop.planfile import read_plan_file
     from robot.pybullet_sim import Faults
-    from robot.world import is_kitchen_state, kitchen_world_from_state, world_from_state
 
     pf = read_plan_file(plan_file)
     domain = domain or pf.domain
@@ -90,19 +89,13 @@ def run(plan_file, sim, gui, snapshots, faults, seed, retries, replan, log_path,
     instance = prob.instances[0]
     steps = pf.plans[plan_index - 1].steps
     _check_steps(steps, dom, plan_file)
-    kitchen = is_kitchen_state(instance.state)
-    world = (kitchen_world_from_state if kitchen else world_from_state)(instance.state)
     limits = load_retries(domain)
     limits.update(parse_overrides(retries))
-    if snapshots:
-        os.makedirs(snapshots, exist_ok=True)
 
-    if kitchen:   # the pick-and-place kitchen: two arms, a drawer, a tray
-        from robot.kitchen_sim import KitchenRobot
-        robot = KitchenRobot(world, gui=gui, faults=fault_cfg, seed=seed)
-    else:
-        from robot.pybullet_sim import PyBulletRobot
-        robot = PyBulletRobot(world, gui=gui, faults=fault_cfg, seed=seed)
+    from robot import simulated_robot
+    robot = simulated_robot(instance.state, gui=gui, faults=fault_cfg, seed=seed)
+    if snapshots:   # only once the world could be built from the problem
+        os.makedirs(snapshots, exist_ok=True)
     log = EventLog(log_path, clock=lambda: robot.sim_time)
     view = None
     if not quiet:

@@ -68,7 +68,6 @@ class World:
     containers: dict = field(default_factory=dict)     # container -> area
     trays: dict = field(default_factory=dict)          # tray -> area
     opened: set = field(default_factory=set)           # containers open at the start
-    free_arms: tuple = ()
 
     def place(self, name: str) -> Place:
         try:
@@ -135,7 +134,7 @@ ROBOT_HALF_WIDTH = 0.45  # half the width of the corridor the base (arms tucked)
 
 
 def is_kitchen_state(atoms) -> bool:
-    """Does the state use the kitchen domain's vocabulary (``area``, ``robot-at``)?"""
+    """Does the state use the kitchen domain's vocabulary (``(area a x y)`` facts)?"""
     return any(a.pred == "area" for a in atoms)
 
 
@@ -160,9 +159,7 @@ def kitchen_world_from_state(atoms) -> World:
         try:
             if p == "area":
                 areas[args[0]] = (_num(args, 1, p, pos), _num(args, 2, p, pos))
-            elif p == "at":
-                w.things.setdefault(args[0], Thing(args[0], _kind(args[0]))).on = args[1]
-            elif p == "in":
+            elif p in ("at", "in"):   # on an area's table, in a container
                 w.things.setdefault(args[0], Thing(args[0], _kind(args[0]))).on = args[1]
             elif p == "container":
                 w.containers[args[0]] = args[1]
@@ -172,8 +169,6 @@ def kitchen_world_from_state(atoms) -> World:
                 w.opened.add(args[0])
             elif p == "robot-at":
                 w.robot_at, start_pos = args[0], pos
-            elif p == "free":
-                w.free_arms += (args[0],)
             elif p == "holding":
                 raise HtnError.at(pos, "the simulated kitchen starts with empty hands "
                                        f"(the state says (holding {' '.join(map(str, args))}))")
