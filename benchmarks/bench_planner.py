@@ -29,7 +29,6 @@ from pathlib import Path
 import click
 
 ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT))
 
 DEFAULT_CORPUS = ROOT.parent / "shared" / "corpus" / "jshop2"
 FUNCTION_FILES = {"freecell": ROOT / "tests" / "functions" / "freecell.py",
@@ -37,7 +36,7 @@ FUNCTION_FILES = {"freecell": ROOT / "tests" / "functions" / "freecell.py",
 
 
 def search_times(folder: Path, stats: dict, repeats: int, budget: float) -> list[float]:
-    from jshop import FunctionTable, Planner, load_domain, load_problem
+    from htn.jshop import FunctionTable, Planner, load_domain, load_problem
     table = FunctionTable()
     if folder.name in FUNCTION_FILES:
         table.load_file(str(FUNCTION_FILES[folder.name]))
@@ -68,7 +67,7 @@ def search_times(folder: Path, stats: dict, repeats: int, budget: float) -> list
 
 
 def command_time(folder: Path, stats: dict, runs: int) -> float:
-    args = [sys.executable, "-m", "cli.main", "plan", str(folder / stats["domain_file"]),
+    args = [sys.executable, "-m", "htn", "plan", str(folder / stats["domain_file"]),
             str(folder / stats["problem_file"]), "--format", "jshop", "--quiet"]
     if folder.name in FUNCTION_FILES:
         args += ["--functions", str(FUNCTION_FILES[folder.name])]

@@ -21,7 +21,6 @@ from pathlib import Path
 import click
 
 ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT))
 
 
 @click.command()
@@ -32,20 +31,20 @@ sys.path.insert(0, str(ROOT))
               help="Kitchen problems: run the plan after the plan transformations.")
 def main(problem, runs, faults, transformed):
     """Time plan execution in the simulation; print the real-time factor."""
-    from executor.config import load_retries
-    from executor.dispatcher import TaskDispatcher
-    from executor.log import EventLog
-    from jshop import Planner, load_domain, load_problem
-    from robot import simulated_robot
-    from robot.pybullet_sim import Faults
-    from robot.world import is_kitchen_state
+    from htn.executor.config import load_retries
+    from htn.executor.dispatcher import TaskDispatcher
+    from htn.executor.log import EventLog
+    from htn.jshop import Planner, load_domain, load_problem
+    from htn.robot import simulated_robot
+    from htn.robot.pybullet_sim import Faults
+    from htn.robot.world import is_kitchen_state
 
     inst = load_problem(str(ROOT / "problems" / f"{problem}.jshop")).instances[0]
     kitchen = is_kitchen_state(inst.state)
     domain = str(ROOT / "domains" / ("kitchen.jshop" if kitchen else "domestic.jshop"))
     dom = load_domain(domain)
     if transformed:
-        from transform.framework import Workspace, default_framework
+        from htn.transform.framework import Workspace, default_framework
         plan = default_framework().apply_all_transformations(Workspace.from_problem(dom, inst)).plan
     else:
         plan = next(Planner(dom, inst).plans())

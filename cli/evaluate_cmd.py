@@ -6,15 +6,17 @@ import os
 
 import click
 
-from jshop.errors import HtnError
+from htn.jshop.errors import HtnError
 
 
 def _domain_for(problem: str) -> str:
-    """The problem's domain file: ../domains/NAME.jshop beside it, or domains/ here."""
-    from jshop.parser import load_problem
+    """The problem's domain file: ../domains/NAME.jshop beside it, domains/
+    here, or the bundled one of that name."""
+    from htn import EXAMPLES
+    from htn.jshop.parser import load_problem
     name = load_problem(problem).domain_name
     for base in (os.path.join(os.path.dirname(os.path.abspath(problem)), "..", "domains"),
-                 "domains"):
+                 "domains", str(EXAMPLES / "domains")):
         path = os.path.normpath(os.path.join(base, f"{name}.jshop"))
         if os.path.isfile(path):
             return path
@@ -45,7 +47,9 @@ def evaluate(problem, domain, runs, seed, workers, plot_dir, as_json):
     from rich.console import Console
     from rich.progress import Progress
 
-    from transform.evaluate import METRIC_NAMES, compare, plot
+    from .extras import require_extra
+    require_extra("eval", "htn evaluate")
+    from htn.transform.evaluate import METRIC_NAMES, compare, plot
 
     if not os.path.isfile(problem):
         raise HtnError("no such file", problem)

@@ -1,7 +1,7 @@
 """``htn``: plan with a JSHOP2 domain, execute plans, evaluate.
 
 This module only parses arguments, calls the library and prints. Errors in the
-user's input are :class:`jshop.errors.HtnError`; they are caught once, in
+user's input are :class:`htn.jshop.errors.HtnError`; they are caught once, in
 :func:`main`, and printed as ``file:line:col: message`` with exit code 2.
 """
 from __future__ import annotations
@@ -11,7 +11,7 @@ import sys
 
 import click
 
-from jshop.errors import HtnError
+from htn.jshop.errors import HtnError
 
 from .output import fail
 
@@ -25,22 +25,23 @@ def cli():
     and optimise them by transforming their task trees.
 
     \b
-    Quick start:
-      htn plan domains/domestic.jshop problems/bring_object.jshop
+    Quick start (the bundled examples: htn examples DIR copies them):
+      htn examples demo && cd demo
+      htn plan domains/domestic.jshop problems/bring_object.jshop -o plan.txt
+      htn run plan.txt --robot symbolic      # or --sim, with the 'sim' extra
     """
 
 
 def _register():
+    from .evaluate_cmd import evaluate
+    from .examples_cmd import examples
     from .plan_cmd import plan
     from .run_cmd import run
     from .stats_cmd import stats
-    from .evaluate_cmd import evaluate
     from .transform_cmd import transform
-    cli.add_command(plan)
-    cli.add_command(run)
-    cli.add_command(stats)
-    cli.add_command(transform)
-    cli.add_command(evaluate)
+    from .validate_cmd import validate
+    for command in (plan, run, validate, stats, transform, evaluate, examples):
+        cli.add_command(command)
 
 
 _register()

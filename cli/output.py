@@ -31,7 +31,7 @@ def atomic_write(path: str):
     """
     directory = os.path.dirname(os.path.abspath(path)) or "."
     if not os.path.isdir(directory):
-        from jshop.errors import HtnError
+        from htn.jshop.errors import HtnError
         raise HtnError("directory does not exist", path)
     fd, tmp = tempfile.mkstemp(prefix=".htn-", dir=directory)
     umask = os.umask(0)

@@ -3,7 +3,6 @@ from __future__ import annotations
 
 import contextlib
 import json
-import os
 import sys
 import time
 
@@ -12,15 +11,6 @@ import click
 from .output import atomic_write, deferred_interrupt, stdout_is_terminal, warn
 
 FORMATS = ["text", "jshop", "json"]
-
-
-def plan_file_header(domain: str, problem: str, out_path: str) -> str:
-    """Comment lines naming the domain and problem, relative to the plan file."""
-    base = os.path.dirname(os.path.abspath(out_path))
-    rel = lambda p: os.path.relpath(os.path.abspath(p), base)  # noqa: E731
-    return (f"; htn plan file: JSHOP2 plan format\n"
-            f"; domain: {rel(domain)}\n"
-            f"; problem: {rel(problem)}\n")
 
 
 @click.command("plan")
@@ -56,10 +46,11 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
       htn plan DOMAIN PROBLEM --all --format jshop
       htn plan DOMAIN PROBLEM -o plan.txt && htn run plan.txt --sim
     """
-    from jshop.checks import check_domain, check_problem
-    from jshop.functions import FunctionTable
-    from jshop.parser import load_domain, load_problem
-    from jshop.planner import Planner
+    from htn.jshop.checks import check_domain, check_problem
+    from htn.jshop.functions import FunctionTable
+    from htn.jshop.parser import load_domain, load_problem
+    from htn.jshop.planfile import header
+    from htn.jshop.planner import Planner
 
     fmt = fmt or ("text" if stdout_is_terminal() else "jshop")
     table = FunctionTable()
@@ -86,7 +77,7 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
     with contextlib.ExitStack() as files:
         out_fh = files.enter_context(atomic_write(output)) if output else None
         if out_fh:
-            out_fh.write(plan_file_header(domain, problem, output))
+            out_fh.write(header(output, domain, problem, functions))
         try:
             for k, inst in enumerate(prob.instances):
                 remaining = None
@@ -180,7 +171,7 @@ class _Renderer:
     def _text_plan(self, p) -> None:
         from rich.table import Table
         from rich import box
-        from jshop.terms import java_double
+        from htn.jshop.terms import java_double
         c = self.console
         c.print(f"[bold]Plan {self.count}[/bold]  cost {java_double(p.cost)}  "
                 f"{len(p.steps)} step{'s' if len(p.steps) != 1 else ''}")

@@ -1,4 +1,4 @@
-"""``htn run PLAN --sim``: execute a plan with monitoring on the simulated robot."""
+"""``htn run PLAN``: execute a plan with per-action monitoring on a robot back end."""
 from __future__ import annotations
 
 import os
@@ -7,7 +7,7 @@ import sys
 
 import click
 
-from jshop.errors import HtnError
+from htn.jshop.errors import HtnError
 
 from .output import stdout_is_terminal
 
@@ -16,14 +16,22 @@ OUTCOME_STYLE = {"verified": "green", "finished": "cyan", "failed": "bold red",
                  "replanned": "magenta", "interrupted": "bold red"}
 
 
+RUN_OPTIONS = ("plan_file", "robot_name", "sim", "faults", "seed", "retries", "replan",
+               "plan_index", "domain", "problem", "functions")
+
+
 @click.command("run")
-@click.argument("plan_file", type=click.Path(dir_okay=False))
-@click.option("--sim", is_flag=True, help="Run on the simulated robot (PyBullet, headless).")
+@click.argument("plan_file", required=False, type=click.Path(dir_okay=False))
+@click.option("--robot", "robot_name", metavar="NAME",
+              help="Robot back end: pybullet, symbolic, projection, or one a plugin adds "
+                   "(entry points 'htn.robots').")
+@click.option("--sim", is_flag=True, help="Short for --robot pybullet (headless PyBullet).")
 @click.option("--gui", is_flag=True, help="Show the simulation in a window (needs a display).")
 @click.option("--snapshots", type=click.Path(file_okay=False), metavar="DIR",
-              help="Save a PNG camera image after each action attempt.")
-@click.option("--faults", metavar="slip=P,nav=P,detect=P,moved=P",
-              help="Inject faults with these probabilities.")
+              help="Save a PNG camera image after each action attempt (PyBullet).")
+@click.option("--faults", metavar="KIND=P,...",
+              help="Inject faults with these probabilities: slip, nav, detect, moved on "
+                   "PyBullet; effect on the symbolic robot.")
 @click.option("--seed", type=int, default=0, show_default=True,
               help="Random seed for faults (same seed, same run).")
 @click.option("--retries", multiple=True, metavar="OPERATOR=N",
@@ -31,72 +39,123 @@ OUTCOME_STYLE = {"verified": "green", "finished": "cyan", "failed": "bold red",
 @click.option("--replan", is_flag=True,
               help="On a failed or aborted action, re-plan from the observed state and go on.")
 @click.option("--log", "log_path", type=click.Path(dir_okay=False), metavar="FILE.jsonl",
-              help="Write every event as a JSON line, flushed as it happens.")
+              help="Write every event as a JSON line, flushed as it happens; the first "
+                   "line (header) records what is needed to re-run it.")
+@click.option("--from-log", "from_log", type=click.Path(dir_okay=False), metavar="FILE.jsonl",
+              help="Re-run what the log's header records (plan, robot, seed, faults, "
+                   "retries, ...).")
 @click.option("--plan-index", type=click.IntRange(min=1), default=1, show_default=True,
               help="Which plan of the file to run.")
 @click.option("--domain", type=click.Path(dir_okay=False),
               help="Domain file (default: the one named in the plan file).")
 @click.option("--problem", type=click.Path(dir_okay=False),
               help="Problem file (default: the one named in the plan file).")
+@click.option("--functions", type=click.Path(dir_okay=False), metavar="FILE.py",
+              help="User functions for (call ...) (default: the plan file's, if any).")
 @click.option("-q", "--quiet", is_flag=True, help="Print only the summary.")
-def run(plan_file, sim, gui, snapshots, faults, seed, retries, replan, log_path, plan_index,
-        domain, problem, quiet):
+@click.pass_context
+def run(ctx, plan_file, robot_name, sim, gui, snapshots, faults, seed, retries, replan,
+        log_path, from_log, plan_index, domain, problem, functions, quiet):
     """Execute PLAN_FILE (written by 'htn plan -o') with per-action monitoring.
 
     Each step runs as an action state machine: execute, monitor, report
     (finished / verified / failed / aborted / retrying). Exit code 0 when every
     action is verified, 1 when execution failed or was aborted, 130 on Ctrl-C.
 
-    The simulated world is built from the problem's initial state: the
-    domestic robot (one arm) for problems with locations and furniture, the
-    kitchen robot (two arms, tables per area, drawers, trays) for problems
-    with (area ...) facts.
+    Robots: 'pybullet' (--sim; the 'sim' extra) builds a simulated world from
+    the problem's initial state: the domestic robot (one arm) for problems with
+    locations and furniture, the kitchen robot (two arms, tables per area,
+    drawers, trays) for problems with (area ...) facts. 'symbolic' runs any
+    domain's plan against the domain's own operators. 'projection' is the
+    fast kinematic robot of the plan-transformations paper.
 
     \b
     Examples:
       htn plan domains/domestic.jshop problems/bring_object.jshop -o plan.txt
       htn run plan.txt --sim
       htn run plan.txt --sim --faults slip=0.5,nav=0.3 --seed 4 --log run.jsonl
+      htn run --from-log run.jsonl          # the same run again
       htn run plan.txt --sim --faults moved=1 --replan
-      htn transform domains/kitchen.jshop problems/set_table_and_clean_up.jshop -o t.txt
-      htn run t.txt --sim
+      htn run plan.txt --robot symbolic --faults effect=0.2
     """
-    from executor.config import load_retries, parse_overrides
-    from executor.dispatcher import TaskDispatcher
-    from executor.log import EventLog
-    from jshop.functions import FunctionTable
-    from jshop.parser import load_domain, load_problem
-    from jshop.planfile import read_plan_file
-    from robot.pybullet_sim import Faults
+    from htn.executor.actions import machine_for
+    from htn.executor.config import load_retries, parse_overrides
+    from htn.executor.dispatcher import TaskDispatcher
+    from htn.executor.log import EventLog
+    from htn.jshop.functions import FunctionTable
+    from htn.jshop.parser import load_domain, load_problem
+    from htn.jshop.planfile import read_plan_file
+    from htn.jshop.validate import check_steps
+    from htn.robot.backends import RobotRequest, backends, make_robot, missing_modules
+    from htn.robot.interface import Robot
 
+    if from_log:
+        given = [n for n in RUN_OPTIONS
+                 if ctx.get_parameter_source(n) == click.core.ParameterSource.COMMANDLINE]
+        if given:
+            raise click.UsageError(f"--from-log takes the run from the log; do not give "
+                                   f"{', '.join(given)} as well")
+        rec = read_header(from_log)
+        plan_file, robot_name, seed, replan = rec["plan"], rec["robot"], rec["seed"], rec["replan"]
+        faults, plan_index = rec["faults"], rec["plan_index"]
+        domain, problem, functions = rec["domain"], rec["problem"], rec.get("functions")
+        retries = [",".join(f"{k}={v}" for k, v in rec["retries"].items())] if rec["retries"] else []
+        _check_digest(plan_file, rec.get("plan_sha256"), from_log)
+    if plan_file is None:
+        raise click.UsageError("give a PLAN_FILE (or --from-log FILE.jsonl)")
+    if sim and robot_name not in (None, "pybullet"):
+        raise click.UsageError(f"--sim is --robot pybullet; it contradicts --robot {robot_name}")
+    robot_name = robot_name or ("pybullet" if sim else None)
+    known = backends()
+    if robot_name is None:
+        raise click.UsageError("choose a robot: --sim (PyBullet) or --robot NAME "
+                               f"(known: {', '.join(sorted(known))})")
+    backend = known.get(robot_name)
+    if backend is not None and backend.extra and missing_modules(backend):
+        what = "htn run --sim" if sim else f"htn run --robot {robot_name}"
+        raise HtnError(f"{what} needs the {backend.extra} extra: "
+                       f"pip install 'htn[{backend.extra}]'")
+    if gui and not os.environ.get("DISPLAY"):
+        raise click.UsageError("--gui needs a display (DISPLAY is not set); run headless without it")
     pf = read_plan_file(plan_file)
     domain = domain or pf.domain
     problem = problem or pf.problem
+    functions = functions or pf.file("functions")
     if not domain or not problem:
         raise HtnError("the plan file names no domain or problem (write it with 'htn plan -o', "
                        "or give --domain and --problem)", plan_file)
     if plan_index > len(pf.plans):
         raise HtnError(f"--plan-index {plan_index}: the file holds {len(pf.plans)} plan(s)",
                        plan_file)
-    if not sim:
-        raise click.UsageError("choose where to run the plan: --sim (the PyBullet simulation)")
-    if gui and not os.environ.get("DISPLAY"):
-        raise click.UsageError("--gui needs a display (DISPLAY is not set); run headless without it")
-    fault_cfg = Faults.parse(faults)
     table = FunctionTable()
+    if functions:
+        table.load_file(functions)
     dom = load_domain(domain, table)
     prob = load_problem(problem, table)
     instance = prob.instances[0]
     steps = pf.plans[plan_index - 1].steps
-    _check_steps(steps, dom, plan_file)
+    check_steps(dom, steps, plan_file)
     limits = load_retries(domain)
     limits.update(parse_overrides(retries))
 
-    from robot import simulated_robot
-    robot = simulated_robot(instance.state, gui=gui, faults=fault_cfg, seed=seed)
+    robot = make_robot(robot_name, RobotRequest(dom, instance, faults or "", seed, gui, table))
+    try:
+        for s in steps:
+            if not s.internal and machine_for(s.name, dom.name, robot) is None:
+                raise HtnError(f"no action state machine is registered for {s.name} "
+                               f"(try --robot symbolic, or add one: entry points 'htn.actions')",
+                               plan_file, s.line, 1)
+        if snapshots and type(robot).snapshot is Robot.snapshot:
+            raise click.UsageError(f"--snapshots: the {robot_name} robot has no camera")
+    except BaseException:
+        robot.close()
+        raise
     if snapshots:   # only once the world could be built from the problem
         os.makedirs(snapshots, exist_ok=True)
     log = EventLog(log_path, clock=lambda: robot.sim_time)
+    log.emit(None, None, "header", None, "", **run_header(
+        plan_file, plan_index, domain, problem, functions, robot_name, seed, faults or "",
+        limits, replan))
     view = None
     if not quiet:
         view = _LiveView() if stdout_is_terminal() else _PlainView()
@@ -132,21 +191,64 @@ def run(plan_file, sim, gui, snapshots, faults, seed, retries, replan, log_path,
     sys.exit(0 if summary.result == "verified" else 1)
 
 
-def _check_steps(steps, domain, plan_file) -> None:
-    """Every step must be an operator of the domain, with its arity, and have an
-    action state machine unless it is internal (!!)."""
-    from executor.actions import machine_for
-    for s in steps:
-        ops = domain.operators.get(s.name)
-        if not ops:
-            raise HtnError(f"unknown operator {s.name}: the domain has no such operator",
-                           plan_file, s.line, 1)
-        if all(len(o.head.args) != len(s.args) for o in ops):
-            raise HtnError(f"{s.name} takes {len(ops[0].head.args)} arguments, given "
-                           f"{len(s.args)}", plan_file, s.line, 1)
-        if not s.internal and machine_for(s.name, domain.name) is None:
-            raise HtnError(f"no action state machine is registered for {s.name}",
-                           plan_file, s.line, 1)
+def run_header(plan_file, plan_index, domain, problem, functions, robot, seed, faults,
+               retries, replan) -> dict:
+    """What a log's first event records: enough to run the same thing again."""
+    import hashlib
+    import platform
+    from importlib.metadata import PackageNotFoundError, version
+
+    import htn
+
+    def installed(name):
+        try:
+            return version(name)
+        except PackageNotFoundError:
+            return None
+    with open(plan_file, "rb") as fh:
+        digest = hashlib.sha256(fh.read()).hexdigest()
+    absolute = lambda p: os.path.abspath(p) if p else None  # noqa: E731
+    return {"htn": htn.__version__, "argv": ["htn", *sys.argv[1:]],
+            "plan": absolute(plan_file), "plan_sha256": digest, "plan_index": plan_index,
+            "domain": absolute(domain), "problem": absolute(problem),
+            "functions": absolute(functions), "robot": robot, "seed": seed, "faults": faults,
+            "retries": dict(sorted(retries.items())), "replan": replan,
+            "python": platform.python_version(), "pybullet": installed("pybullet")}
+
+
+HEADER_KEYS = ("plan", "plan_index", "domain", "problem", "robot", "seed", "faults",
+               "retries", "replan")
+
+
+def read_header(path: str) -> dict:
+    """The header event of a log written by ``htn run --log``."""
+    import json
+    if not os.path.isfile(path):
+        raise HtnError("no such log file", path)
+    try:
+        with open(path, encoding="utf-8") as fh:
+            first = fh.readline()
+        rec = json.loads(first)
+    except (OSError, UnicodeDecodeError, ValueError) as exc:
+        raise HtnError(f"not a log of htn run --log: {exc}", path, 1, 1)
+    if not isinstance(rec, dict) or rec.get("event") != "header":
+        raise HtnError("not a log of htn run --log: its first line is no header event",
+                       path, 1, 1)
+    missing = [k for k in HEADER_KEYS if k not in rec]
+    if missing:
+        raise HtnError(f"the header lacks {', '.join(missing)}", path, 1, 1)
+    return rec
+
+
+def _check_digest(plan_file: str, digest, log_path: str) -> None:
+    import hashlib
+    if not os.path.isfile(plan_file):
+        raise HtnError(f"the plan file of this run is missing: {plan_file}", log_path, 1, 1)
+    with open(plan_file, "rb") as fh:
+        now = hashlib.sha256(fh.read()).hexdigest()
+    if digest and now != digest:
+        raise HtnError(f"the plan file {plan_file} has changed since this run (SHA-256 "
+                       f"{now[:12]}..., the log says {digest[:12]}...)", log_path, 1, 1)
 
 
 def _snapshotter(robot, folder):

@@ -2,24 +2,27 @@
 from __future__ import annotations
 
 import json
-import os
 from pathlib import Path
 
 import click
 
-from jshop.errors import HtnError
+from htn.jshop.errors import HtnError
 
 SCENARIOS = [("domains/domestic.jshop", "problems/bring_object.jshop"),
              ("domains/domestic.jshop", "problems/guide_robot.jshop")]
 
 
-def find_project_file(rel: str) -> str:
-    """A shipped domain or problem: from the current directory or this checkout."""
-    for base in (Path.cwd(), Path(__file__).resolve().parent.parent):
-        if (base / rel).is_file():
-            return os.path.relpath(base / rel) if base == Path.cwd() else str(base / rel)
-    raise HtnError(f"cannot find {rel}: run htn stats from the project folder, or give "
-                   "DOMAIN PROBLEM", rel)
+def bundled_file(rel: str) -> str:
+    """A bundled example (``domains/...``, ``problems/...``), shown relative
+    to the current folder when it lies below it."""
+    from htn import EXAMPLES
+    path = EXAMPLES / rel
+    if not path.is_file():
+        raise HtnError(f"the bundled example {rel} is missing from this installation", str(path))
+    try:
+        return str(path.relative_to(Path.cwd()))
+    except ValueError:
+        return str(path)
 
 
 @click.command("stats")
@@ -36,19 +39,20 @@ def stats(files, repeat, as_json, functions, timeout):
 
     \b
     Without arguments: the paper's two scenarios (bring an object, guide a
-    robot) with the paper's figures beside ours. With arguments: the first is
+    robot; the bundled examples, see 'htn examples') with the paper's
+    figures beside ours. With arguments: the first is
     a DOMAIN, the rest are PROBLEMs in it:
       htn stats
       htn stats domains/domestic.jshop problems/bring_coke.jshop problems/bring_two.jshop
     """
-    from jshop.functions import FunctionTable
-    from jshop.stats import PAPER, scenario_stats
+    from htn.jshop.functions import FunctionTable
+    from htn.jshop.stats import PAPER, scenario_stats
 
     if len(files) == 1:
         raise click.UsageError("give a DOMAIN and at least one PROBLEM (or no arguments)")
     pairs = SCENARIOS if not files else [(files[0], p) for p in files[1:]]
     if not files:
-        pairs = [(find_project_file(d), find_project_file(p)) for d, p in pairs]
+        pairs = [(bundled_file(d), bundled_file(p)) for d, p in pairs]
     table = FunctionTable()
     if functions:
         table.load_file(functions)

@@ -32,10 +32,10 @@ def transform(domain, problem, rules, metric, output, as_json):
     step's precondition holds in sequence from the initial state; a rewrite
     that breaks the plan or costs more on --metric is rolled back.
     """
-    from jshop.parser import load_domain, load_problem
-    from transform.framework import METRICS, Workspace, default_framework
+    from htn.jshop.parser import load_domain, load_problem
+    from htn.transform.framework import METRICS, Workspace, default_framework
 
-    from .plan_cmd import plan_file_header
+    from htn.jshop.planfile import header
 
     dom = load_domain(domain)
     prob = load_problem(problem)
@@ -68,7 +68,7 @@ def transform(domain, problem, rules, metric, output, as_json):
     }
     if output:
         with atomic_write(output) as fh:
-            fh.write(plan_file_header(domain, problem, output))
+            fh.write(header(output, domain, problem))
             fh.write(ws.plan.to_jshop())
     if as_json:
         click.echo(json.dumps(result, indent=1))
@@ -89,5 +89,5 @@ def transform(domain, problem, rules, metric, output, as_json):
 
 
 def _task_text(t) -> str:
-    from jshop.terms import source_str
+    from htn.jshop.terms import source_str
     return "(" + " ".join([t.name] + [source_str(a) for a in t.args]) + ")"

@@ -18,13 +18,18 @@ Registering an action for a new operator is a few lines::
             return robot.wave(hand)
         def monitor(self, robot, hand):
             return robot.check_waving(hand)
+
+Other packages register theirs through the entry-point group ``htn.actions``:
+each entry point names a module (importing it runs its ``@action``
+decorators) or a function called once with no arguments. They are loaded the
+first time a machine is looked up.
 """
 from __future__ import annotations
 
 from enum import Enum
 from typing import Callable, Optional
 
-from robot.interface import Check, Robot, SkillResult
+from htn.robot.interface import Check, Robot, SkillResult
 
 
 class Outcome(str, Enum):
@@ -83,9 +88,54 @@ def action(operator: str, domain: Optional[str] = None):
     return register
 
 
-def machine_for(operator: str, domain: Optional[str] = None) -> Optional[ActionMachine]:
+_plugins_loaded = False
+
+
+def load_plugins() -> None:
+    """Load the ``htn.actions`` entry points (once)."""
+    global _plugins_loaded
+    if _plugins_loaded:
+        return
+    _plugins_loaded = True
+    import inspect
+    from importlib.metadata import entry_points
+
+    from htn.jshop.errors import HtnError
+    for ep in entry_points(group="htn.actions"):
+        try:
+            obj = ep.load()
+            if callable(obj) and not inspect.isclass(obj):
+                obj()
+        except Exception as exc:   # a broken plugin: say which, no traceback
+            raise HtnError(f"action plugin '{ep.name}' ({ep.value}) failed to load: "
+                           f"{type(exc).__name__}: {exc}")
+
+
+def machine_for(operator: str, domain: Optional[str] = None,
+                robot: Optional[Robot] = None) -> Optional[ActionMachine]:
+    """The action state machine for an operator: the operator model's on a
+    robot that executes it, else the one registered for this domain, else
+    the one registered for every domain, else None."""
+    if robot is not None and robot.executes_operator_model:
+        return OperatorModelAction(operator)
+    load_plugins()
     cls = REGISTRY.get((domain, operator)) or REGISTRY.get((None, operator))
     return cls() if cls else None
+
+
+class OperatorModelAction(ActionMachine):
+    """Any operator, on a robot whose world is the domain's operator model:
+    execute applies the operator's effects, the monitor checks its add and
+    delete lists against the world (see :mod:`htn.robot.symbolic`)."""
+
+    def __init__(self, operator: str):
+        self.name = operator
+
+    def execute(self, robot, *args):
+        return robot.apply_operator(self.name, args)
+
+    def monitor(self, robot, *args):
+        return robot.check_operator_effects(self.name, args)
 
 
 def _all(*checks: Check) -> Check:

@@ -2,7 +2,7 @@
 
 The **task dispatcher** walks the plan and sends one step at a time to the
 **task executor**, which parses the step into a name and parameters and runs
-the action state machine registered for that operator (:mod:`executor.actions`),
+the action state machine registered for that operator (:mod:`htn.executor.actions`),
 retrying it while its monitor does not verify it, up to the operator's limit.
 Internal operators (``!!``) are not sent to the robot: they are applied to the
 belief state only.
@@ -17,8 +17,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Optional
 
-from jshop import syntax as S
-from jshop.planner import Planner
+from htn.jshop import syntax as S
+from htn.jshop.planner import Planner
 
 from .actions import Outcome, machine_for
 from .log import EventLog
@@ -40,16 +40,7 @@ class RunSummary:
 
 def dynamic_predicates(domain: S.Domain) -> set[str]:
     """Predicates some operator adds or deletes: the ones to observe."""
-    preds: set[str] = set()
-    for op in domain.elements():
-        if not isinstance(op, S.Operator):
-            continue
-        for eff in (op.delete, op.add):
-            for item in eff.items:
-                atoms = item.atoms if isinstance(item, S.EffectForAll) else [
-                    item.atom if isinstance(item, S.Protection) else item]
-                preds.update(a.pred for a in atoms if isinstance(a, S.Atom))
-    return preds
+    return domain.dynamic_predicates()
 
 
 class TaskExecutor:
@@ -66,7 +57,7 @@ class TaskExecutor:
     def execute(self, index: int, step) -> Outcome:
         name, args = step.name, tuple(step.args)
         action = str(step)
-        machine = machine_for(name, self.domain)
+        machine = machine_for(name, self.domain, self.robot)
         if machine is None:
             self.log.emit(index, action, Outcome.FAILED.value, 1,
                           f"no action state machine is registered for {name}")
@@ -118,6 +109,8 @@ class TaskDispatcher:
                 executed += 1
                 if step.internal:
                     ok = self.belief.apply_step(step.name, step.args)
+                    if ok:
+                        self.robot.apply_internal(step.name, step.args)
                     self.log.emit(i, str(step), Outcome.VERIFIED.value if ok else Outcome.FAILED.value,
                                   1, "internal operator applied to the belief state"
                                   if ok else "internal operator not applicable")

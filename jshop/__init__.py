@@ -2,13 +2,13 @@
 
 Typical use::
 
-    from jshop import load_domain, load_problem, Planner
+    from htn.jshop import load_domain, load_problem, Planner
     domain = load_domain("domains/domestic.jshop")
     problem = load_problem("problems/bring_object.jshop")
     planner = Planner(domain, problem.instances[0])
     plan = next(planner.plans())
 
-The names below are imported on first use, so that importing ``jshop.errors``
+The names below are imported on first use, so that importing ``htn.jshop.errors``
 (as the command line does for ``htn --help``) does not load the parser.
 """
 from importlib import import_module

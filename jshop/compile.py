@@ -7,7 +7,7 @@ on a small scale for the two hottest operations on argument tuples:
 * :func:`head_unifier` - unify a method's or operator's head with a task.
 
 Only "flat" tuples (constants and variables) are compiled; anything with a
-nested list or call term uses the generic functions in :mod:`jshop.terms`, so
+nested list or call term uses the generic functions in :mod:`htn.jshop.terms`, so
 the semantics are exactly those of ``subst`` and ``unify``.
 """
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Read JSHOP2 domain and problem files into :mod:`jshop.syntax` objects.
+"""Read JSHOP2 domain and problem files into :mod:`htn.jshop.syntax` objects.
 
 The grammar lives in ``jshop2.lark``; one :class:`Builder` transformer turns the
 parse tree into domain objects. Variables are numbered per domain element in the

@@ -31,6 +31,7 @@ class Plan:
     cost: float
     tree: Optional[Any] = None   # a jshop.tree.TaskTree, when recorded
     index: int = 0               # 0-based position in the planner's stream
+    line: int = 0                # line of its 'Plan cost:' in a plan file it was read from
 
     def __len__(self) -> int:
         return len(self.steps)

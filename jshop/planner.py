@@ -336,6 +336,33 @@ class Planner:
             self.stats.backtracks += 1
 
     # ------------------------------------------------------------ operators
+    def step_options(self, name: str, args: tuple):
+        """``(operator, binding)`` for each way the ground step ``(name . args)``
+        is applicable in the current state: operators in definition order,
+        then satisfiers of the precondition in JSHOP2's order (lazily; the
+        state must be as it was when the next option is asked for)."""
+        for op, unify_head, pre, _bind in self._ops.get(name, ()):
+            env = [None] * op.nvars
+            if unify_head(tuple(args), env):
+                for nb in pre(env):
+                    yield op, nb
+
+    def effects(self, op: S.Operator, env: list) -> tuple[list, list]:
+        """The ground atoms ``(pred, args)`` an operator would delete and add
+        under ``env``, evaluated in the current state (protections left out)."""
+        dels = [a for a in self._effect_atoms(op.delete, env, op) if a[0] is not None]
+        adds = [a for a in self._effect_atoms(op.add, env, op) if a[0] is not None]
+        return dels, adds
+
+    def apply(self, op: S.Operator, env: list) -> Optional[Change]:
+        """Apply an operator to the state (manual 5.2.1); the change, to undo
+        it, or None (state unchanged) if it would delete a protected atom."""
+        change, ok = self._apply(op, env)
+        if ok:
+            return change
+        change.undo(self.state)
+        return None
+
     def apply_step(self, name: str, args: tuple) -> bool:
         """Apply a ground plan step to this planner's state, as the search would.
 
@@ -343,15 +370,9 @@ class Planner:
         first satisfier is used. Returns False (state unchanged) otherwise.
         Used to keep a belief state during execution and to check plans.
         """
-        for op, unify_head, pre, _bind in self._ops.get(name, ()):
-            env = [None] * op.nvars
-            if not unify_head(tuple(args), env):
-                continue
-            for nb in pre(env):
-                change, ok = self._apply(op, nb)
-                if ok:
-                    return True
-                change.undo(self.state)
+        for op, env in self.step_options(name, args):
+            if self.apply(op, env) is not None:
+                return True
         return False
 
     def _plain(self, eff: S.Effects):

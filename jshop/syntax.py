@@ -218,6 +218,18 @@ class Domain:
         for axs in self.axioms.values():
             yield from axs
 
+    def dynamic_predicates(self) -> set[str]:
+        """Predicates some operator adds or deletes: what execution can change."""
+        preds: set[str] = set()
+        for ops in self.operators.values():
+            for op in ops:
+                for eff in (op.delete, op.add):
+                    for item in eff.items:
+                        atoms = item.atoms if isinstance(item, EffectForAll) else [
+                            item.atom if isinstance(item, Protection) else item]
+                        preds.update(a.pred for a in atoms if isinstance(a, Atom))
+        return preds
+
     @property
     def n_methods(self) -> int:
         return sum(len(v) for v in self.methods.values())

@@ -2,13 +2,13 @@
 a drawer and a tray, for the pick-and-place domain (``domains/kitchen.jshop``).
 
 The world comes from a kitchen problem's initial state
-(:func:`robot.world.kitchen_world_from_state`): each working area gets a table
+(:func:`htn.robot.world.kitchen_world_from_state`): each working area gets a table
 in front of its base pose. Objects are cylinders sized by kind (bowl, cup,
 spoon, ...). A container is a drawer: an open box that slides out of a housing
 standing on its area's table; closed, its contents cannot be seen or reached.
 A tray is a light box with rims on its area's table.
 
-As in :mod:`robot.pybullet_sim` (whose helpers this class reuses, one arm at a
+As in :mod:`htn.robot.pybullet_sim` (whose helpers this class reuses, one arm at a
 time), motion is kinematic and everything else is physics: objects rest on
 tables, in the drawer and on the tray, and ride on the tray by friction while
 it is carried. A grasp holds an object with a fixed constraint, created only
@@ -28,7 +28,7 @@ from typing import Optional
 
 import numpy as np
 
-from jshop.errors import HtnError
+from htn.jshop.errors import HtnError
 
 from .interface import Check, SkillResult
 from .pybullet_sim import (ARM_JOINTS, BASE_SPEED, BASE_Z, DT, EE_LINK, FINGERS, POSE_TOLERANCE,

@@ -1,6 +1,6 @@
 """A simulated domestic robot in PyBullet: a Husky base carrying a Franka Panda.
 
-The world is built from the problem's initial state (:mod:`robot.world`):
+The world is built from the problem's initial state (:mod:`htn.robot.world`):
 tables from ``table/table.urdf``, objects as small cylinders, persons as
 upright capsules with a hand point, the robot at its start location.
 
@@ -22,11 +22,11 @@ import os
 import random
 import sys
 from contextlib import contextmanager
-from dataclasses import dataclass
 from typing import Optional
 
 import numpy as np
 
+from .faults import Faults
 from .interface import Check, Robot, SkillResult
 from .world import World
 
@@ -46,37 +46,6 @@ CAN_RADIUS, CAN_HEIGHT = 0.033, 0.12
 PERSON_RADIUS, PERSON_HEIGHT = 0.2, 1.6
 HAND_REACH = 0.7          # a person takes an object within this distance of their axis
 CAMERA_HEIGHT = 1.45
-
-
-@dataclass
-class Faults:
-    """Probabilities of injected faults (each in [0, 1])."""
-    slip: float = 0.0     # object slips out of the gripper while it is lifted and carried
-    nav: float = 0.0      # navigation stops short of the goal
-    detect: float = 0.0   # object detection misses
-    moved: float = 0.0    # a person moves the object (once) just before the robot grasps it
-
-    @classmethod
-    def parse(cls, text: Optional[str]) -> "Faults":
-        from jshop.errors import HtnError
-        f = cls()
-        if not text:
-            return f
-        for part in text.split(","):
-            if not part.strip():
-                continue
-            name, _, value = part.partition("=")
-            name = name.strip()
-            if name not in ("slip", "nav", "detect", "moved"):
-                raise HtnError(f"--faults: unknown fault '{name}' (use slip, nav, detect, moved)")
-            try:
-                p = float(value)
-            except ValueError:
-                raise HtnError(f"--faults: '{part}' needs a probability, e.g. {name}=0.3")
-            if not 0.0 <= p <= 1.0:
-                raise HtnError(f"--faults: {name}={value} is not a probability in [0, 1]")
-            setattr(f, name, p)
-        return f
 
 
 @contextmanager

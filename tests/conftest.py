@@ -25,7 +25,7 @@ needs_corpus = pytest.mark.skipif(
 
 def run_htn(*args, timeout=600, input=None):
     """Run the real command line in a subprocess; returns CompletedProcess."""
-    return subprocess.run([sys.executable, "-m", "cli.main", *map(str, args)],
+    return subprocess.run([sys.executable, "-m", "htn", *map(str, args)],
                           cwd=ROOT, capture_output=True, text=True, timeout=timeout,
                           input=input)
 

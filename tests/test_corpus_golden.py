@@ -61,7 +61,7 @@ def test_matches_jshop2(example, mode):
 @needs_corpus
 def test_first_plan_figures_match_stats():
     """The first plan's length and cost agree with each stats.json."""
-    from jshop import FunctionTable, Planner, load_domain, load_problem
+    from htn.jshop import FunctionTable, Planner, load_domain, load_problem
     for folder in sorted(p for p in CORPUS.iterdir() if p.is_dir()):
         stats = json.loads((folder / "stats.json").read_text())
         table = FunctionTable()

@@ -6,7 +6,7 @@ import json
 import pytest
 
 from conftest import CORPUS, ROOT, needs_corpus, run_htn
-from jshop import Planner, load_domain, load_problem
+from htn.jshop import Planner, load_domain, load_problem
 
 DOMAIN = ROOT / "domains" / "domestic.jshop"
 
@@ -107,7 +107,7 @@ def test_blocks_smallproblem_every_tree_matches_its_plan():
 
 def test_tree_never_shows_backtracked_branches():
     """A branch that fails after reducing must not leave its steps in the tree."""
-    from jshop import parse_text
+    from htn.jshop import parse_text
     dom = parse_text("""
     (defdomain d (
       (:operator (!a) () () ((did-a)))

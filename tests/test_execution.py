@@ -11,12 +11,12 @@ import time
 import pytest
 
 from conftest import ROOT, run_htn
-from executor.config import load_retries
-from executor.dispatcher import TaskDispatcher
-from executor.log import EventLog
-from jshop import Planner, load_domain, load_problem
-from robot.pybullet_sim import Faults, PyBulletRobot
-from robot.world import world_from_state
+from htn.executor.config import load_retries
+from htn.executor.dispatcher import TaskDispatcher
+from htn.executor.log import EventLog
+from htn.jshop import Planner, load_domain, load_problem
+from htn.robot.pybullet_sim import Faults, PyBulletRobot
+from htn.robot.world import world_from_state
 
 DOMAIN = str(ROOT / "domains" / "domestic.jshop")
 # the actions during which each kind of fault can happen (a grasp retry looks again)
@@ -135,7 +135,7 @@ def test_replan_recovers_a_moved_object():
 def test_interrupted_run_leaves_a_complete_log(tmp_path):
     plan, log = tmp_path / "plan.txt", tmp_path / "run.jsonl"
     assert run_htn("plan", DOMAIN, ROOT / "problems" / "bring_two.jshop", "-o", plan).returncode == 0
-    proc = subprocess.Popen([sys.executable, "-m", "cli.main", "run", str(plan), "--sim",
+    proc = subprocess.Popen([sys.executable, "-m", "htn", "run", str(plan), "--sim",
                              "--log", str(log), "-q"], cwd=ROOT, stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True)
     deadline = time.time() + 60

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import pytest
 
-from jshop import FunctionTable, Planner, parse_text
+from htn.jshop import FunctionTable, Planner, parse_text
 
 
 def plans(domain: str, problem: str, functions: FunctionTable | None = None, limit=None,

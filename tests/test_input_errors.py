@@ -145,7 +145,7 @@ def test_ctrl_c_on_a_streaming_all_keeps_whole_plans(tmp_path):
       (:method (m) () ((!a))) (:method (m) () ((!a) (m)))))""",
                  problem="(defproblem p d () ((m)))")
     out = tmp_path / "plans.txt"
-    proc = subprocess.Popen([sys.executable, "-m", "cli.main", "plan", str(d), str(p), "--all",
+    proc = subprocess.Popen([sys.executable, "-m", "htn", "plan", str(d), str(p), "--all",
                              "-f", "jshop", "-o", str(out)], cwd=ROOT, stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True)
     time.sleep(2.0)

@@ -4,7 +4,7 @@ from __future__ import annotations
 import pytest
 
 from conftest import ROOT
-from jshop import Planner, load_domain, load_problem
+from htn.jshop import Planner, load_domain, load_problem
 
 DOMAIN = str(ROOT / "domains" / "kitchen.jshop")
 

@@ -13,20 +13,20 @@ import math
 import pytest
 
 from conftest import ROOT, run_htn
-from executor.actions import Outcome, machine_for
-from executor.config import load_retries
-from executor.dispatcher import TaskDispatcher, dynamic_predicates
-from executor.log import EventLog
-from jshop import Planner, load_domain, load_problem
-from jshop import syntax as S
-from jshop.errors import HtnError
-from jshop.parser import parse_text
-from robot.kitchen_sim import KitchenRobot
-from robot.pybullet_sim import Faults
-from robot.world import (ROBOT_HALF_WIDTH, _rect_seg_dist, _table_rect,
+from htn.executor.actions import Outcome, machine_for
+from htn.executor.config import load_retries
+from htn.executor.dispatcher import TaskDispatcher, dynamic_predicates
+from htn.executor.log import EventLog
+from htn.jshop import Planner, load_domain, load_problem
+from htn.jshop import syntax as S
+from htn.jshop.errors import HtnError
+from htn.jshop.parser import parse_text
+from htn.robot.kitchen_sim import KitchenRobot
+from htn.robot.pybullet_sim import Faults
+from htn.robot.world import (ROBOT_HALF_WIDTH, _rect_seg_dist, _table_rect,
                          kitchen_world_from_state)
-from transform import rules
-from transform.framework import Framework, Workspace
+from htn.transform import rules
+from htn.transform.framework import Framework, Workspace
 
 DOMAIN = str(ROOT / "domains" / "kitchen.jshop")
 

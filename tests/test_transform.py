@@ -7,11 +7,11 @@ import json
 import pytest
 
 from conftest import ROOT, run_htn
-from jshop import Planner, load_domain, load_problem
-from jshop import syntax as S
-from jshop.errors import HtnError
-from transform import rules
-from transform.framework import Framework, Unit, Workspace, navigation_distance
+from htn.jshop import Planner, load_domain, load_problem
+from htn.jshop import syntax as S
+from htn.jshop.errors import HtnError
+from htn.transform import rules
+from htn.transform.framework import Framework, Unit, Workspace, navigation_distance
 
 DOMAIN = str(ROOT / "domains" / "kitchen.jshop")
 PROBLEMS = ROOT / "problems"
@@ -21,7 +21,7 @@ def workspace(problem: str, text: str | None = None) -> Workspace:
     dom = load_domain(DOMAIN)
     if text is not None:
         path = ROOT / "problems" / "transport_four.jshop"   # for a position only
-        from jshop.parser import parse_text
+        from htn.jshop.parser import parse_text
         prob = parse_text(text, str(path))
     else:
         prob = load_problem(str(PROBLEMS / f"{problem}.jshop"))
@@ -188,9 +188,9 @@ def test_htn_transform_cli(tmp_path):
 
 def test_projection_is_fast_deterministic_and_monitored():
     import time
-    from executor.config import load_retries
-    from robot.projection import FailureRates
-    from transform.evaluate import project
+    from htn.executor.config import load_retries
+    from htn.robot.projection import FailureRates
+    from htn.transform.evaluate import project
     ws = workspace("transport_four")
     retries = load_retries(DOMAIN)
     t0 = time.perf_counter()
@@ -210,7 +210,7 @@ def test_projection_is_fast_deterministic_and_monitored():
 
 
 def test_evaluate_reproduces_the_papers_findings():
-    from transform.evaluate import compare
+    from htn.transform.evaluate import compare
     four = compare(DOMAIN, str(PROBLEMS / "transport_four.jshop"), runs=120, seed=0).metrics()
     assert -40 < four["navigation"]["change_pct"] < -20 and four["navigation"]["p_value"] < 1e-3
     assert abs(four["manipulation"]["change_pct"]) < 10
@@ -233,8 +233,8 @@ def test_htn_evaluate_json_and_plots(tmp_path):
 
 
 def test_task_tree_annotated_by_a_projected_run():
-    from executor.config import load_retries
-    from transform.evaluate import projected_tree
+    from htn.executor.config import load_retries
+    from htn.transform.evaluate import projected_tree
     ws = workspace("transport_four")
     framework().apply_all_transformations(ws)
     tree = ws.annotated_tree()
@@ -250,7 +250,7 @@ def test_task_tree_annotated_by_a_projected_run():
 
 def test_plugins_register_through_the_entry_point_group(monkeypatch):
     import importlib.metadata
-    from transform import framework as F
+    from htn.transform import framework as F
 
     def register(fw):
         fw.register_transformation(lambda ws, schemas: None, "(transport ?t ?o ?f ?d ?k)",

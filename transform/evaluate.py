@@ -7,11 +7,11 @@ import statistics
 from dataclasses import dataclass, field
 from typing import Optional
 
-from executor.config import load_retries
-from executor.dispatcher import TaskDispatcher
-from executor.log import EventLog
-from jshop import syntax as S
-from robot.projection import FailureRates, ProjectionRobot, world_from_atoms
+from htn.executor.config import load_retries
+from htn.executor.dispatcher import TaskDispatcher
+from htn.executor.log import EventLog
+from htn.jshop import syntax as S
+from htn.robot.projection import FailureRates, ProjectionRobot, world_from_atoms
 
 METRIC_NAMES = ("navigation", "manipulation", "actions", "failures")
 
@@ -35,7 +35,7 @@ def project(domain: S.Domain, instance: S.ProblemInstance, steps, seed: int,
 def projected_tree(domain: S.Domain, instance: S.ProblemInstance, plan, seed: int = 0,
                    retries: Optional[dict] = None):
     """The plan's task tree annotated with the outcomes of one projected run."""
-    from jshop.tree import annotate
+    from htn.jshop.tree import annotate
     run = project(domain, instance, plan.steps, seed, retries=retries)
     return annotate(plan.tree, run["outcomes"]), run
 
@@ -73,7 +73,7 @@ _CACHE: dict = {}
 def _load(domain_path: str, problem_path: str):
     key = (domain_path, problem_path)
     if key not in _CACHE:
-        from jshop import load_domain, load_problem
+        from htn.jshop import load_domain, load_problem
         from .framework import Workspace, default_framework
         dom = load_domain(domain_path)
         inst = load_problem(problem_path).instances[0]

@@ -28,12 +28,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Optional
 
-from jshop import syntax as S
-from jshop.errors import HtnError
-from jshop.logic import Logic
-from jshop.parser import parse_text
-from jshop.planner import Planner
-from jshop.state import State
+from htn.jshop import syntax as S
+from htn.jshop.errors import HtnError
+from htn.jshop.logic import Logic
+from htn.jshop.parser import parse_text
+from htn.jshop.planner import Planner
+from htn.jshop.state import State
 
 RULES_FILE = Path(__file__).with_name("rules.jshop")
 
@@ -77,7 +77,7 @@ class Workspace:
         """The current plan's tree; each top-level node rewritten by a
         transformation carries the replacement tasks in its code-replacement
         slot (the paper's mechanism, here filled in for inspection)."""
-        from jshop.terms import source_str
+        from htn.jshop.terms import source_str
         tree = self.plan.tree
         nodes = iter(tree.children)
         for unit in self.units:
@@ -159,7 +159,7 @@ def projected(metric: str) -> Callable:
     projection robot, with the same seeds for every plan (a paired comparison,
     so the same plan always gets the same cost)."""
     def cost(ws: "Workspace", plan) -> float:
-        from executor.config import load_retries
+        from htn.executor.config import load_retries
         from .evaluate import project
         retries = load_retries(ws.domain.file) if ws.domain.file else {}
         runs = [project(ws.domain, ws.instance, plan.steps, seed, retries=retries)
@@ -293,7 +293,7 @@ class Framework:
 
 
 def _vars_of(expr) -> list:
-    from jshop.parser import _walk_expr
+    from htn.jshop.parser import _walk_expr
     found: list = []
     _walk_expr(expr, found.append)
     return found

@@ -13,8 +13,8 @@ from __future__ import annotations
 import itertools
 from collections import OrderedDict
 
-from jshop import syntax as S
-from jshop.terms import Var
+from htn.jshop import syntax as S
+from htn.jshop.terms import Var
 
 from .framework import Framework, Unit
 
