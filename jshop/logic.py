@@ -81,18 +81,16 @@ class Logic:
                                            f"{term_str(x)} and {term_str(y)}")
                 return sign * ((x > y) - (x < y))
         else:
-            from .functions import to_python
+            from .functions import compare
             user = self.functions.comparator(name) if self.functions else None
             if user is None:
                 raise HtnError.at(pre.pos, f"undefined comparator '{name}'")
 
             def cmp(a, b):
                 try:
-                    r = user(to_python(a[idx]), to_python(b[idx]))
-                except Exception as exc:
-                    raise PlanningError.at(pre.pos, f"comparator {name} raised "
-                                           f"{type(exc).__name__}: {exc}")
-                return int(r)
+                    return compare(name, user, a[idx], b[idx])
+                except HtnError as exc:    # placed at the :sort-by that called it
+                    raise PlanningError.at(pre.pos, exc.message) from None
 
         def sorted_sat(env):
             yield from java_sort(list(sat(env)), cmp)

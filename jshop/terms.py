@@ -20,6 +20,8 @@ from __future__ import annotations
 
 from typing import Any, Callable, Sequence
 
+from .errors import HtnError
+
 NIL: tuple = ()
 
 
@@ -86,6 +88,14 @@ class CallTerm:
         return f"CallTerm({self.name!r}, {self.args!r})"
 
 
+def at_call(exc: HtnError, call: CallTerm) -> HtnError:
+    """``exc`` placed at ``call`` in the domain, unless it has a place already
+    (an error in a standard function given a symbol, or in a user function)."""
+    if exc.file is None and call.pos is not None:
+        exc.file, exc.line, exc.col = call.pos.file, call.pos.line, call.pos.col
+    return exc
+
+
 def is_ground(t: Any) -> bool:
     tt = type(t)
     if tt is str or tt is float:
@@ -113,7 +123,10 @@ def subst(t: Any, env: list) -> Any:
     if tt is CallTerm:
         args = tuple([subst(x, env) for x in t.args])
         if is_ground(args):
-            return t.func(args)
+            try:
+                return t.func(args)
+            except HtnError as exc:
+                raise at_call(exc, t)
         return CallTerm(t.name, t.func, args, t.pos)
     if tt is Dotted:
         return make_list([subst(x, env) for x in t.items], subst(t.tail, env))
