@@ -65,9 +65,29 @@ def test_arity_mismatch_in_the_problem(tmp_path):
     check_error(run_htn("plan", d, p), f"{p}:1:31:", "'travel' takes 1 argument, given 2")
 
 
-def test_arity_mismatch_in_a_method_body(tmp_path):
+def test_arity_mismatch_in_a_method_body_is_a_warning(tmp_path):
+    # legal JSHOP2 (manual 3.7, 5.2.1): that branch simply never applies
     d, p = write(tmp_path, domain=DOMAIN.replace("((!go ?from ?to))", "((!go ?to))"))
-    check_error(run_htn("plan", d, p), f"{d}:3:", "'!go' takes 2 arguments, given 1")
+    r = run_htn("plan", d, p, "-f", "jshop")
+    assert r.returncode == 1 and "Traceback" not in r.stderr        # no plan, no error
+    assert f"{d}:3:40: warning: '!go' takes 2 arguments, given 1; branch Method0Branch0 " \
+           "of travel can never succeed" in r.stderr
+    other = DOMAIN.replace("(:method", "(:method (travel ?to) () ((!go ?to)))\n  (:method")
+    d, p = write(tmp_path, domain=other)
+    r = run_htn("plan", d, p, "-f", "jshop")
+    assert r.returncode == 0 and r.stdout.count("(!go home work)") == 1   # the next method
+    assert "warning: '!go' takes 2 arguments, given 1" in r.stderr
+
+
+def test_a_problem_for_another_domain(tmp_path):
+    d, p = write(tmp_path, problem="(defproblem p\n    elsewhere ((at home)) ((travel work)))")
+    out = tmp_path / "plan.txt"
+    out.write_text("previous plan\n")
+    for command in (["plan", d, p, "-o", out], ["validate", d, p, out]):
+        r = run_htn(*command)
+        check_error(r, f"{p}:2:5:", "problem 'p' is for domain 'elsewhere', but")
+        assert "defines 'd'" in r.stderr.splitlines()[0]
+    assert out.read_text() == "previous plan\n"
 
 
 def test_undefined_function(tmp_path):
@@ -112,7 +132,7 @@ def test_bad_options(tmp_path, args):
 
 def test_warnings_for_likely_domain_bugs(tmp_path):
     domain = """(defdomain d (
-  (:operator (!go ?a) () () ((at ?b)))
+  (:operator (!go ?a) () ((at ?b)) ())
   (:method (m) () ((!go x) (!missing)))))"""
     d, p = write(tmp_path, domain=domain, problem="(defproblem p d () ((m)))")
     r = run_htn("plan", d, p, "-f", "jshop")
@@ -121,6 +141,17 @@ def test_warnings_for_likely_domain_bugs(tmp_path):
     assert f"{d}:3:29: warning: primitive task '!missing' has no operator" in r.stderr
     quiet = run_htn("plan", d, p, "-f", "jshop", "--quiet")
     assert quiet.stderr == ""
+
+
+def test_an_add_list_variable_nothing_binds(tmp_path):
+    # it would put an unbound variable into the state, where a later
+    # precondition matching it used to crash (IndexError); a state holds
+    # ground atoms only (manual 5.1.2)
+    domain = """(defdomain d ((:operator (!a ?x) ((not (r ?z))) () ((r ?z)))
+  (:operator (!b) ((r ?w) (s ?w ?v ?u)) () ())
+  (:method (m) () ((!a x) (!b)))))"""
+    d, p = write(tmp_path, domain=domain, problem="(defproblem p d () ((m)))")
+    check_error(run_htn("plan", d, p), f"{d}:1:53:", "operator !a adds (r ...) with ?z unbound")
 
 
 def test_output_file_is_not_left_half_written(tmp_path):
