@@ -131,14 +131,14 @@ def _search(dom, prob, table, render, out, dot_out, started, timeout, limit, rec
                 try:
                     for p in planner.plans(remaining):
                         p.instance = k
-                        with held():
-                            render.plan(p)
+                        with held():    # the files first: they outlive a closed stdout
                             if out:
                                 out.write(p.to_jshop())
                                 out.flush()
                             if dot_out and p.tree is not None:
                                 dot_out.add(p.tree)
                             _count(totals, p)
+                            render.plan(p)
                         if limit is not None and planner.stats.plans_found >= limit:
                             break
                 finally:

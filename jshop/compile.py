@@ -231,6 +231,14 @@ _TERMS: dict = {}
 _CONJUNCTIONS: dict = {}
 
 
+def clear_caches() -> None:
+    """Forget every compiled function. The caches keep the domain's tuples
+    alive, which is right for one planning run per process (the command
+    line) but not for a long-lived process that parses many domains."""
+    for cache in (_BINDERS, _UNIFIERS, _SCANNERS, _TERMS):
+        cache.clear()
+
+
 def term_binder(term) -> Callable[[list], tuple]:
     """Cached binder of a single term (keyed by the term object itself)."""
     hit = _TERMS.get(id(term))

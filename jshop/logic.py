@@ -219,12 +219,17 @@ class Logic:
                 continue
             for sat in branches:
                 found = False
-                for nb in sat(aenv):
-                    head = bind_head(nb)[1]
-                    new = env[:]
-                    if _unify_args(bound, head, new):
-                        found = True
-                        yield new
+                try:
+                    for nb in sat(aenv):
+                        head = bind_head(nb)[1]
+                        new = env[:]
+                        if _unify_args(bound, head, new):
+                            found = True
+                            yield new
+                except RecursionError:   # JSHOP2 overflows its stack here too
+                    raise PlanningError.at(ax.pos, f"proving an axiom for {ax.head.pred} "
+                                           "recursed too deeply: does it depend on itself?") \
+                        from None
                 if found:
                     break
 

@@ -100,9 +100,9 @@ class Builder(Transformer_NonRecursive):
                               "(give its Python file with --functions)")
         why = arity_error(name, len(args))
         if why:
-            raise HtnError.at(self.tpos(tok), why)
+            raise HtnError.at(self.pos(meta), why)
         shown = STDLIB_JAVA_NAMES.get(name, str(tok))
-        return CallTerm(shown, func, tuple(args), self.tpos(tok))
+        return CallTerm(shown, func, tuple(args), self.pos(meta))
 
     # ---------------------------------------------------------------- logic
     @v_args(meta=True)

@@ -214,6 +214,8 @@ def java_double(x: float) -> str:
     if x == 0.0:
         return "-0.0" if str(x).startswith("-") else "0.0"
     a = abs(x)
+    if a < 1e7 and a >= 1.0 and x.is_integer():    # the common case, printed fast
+        return f"{int(x)}.0"
     if 1e-3 <= a < 1e7:
         s = repr(x)
         if "e" in s or "E" in s:  # repr switches to exponent form at 1e16 only

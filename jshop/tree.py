@@ -69,9 +69,10 @@ class TaskTree:
         stack: list = [(self, None)]
         while stack:
             node, parent = stack.pop()
-            d: dict[str, Any] = {"id": len(nodes), "parent": parent, "task": node.task,
-                                 "name": node.name,
-                                 "args": [term_str(a) for a in node.args], "path": node.path}
+            args = [term_str(a) for a in node.args]
+            task = ("(" + " ".join([node.name, *args]) + ")") if node.name else "(root)"
+            d: dict[str, Any] = {"id": len(nodes), "parent": parent, "task": task,
+                                 "name": node.name, "args": args, "path": node.path}
             if node.method is not None:
                 d["method"] = node.method
                 d["method_index"] = node.method_index
