@@ -19,6 +19,14 @@ def write(tmp_path, domain=DOMAIN, problem=PROBLEM):
     return d, p
 
 
+def at(file, text: str) -> str:
+    """``file:line:col:`` of the first ``text`` in ``file``."""
+    source = file.read_text()
+    offset = source.index(text)
+    line = source.count("\n", 0, offset) + 1
+    return f"{file}:{line}:{offset - source.rfind(chr(10), 0, offset)}:"
+
+
 def check_error(result, prefix, message):
     assert result.returncode == 2, result.stdout + result.stderr
     assert "Traceback" not in result.stderr
@@ -200,3 +208,129 @@ def test_an_error_during_search_leaves_the_output_file_untouched(tmp_path):
     check_error(r, f"{d}:1:", "cost of !a is expensive, not a number")
     assert out.read_text() == "previous plan\n"
     assert [f.name for f in tmp_path.iterdir() if f.name.startswith(".htn-")] == []
+
+
+# ------------------------------------------------------------------ issue 10: hardening
+
+FUNCTIONS = '''
+import time
+def fails(x):
+    raise ValueError("no " + x)
+def leaves(x):
+    import sys
+    sys.exit(3)
+def spins(x):
+    while True:
+        time.sleep(0.01)
+def word(a, b):
+    return "less"
+def nothing(a, b):
+    return None
+def mark(x):
+    open(__file__ + ".called", "w").close()
+    return 1
+'''
+
+
+def functions_file(tmp_path, name="fns.txt"):
+    """A functions file whose name does not end in .py (that used to crash)."""
+    f = tmp_path / name
+    f.write_text(FUNCTIONS)
+    return f
+
+
+def test_generated_code_does_not_follow_input_nesting(tmp_path):
+    # 25 conjuncts (IPC Rover p-19) and a list nested 200 deep in an operator atom
+    conjuncts = " ".join(f"(p{i} ?x)" for i in range(25))
+    deep = "(" * 200 + "leaf" + ")" * 200
+    d, p = write(tmp_path, domain=f"""(defdomain d (
+  (:operator (!a ?x) ({conjuncts} (q ?x {deep})) () ())
+  (:method (m) () ((!a x)))))""", problem="(defproblem p d ("
+                 + " ".join(f"(p{i} x)" for i in range(25)) + f" (q x {deep})) ((m)))")
+    r = run_htn("plan", d, p, "-f", "jshop")
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.splitlines()[2] == "(!a x)"
+
+
+def test_ten_thousand_nested_parentheses(tmp_path):
+    d, p = write(tmp_path, problem="(defproblem p d ((at " + "(" * 10_000 + ")" * 10_000
+                 + ")) ((travel work)))")
+    r = run_htn("plan", d, p)
+    check_error(r, f"{p}:1:1019:", "parentheses nested more than 1000 deep")
+    shown, caret = r.stderr.splitlines()[1:3]
+    assert len(shown) < 210 and shown.startswith("  ...") and shown.endswith("...")
+    assert shown[caret.index("^")] == "("          # the caret still points at the place
+
+
+@pytest.mark.parametrize("call", ["(call -)", "(call - )", "(call member a)"])
+def test_standard_function_without_enough_arguments(tmp_path, call):
+    d, p = write(tmp_path, domain=DOMAIN.replace("((at ?from))", f"((at ?from) {call})"))
+    check_error(run_htn("plan", d, p), at(d, "(call"), "call ")
+
+
+def test_runtime_error_of_a_call_names_its_place(tmp_path):
+    d, p = write(tmp_path, domain=DOMAIN.replace("((at ?from))",
+                                                 "((at ?from)\n   (call < ?from 1))"))
+    check_error(run_htn("plan", d, p), at(d, "(call <"), "call <: expected a number, got home")
+
+
+@pytest.mark.parametrize("function,message", [
+    ("fails", "function fails raised ValueError: no home"),
+    ("leaves", "function leaves called sys.exit(3)")])
+def test_user_function_that_raises_or_exits(tmp_path, function, message):
+    d, p = write(tmp_path, domain=DOMAIN.replace("((at ?from))",
+                                                 f"((at ?from) (call {function} ?from))"))
+    r = run_htn("plan", d, p, "--functions", functions_file(tmp_path))
+    check_error(r, at(d, "(call"), message)
+
+
+@pytest.mark.parametrize("comparator,shown", [("word", "'less'"), ("nothing", "None")])
+def test_comparator_returning_no_number(tmp_path, comparator, shown):
+    d, p = write(tmp_path, domain=DOMAIN.replace("((at ?from))",
+                                                 f"(:sort-by ?from {comparator} (at ?from))"),
+                 problem="(defproblem p d ((at home) (at work)) ((travel work)))")
+    r = run_htn("plan", d, p, "--functions", functions_file(tmp_path))
+    check_error(r, at(d, "(:sort-by"), f"comparator {comparator} returned {shown}, not a number")
+
+
+def test_user_function_running_past_the_timeout(tmp_path):
+    d, p = write(tmp_path, domain=DOMAIN.replace("((at ?from))", "((at ?from) (call spins ?from))"))
+    out = tmp_path / "plan.txt"
+    out.write_text("previous plan\n")
+    r = run_htn("plan", d, p, "--functions", functions_file(tmp_path), "--timeout", "1",
+                "-o", out, timeout=60)
+    assert r.returncode == 1 and "Traceback" not in r.stderr
+    assert "timed out after 1 s; 0 plan(s) found" in r.stderr
+    assert out.read_text() == "previous plan\n"       # no plan: the old file stays
+    assert [f.name for f in tmp_path.iterdir() if f.name.startswith(".htn-")] == []
+
+
+def test_encodings(tmp_path):
+    d, p = write(tmp_path)
+    p.write_bytes(b"\xef\xbb\xbf" + PROBLEM.encode())          # a UTF-8 byte-order mark
+    r = run_htn("plan", d, p, "-f", "jshop")
+    assert r.returncode == 0 and "(!go home work)" in r.stdout
+    p.write_bytes(b"(defproblem p d ((at home))\n  ((travel w\xc3\xa9rk \xff)))")
+    r = run_htn("plan", d, p)
+    check_error(r, f"{p}:2:17:", "not UTF-8 text: byte 0xff")
+
+
+@pytest.mark.parametrize("option", ["--dot", "-o"])
+def test_unwritable_outputs_are_found_before_planning(tmp_path, option):
+    d, p = write(tmp_path, domain=DOMAIN.replace("((at ?from))", "((at ?from) (call mark ?from))"))
+    fns = functions_file(tmp_path)
+    for target, message in [(tmp_path / "missing" / "x.out", "directory does not exist"),
+                            (tmp_path, "is a directory")]:
+        r = run_htn("plan", d, p, "--functions", fns, option, target)
+        assert r.returncode == 2 and message in r.stderr and "Traceback" not in r.stderr
+        assert not (tmp_path / "fns.txt.called").exists()         # nothing was planned
+    r = run_htn("plan", d, p, "--functions", fns, option, tmp_path / "ok.out")
+    assert r.returncode == 0 and (tmp_path / "fns.txt.called").exists()
+
+
+def test_other_commands_check_options_first(tmp_path):
+    d, p = write(tmp_path)
+    r = run_htn("transform", tmp_path / "no.jshop", p, "--rules", "bogus")
+    assert r.returncode == 2 and "unknown rule(s) bogus" in r.stderr    # before the files
+    r = run_htn("transform", d, p, "-o", tmp_path / "missing" / "t.txt")
+    check_error(r, f"{tmp_path / 'missing' / 't.txt'}:", "directory does not exist")
