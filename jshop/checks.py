@@ -21,6 +21,7 @@ from dataclasses import dataclass
 from . import syntax as S
 from .errors import HtnError
 from .parser import _walk_expr, _walk_term
+from .terms import source_str, variables
 
 
 @dataclass
@@ -60,6 +61,9 @@ def check_problem(domain: S.Domain, problem: S.Problem) -> list[Warning_]:
             if len(t.args) not in known:
                 raise HtnError.at(t.pos, f"'{t.name}' takes {_plural(known)}, "
                                   f"given {len(t.args)}")
+    for name, open_ in _open_positions(domain, problem).items():
+        for op in domain.operators.get(name, ()):
+            _unbound_effect_vars(op, open_)
     return warnings
 
 
@@ -102,9 +106,12 @@ def check_domain(domain: S.Domain) -> list[Warning_]:
 
 
 def _binds(e, out: set) -> set:
-    """Names of the variables a satisfier of expression ``e`` binds (manual
-    5.1.2): those of its positive atoms and assignments; a negation, a forall
-    and a call bind nothing. A disjunction counts what any disjunct binds."""
+    """Add to ``out`` the names of the variables a satisfier of expression
+    ``e`` binds to ground terms (manual 5.1.2), given those in ``out``: the
+    variables of its positive atoms, and an assigned variable whose term's
+    variables are bound. A negation, a forall and a call bind nothing; a
+    disjunction counts what any disjunct binds."""
+    assigns = []
     stack = [e]
     while stack:
         x = stack.pop()
@@ -113,21 +120,37 @@ def _binds(e, out: set) -> set:
         elif isinstance(x, (S.And, S.Or)):
             stack.extend(x.items)
         elif isinstance(x, S.Assign):
-            out.add(x.var.name)
+            assigns.append(x)
+    while True:
+        ready = [a for a in assigns if all(v.name in out for v in variables(a.term, []))]
+        if not ready:
+            return out
+        out.update(a.var.name for a in ready)
+        assigns = [a for a in assigns if a not in ready]
+
+
+def _head_binds(head: S.TaskAtom, open_: dict) -> set:
+    """Variables the head binds, except in the argument positions ``open_``
+    (those a task may fill with a term that has unbound variables)."""
+    out: set = set()
+    for j, a in enumerate(head.args):
+        if j not in open_:
+            _walk_term(a, lambda v: out.add(v.name))
     return out
 
 
-def _unbound_effect_vars(op: S.Operator) -> list[Warning_]:
+def _unbound_effect_vars(op: S.Operator, open_: dict | None = None) -> list[Warning_]:
     """Warnings for effect and cost variables nothing binds; an error for
-    such a variable in an add-list atom (it would enter the state unbound)."""
-    bound: set[str] = set()
-    _walk_term(op.head.args, lambda v: bound.add(v.name))
-    _binds(op.pre.expr, bound)
+    such a variable in an add-list atom (it would enter the state unbound).
+    ``open_`` maps head positions a task may leave unbound to where that task
+    is written (see :func:`_open_positions`)."""
+    open_ = open_ or {}
+    bound = _binds(op.pre.expr, _head_binds(op.head, open_))
     found: dict[str, None] = {}
     for eff in (op.delete, op.add):
         for item in eff.items:
             if isinstance(item, S.EffectForAll):
-                local = _binds(item.cond, set(v.name for v in item.vars))
+                local = _binds(item.cond, bound | {v.name for v in item.vars})
                 atoms, known = item.atoms, bound | local
             else:
                 atoms, known = [item.atom if isinstance(item, S.Protection) else item], bound
@@ -136,8 +159,8 @@ def _unbound_effect_vars(op: S.Operator) -> list[Warning_]:
                 if free and eff is op.add and isinstance(a, S.Atom) \
                         and not isinstance(item, S.Protection):
                     raise HtnError.at(a.pos or op.pos, f"operator {op.name} adds ({a.pred} ...) "
-                                      f"with {free[0]} unbound: neither its head nor its "
-                                      "precondition binds it, and a state holds only ground atoms")
+                                      f"with {free[0]} unbound: {_why_unbound(op, free[0], open_)}"
+                                      ", and a state holds only ground atoms")
                 for name in free:
                     found.setdefault(name)
         if eff.var is not None and eff.var.name not in bound:
@@ -146,6 +169,53 @@ def _unbound_effect_vars(op: S.Operator) -> list[Warning_]:
     return [Warning_(op.pos, f"operator {op.name}: variable {name} in its effects or cost is "
                      "bound by neither its head nor its precondition")
             for name in found]
+
+
+def _why_unbound(op: S.Operator, name: str, open_: dict) -> str:
+    for j, a in enumerate(op.head.args):
+        if j in open_ and any(v.name == name for v in variables(a, [])):
+            return f"{open_[j].message} passes it unbound"
+    return "neither its head nor its precondition binds it"
+
+
+@dataclass
+class _Source:
+    """A task (as written, and where) that may pass an unbound variable on."""
+    task: S.TaskAtom
+
+    @property
+    def message(self) -> str:
+        text = "(" + " ".join([self.task.name, *map(source_str, self.task.args)]) + ")"
+        return f"{text} at {self.task.pos}" if self.task.pos else text
+
+
+def _open_positions(domain: S.Domain, problem: S.Problem) -> dict[str, dict[int, _Source]]:
+    """For each task name, the argument positions a task may fill with a term
+    that has unbound variables (a variable of the problem, or one a method
+    neither receives bound nor binds in its precondition), found by
+    following method bodies to a fixed point."""
+    open_: dict[str, dict[int, _Source]] = {}
+    todo = list(domain.methods)
+
+    def mark(t: S.TaskAtom, bound: set | None) -> None:
+        for j, arg in enumerate(t.args):
+            names = {v.name for v in variables(arg, [])}
+            if names and (bound is None or not names <= bound) \
+                    and j not in open_.setdefault(t.name, {}):
+                open_[t.name][j] = _Source(t)
+                todo.append(t.name)
+
+    for inst in problem.instances:
+        for t in S.task_atoms(inst.tasks):
+            mark(t, None)
+    while todo:
+        for m in domain.methods.get(todo.pop(), ()):
+            head = _head_binds(m.head, open_.get(m.name, {}))
+            for b in m.branches:
+                bound = _binds(b.pre.expr, set(head))
+                for t in S.task_atoms(b.tasks):
+                    mark(t, bound)
+    return open_
 
 
 def _vars_of(a) -> list:

@@ -313,17 +313,19 @@ def make_head_unifier(head: tuple) -> Callable[[tuple, list], bool]:
                     return False
             return True
         return generic
-    ns: dict = {"Var": Var}
+    ns: dict = {"Var": Var, "is_ground": is_ground}
     src = ["def unify_head(args, env):", f"    if len(args) != {n}:", "        return False"]
     seen = set()
+    # a task argument binds a head variable only if it is ground (see terms.unify)
+    known = "(type(t) is str or type(t) is float or is_ground(t))"
     for i, a in enumerate(head):
         src.append(f"    t = args[{i}]")
         if type(a) is Var:
             if a.index not in seen:
                 seen.add(a.index)
-                src.append(f"    if type(t) is not Var: env[{a.index}] = t")
+                src.append(f"    if {known}: env[{a.index}] = t")
             else:
-                src += ["    if type(t) is not Var:",
+                src += [f"    if {known}:",
                         f"        v = env[{a.index}]",
                         f"        if v is None: env[{a.index}] = t",
                         "        elif not (v == t and type(v) is type(t)): return False"]

@@ -15,6 +15,11 @@ Representation, chosen so that ground terms are plain hashable Python values:
 Unification follows JSHOP2's ``findUnifier``: it is one-way. Variables of the
 pattern get bound; a variable on the other side matches anything and binds
 nothing, which is why bindings propagate only downwards in the task network.
+A list term that still holds variables, such as ``(a ?w)`` passed down in a
+task, is treated the same way when a pattern variable meets it: its variables
+belong to another domain element (their indices mean nothing in this
+element's binding), so binding them in would be meaningless - JSHOP2 indexes
+the wrong binding there and fails.
 """
 from __future__ import annotations
 
@@ -141,7 +146,8 @@ def unify(p: Any, t: Any, env: list) -> bool:
     """
     tp = type(p)
     if tp is Var:
-        if type(t) is Var:
+        tt = type(t)
+        if tt is Var or (tt is not str and tt is not float and not is_ground(t)):
             return True
         v = env[p.index]
         if v is None:

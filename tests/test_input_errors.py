@@ -162,6 +162,17 @@ def test_an_add_list_variable_nothing_binds(tmp_path):
     check_error(run_htn("plan", d, p), f"{d}:1:53:", "operator !a adds (r ...) with ?z unbound")
 
 
+def test_a_variable_passed_down_unbound_into_an_add_list(tmp_path):
+    # the same, through the head: (m) passes ?x unbound, !p adds it (that used
+    # to crash with an IndexError once !q matched the atom)
+    domain = """(defdomain d ((:operator (!p ?d ?a) () () ((r ?a)))
+  (:operator (!q) ((r ?w) (s ?w)) () ())
+  (:method (m) () ((!p x ?x) (!q)))))"""
+    d, p = write(tmp_path, domain=domain, problem="(defproblem p d ((s b)) ((m)))")
+    check_error(run_htn("plan", d, p), at(d, "(r ?a)"),
+                f"operator !p adds (r ...) with ?a unbound: (!p x ?x) at {d}:3:21 passes it")
+
+
 def test_output_file_is_not_left_half_written(tmp_path):
     d, p = write(tmp_path)
     out = tmp_path / "plan.txt"
