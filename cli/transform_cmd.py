@@ -1,12 +1,13 @@
 """``htn transform DOMAIN PROBLEM``: apply plan transformations to a plan's task tree."""
 from __future__ import annotations
 
+import contextlib
 import json
 import sys
 
 import click
 
-from .output import AtomicFile
+from .output import atomic_write
 
 
 @click.command("transform")
@@ -34,18 +35,12 @@ def transform(domain, problem, rules, metric, output, as_json):
     """
     from htn.jshop.planfile import header
 
-    out = AtomicFile(output) if output else None    # a bad -o fails before the work
-    try:
+    # a bad -o fails before the work; the file is replaced once all is done
+    with atomic_write(output) if output else contextlib.nullcontext() as out:
         result, ws = _transform(domain, problem, rules, metric)
         if out:
             out.write(header(output, domain, problem))
             out.write(ws.plan.to_jshop())
-    except BaseException:
-        if out:
-            out.discard()
-        raise
-    if out:
-        out.commit()
     if as_json:
         click.echo(json.dumps(result, indent=1))
         return

@@ -321,6 +321,10 @@ def test_encodings(tmp_path):
     p.write_bytes(b"\xef\xbb\xbf" + PROBLEM.encode())          # a UTF-8 byte-order mark
     r = run_htn("plan", d, p, "-f", "jshop")
     assert r.returncode == 0 and "(!go home work)" in r.stdout
+    plan = tmp_path / "plan.txt"
+    plan.write_bytes(b"\xef\xbb\xbf" + r.stdout.encode())                # plan files too
+    r = run_htn("validate", d, p, plan)
+    assert r.returncode == 0 and "plan 1: valid" in r.stdout, r.stderr
     p.write_bytes(b"(defproblem p d ((at home))\n  ((travel w\xc3\xa9rk \xff)))")
     r = run_htn("plan", d, p)
     check_error(r, f"{p}:2:17:", "not UTF-8 text: byte 0xff")
