@@ -429,6 +429,10 @@ def parse_text(text: str, file: str = "<string>", functions: FunctionTable | Non
 def parse_step(text: str, file: str = "<plan>", line: int = 1):
     """Parse one plan step such as ``(!move_base jenny home kitchen)``."""
     try:
+        _check_nesting(text, file)
+    except HtnError as exc:           # the step is one line of the plan file
+        raise HtnError(exc.message, file, line, exc.col) from None
+    try:
         tree = _lark().parse(text, start="task_atom")
     except UnexpectedInput as e:
         raise HtnError(f"not a plan step: {text.strip()!r}", file, line,
