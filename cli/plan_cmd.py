@@ -89,7 +89,10 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
         found = totals["plans_found"]
     finally:
         for sink in filter(None, sinks):
-            sink.commit() if found else sink.discard()
+            if found:
+                sink.commit()
+            else:
+                sink.discard()
     if isinstance(stop, BrokenPipeError):
         raise stop          # the reader went away: main() exits quietly
     render.finish(totals)
