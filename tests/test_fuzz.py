@@ -12,11 +12,12 @@ allow only a few hundred inputs in the time budget). For every input:
 * an exit code 2 comes with ``file:line:col:`` at the start of its message.
 
 CI runs a fixed, derandomized sample of ``HTN_FUZZ_EXAMPLES`` inputs (default
-250, about 30 s). Run it longer, with fresh random inputs, like this::
+500, about 25 s on two cores). Run it longer, with fresh random inputs, like this::
 
     HTN_FUZZ_EXAMPLES=10000 HTN_FUZZ_RANDOM=1 python -m pytest tests/test_fuzz.py -s
 
-(``-s`` shows the tally of inputs and exit codes at the end.)
+(``-s`` shows the tally of inputs and exit codes at the end; ``HTN_FUZZ_SHOW=1``
+also prints the first line of each error, to see what the mutants provoke.)
 """
 from __future__ import annotations
 
@@ -36,7 +37,7 @@ from hypothesis import strategies as st
 from conftest import CORPUS, FUNCTIONS, ROOT, corpus_available
 
 sys.setrecursionlimit(max(sys.getrecursionlimit(), 20000))   # as htn's main() does
-EXAMPLES = int(os.environ.get("HTN_FUZZ_EXAMPLES", "250"))
+EXAMPLES = int(os.environ.get("HTN_FUZZ_EXAMPLES", "500"))
 RANDOM = bool(os.environ.get("HTN_FUZZ_RANDOM"))
 LOCATED = re.compile(r"^[^\n]+:\d+:\d+: ")
 
