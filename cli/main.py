@@ -3,6 +3,9 @@
 This module only parses arguments, calls the library and prints. Errors in the
 user's input are :class:`htn.jshop.errors.HtnError`; they are caught once, in
 :func:`main`, and printed as ``file:line:col: message`` with exit code 2.
+Ctrl-C exits with 130, SIGTERM with 143 (both after the command's own clean-up,
+see :mod:`htn.cli.signals`), and a reader that closes the pipe early (``htn
+plan ... | head -1``) ends the command quietly with 0.
 """
 from __future__ import annotations
 
@@ -14,11 +17,43 @@ import click
 from htn.jshop.errors import HtnError
 
 from .output import fail
+from .signals import SIGTERM_EXIT, Terminated, sigterm_as_interrupt
 
 CONTEXT = dict(help_option_names=["-h", "--help"], max_content_width=100)
 
 
-@click.group(context_settings=CONTEXT)
+class HtnGroup(click.Group):
+    """The command group; it ends a command on a closed pipe or an interrupt
+    before click does (click would exit 1 on a broken pipe)."""
+
+    def invoke(self, ctx):
+        try:
+            return super().invoke(ctx)
+        except BrokenPipeError:
+            _silence_stdout()
+            ctx.exit(0)
+        except SystemExit as exc:
+            # rich's Console exits 1 on a broken pipe (after silencing stdout)
+            if exc.code == 1 and isinstance(exc.__context__, BrokenPipeError):
+                ctx.exit(0)
+            raise
+        except KeyboardInterrupt as exc:
+            terminated = isinstance(exc, Terminated)
+            click.echo("terminated" if terminated else "interrupted", err=True)
+            ctx.exit(SIGTERM_EXIT if terminated else 130)
+
+
+def _silence_stdout() -> None:
+    """Point stdout at /dev/null: the reader is gone, and Python's final
+    flush must not fail again."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError):   # no real file descriptor (tests capture stdout)
+        pass
+
+
+@click.group(cls=HtnGroup, context_settings=CONTEXT)
 @click.version_option(package_name="htn", prog_name="htn")
 def cli():
     """Plan with a JSHOP2-compatible HTN planner, run plans with monitoring,
@@ -51,23 +86,25 @@ def main(argv=None) -> None:
     """Console entry point: run the click group, turning input errors into exit 2."""
     sys.setrecursionlimit(max(sys.getrecursionlimit(), 20000))
     try:
-        code = cli.main(args=argv, prog_name="htn", standalone_mode=False)
+        with sigterm_as_interrupt():
+            code = cli.main(args=argv, prog_name="htn", standalone_mode=False)
+            sys.stdout.flush()
     except HtnError as exc:
         fail(exc)
         sys.exit(2)
-    except click.exceptions.Abort:
-        click.echo("interrupted", err=True)
-        sys.exit(130)
+    except click.exceptions.Abort as exc:
+        terminated = isinstance(exc.__context__, Terminated)
+        click.echo("terminated" if terminated else "interrupted", err=True)
+        sys.exit(SIGTERM_EXIT if terminated else 130)
     except click.ClickException as exc:
         exc.show()
         sys.exit(exc.exit_code)
-    except KeyboardInterrupt:
-        click.echo("interrupted", err=True)
-        sys.exit(130)
+    except KeyboardInterrupt as exc:
+        terminated = isinstance(exc, Terminated)
+        click.echo("terminated" if terminated else "interrupted", err=True)
+        sys.exit(SIGTERM_EXIT if terminated else 130)
     except BrokenPipeError:
-        # stdout closed early (e.g. piped into head): not an error of ours
-        devnull = os.open(os.devnull, os.O_WRONLY)
-        os.dup2(devnull, sys.stdout.fileno())
+        _silence_stdout()
         sys.exit(0)
     sys.exit(code or 0)
 

@@ -1,14 +1,20 @@
-"""``htn plan DOMAIN PROBLEM``: find plans and print them."""
+"""``htn plan DOMAIN PROBLEM``: find plans and print them as they are found.
+
+Every format streams: a plan is printed (and written to ``-o``/``--dot``) when
+the planner finds it and then forgotten, so ``--all`` runs in flat memory
+until it ends, times out or is interrupted. ``-f json`` is JSON Lines: one
+object per plan, then one with the statistics (see the README).
+"""
 from __future__ import annotations
 
-import contextlib
 import json
 import sys
 import time
 
 import click
 
-from .output import atomic_write, deferred_interrupt, stdout_is_terminal, warn
+from .output import AtomicFile, console, stdout_is_terminal, warn
+from .signals import SIGTERM_EXIT, DeadlineExceeded, Terminated, deadline, held
 
 FORMATS = ["text", "jshop", "json"]
 
@@ -22,12 +28,14 @@ FORMATS = ["text", "jshop", "json"]
               help="Enumerate every plan (JSHOP2's -ra); stream them as they are found.")
 @click.option("-f", "--format", "fmt", type=click.Choice(FORMATS),
               help="Output format [default: text on a terminal, else jshop]. 'jshop' prints "
-                   "exactly what JSHOP2 prints; 'json' one object with plans, trees and stats.")
+                   "exactly what JSHOP2 prints; 'json' is JSON Lines: one object per plan "
+                   "(steps, cost, task tree), then one with the statistics.")
 @click.option("-o", "--output", type=click.Path(dir_okay=False),
               help="Also write the plans (jshop format, with a header naming the domain and "
                    "problem files) to this file, for 'htn run'.")
 @click.option("--timeout", type=click.FloatRange(min=0, min_open=True), metavar="SECONDS",
-              help="Stop searching after this many seconds and keep what was found.")
+              help="Stop searching after this many seconds (wall clock, user functions "
+                   "included) and keep what was found.")
 @click.option("--functions", type=click.Path(dir_okay=False), metavar="FILE.py",
               help="Python file whose public functions can be called with (call name ...) "
                    "and used as :sort-by comparators.")
@@ -50,35 +58,71 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
     from htn.jshop.functions import FunctionTable
     from htn.jshop.parser import load_domain, load_problem
     from htn.jshop.planfile import header
+
+    started = time.perf_counter()
+    fmt = fmt or ("text" if stdout_is_terminal() else "jshop")
+    # -o and --dot are checked before any work, and replaced only by a
+    # complete new result: at least one whole plan (also after a timeout,
+    # Ctrl-C, SIGTERM or a closed stdout); otherwise an earlier file stays
+    sinks: list = []
+    found = 0
+    try:
+        out = AtomicFile(output) if output else None
+        sinks.append(out)
+        dot_out = _DotFile(AtomicFile(dot)) if dot else None
+        sinks.append(dot_out)
+        table = FunctionTable()
+        if functions:
+            table.load_file(functions)
+        dom = load_domain(domain, table)
+        prob = load_problem(problem, table)
+        warnings = check_domain(dom) + check_problem(dom, prob)
+        if not quiet:
+            for w in warnings:
+                warn(w)
+        if out:
+            out.write(header(output, domain, problem, functions))
+        render = _Renderer(fmt, show_tree, domain, problem)
+        totals, stop = _search(dom, prob, table, render, out, dot_out, started, timeout,
+                               None if all_plans else n_plans,
+                               record_trees=show_tree or bool(dot) or fmt == "json")
+        found = totals["plans_found"]
+    finally:
+        for sink in filter(None, sinks):
+            if found:
+                sink.commit()
+            else:
+                sink.discard()
+    if isinstance(stop, BrokenPipeError):
+        raise stop          # the reader went away: main() exits quietly
+    render.finish(totals)
+    if totals["timed_out"]:
+        warn(f"timed out after {timeout:g} s; {found} plan(s) found")
+    if isinstance(stop, KeyboardInterrupt):
+        warn(f"{'terminated' if isinstance(stop, Terminated) else 'interrupted'}; "
+             f"{found} plan(s) found")
+        sys.exit(SIGTERM_EXIT if isinstance(stop, Terminated) else 130)
+    if not found:
+        if fmt == "text":
+            warn("no plan found")
+        for path in (output, dot):
+            if path:
+                warn(f"{path}: not written (no plan)")
+        sys.exit(1)
+
+
+def _search(dom, prob, table, render, out, dot_out, started, timeout, limit, record_trees):
+    """Stream the plans of every problem instance to the renderer and the
+    files. Returns the summed statistics and what stopped the stream early
+    (Ctrl-C, SIGTERM or a closed stdout), if anything."""
     from htn.jshop.planner import Planner
 
-    fmt = fmt or ("text" if stdout_is_terminal() else "jshop")
-    table = FunctionTable()
-    if functions:
-        table.load_file(functions)
-    dom = load_domain(domain, table)
-    prob = load_problem(problem, table)
-    warnings = check_domain(dom) + check_problem(dom, prob)
-    if not quiet:
-        for w in warnings:
-            warn(w)
-    limit = None if all_plans else n_plans
-    record_trees = show_tree or bool(dot) or fmt == "json"
-    render = _Renderer(fmt, show_tree)
-    found = []      # whole plans, kept only when --format json or --dot needs them
-    lengths = []    # of every plan streamed (memory stays flat for --all)
     totals = {"plans_found": 0, "search_ms": 0.0, "expansions": 0,
               "operator_applications": 0, "backtracks": 0, "timed_out": False,
-              "interrupted": False}
-    started = time.perf_counter()
-    interrupted = False
-    # -o: Ctrl-C keeps the whole plans written so far; any other error leaves
-    # an earlier file untouched (atomic_write discards the temporary file)
-    with contextlib.ExitStack() as files:
-        out_fh = files.enter_context(atomic_write(output)) if output else None
-        if out_fh:
-            out_fh.write(header(output, domain, problem, functions))
-        try:
+              "interrupted": False, "shortest_plan": None}
+    stop = None
+    try:
+        with deadline(timeout, started):
             for k, inst in enumerate(prob.instances):
                 remaining = None
                 if timeout is not None:
@@ -90,14 +134,14 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
                 try:
                     for p in planner.plans(remaining):
                         p.instance = k
-                        with deferred_interrupt():
+                        with held():    # the files first: they outlive a closed stdout
+                            if out:
+                                out.write(p.to_jshop())
+                                out.flush()
+                            if dot_out and p.tree is not None:
+                                dot_out.add(p.tree)
+                            _count(totals, p)
                             render.plan(p)
-                            if out_fh:
-                                out_fh.write(p.to_jshop())
-                                out_fh.flush()
-                            lengths.append(len(p.steps))
-                        if fmt == "json" or dot:
-                            found.append(p)
                         if limit is not None and planner.stats.plans_found >= limit:
                             break
                 finally:
@@ -105,55 +149,76 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
                 if planner.stats.timed_out:
                     totals["timed_out"] = True
                     break
-        except KeyboardInterrupt:
-            interrupted = True
-            totals["interrupted"] = True
-    totals["shortest_plan"] = min(lengths) if lengths else None
+    except DeadlineExceeded:
+        totals["timed_out"] = True
+    except (KeyboardInterrupt, BrokenPipeError) as exc:
+        totals["interrupted"] = isinstance(exc, KeyboardInterrupt)
+        stop = exc
     totals["search_ms"] = round(totals["search_ms"], 3)
-    if dot:
-        _write_dot(dot, found)
-    render.finish(found, totals, domain, problem, any_plan=bool(lengths))
-    if totals["timed_out"]:
-        warn(f"timed out after {timeout:g} s; {totals['plans_found']} plan(s) found")
-    if interrupted:
-        warn(f"interrupted; {totals['plans_found']} plan(s) found")
-        sys.exit(130)
-    if not lengths:
-        if fmt == "text":
-            warn("no plan found")
-        sys.exit(1)
+    return totals, stop
+
+
+def _count(totals: dict, p) -> None:
+    """Count a plan once it is wholly written (what the files and streams hold)."""
+    totals["plans_found"] += 1
+    shortest = totals["shortest_plan"]
+    if shortest is None or len(p.steps) < shortest:
+        totals["shortest_plan"] = len(p.steps)
 
 
 def _add_stats(totals: dict, s: dict) -> None:
-    for key in ("plans_found", "expansions", "operator_applications", "backtracks"):
+    for key in ("expansions", "operator_applications", "backtracks"):
         totals[key] += s[key]
     totals["search_ms"] += s["search_ms"]
 
 
-def _write_dot(path: str, plans) -> None:
-    with atomic_write(path) as fh:
-        trees = [p for p in plans if getattr(p, "tree", None) is not None]
-        if len(trees) == 1:
-            fh.write(trees[0].tree.to_dot())
-        else:
-            for i, p in enumerate(trees, 1):
-                fh.write(p.tree.to_dot().replace("digraph task_tree", f"digraph plan_{i}", 1))
+class _DotFile:
+    """Task trees streamed to a Graphviz file: one ``digraph task_tree`` for
+    a single plan, ``digraph plan_N`` for each of several (only the first
+    tree is held back, until it is known whether a second one comes)."""
+
+    def __init__(self, file):
+        self.file = file
+        self.count = 0
+        self.first = None
+
+    def add(self, tree) -> None:
+        self.count += 1
+        if self.count == 1:
+            self.first = tree.to_dot()
+            return
+        if self.count == 2:
+            self._write(1, self.first)
+            self.first = None
+        self._write(self.count, tree.to_dot())
+
+    def _write(self, i: int, text: str) -> None:
+        self.file.write(text.replace("digraph task_tree", f"digraph plan_{i}", 1))
+
+    def commit(self) -> None:
+        if self.first is not None:
+            self.file.write(self.first)
+        self.file.commit()
+
+    def discard(self) -> None:
+        self.file.discard()
 
 
 class _Renderer:
     """Prints plans as they stream in, in one of the three formats."""
 
-    def __init__(self, fmt: str, show_tree: bool):
+    def __init__(self, fmt: str, show_tree: bool, domain: str, problem: str):
         self.fmt = fmt
         self.show_tree = show_tree
+        self.domain = domain
+        self.problem = problem
         self.count = 0
         self._console = None
 
     @property
     def console(self):
         if self._console is None:
-            from rich.console import Console
-            self._console = Console(highlight=False)
+            self._console = console(highlight=False)
         return self._console
 
     def plan(self, p) -> None:
@@ -163,10 +228,18 @@ class _Renderer:
             sys.stdout.flush()
             if self.show_tree and p.tree is not None:
                 from .tree_view import rich_tree
-                from rich.console import Console
-                Console(stderr=True, highlight=False).print(rich_tree(p.tree))
+                console(stderr=True, highlight=False).print(rich_tree(p.tree))
         elif self.fmt == "text":
             self._text_plan(p)
+        else:
+            self._json_line({"type": "plan", "instance": getattr(p, "instance", 0),
+                             "index": p.index, "cost": p.cost, "length": len(p.steps),
+                             "steps": p.lines(),
+                             "tree": p.tree.to_dict() if p.tree is not None else None})
+
+    def _json_line(self, record: dict) -> None:
+        sys.stdout.write(json.dumps(record, separators=(",", ":")) + "\n")
+        sys.stdout.flush()
 
     def _text_plan(self, p) -> None:
         from rich.table import Table
@@ -185,22 +258,14 @@ class _Renderer:
             from .tree_view import rich_tree
             c.print(rich_tree(p.tree))
 
-    def finish(self, plans, totals: dict, domain: str, problem: str, any_plan: bool) -> None:
+    def finish(self, totals: dict) -> None:
         if self.fmt == "json":
-            doc = {
-                "domain": domain,
-                "problem": problem,
-                "plans": [{"instance": getattr(p, "instance", 0),
-                           "steps": p.lines(), "cost": p.cost, "length": len(p.steps),
-                           "tree": p.tree.to_dict() if p.tree is not None else None}
-                          for p in plans],
-                "stats": totals,
-            }
-            sys.stdout.write(json.dumps(doc, indent=1) + "\n")
+            self._json_line({"type": "stats", "domain": self.domain, "problem": self.problem,
+                             **totals})
         elif self.fmt == "text":
             shortest = totals["shortest_plan"]
             extra = f", shortest plan {shortest} steps" if shortest is not None else ""
             self.console.print(
                 f"[bold]{totals['plans_found']}[/bold] plan(s) found; search "
                 f"{totals['search_ms']:.1f} ms{extra}; {totals['expansions']} expansions, "
-                f"{totals['backtracks']} backtracks", style="green" if any_plan else "red")
+                f"{totals['backtracks']} backtracks", style="green" if self.count else "red")

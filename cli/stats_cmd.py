@@ -8,6 +8,9 @@ import click
 
 from htn.jshop.errors import HtnError
 
+from .output import console
+from .signals import DeadlineExceeded, deadline
+
 SCENARIOS = [("domains/domestic.jshop", "problems/bring_object.jshop"),
              ("domains/domestic.jshop", "problems/guide_robot.jshop")]
 
@@ -56,12 +59,21 @@ def stats(files, repeat, as_json, functions, timeout):
     table = FunctionTable()
     if functions:
         table.load_file(functions)
-    rows = [scenario_stats(d, p, table, repeat, timeout) for d, p in pairs]
+    rows = []
+    for d, p in pairs:
+        # --timeout bounds each enumeration; the deadline catches a user
+        # function that never returns, which the planner cannot interrupt
+        try:
+            with deadline(None if timeout is None else timeout * repeat + 1.0):
+                rows.append(scenario_stats(d, p, table, repeat, timeout))
+        except DeadlineExceeded:
+            click.echo(f"{p}: --timeout {timeout:g} s ran out inside a user function "
+                       "or comparator; no figures", err=True)
+            raise SystemExit(1) from None
     if as_json:
         click.echo(json.dumps({"scenarios": [r.as_dict() for r in rows]}, indent=1))
         return
     from rich import box
-    from rich.console import Console
     from rich.table import Table
 
     show_paper = not files
@@ -87,9 +99,9 @@ def stats(files, repeat, as_json, functions, timeout):
                 + (f"  [dim](paper {PAPER[Path(r.problem).stem]['methods']} / "
                    f"{PAPER[Path(r.problem).stem]['operators']})[/dim]"
                    if show_paper and Path(r.problem).stem in PAPER else "") for r in rows])
-    console = Console()
-    console.print(t)
-    console.print(f"[dim]time: median of {repeat} run(s), parsing excluded; "
+    out = console()
+    out.print(t)
+    out.print(f"[dim]time: median of {repeat} run(s), parsing excluded; "
                   f"domain {rows[0].domain}[/dim]")
     if any(r.timed_out for r in rows):
-        console.print("[yellow]some problems timed out; their counts are partial[/yellow]")
+        out.print("[yellow]some problems timed out; their counts are partial[/yellow]")

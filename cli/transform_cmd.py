@@ -1,6 +1,7 @@
 """``htn transform DOMAIN PROBLEM``: apply plan transformations to a plan's task tree."""
 from __future__ import annotations
 
+import contextlib
 import json
 import sys
 
@@ -32,13 +33,38 @@ def transform(domain, problem, rules, metric, output, as_json):
     step's precondition holds in sequence from the initial state; a rewrite
     that breaks the plan or costs more on --metric is rolled back.
     """
+    from htn.jshop.planfile import header
+
+    # a bad -o fails before the work; the file is replaced once all is done
+    with atomic_write(output) if output else contextlib.nullcontext() as out:
+        result, ws = _transform(domain, problem, rules, metric)
+        if out:
+            out.write(header(output, domain, problem))
+            out.write(ws.plan.to_jshop())
+    if as_json:
+        click.echo(json.dumps(result, indent=1))
+        return
+    for entry in result["log"]:
+        mark = "+" if entry["status"] == "applied" else "-"
+        click.echo(f"{mark} {entry['rule']:<11} {entry['status']:<12} {entry['detail']}")
+    if not result["log"]:
+        click.echo("no transformation applies")
+    for ch in result["changes"]:
+        click.echo(f"\n{ch['rule']}: {' , '.join(ch['paths'])}")
+        for t in ch["tasks"]:
+            click.echo(f"    {t}")
+    o, t = result["original"], result["transformed"]
+    click.echo(f"\nplan: {o['steps']} -> {t['steps']} steps; {metric}: "
+               f"{o[metric]:.2f} -> {t[metric]:.2f}")
+    sys.stdout.flush()
+
+
+def _transform(domain: str, problem: str, rules, metric: str):
+    """Plan, transform and check; the result document and the workspace."""
+    from htn.jshop.checks import check_domain_name
     from htn.jshop.parser import load_domain, load_problem
     from htn.transform.framework import METRICS, Workspace, default_framework
 
-    from htn.jshop.planfile import header
-
-    dom = load_domain(domain)
-    prob = load_problem(problem)
     fw = default_framework()
     names = [t.name for t in fw.transformations]
     if rules:
@@ -49,6 +75,9 @@ def transform(domain, problem, rules, metric, output, as_json):
                                      f"known: {', '.join(names)}", param_hint="--rules")
         for t in fw.transformations:
             t.enabled = t.name in wanted
+    dom = load_domain(domain)
+    prob = load_problem(problem)
+    check_domain_name(dom, prob)
     ws = Workspace.from_problem(dom, prob.instances[0])
     original = ws.plan
     fw.apply_all_transformations(ws, metric)
@@ -66,26 +95,7 @@ def transform(domain, problem, rules, metric, output, as_json):
                         "plan": ws.plan.lines()},
         "tree": ws.annotated_tree().to_dict(),
     }
-    if output:
-        with atomic_write(output) as fh:
-            fh.write(header(output, domain, problem))
-            fh.write(ws.plan.to_jshop())
-    if as_json:
-        click.echo(json.dumps(result, indent=1))
-        return
-    for entry in result["log"]:
-        mark = "+" if entry["status"] == "applied" else "-"
-        click.echo(f"{mark} {entry['rule']:<11} {entry['status']:<12} {entry['detail']}")
-    if not result["log"]:
-        click.echo("no transformation applies")
-    for ch in changes:
-        click.echo(f"\n{ch['rule']}: {' , '.join(ch['paths'])}")
-        for t in ch["tasks"]:
-            click.echo(f"    {t}")
-    o, t = result["original"], result["transformed"]
-    click.echo(f"\nplan: {o['steps']} -> {t['steps']} steps; {metric}: "
-               f"{o[metric]:.2f} -> {t[metric]:.2f}")
-    sys.stdout.flush()
+    return result, ws
 
 
 def _task_text(t) -> str:

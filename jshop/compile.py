@@ -9,11 +9,19 @@ on a small scale for the two hottest operations on argument tuples:
 Only "flat" tuples (constants and variables) are compiled; anything with a
 nested list or call term uses the generic functions in :mod:`htn.jshop.terms`, so
 the semantics are exactly those of ``subst`` and ``unify``.
+
+The shape of the generated source never follows the nesting of the input:
+Python's compiler refuses more than 20 nested blocks, 200 nested parentheses
+or a few thousand chained operators, and domains may have many conjuncts,
+deeply nested list terms or atoms with many arguments. Long chains are split
+into statements, long conjunctions run on an explicit stack, and list terms
+nested deeper than :data:`FAST_PATH_DEPTH` take the generic path.
 """
 from __future__ import annotations
 
 from typing import Callable
 
+from .errors import HtnError
 from .terms import CallTerm, Var, is_ground, subst, unify
 
 
@@ -95,18 +103,54 @@ def make_binder(args: tuple) -> Callable[[list], tuple]:
     src = ["def bind(env):", *fast, *lines,
            f"    if {' and '.join(tests)}:",
            f"        return None, ({', '.join(parts)},)",
-           f"    return {' | '.join(keys)}, ({', '.join(unbound)},)"]
+           *_or_lines("key", keys),
+           f"    return key, ({', '.join(unbound)},)"]
     ns = dict(consts, is_ground=is_ground, subst=subst, GENERIC=GENERIC)
     exec("\n".join(src), ns)
     return ns["bind"]
 
 
+def _or_lines(name: str, exprs: list, chunk: int = 32) -> list:
+    """``name = e1 | e2 | ...`` as statements of at most ``chunk`` operands:
+    one long chain of ``|`` nests as deep as it is long in Python's parser."""
+    lines = []
+    for k in range(0, len(exprs), chunk):
+        op = "=" if k == 0 else "|="
+        lines.append(f"    {name} {op} {' | '.join(exprs[k:k + chunk])}")
+    return lines
+
+
+FAST_PATH_DEPTH = 16   # list terms nested deeper than this use the generic subst
+
+
+def _depth(args: tuple) -> int:
+    """How deeply list and call terms nest in ``args`` (iteratively)."""
+    deepest = 0
+    stack = [(a, 1) for a in args]
+    while stack:
+        t, d = stack.pop()
+        tt = type(t)
+        if tt is tuple:
+            stack.extend((x, d + 1) for x in t)
+        elif tt is CallTerm:
+            stack.extend((x, d + 1) for x in t.args)
+        else:
+            continue
+        deepest = max(deepest, d)
+    return deepest
+
+
 def _fast_path(args: tuple, ns: dict) -> list:
     """Source lines returning at once when every variable of ``args`` (call
     arguments and nested lists included) is bound to a symbol or a number:
-    then every call can be evaluated inline and the result is ground."""
+    then every call can be evaluated inline and the result is ground.
+
+    If a call fails, the generated code falls through to the general code,
+    whose ``subst`` evaluates again and reports the failing call's place."""
     if all(type(a) in (str, float, Var) for a in args):
         return []   # flat tuples are already handled well by the general code
+    if _depth(args) > FAST_PATH_DEPTH:
+        return []
     seen: dict = {}
     counter = [0]
 
@@ -135,7 +179,12 @@ def _fast_path(args: tuple, ns: dict) -> list:
         return []
     lines = [f"    f{i} = env[{i}]" for i in seen]
     test = " and ".join(f"(type(f{i}) is str or type(f{i}) is float)" for i in seen) or "True"
-    return lines + [f"    if {test}:", f"        return None, {body}"]
+    ns["HtnError"] = HtnError
+    return lines + [f"    if {test}:",
+                    "        try:",
+                    f"            return None, {body}",
+                    "        except HtnError:",
+                    "            pass"]
 
 
 class _NoFastPath(Exception):
@@ -182,6 +231,14 @@ _TERMS: dict = {}
 _CONJUNCTIONS: dict = {}
 
 
+def clear_caches() -> None:
+    """Forget every compiled function. The caches keep the domain's tuples
+    alive, which is right for one planning run per process (the command
+    line) but not for a long-lived process that parses many domains."""
+    for cache in (_BINDERS, _UNIFIERS, _SCANNERS, _TERMS):
+        cache.clear()
+
+
 def term_binder(term) -> Callable[[list], tuple]:
     """Cached binder of a single term (keyed by the term object itself)."""
     hit = _TERMS.get(id(term))
@@ -190,11 +247,18 @@ def term_binder(term) -> Callable[[list], tuple]:
     return hit[1]
 
 
+NESTED_CONJUNCTS = 16   # Python allows 20 nested blocks; longer conjunctions use a stack
+
+
 def conjunction(sats: list) -> Callable:
     """Left-to-right backtracking over conjuncts as one generator of nested
     loops (JSHOP2's generated conjunction classes do the same). The code is
-    generated once per number of conjuncts."""
+    generated once per number of conjuncts, up to :data:`NESTED_CONJUNCTS`;
+    longer conjunctions backtrack over an explicit stack of generators, in
+    the same order."""
     n = len(sats)
+    if n > NESTED_CONJUNCTS:
+        return _stacked_conjunction(sats)
     make = _CONJUNCTIONS.get(n)
     if make is None:
         args = ", ".join(f"s{i}" for i in range(n))
@@ -207,6 +271,25 @@ def conjunction(sats: list) -> Callable:
         exec("\n".join(lines).replace("(e0)", "(env)"), ns)
         make = _CONJUNCTIONS[n] = ns["make"]
     return make(*sats)
+
+
+def _stacked_conjunction(sats: list) -> Callable:
+    """The satisfiers of ``sats`` in conjunction, depth first, with one open
+    generator per conjunct on a list instead of one nested loop each."""
+    last = len(sats) - 1
+
+    def conj(env):
+        open_ = [sats[0](env)]
+        while open_:
+            for e in open_[-1]:
+                if len(open_) > last:
+                    yield e
+                else:
+                    open_.append(sats[len(open_)](e))
+                    break
+            else:
+                open_.pop()
+    return conj
 
 
 def scanner(args: tuple, key: int) -> Callable:
@@ -230,17 +313,19 @@ def make_head_unifier(head: tuple) -> Callable[[tuple, list], bool]:
                     return False
             return True
         return generic
-    ns: dict = {"Var": Var}
+    ns: dict = {"Var": Var, "is_ground": is_ground}
     src = ["def unify_head(args, env):", f"    if len(args) != {n}:", "        return False"]
     seen = set()
+    # a task argument binds a head variable only if it is ground (see terms.unify)
+    known = "(type(t) is str or type(t) is float or is_ground(t))"
     for i, a in enumerate(head):
         src.append(f"    t = args[{i}]")
         if type(a) is Var:
             if a.index not in seen:
                 seen.add(a.index)
-                src.append(f"    if type(t) is not Var: env[{a.index}] = t")
+                src.append(f"    if {known}: env[{a.index}] = t")
             else:
-                src += ["    if type(t) is not Var:",
+                src += [f"    if {known}:",
                         f"        v = env[{a.index}]",
                         f"        if v is None: env[{a.index}] = t",
                         "        elif not (v == t and type(v) is type(t)): return False"]

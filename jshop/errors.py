@@ -34,19 +34,34 @@ class HtnError(Exception):
         return f"{loc}: {self.message}" if loc else self.message
 
     def source_line(self) -> Optional[str]:
-        """The offending line of the input file with a caret, if readable."""
+        """The offending line of the input file with a caret, if readable;
+        a line longer than :data:`SHOWN` characters is shown around the column."""
         if not self.file or not self.line:
             return None
         try:
-            with open(self.file, encoding="utf-8", errors="replace") as fh:
+            with open(self.file, encoding="utf-8-sig", errors="replace") as fh:
                 for i, text in enumerate(fh, 1):
                     if i == self.line:
                         text = text.rstrip("\n\r").expandtabs(1)
-                        caret = " " * max((self.col or 1) - 1, 0) + "^"
-                        return f"  {text}\n  {caret}"
-        except OSError:
+                        return _with_caret(text, max((self.col or 1) - 1, 0))
+        except (OSError, ValueError):
             return None
         return None
+
+
+SHOWN = 200   # characters of a source line echoed under an error
+
+
+def _with_caret(text: str, at: int) -> str:
+    """``text`` and a caret under column ``at`` (0-based), cut to about
+    :data:`SHOWN` characters around it with ``...`` where text is left out."""
+    if len(text) > SHOWN:
+        start = min(max(at - SHOWN // 2, 0), len(text) - SHOWN)
+        end = start + SHOWN
+        head = "..." if start > 0 else ""
+        tail = "..." if end < len(text) else ""
+        text, at = head + text[start:end] + tail, at - start + len(head)
+    return f"  {text}\n  {' ' * at}^"
 
 
 class PlanningError(HtnError):

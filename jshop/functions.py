@@ -7,10 +7,16 @@ plain Python values (numbers as ``float``, symbols as lower-case ``str``, lists
 as Python lists, ``nil`` as ``[]``) and the return value is converted back the
 same way (``None``/``False`` become ``nil``, ``True`` becomes ``1.0``). A
 function used as a ``:sort-by`` comparator takes two such values and returns a
-negative, zero or positive int (manual appendix B).
+negative, zero or positive number (manual appendix B).
+
+A user function that raises, calls ``sys.exit`` or returns something that is
+not a term is an input error; the caller reports it at the call's place in the
+domain (:func:`htn.jshop.terms.at_call`). Ctrl-C and the command line's
+``--timeout`` deadline (exceptions that are not ``Exception``) pass through.
 """
 from __future__ import annotations
 
+import importlib.machinery
 import importlib.util
 import inspect
 import math
@@ -115,6 +121,21 @@ STDLIB: dict[str, Callable] = {
     "member": _member,
 }
 
+# How many arguments a standard function needs, where any number will not do:
+# (min, max or None). JSHOP2 leaves these unchecked until run time.
+STDLIB_ARITY = {"-": (1, None), "/": (1, None), "^": (1, None), "member": (2, 2)}
+
+
+def arity_error(name: str, given: int) -> str | None:
+    """Why ``(call name ...)`` with ``given`` arguments can never work, or None."""
+    least, most = STDLIB_ARITY.get(name, (0, None))
+    if given < least:
+        return f"call {name} needs at least {least} argument{'s' if least > 1 else ''}, given {given}"
+    if most is not None and given > most:
+        return f"call {name} takes {most} arguments, given {given}"
+    return None
+
+
 # Names JSHOP2 prints for standard functions inside an unevaluated call term.
 STDLIB_JAVA_NAMES = {
     "+": "StdLib.plus", "-": "StdLib.minus", "*": "StdLib.mult",
@@ -146,20 +167,57 @@ def from_python(v: Any) -> Any:
         return v.lower()
     if isinstance(v, (list, tuple)):
         return tuple(from_python(x) for x in v)
-    raise HtnError(f"a user function returned {v!r}, which is not a term")
+    raise HtnError(f"a user function returned {_shown(v)}, which is not a term")
+
+
+def _shown(v: Any, limit: int = 80) -> str:
+    """A user value for a message: its repr, cut to ``limit`` characters."""
+    try:
+        text = repr(v)
+    except Exception:  # a user object whose repr fails
+        text = f"a {type(v).__name__}"
+    return _clip(text, limit)
+
+
+def _clip(text: str, limit: int) -> str:
+    return text if len(text) <= limit else text[:limit - 3] + "..."
+
+
+def run_user_code(what: str, fn: Callable, *args) -> Any:
+    """``fn(*args)``; what goes wrong inside becomes an :class:`HtnError`
+    naming ``what`` ran (the caller adds the place of the call)."""
+    try:
+        return fn(*args)
+    except HtnError:
+        raise
+    except SystemExit as exc:
+        raise HtnError(f"{what} called sys.exit({_shown(exc.code)})") from None
+    except RecursionError:
+        raise HtnError(f"{what} recursed too deeply") from None
+    except Exception as exc:  # the user's code failed: report, no traceback
+        raise HtnError(f"{what} raised {type(exc).__name__}: {_clip(str(exc), 160)}") from None
 
 
 def wrap_user_function(name: str, fn: Callable) -> Callable:
     def call(args):
+        result = run_user_code(f"function {name}", fn, *[to_python(a) for a in args])
         try:
-            result = fn(*[to_python(a) for a in args])
-        except HtnError:
-            raise
-        except Exception as exc:  # the user's code failed: report, no traceback
-            raise HtnError(f"function {name} raised {type(exc).__name__}: {exc}")
-        return from_python(result)
+            return from_python(result)
+        except (OverflowError, RecursionError):   # a huge int, a list nested in itself
+            raise HtnError(f"function {name} returned {_shown(result)}, which is not a term") \
+                from None
     call.__name__ = name
     return call
+
+
+def compare(name: str, fn: Callable, a: Any, b: Any) -> int:
+    """A user comparator's verdict on two terms: negative, zero or positive
+    (manual appendix B); anything but a number is an error."""
+    r = run_user_code(f"comparator {name}", fn, to_python(a), to_python(b))
+    if isinstance(r, bool) or not isinstance(r, (int, float)) or r != r:
+        raise HtnError(f"comparator {name} returned {_shown(r)}, not a number "
+                       "(negative, zero or positive)")
+    return (r > 0) - (r < 0)
 
 
 class FunctionTable:
@@ -177,16 +235,20 @@ class FunctionTable:
         return self.user.get(name.lower())
 
     def load_file(self, path: str) -> None:
-        """Load every public top-level function of a Python file."""
+        """Load every public top-level function of a Python file (whatever
+        its name ends with: it is read as Python source)."""
         import os
         if not os.path.isfile(path):
             raise HtnError("functions file not found", path)
-        spec = importlib.util.spec_from_file_location("_htn_user_functions", path)
+        loader = importlib.machinery.SourceFileLoader("_htn_user_functions", path)
+        spec = importlib.util.spec_from_loader(loader.name, loader)
         module = importlib.util.module_from_spec(spec)
         try:
-            spec.loader.exec_module(module)
+            loader.exec_module(module)
         except SyntaxError as exc:
             raise HtnError(f"syntax error: {exc.msg}", path, exc.lineno, exc.offset)
+        except SystemExit as exc:
+            raise HtnError(f"loading failed: it called sys.exit({_shown(exc.code)})", path)
         except Exception as exc:
             raise HtnError(f"loading failed: {type(exc).__name__}: {exc}", path)
         self.source = path

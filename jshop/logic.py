@@ -81,18 +81,16 @@ class Logic:
                                            f"{term_str(x)} and {term_str(y)}")
                 return sign * ((x > y) - (x < y))
         else:
-            from .functions import to_python
+            from .functions import compare
             user = self.functions.comparator(name) if self.functions else None
             if user is None:
                 raise HtnError.at(pre.pos, f"undefined comparator '{name}'")
 
             def cmp(a, b):
                 try:
-                    r = user(to_python(a[idx]), to_python(b[idx]))
-                except Exception as exc:
-                    raise PlanningError.at(pre.pos, f"comparator {name} raised "
-                                           f"{type(exc).__name__}: {exc}")
-                return int(r)
+                    return compare(name, user, a[idx], b[idx])
+                except HtnError as exc:    # placed at the :sort-by that called it
+                    raise PlanningError.at(pre.pos, exc.message) from None
 
         def sorted_sat(env):
             yield from java_sort(list(sat(env)), cmp)
@@ -221,12 +219,17 @@ class Logic:
                 continue
             for sat in branches:
                 found = False
-                for nb in sat(aenv):
-                    head = bind_head(nb)[1]
-                    new = env[:]
-                    if _unify_args(bound, head, new):
-                        found = True
-                        yield new
+                try:
+                    for nb in sat(aenv):
+                        head = bind_head(nb)[1]
+                        new = env[:]
+                        if _unify_args(bound, head, new):
+                            found = True
+                            yield new
+                except RecursionError:   # JSHOP2 overflows its stack here too
+                    raise PlanningError.at(ax.pos, f"proving an axiom for {ax.head.pred} "
+                                           "recursed too deeply: does it depend on itself?") \
+                        from None
                 if found:
                     break
 

@@ -4,22 +4,29 @@ The grammar lives in ``jshop2.lark``; one :class:`Builder` transformer turns the
 parse tree into domain objects. Variables are numbered per domain element in the
 order JSHOP2's parser meets them (manual 5.1.1), because that index is what an
 unbound variable prints as (``VAR<n>``).
+
+Files are UTF-8, with or without a byte-order mark. Parentheses may nest at most
+:data:`MAX_NESTING` deep: the manual sets no limit, but the term functions
+recurse over list terms, and no domain nests anywhere near that deep.
 """
 from __future__ import annotations
 
 import os
+import re
 from functools import lru_cache
 from pathlib import Path
 
-from lark import Lark, Token, Transformer, v_args
+from lark import Lark, Token, v_args
+from lark.visitors import Transformer_NonRecursive
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken, VisitError
 
 from . import syntax as S
 from .errors import HtnError
-from .functions import STDLIB_JAVA_NAMES, FunctionTable
+from .functions import STDLIB_JAVA_NAMES, FunctionTable, arity_error
 from .terms import NIL, CallTerm, Var, make_list, variables
 
 GRAMMAR = Path(__file__).with_name("jshop2.lark")
+MAX_NESTING = 1000      # levels of parentheses
 
 
 @lru_cache(maxsize=1)
@@ -41,8 +48,9 @@ def _describe(expected) -> str:
     return ", ".join(names)
 
 
-class Builder(Transformer):
-    """Turns the Lark tree into syntax objects (method names = rule names)."""
+class Builder(Transformer_NonRecursive):
+    """Turns the Lark tree into syntax objects (method names = rule names);
+    it walks the tree with a stack, so nesting costs no Python recursion."""
 
     def __init__(self, file: str, functions: FunctionTable):
         super().__init__()
@@ -90,8 +98,11 @@ class Builder(Transformer):
         if func is None:
             raise HtnError.at(self.tpos(tok), f"undefined function '{tok}' in call "
                               "(give its Python file with --functions)")
+        why = arity_error(name, len(args))
+        if why:
+            raise HtnError.at(self.pos(meta), why)
         shown = STDLIB_JAVA_NAMES.get(name, str(tok))
-        return CallTerm(shown, func, tuple(args), self.tpos(tok))
+        return CallTerm(shown, func, tuple(args), self.pos(meta))
 
     # ---------------------------------------------------------------- logic
     @v_args(meta=True)
@@ -280,7 +291,7 @@ class Builder(Transformer):
     def problem(self, meta, items):
         name, dname, *instances = items
         return S.Problem(str(name).lower(), str(dname).lower(), instances,
-                         file=self.file, pos=self.pos(meta))
+                         file=self.file, pos=self.pos(meta), domain_pos=self.tpos(dname))
 
     def start(self, items):
         return items[0]
@@ -390,6 +401,7 @@ def _number_axiom(ax: S.Axiom) -> int:
 def parse_text(text: str, file: str = "<string>", functions: FunctionTable | None = None):
     """Parse a domain or problem from text; raise :class:`HtnError` on bad input."""
     functions = functions or FunctionTable()
+    _check_nesting(text, file)
     try:
         tree = _lark().parse(text, start="start")
     except UnexpectedCharacters as e:
@@ -417,6 +429,10 @@ def parse_text(text: str, file: str = "<string>", functions: FunctionTable | Non
 def parse_step(text: str, file: str = "<plan>", line: int = 1):
     """Parse one plan step such as ``(!move_base jenny home kitchen)``."""
     try:
+        _check_nesting(text, file)
+    except HtnError as exc:           # the step is one line of the plan file
+        raise HtnError(exc.message, file, line, exc.col) from None
+    try:
         tree = _lark().parse(text, start="task_atom")
     except UnexpectedInput as e:
         raise HtnError(f"not a plan step: {text.strip()!r}", file, line,
@@ -429,6 +445,32 @@ def parse_step(text: str, file: str = "<plan>", line: int = 1):
         raise
 
 
+_PAREN_OR_COMMENT = re.compile(r"[()]|;[^\n\r]*")
+
+
+def _check_nesting(text: str, file: str) -> None:
+    """Refuse parentheses nested deeper than :data:`MAX_NESTING`, at the first
+    one too deep (comments are skipped, as the grammar skips them)."""
+    if text.count("(") <= MAX_NESTING:
+        return
+    depth = 0
+    for m in _PAREN_OR_COMMENT.finditer(text):
+        c = m.group()
+        if c == "(":
+            depth += 1
+            if depth > MAX_NESTING:
+                line, col = _position(text, m.start())
+                raise HtnError(f"parentheses nested more than {MAX_NESTING} deep", file, line, col)
+        elif c == ")":
+            depth -= 1
+
+
+def _position(text: str, offset: int) -> tuple[int, int]:
+    """1-based line and column of a character offset."""
+    line = text.count("\n", 0, offset) + 1
+    return line, offset - (text.rfind("\n", 0, offset) + 1) + 1
+
+
 def _end_position(text: str) -> tuple[int, int]:
     lines = text.splitlines() or [""]
     return len(lines), len(lines[-1]) + 1
@@ -439,12 +481,26 @@ def parse_file(path: str, functions: FunctionTable | None = None):
         raise HtnError("no such file", path)
     if os.path.isdir(path):
         raise HtnError("is a directory, not a JSHOP2 file", path)
+    return parse_text(read_source(path), path, functions)
+
+
+def read_source(path: str) -> str:
+    """The text of a UTF-8 file (a byte-order mark is dropped); bytes that are
+    not UTF-8 are an error at their line and column."""
     try:
-        with open(path, encoding="utf-8") as fh:
-            text = fh.read()
-    except (OSError, UnicodeDecodeError) as exc:
-        raise HtnError(f"cannot read: {exc}", path)
-    return parse_text(text, path, functions)
+        with open(path, "rb") as fh:
+            data = fh.read()
+    except OSError as exc:
+        raise HtnError(f"cannot read: {exc.strerror}", path)
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        start = exc.start
+        line = data.count(b"\n", 0, start) + 1
+        bol = data.rfind(b"\n", 0, start) + 1
+        col = len(data[bol:start].decode("utf-8-sig" if bol == 0 else "utf-8", "replace")) + 1
+        raise HtnError(f"not UTF-8 text: byte 0x{data[start]:02x} ({exc.reason})",
+                       path, line, col) from None
 
 
 def load_domain(path: str, functions: FunctionTable | None = None) -> S.Domain:

@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 from typing import Optional
 
 from .errors import HtnError
-from .parser import parse_step
+from .parser import parse_step, read_source
 from .plan import Plan, Step
 
 NAMED = ("domain", "problem", "functions")
@@ -78,11 +78,7 @@ class PlanFile:
 def read_plan_file(path: str) -> PlanFile:
     if not os.path.isfile(path):
         raise HtnError("no such plan file", path)
-    try:
-        with open(path, encoding="utf-8") as fh:
-            lines = fh.read().splitlines()
-    except (OSError, UnicodeDecodeError) as exc:
-        raise HtnError(f"cannot read: {exc}", path)
+    lines = read_source(path).splitlines()     # UTF-8, BOM or not; bad bytes at line:col
     base = os.path.dirname(os.path.abspath(path))
     pf = PlanFile(path)
     steps: list = []

@@ -254,3 +254,4 @@ class Problem:
     instances: list
     file: str = ""
     pos: Optional[Pos] = None
+    domain_pos: Optional[Pos] = None   # where the domain's name is written

@@ -15,10 +15,17 @@ Representation, chosen so that ground terms are plain hashable Python values:
 Unification follows JSHOP2's ``findUnifier``: it is one-way. Variables of the
 pattern get bound; a variable on the other side matches anything and binds
 nothing, which is why bindings propagate only downwards in the task network.
+A list term that still holds variables, such as ``(a ?w)`` passed down in a
+task, is treated the same way when a pattern variable meets it: its variables
+belong to another domain element (their indices mean nothing in this
+element's binding), so binding them in would be meaningless - JSHOP2 indexes
+the wrong binding there and fails.
 """
 from __future__ import annotations
 
 from typing import Any, Callable, Sequence
+
+from .errors import HtnError
 
 NIL: tuple = ()
 
@@ -86,6 +93,14 @@ class CallTerm:
         return f"CallTerm({self.name!r}, {self.args!r})"
 
 
+def at_call(exc: HtnError, call: CallTerm) -> HtnError:
+    """``exc`` placed at ``call`` in the domain, unless it has a place already
+    (an error in a standard function given a symbol, or in a user function)."""
+    if exc.file is None and call.pos is not None:
+        exc.file, exc.line, exc.col = call.pos.file, call.pos.line, call.pos.col
+    return exc
+
+
 def is_ground(t: Any) -> bool:
     tt = type(t)
     if tt is str or tt is float:
@@ -113,7 +128,10 @@ def subst(t: Any, env: list) -> Any:
     if tt is CallTerm:
         args = tuple([subst(x, env) for x in t.args])
         if is_ground(args):
-            return t.func(args)
+            try:
+                return t.func(args)
+            except HtnError as exc:
+                raise at_call(exc, t)
         return CallTerm(t.name, t.func, args, t.pos)
     if tt is Dotted:
         return make_list([subst(x, env) for x in t.items], subst(t.tail, env))
@@ -128,7 +146,8 @@ def unify(p: Any, t: Any, env: list) -> bool:
     """
     tp = type(p)
     if tp is Var:
-        if type(t) is Var:
+        tt = type(t)
+        if tt is Var or (tt is not str and tt is not float and not is_ground(t)):
             return True
         v = env[p.index]
         if v is None:
@@ -201,6 +220,8 @@ def java_double(x: float) -> str:
     if x == 0.0:
         return "-0.0" if str(x).startswith("-") else "0.0"
     a = abs(x)
+    if a < 1e7 and a >= 1.0 and x.is_integer():    # the common case, printed fast
+        return f"{int(x)}.0"
     if 1e-3 <= a < 1e7:
         s = repr(x)
         if "e" in s or "E" in s:  # repr switches to exponent form at 1e16 only

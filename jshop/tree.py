@@ -60,21 +60,32 @@ class TaskTree:
         return None
 
     def to_dict(self) -> dict[str, Any]:
-        d: dict[str, Any] = {"task": self.task, "name": self.name,
-                             "args": [term_str(a) for a in self.args], "path": self.path}
-        if self.method is not None:
-            d["method"] = self.method
-            d["method_index"] = self.method_index
-            d["branch"] = self.branch
-        if self.step is not None:
-            d["step"] = self.step
-        if self.outcome is not None:
-            d["outcome"] = self.outcome
-        if self.code_replacement is not None:
-            d["code_replacement"] = self.code_replacement
-        if self.children:
-            d["children"] = [c.to_dict() for c in self.children]
-        return d
+        """The tree as JSON-ready data, flat so that its depth does not matter
+        to JSON readers: ``{"nodes": [...]}``, depth first in order. Each node
+        has ``id`` (its index in the list) and ``parent`` (the parent's id;
+        None for the root, whose task is ``(root)``), so a node's children are
+        the nodes naming it as parent, in list order."""
+        nodes: list = []
+        stack: list = [(self, None)]
+        while stack:
+            node, parent = stack.pop()
+            args = [term_str(a) for a in node.args]
+            task = ("(" + " ".join([node.name, *args]) + ")") if node.name else "(root)"
+            d: dict[str, Any] = {"id": len(nodes), "parent": parent, "task": task,
+                                 "name": node.name, "args": args, "path": node.path}
+            if node.method is not None:
+                d["method"] = node.method
+                d["method_index"] = node.method_index
+                d["branch"] = node.branch
+            if node.step is not None:
+                d["step"] = node.step
+            if node.outcome is not None:
+                d["outcome"] = node.outcome
+            if node.code_replacement is not None:
+                d["code_replacement"] = node.code_replacement
+            nodes.append(d)
+            stack.extend((c, d["id"]) for c in reversed(node.children))
+        return {"nodes": nodes}
 
     def to_text(self) -> str:
         """A plain, stable text rendering (used for golden files)."""

@@ -129,10 +129,11 @@ def test_cli_tree_dot_and_json(tmp_path):
     result = run_htn("plan", DOMAIN, ROOT / "problems" / "guide_robot.jshop", "--format", "json",
                      "--dot", dot)
     assert result.returncode == 0, result.stderr
-    doc = json.loads(result.stdout)
-    tree = doc["plans"][0]["tree"]
-    assert tree["children"][0]["path"] == "guide_robot"
-    assert tree["children"][0]["method"] == "guide_robot"
+    plan, stats = [json.loads(line) for line in result.stdout.splitlines()]   # JSON Lines
+    assert plan["type"] == "plan" and stats["type"] == "stats" and stats["plans_found"] == 1
+    root, top = plan["tree"]["nodes"][:2]
+    assert root["parent"] is None and top["parent"] == root["id"]
+    assert top["path"] == "guide_robot" and top["method"] == "guide_robot"
     text = dot.read_text()
     assert text.startswith("digraph task_tree {") and text.rstrip().endswith("}")
     assert text.count("->") == sum(1 for _ in text.splitlines() if "->" in _)

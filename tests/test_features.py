@@ -227,3 +227,22 @@ def test_variables_in_the_problem_task_list_stay_unbound():
     d = "(defdomain d ((:operator (!take ?x) ((thing ?x)) () ())))"
     assert plans(d, "(defproblem p d ((thing a) (thing b)) ((!take ?what)))") == [
         ["(!take a)"], ["(!take b)"]]
+
+
+def test_a_long_conjunction_backtracks_in_order():
+    # more conjuncts than Python allows nested loops: an explicit stack, same order
+    d = ("(defdomain d ((:operator (!o ?x ?y) () () ()) (:method (m) ((p ?x) "
+         + " ".join(f"(c{i})" for i in range(20)) + " (q ?x ?y)) ((!o ?x ?y)))))")
+    s = ("(defproblem p d ((p 1) (p 2) (q 2 a) (q 1 b) (q 2 c) "
+         + " ".join(f"(c{i})" for i in range(20)) + ") ((m)))")
+    assert plans(d, s) == [["(!o 1.0 b)"], ["(!o 2.0 a)"], ["(!o 2.0 c)"]]
+
+
+def test_a_list_with_unbound_variables_passed_down_binds_nothing():
+    # (a ?w) is the method's term; its ?w means nothing in !o's binding, so !o's
+    # ?a stays unbound and its precondition binds it (JSHOP2 indexes the wrong
+    # binding here and fails)
+    d = """(defdomain d ((:operator (!o ?a) ((q ?a)) () ())
+      (:method (m ?k1 ?k2 ?k3 ?k4) () ((!o (a ?w))))))"""
+    assert plans(d, "(defproblem p d ((q (a b)) (q c)) ((m 1 2 3 4)))") == [
+        ["(!o (a b))"], ["(!o c)"]]

@@ -244,7 +244,7 @@ def test_task_tree_annotated_by_a_projected_run():
                                retries=load_retries(DOMAIN))
     assert run["result"] == "verified"
     assert all(n.outcome == "verified" for n in tree.walk() if n is not tree)
-    d = tree.to_dict()["children"][0]
+    d = tree.to_dict()["nodes"][1]         # the root's first child
     assert d["outcome"] == "verified" and "code_replacement" in d and "path" in d
 
 
