@@ -8,6 +8,8 @@ import time
 
 import click
 
+from htn.jshop.limits import DEFAULT_MAX_DEPTH
+
 from .output import atomic_write, deferred_interrupt, stdout_is_terminal, warn
 
 FORMATS = ["text", "jshop", "json"]
@@ -36,8 +38,15 @@ FORMATS = ["text", "jshop", "json"]
 @click.option("--dot", type=click.Path(dir_okay=False), metavar="FILE",
               help="Write the task tree(s) as Graphviz DOT.")
 @click.option("-q", "--quiet", is_flag=True, help="Do not print domain warnings.")
+@click.option("--jshop2-compat", is_flag=True,
+              help="Reproduce JSHOP2 1.0.3 exactly: a method body written (:unordered ...) "
+                   "runs in order [default: unordered, as the JSHOP2 manual says].")
+@click.option("--max-depth", type=click.IntRange(min=1), default=DEFAULT_MAX_DEPTH,
+              show_default=True, metavar="N",
+              help="Stop a search that nests deeper than N reductions and steps "
+                   "(a method that decomposes into itself without end).")
 def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
-         show_tree, dot, quiet):
+         show_tree, dot, quiet, jshop2_compat, max_depth):
     """Find plans for PROBLEM in DOMAIN (JSHOP2 files).
 
     \b
@@ -50,7 +59,7 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
     from htn.jshop.functions import FunctionTable
     from htn.jshop.parser import load_domain, load_problem
     from htn.jshop.planfile import header
-    from htn.jshop.planner import Planner
+    from htn.jshop.planner import Planner, compat_warning
 
     fmt = fmt or ("text" if stdout_is_terminal() else "jshop")
     table = FunctionTable()
@@ -59,6 +68,8 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
     dom = load_domain(domain, table)
     prob = load_problem(problem, table)
     warnings = check_domain(dom) + check_problem(dom, prob)
+    if jshop2_compat and compat_warning(dom):
+        warnings.append(compat_warning(dom))
     if not quiet:
         for w in warnings:
             warn(w)
@@ -69,7 +80,7 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
     lengths = []    # of every plan streamed (memory stays flat for --all)
     totals = {"plans_found": 0, "search_ms": 0.0, "expansions": 0,
               "operator_applications": 0, "backtracks": 0, "timed_out": False,
-              "interrupted": False}
+              "interrupted": False, "depth_limit_reached": False}
     started = time.perf_counter()
     interrupted = False
     # -o: Ctrl-C keeps the whole plans written so far; any other error leaves
@@ -86,7 +97,8 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
                     if remaining <= 0:
                         totals["timed_out"] = True
                         break
-                planner = Planner(dom, inst, table, record_trees=record_trees)
+                planner = Planner(dom, inst, table, record_trees=record_trees,
+                                  jshop2_compat=jshop2_compat, max_depth=max_depth)
                 try:
                     for p in planner.plans(remaining):
                         p.instance = k
@@ -104,6 +116,10 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
                     _add_stats(totals, planner.stats.as_dict())
                 if planner.stats.timed_out:
                     totals["timed_out"] = True
+                    break
+                if planner.stats.depth_limit is not None:
+                    totals["depth_limit_reached"] = True
+                    warn(planner.stats.depth_limit)
                     break
         except KeyboardInterrupt:
             interrupted = True

@@ -20,10 +20,18 @@ stream are what ``-rN`` prints and the whole stream is ``-ra``. The recursion of
 ``findPlanHelper`` is run as an explicit stack of generator frames, so plan
 length is not limited by Python's recursion limit.
 
-Deliberately kept JSHOP2 1.0.3 behaviour: when a method reduces a task, only
-the subtasks of the method's task list replace the task; the task keeps its
-"ordered" flag, so a method body written ``(:unordered ...)`` at top level is
-ordered (nested ``:unordered`` lists keep their meaning).
+A method body written ``(:unordered ...)`` is unordered, as the manual says
+(3.8, 5.2.2: the reduced task is replaced by the body, flag included). JSHOP2
+1.0.3 differs: its ``TaskList.replace`` keeps the reduced task's "ordered"
+flag, so such a body runs in order. ``jshop2_compat=True`` reproduces that
+(nested ``:unordered`` lists keep their meaning in both modes).
+
+The search depth (the number of nested ``findPlanHelper`` calls, i.e. frames
+on the stack) is bounded by ``max_depth``: a method that decomposes into
+itself without end would otherwise grow the stack until memory runs out
+(JSHOP2 ends such a search with a ``StackOverflowError``). Reaching the bound
+ends the search like a timeout; ``stats.depth_limit`` then names the task
+that was being reduced deepest.
 """
 from __future__ import annotations
 
@@ -33,6 +41,7 @@ from typing import Iterator, Optional
 
 from . import syntax as S
 from .errors import PlanningError
+from .limits import DEFAULT_MAX_DEPTH
 from .logic import Logic, atom_from_term
 from .plan import Plan, Step
 from .state import Change, State
@@ -153,9 +162,42 @@ def _undo_marks(trail: list, mark: int) -> None:
             entry.done = False
 
 
+def compat_warning(domain: S.Domain):
+    """The one warning ``--jshop2-compat`` gives for a domain whose method
+    bodies are written ``(:unordered ...)`` (they will run in order), or None."""
+    from .checks import Warning_
+    bodies = [b for ms in domain.methods.values() for m in ms for b in m.branches
+              if not b.tasks.ordered]
+    if not bodies:
+        return None
+    more = f" (and {len(bodies) - 1} more)" if len(bodies) > 1 else ""
+    return Warning_(bodies[0].tasks.pos or bodies[0].pos,
+                    f"--jshop2-compat: this (:unordered ...) method body{more} runs in "
+                    "order, as in JSHOP2 1.0.3; without the option it is unordered")
+
+
+def _deepest_task(root: Node, req: Node) -> Optional[Task]:
+    """The task to name when the search is too deep: the one just reduced, or
+    else the deepest reduced compound task of the network."""
+    if req.task is not None and not req.task.primitive:
+        return req.task
+    best, best_depth = None, -1
+    stack = [(root, 0)]
+    while stack:
+        node, depth = stack.pop()
+        if node.task is not None and node.subtasks is not None and not node.task.primitive:
+            depth += 1
+            if depth > best_depth:
+                best, best_depth = node.task, depth
+        for child in node.subtasks or ():
+            stack.append((child, depth))
+    return best
+
+
 class Stats:
     __slots__ = ("plans_found", "expansions", "operator_applications",
-                 "backtracks", "started", "elapsed", "timed_out", "interrupted")
+                 "backtracks", "started", "elapsed", "timed_out", "interrupted",
+                 "depth_limit")
 
     def __init__(self):
         self.plans_found = 0
@@ -166,6 +208,7 @@ class Stats:
         self.elapsed = 0.0
         self.timed_out = False
         self.interrupted = False
+        self.depth_limit = None    # a DepthLimit when the search hit max_depth
 
     def as_dict(self) -> dict:
         return {
@@ -176,17 +219,40 @@ class Stats:
             "backtracks": self.backtracks,
             "timed_out": self.timed_out,
             "interrupted": self.interrupted,
+            "depth_limit_reached": self.depth_limit is not None,
         }
+
+
+class DepthLimit:
+    """Why the search stopped at ``max_depth``: the task being reduced deepest."""
+    __slots__ = ("limit", "task")
+
+    def __init__(self, limit: int, task: Optional[Task]):
+        self.limit = limit
+        self.task = task
+
+    def __str__(self) -> str:
+        where = ""
+        if self.task is not None:
+            pos = getattr(self.task.src, "pos", None)
+            where = f"{pos}: " if pos else ""
+            what = f"task {self.task} recurses past the search depth limit"
+        else:
+            what = "the search reached its depth limit"
+        return (f"{where}{what} ({self.limit:,} nested reductions and steps); "
+                "search stopped (raise it with --max-depth N)")
 
 
 class Planner:
     """Finds plans for one problem instance of a domain."""
 
     def __init__(self, domain: S.Domain, instance: S.ProblemInstance,
-                 functions=None, record_trees: bool = False):
+                 functions=None, record_trees: bool = False,
+                 jshop2_compat: bool = False, max_depth: int = DEFAULT_MAX_DEPTH):
         self.domain = domain
         self.instance = instance
         self.record_trees = record_trees
+        self.max_depth = max_depth
         self.state = State()
         for atom in instance.state:
             self.state.add(atom.pred, atom.args)
@@ -195,8 +261,10 @@ class Planner:
         self._ops = {name: [(op, head_unifier(op.head.args), pre(op.pre), binder(op.head.args))
                             for op in ops]
                      for name, ops in domain.operators.items()}
+        # (precondition, body, body is ordered) per branch; see the module docstring
         self._methods = {name: [(m, head_unifier(m.head.args),
-                                 [(pre(b.pre), compile_tasks(b.tasks)) for b in m.branches])
+                                 [(pre(b.pre), compile_tasks(b.tasks),
+                                   jshop2_compat or b.tasks.ordered) for b in m.branches])
                                 for m in ms]
                          for name, ms in domain.methods.items()}
         self.stats = Stats()
@@ -253,6 +321,9 @@ class Planner:
                     gc.disable()
                     t0 = clock()
                     continue
+                if len(stack) >= self.max_depth:
+                    stats.depth_limit = DepthLimit(self.max_depth, _deepest_task(self.root, req))
+                    return
                 push(self._frame(req))
                 ticks += 1
                 if timeout is not None and not ticks & 255:
@@ -320,10 +391,11 @@ class Planner:
                     env = [None] * m.nvars
                     if not unify_head(task.args, env):
                         continue
-                    for k, (sat, reduce) in enumerate(branches):
+                    for k, (sat, reduce, ordered) in enumerate(branches):
                         found = False
                         for nb in sat(env):
                             node.subtasks = reduce(nb)
+                            node.ordered = ordered
                             node.how = (m, k, index)
                             yield node
                             if len(trail) > mark:
