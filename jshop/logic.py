@@ -20,7 +20,7 @@ from typing import Callable, Iterator
 from . import syntax as S
 from .errors import HtnError, PlanningError
 from .compile import GENERIC, binder, conjunction, head_unifier, scanner, term_binder
-from .terms import Var, is_ground, term_str, unify
+from .terms import Var, is_ground, subst, term_str, unify
 
 Sat = Callable[[list], Iterator[list]]
 
@@ -139,6 +139,26 @@ class Logic:
                     return
             yield env
         return forall
+
+    def _equal(self, e: S.Equal) -> Sat:
+        left, right, pos = e.left, e.right, e.pos
+
+        def equal(env):
+            a, b = subst(left, env), subst(right, env)
+            if type(a) is Var:
+                if type(b) is Var:
+                    raise PlanningError.at(pos, f"(= {a.name} {b.name}) compares two "
+                                           "unbound variables")
+                new = env[:]
+                new[a.index] = b
+                yield new
+            elif type(b) is Var:
+                new = env[:]
+                new[b.index] = a
+                yield new
+            elif a == b and type(a) is type(b):
+                yield env
+        return equal
 
     def _assign(self, e: S.Assign) -> Sat:
         idx, bind = e.var.index, term_binder(e.term)

@@ -388,7 +388,13 @@ def _number_axiom(ax: S.Axiom) -> int:
 # ------------------------------------------------------------ entry points
 
 def parse_text(text: str, file: str = "<string>", functions: FunctionTable | None = None):
-    """Parse a domain or problem from text; raise :class:`HtnError` on bad input."""
+    """Parse a domain or problem from text; raise :class:`HtnError` on bad input.
+
+    HDDL text (``(define (domain ...`` or ``(define (problem ...``) is read by
+    :mod:`htn.jshop.hddl` into the same syntax objects."""
+    from . import hddl
+    if hddl.is_hddl(text):
+        return hddl.parse_text(text, file)
     functions = functions or FunctionTable()
     try:
         tree = _lark().parse(text, start="start")

@@ -44,7 +44,8 @@ from .errors import PlanningError
 from .limits import DEFAULT_MAX_DEPTH
 from .logic import Logic, atom_from_term
 from .plan import Plan, Step
-from .state import Change, State
+from .loops import LoopCheck
+from .state import Change, HashedState, State
 from .compile import binder, head_unifier
 from .terms import subst, term_str, variables
 from .tree import snapshot
@@ -74,7 +75,7 @@ class Node:
     ``how`` records what reduced an atomic node (for the task tree): a
     ``(method, branch_index, method_index)`` triple or the plan step's index.
     """
-    __slots__ = ("task", "subtasks", "ordered", "how", "done", "start")
+    __slots__ = ("task", "subtasks", "ordered", "how", "done", "start", "loop_key")
 
     def __init__(self, task=None, subtasks=None, ordered=True):
         self.task = task
@@ -83,6 +84,7 @@ class Node:
         self.how = None
         self.done = False   # cached: every task below is achieved
         self.start = 0      # cached: members before this index are achieved
+        self.loop_key = None   # the active method instance it is, see loops.py
 
 
 def compile_tasks(tl):
@@ -152,7 +154,7 @@ def first_tasks(root: Node, trail: Optional[list] = None) -> list:
     return res
 
 
-def _undo_marks(trail: list, mark: int) -> None:
+def _undo_marks(trail: list, mark: int, loops=None) -> None:
     """Forget what :func:`first_tasks` cached since ``mark``."""
     while len(trail) > mark:
         entry = trail.pop()
@@ -160,6 +162,8 @@ def _undo_marks(trail: list, mark: int) -> None:
             entry[0].start = entry[1]
         else:
             entry.done = False
+            if loops is not None:
+                loops.reopened(entry)
 
 
 def compat_warning(domain: S.Domain):
@@ -248,15 +252,25 @@ class Planner:
 
     def __init__(self, domain: S.Domain, instance: S.ProblemInstance,
                  functions=None, record_trees: bool = False,
-                 jshop2_compat: bool = False, max_depth: int = DEFAULT_MAX_DEPTH):
+                 jshop2_compat: bool = False, max_depth: int = DEFAULT_MAX_DEPTH,
+                 loop_check: Optional[bool] = None):
         self.domain = domain
         self.instance = instance
         self.record_trees = record_trees
         self.max_depth = max_depth
-        self.state = State()
-        for atom in instance.state:
+        if loop_check is None:           # on for HDDL, off for JSHOP2 (its own semantics)
+            loop_check = domain.language == "hddl"
+        self.state = HashedState() if loop_check else State()
+        self.loops = LoopCheck(self.state) if loop_check else None
+        implied = domain.implied
+        for atom in (*domain.facts, *instance.state):
             self.state.add(atom.pred, atom.args)
+            for pred in implied.get(atom.pred, ()):    # HDDL supertypes
+                self.state.add(pred, atom.args)
         self.logic = Logic(domain, self.state, functions)
+        self._goal = None
+        if instance.goal is not None:
+            self._goal = (self.logic.precondition(instance.goal), instance.goal_nvars)
         pre = self.logic.precondition
         self._ops = {name: [(op, head_unifier(op.head.args), pre(op.pre), binder(op.head.args))
                             for op in ops]
@@ -349,12 +363,16 @@ class Planner:
         """
         self.stats.expansions += 1
         trail = self._trail
+        loops = self.loops
+        mark = len(trail)
         options = first_tasks(chosen, trail)
+        if loops is not None and len(trail) > mark:
+            loops.completed(trail, mark)
         mark = len(trail)
         if not options:
             if chosen is not self.root:
                 yield self.root
-            else:
+            elif self._goal is None or self.goal_holds():
                 yield _PLAN
             return
         state = self.state
@@ -379,7 +397,7 @@ class Planner:
                             self._cost += cost
                             yield self.root
                             if len(trail) > mark:
-                                _undo_marks(trail, mark)
+                                _undo_marks(trail, mark, loops)
                             self._steps.pop()
                             self._cost -= cost
                         change.undo(state)
@@ -394,18 +412,33 @@ class Planner:
                     for k, (sat, reduce, ordered) in enumerate(branches):
                         found = False
                         for nb in sat(env):
+                            if loops is not None:
+                                key = loops.key(m, k, nb)
+                                if key in loops.active:
+                                    loops.cut += 1
+                                    found = True
+                                    continue
                             node.subtasks = reduce(nb)
                             node.ordered = ordered
                             node.how = (m, k, index)
+                            if loops is not None and node.subtasks:
+                                loops.enter(node, key)
                             yield node
                             if len(trail) > mark:
-                                _undo_marks(trail, mark)
+                                _undo_marks(trail, mark, loops)
+                            if node.loop_key is not None:
+                                loops.leave(node)
                             found = True
                             node.subtasks = None
                             node.how = None
                         if found:
                             break
             self.stats.backtracks += 1
+
+    def goal_holds(self) -> bool:
+        """Whether the problem's goal (HDDL) holds in the current state."""
+        sat, nvars = self._goal
+        return next(iter(sat([None] * nvars)), None) is not None
 
     # ------------------------------------------------------------ operators
     def step_options(self, name: str, args: tuple):
@@ -461,7 +494,7 @@ class Planner:
         if plain is None:
             plain = self._effects[id(op)] = (self._plain(op.delete), self._plain(op.add), op)
         dels, adds, _ = plain
-        if dels is not None and adds is not None:
+        if dels is not None and adds is not None:    # no conditions: nothing to evaluate
             protections = state.protections
             for pred, bind in dels:
                 args = bind(env)[1]
@@ -475,7 +508,11 @@ class Planner:
                 if state.add(pred, args):
                     change.added.append((pred, args))
             return change, True
-        for pred, args in self._effect_atoms(op.delete, env, op):
+        deletions = self._effect_atoms(op.delete, env, op)
+        additions = self._effect_atoms(op.add, env, op)
+        if op.effects_in_prestate:
+            deletions, additions = list(deletions), list(additions)
+        for pred, args in deletions:
             if pred is None:  # a protection condition to cancel
                 p, a = args
                 if state.unprotect(p, a):
@@ -486,7 +523,7 @@ class Planner:
             i = state.delete(pred, args)
             if i != -1:
                 change.deleted.append((pred, args, i))
-        for pred, args in self._effect_atoms(op.add, env, op):
+        for pred, args in additions:
             if pred is None:
                 p, a = args
                 state.protect(p, a)

@@ -105,6 +105,37 @@ class State:
         return sum(len(v) for v in self.atoms.values())
 
 
+class HashedState(State):
+    """A state that keeps a hash of its atoms up to date (``key``), so that
+    two states can be compared in constant time (see :mod:`htn.jshop.loops`).
+    Equal states have equal keys; unequal states almost surely differ."""
+    __slots__ = ("key",)
+
+    def __init__(self):
+        super().__init__()
+        self.key = 0
+
+    def add(self, pred: str, args: tuple) -> bool:
+        if State.add(self, pred, args):
+            self.key ^= hash((pred, args))
+            return True
+        return False
+
+    def delete(self, pred: str, args: tuple) -> int:
+        i = State.delete(self, pred, args)
+        if i != -1:
+            self.key ^= hash((pred, args))
+        return i
+
+    def restore(self, pred: str, args: tuple, index: int) -> None:
+        State.restore(self, pred, args, index)
+        self.key ^= hash((pred, args))
+
+    def retract(self, pred: str, args: tuple) -> None:
+        State.retract(self, pred, args)
+        self.key ^= hash((pred, args))
+
+
 class Change:
     """What one operator application did, to be undone on backtracking."""
     __slots__ = ("deleted", "added", "unprotected", "protected")
