@@ -44,6 +44,7 @@ from .errors import PlanningError
 from .limits import DEFAULT_MAX_DEPTH
 from .logic import Logic, atom_from_term
 from .plan import Plan, Step
+from .goals import GoalGuard
 from .loops import LoopCheck
 from .state import Change, HashedState, State
 from .compile import binder, head_unifier
@@ -268,9 +269,10 @@ class Planner:
             for pred in implied.get(atom.pred, ()):    # HDDL supertypes
                 self.state.add(pred, atom.args)
         self.logic = Logic(domain, self.state, functions)
-        self._goal = None
+        self._goal = self.guard = None
         if instance.goal is not None:
             self._goal = (self.logic.precondition(instance.goal), instance.goal_nvars)
+            self.guard = GoalGuard(domain, instance.goal) or None
         pre = self.logic.precondition
         self._ops = {name: [(op, head_unifier(op.head.args), pre(op.pre), binder(op.head.args))
                             for op in ops]
@@ -386,6 +388,9 @@ class Planner:
                         continue
                     for nb in pre(env):
                         change, ok = self._apply(op, nb)
+                        if ok and self.guard is not None and \
+                                self.guard.broken(change, state, self.root):
+                            ok = False
                         if ok:
                             self.stats.operator_applications += 1
                             cost = subst(op.cost, nb)

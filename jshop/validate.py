@@ -9,8 +9,11 @@ costs. When a precondition binds variables the step does not show (so
 several satisfiers may give different effects or costs), every distinct
 choice is tried, with backtracking, as the planner would have.
 
-Validation does not check that the plan is a decomposition of the problem's
-tasks: any applicable operator sequence with the right cost is valid.
+An HDDL problem's goal must also hold in the final state (HDDL, Höller et
+al. 2020). Validation does not check that the plan is a decomposition of the
+problem's tasks: any applicable operator sequence with the right cost (and
+reaching the goal) is valid; for HDDL, the IPC 2020 verifier checks the
+decomposition that ``htn plan -f ipc`` prints.
 """
 from __future__ import annotations
 
@@ -50,7 +53,10 @@ def validate_plan(domain: S.Domain, instance: S.ProblemInstance, plan,
     """Replay ``plan`` (a :class:`~htn.jshop.plan.Plan`) from ``instance``'s
     initial state; see the module docstring for what valid means."""
     from .planner import Planner
-    planner = Planner(domain, S.ProblemInstance(instance.state, S.TaskList([])), functions)
+    planner = Planner(domain, S.ProblemInstance(instance.state, S.TaskList([]),
+                                                goal=instance.goal,
+                                                goal_nvars=instance.goal_nvars),
+                      functions, loop_check=False)
     steps = plan.steps
     n = len(steps)
     changes: list = []            # applied change of each step so far
@@ -61,9 +67,15 @@ def validate_plan(domain: S.Domain, instance: S.ProblemInstance, plan,
         k = len(changes)
         if k == n:
             total = sum(costs)
-            if plan.cost is None or abs(total - plan.cost) <= 1e-9 * max(1.0, abs(total)):
+            cost_ok = plan.cost is None or abs(total - plan.cost) <= 1e-9 * max(1.0, abs(total))
+            goal_ok = instance.goal is None or planner.goal_holds()
+            if cost_ok and goal_ok:
                 return Verdict(True, n, total)
-            if deepest.failed_step is None:
+            if not goal_ok:
+                if deepest.failed_step is None or deepest.failed_step < n:
+                    deepest = Verdict(False, n, total, n, _why_goal(planner, instance),
+                                      getattr(plan, "line", 0))
+            elif deepest.failed_step is None:
                 deepest = Verdict(False, n, total, n, f"the plan's cost is "
                                   f"{term_str(float(plan.cost))} but its steps cost "
                                   f"{term_str(float(total))}", getattr(plan, "line", 0))
@@ -137,6 +149,17 @@ def _why(planner, step) -> str:
         else:
             reasons.append(f"precondition of {step} does not hold")
     return "; ".join(reasons) or f"no operator applies to {step}"
+
+
+def _why_goal(planner, instance) -> str:
+    """The first conjunct of the goal that does not hold in the final state."""
+    expr = instance.goal.expr
+    items = expr.items if isinstance(expr, S.And) else [expr]
+    env = [None] * instance.goal_nvars
+    for item in items:
+        if next(iter(planner.logic.expr(item)(env)), None) is None:
+            return f"the goal does not hold in the final state: {_show(item, env)} is false"
+    return "the goal does not hold in the final state"
 
 
 def _show(e, env) -> str:
