@@ -53,6 +53,7 @@ class Param:
     name: str
     types: tuple
     pos: Optional[S.Pos] = None
+    type_pos: Optional[S.Pos] = None    # where its type is written
 
 
 @dataclass
@@ -190,13 +191,13 @@ class Builder(Transformer):
         return self._var(tok) if tok.type == "VAR" else str(tok)
 
     def of_type(self, items):
-        return ("type", tuple(str(t) for t in items))
+        return ("type", tuple(str(t) for t in items), self.tpos(items[0]))
 
     def _typed(self, items) -> list:
         out, pending = [], []
         for x in items:
             if isinstance(x, tuple):
-                out += [Param(n, x[1], p) for n, p in pending]
+                out += [Param(n, x[1], p, x[2]) for n, p in pending]
                 pending = []
             else:
                 pending.append((str(x).lower(), self.tpos(x)))

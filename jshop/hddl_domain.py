@@ -312,7 +312,7 @@ class _Domain:
         for p in params:
             for t in p.types:
                 if t not in self.ancestors:
-                    raise HtnError.at(p.pos, f"unknown type {t}")
+                    raise HtnError.at(p.type_pos or p.pos, f"unknown type {t}")
 
     def declare(self, scope: Scope, params, what: str) -> dict:
         self.check_types(params)

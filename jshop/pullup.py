@@ -121,6 +121,8 @@ class _Pullup:
         """What subtask ``st`` needs, as (positive, pred, args, pos) in the caller's terms."""
         if st.name in self.h.actions:
             a = self.h.actions[st.name]
+            if len(a.params) != len(st.args):
+                return []          # an arity error, reported with its place later
             params = {p.name: i for i, p in enumerate(a.params)}
             out = []
             for positive, atom in self._literals(a.pre):
@@ -135,6 +137,9 @@ class _Pullup:
                 else:
                     out.append((positive, atom.pred, tuple(args), atom.pos))
             return out
+        task = self.h.tasks.get(st.name)
+        if task is None or len(task.params) != len(st.args):
+            return []
         return [(positive, pred, tuple(st.args[i] if type(i) is int else i[1] for i in args), pos)
                 for positive, pred, args, pos in necessary.get(st.name, ())]
 
