@@ -2,11 +2,12 @@
 
 How HDDL's semantics (Höller et al., AAAI 2020) map onto JSHOP2's:
 
-* **Types** become unary type predicates named after the type: an object
-  ``o - t`` is the atom ``(t o)`` of the initial state, every supertype is
-  implied (``Domain.implied``; ``object`` is the root of every type), and the
-  domain's constants are ``Domain.facts``. A predicate may not share its name
-  with a type.
+* **Types** become unary type predicates named ``type:t`` (a name no HDDL
+  predicate can have, so that a predicate may share its name with a type, as
+  Barman's ``ingredient`` does): an object ``o - t`` is the atom
+  ``(type:t o)`` of the initial state, every supertype is implied
+  (``Domain.implied``; ``object`` is the root of every type), and the
+  domain's constants are ``Domain.facts``.
 * An **action** ``a`` becomes the operator ``!a``: its typed parameters become
   type conditions after its precondition; ``forall`` and ``when`` effects
   become conditional delete/add items evaluated in the state before the action
@@ -37,7 +38,11 @@ from typing import Optional
 from . import syntax as S
 from .errors import HtnError
 from .hddl import (ActionDef, EffectCost, EffectForall, EffectWhen, Exists, HDomain,
-                   HProblem, MethodDef, Network)
+                   HProblem, MethodDef, Network, Subtask, TaskDef)
+
+# An initial task network with parameters is the body of this task's one
+# method, which binds them (the IPC 2020 plan format's artificial root)
+TOP, TOP_METHOD = "__top", "__top_method"
 from .terms import Var, variables
 
 
@@ -150,9 +155,14 @@ class Formulas:
         return [self.expr(e, names)], []
 
 
+def type_predicate(t: str) -> str:
+    """The predicate that holds of the objects of type ``t``."""
+    return "type:" + t
+
+
 def type_condition(v: Var, types: tuple, pos) -> object:
-    """``(t ?v)``, or a disjunction for ``(either t1 t2)``."""
-    atoms = [S.Atom(t, (v,), pos) for t in types]
+    """``(type:t ?v)``, or a disjunction for ``(either t1 t2)``."""
+    atoms = [S.Atom(type_predicate(t), (v,), pos) for t in types]
     return atoms[0] if len(atoms) == 1 else S.Or(atoms, pos)
 
 
@@ -283,10 +293,6 @@ class _Domain:
     def __init__(self, h: HDomain):
         self.h = h
         self.ancestors = self._type_closure()
-        for name, params in h.predicates.items():
-            if name in self.ancestors:
-                raise HtnError.at(params[0].pos if params else h.pos, f"predicate {name} has "
-                                  "the name of a type; rename one of them")
         self.method_count = 0
 
     def _type_closure(self) -> dict:
@@ -358,7 +364,7 @@ class _Domain:
         return name
 
     def method(self, m: MethodDef, pulled: list) -> S.Method:
-        task = self.h.tasks.get(m.task.name)
+        task = self.h.tasks.get(m.task.name) if m.task.name != TOP else TaskDef(TOP, [])
         if task is None:
             kind = "an action" if m.task.name in self.h.actions else "not a declared task"
             raise HtnError.at(m.task.pos, f"method {m.name} decomposes {m.task.name}, "
@@ -449,34 +455,52 @@ def domain_from_model(h: HDomain) -> S.Domain:
     for a in h.actions.values():
         d.operators["!" + a.name] = [t.operator(a)]
     pulled = pulled_conditions(h, t.ancestors)
+    d.hddl = h
     for m in h.methods:
         d.methods.setdefault(m.task.name, []).append(t.method(m, pulled.get(id(m), [])))
-    d.facts = [S.Atom(c.types[0], (c.name,), c.pos) for c in h.constants]
-    d.implied = {ty: anc for ty, anc in t.ancestors.items() if anc}
+    d.facts = [S.Atom(type_predicate(c.types[0]), (c.name,), c.pos) for c in h.constants]
+    d.implied = {type_predicate(ty): [type_predicate(a) for a in anc]
+                 for ty, anc in t.ancestors.items() if anc}
     return d
+
+
+def top_method(domain: S.Domain, top: MethodDef) -> S.Method:
+    """The method of the artificial root task that binds the parameters of an
+    initial task network (``ProblemInstance.top``), with its pulled-up
+    conditions, in the domain's terms."""
+    from .pullup import pulled_conditions
+    if domain.hddl is None:
+        raise HtnError.at(top.pos, "an HDDL problem with parameters needs an HDDL domain")
+    t = _Domain(domain.hddl)
+    pulled = pulled_conditions(domain.hddl, t.ancestors, extra=[top])
+    return t.method(top, pulled.get(id(top), []))
 
 
 # ------------------------------------------------------------------ problem
 
 def problem_from_model(h: HProblem) -> S.Problem:
     """The syntax objects of an HDDL problem (see the module docstring)."""
-    if h.params:
-        raise HtnError.at(h.params[0].pos, "an initial task network with parameters is "
-                          "not supported")
     state = []
     for o in h.objects:
         if len(o.types) != 1:
             raise HtnError.at(o.pos, f"object {o.name} must have one type, not (either ...)")
-        state.append(S.Atom(o.types[0], (o.name,), o.pos))
+        state.append(S.Atom(type_predicate(o.types[0]), (o.name,), o.pos))
     for a in h.init:
         if any(isinstance(x, Var) for x in a.args):
             raise HtnError.at(a.pos, "atoms in the initial state must be ground")
         state.append(a)
+    declared = {p.name for p in h.params}
     items = []
     for st in linearise(h.network, "the initial task network", h.pos):
-        if any(isinstance(x, Var) for x in st.args):
-            raise HtnError.at(st.pos, "tasks of the initial task network must be ground")
+        for x in st.args:
+            if isinstance(x, Var) and x.name not in declared:
+                raise HtnError.at(st.pos, f"variable {x.name} is not a parameter of the "
+                                  "initial task network")
         items.append(S.TaskAtom(st.name, st.args, False, st.pos))
+    top = None
+    if h.params:
+        top = MethodDef(TOP_METHOD, h.params, Subtask(None, TOP, (), h.pos), None, h.network,
+                        h.pos)
     goal, nvars = None, 0
     if h.goal is not None:
         scope = Scope()
@@ -485,6 +509,6 @@ def problem_from_model(h: HProblem) -> S.Problem:
         nvars = scope.size
     pos = h.network.pos if h.network is not None else h.pos
     instance = S.ProblemInstance(state, S.TaskList(items, True, pos), h.pos, goal=goal,
-                                 goal_nvars=nvars)
+                                 goal_nvars=nvars, top=top)
     return S.Problem(h.name, h.domain_name, [instance], file=h.file, pos=h.pos,
                      language="hddl", spelling=h.spelling)

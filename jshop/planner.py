@@ -287,7 +287,15 @@ class Planner:
         # the problem's own variables (if any) stay unbound, like a method's
         nvars = 1 + max((v.index for t in S.task_atoms(instance.tasks)
                          for v in variables(t.args, [])), default=-1)
-        self.root = _list_maker(instance.tasks)([None] * nvars)
+        if instance.top is not None:     # HDDL: a root task binds the network's parameters
+            from .hddl_domain import top_method
+            m = top_method(domain, instance.top)
+            self._methods[m.name] = [(m, head_unifier(m.head.args),
+                                      [(pre(b.pre), compile_tasks(b.tasks), True)
+                                       for b in m.branches])]
+            self.root = _list_maker(S.TaskList([m.head]))([])
+        else:
+            self.root = _list_maker(instance.tasks)([None] * nvars)
         self._steps: list = []
         self._cost = 0.0
         self._forall_cache: dict = {}

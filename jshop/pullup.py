@@ -26,14 +26,16 @@ from .hddl import HDomain, MethodDef
 from .terms import Var
 
 
-def pulled_conditions(h: HDomain, ancestors: dict) -> dict:
-    """``id(method) -> [literal]`` in the method's own terms (model formulas)."""
-    return _Pullup(h, ancestors).run()
+def pulled_conditions(h: HDomain, ancestors: dict, extra=()) -> dict:
+    """``id(method) -> [literal]`` in the method's own terms (model formulas),
+    for the domain's methods and ``extra`` ones (a problem's root method)."""
+    return _Pullup(h, ancestors, list(extra)).run()
 
 
 class _Pullup:
-    def __init__(self, h: HDomain, ancestors: dict):
+    def __init__(self, h: HDomain, ancestors: dict, extra: list):
         self.h = h
+        self.methods = h.methods + extra
         self.ancestors = ancestors
         self.const_types = {c.name: c.types for c in h.constants}
         self.action_effects = {a.name: list(self._effects(a)) for a in h.actions.values()}
@@ -145,12 +147,12 @@ class _Pullup:
 
     # ------------------------------------------------------------ the fixpoint
     def run(self) -> dict:
-        pulled: dict = {id(m): [] for m in self.h.methods}
+        pulled: dict = {id(m): [] for m in self.methods}
         necessary: dict = {}
         for _ in range(20):
             necessary = self._necessary(pulled)
             changed = False
-            for m in self.h.methods:
+            for m in self.methods:
                 found = self._pull(m, necessary)
                 if len(found) != len(pulled[id(m)]):
                     pulled[id(m)] = found
@@ -178,7 +180,7 @@ class _Pullup:
     def _necessary(self, pulled: dict) -> dict:
         """Task -> literals over its parameter positions that all its methods test."""
         per_task: dict = {}
-        for m in self.h.methods:
+        for m in self.methods:
             head = {}
             for i, x in enumerate(m.task.args):
                 if isinstance(x, Var):

@@ -230,6 +230,7 @@ class Domain:
     facts: list = field(default_factory=list)       # [Atom]
     implied: dict = field(default_factory=dict)     # pred -> [pred]
     spelling: dict = field(default_factory=dict)    # lower-case name -> as written
+    hddl: Any = None                                # the HDDL model it was read from
 
     def elements(self):
         for ops in self.operators.values():
@@ -269,6 +270,9 @@ class ProblemInstance:
     pos: Optional[Pos] = None
     goal: Optional[Precondition] = None
     goal_nvars: int = 0
+    # an HDDL initial task network with parameters: the (HDDL) method of an
+    # artificial root task whose body is ``tasks`` and which binds them
+    top: Any = None
 
 
 @dataclass
