@@ -361,9 +361,9 @@ class Builder(Transformer):
 
     @v_args(meta=True)
     def task_def(self, meta, items):
-        name = items[0]
-        params = items[1][1] if len(items) > 1 else []
-        return TaskDef(str(name), params, self.tpos(name))
+        name, *rest = items
+        parts = dict(rest)
+        return TaskDef(str(name), parts.get("parameters", []), self.tpos(name))
 
     @v_args(meta=True)
     def method(self, meta, items):
