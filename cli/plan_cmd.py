@@ -47,8 +47,13 @@ FORMATS = ["text", "jshop", "json", "ipc"]
               show_default=True, metavar="N",
               help="Stop a search that nests deeper than N reductions and steps "
                    "(a method that decomposes into itself without end).")
+@click.option("--explain", is_flag=True,
+              help="Say why there is no plan (also printed when there is none): the deepest "
+                   "dead end of the search, each operator or method tried and the precondition "
+                   "literal that failed, with file:line:col.")
+@click.option("--explain-all", is_flag=True, help="Like --explain, listing every dead end.")
 def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
-         show_tree, dot, quiet, jshop2_compat, max_depth):
+         show_tree, dot, quiet, jshop2_compat, max_depth, explain, explain_all):
     """Find plans for PROBLEM in DOMAIN (JSHOP2 files).
 
     \b
@@ -80,6 +85,7 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
     render = _Renderer(fmt, show_tree)
     render.spelling = {**prob.spelling, **dom.spelling}
     found = []      # whole plans, kept only when --format json or --dot needs them
+    explainers = []  # one per problem instance, see --explain
     lengths = []    # of every plan streamed (memory stays flat for --all)
     totals = {"plans_found": 0, "search_ms": 0.0, "expansions": 0,
               "operator_applications": 0, "backtracks": 0, "timed_out": False,
@@ -100,8 +106,14 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
                     if remaining <= 0:
                         totals["timed_out"] = True
                         break
+                explainer = None
+                if explain or explain_all:
+                    from htn.jshop.explain import Explainer
+                    explainer = Explainer(keep_all=explain_all)
+                    explainers.append(explainer)
                 planner = Planner(dom, inst, table, record_trees=record_trees,
-                                  jshop2_compat=jshop2_compat, max_depth=max_depth)
+                                  jshop2_compat=jshop2_compat, max_depth=max_depth,
+                                  explain=explainer)
                 try:
                     for p in planner.plans(remaining):
                         p.instance = k
@@ -131,6 +143,19 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
     totals["search_ms"] = round(totals["search_ms"], 3)
     if dot:
         _write_dot(dot, found)
+    if not lengths and not explainers and not interrupted and not totals["timed_out"] \
+            and not totals["depth_limit_reached"]:
+        # no plan: search again, recording dead ends this time (planning
+        # without --explain pays nothing for them)
+        from htn.jshop.explain import explain_search
+        explainers = [explain_search(dom, inst, table, jshop2_compat=jshop2_compat,
+                                     max_depth=max_depth) for inst in prob.instances]
+    if explainers:
+        totals["explain"] = [e.to_dict(full=explain_all) for e in explainers]
+        if fmt != "json":
+            for e in explainers:
+                for line in e.lines(full=explain_all):
+                    warn(line)
     render.finish(found, totals, domain, problem, any_plan=bool(lengths))
     if totals["timed_out"]:
         warn(f"timed out after {timeout:g} s; {totals['plans_found']} plan(s) found")

@@ -254,8 +254,9 @@ class Planner:
     def __init__(self, domain: S.Domain, instance: S.ProblemInstance,
                  functions=None, record_trees: bool = False,
                  jshop2_compat: bool = False, max_depth: int = DEFAULT_MAX_DEPTH,
-                 loop_check: Optional[bool] = None):
+                 loop_check: Optional[bool] = None, explain=None):
         self.domain = domain
+        self.explain = explain      # an explain.Explainer collecting dead ends, or None
         self.instance = instance
         self.record_trees = record_trees
         self.max_depth = max_depth
@@ -384,10 +385,14 @@ class Planner:
                 yield self.root
             elif self._goal is None or self.goal_holds():
                 yield _PLAN
+            elif self.explain is not None:
+                self.explain.goal_failed(self)
             return
         state = self.state
+        explain = self.explain
         for node in options:
             task = node.task
+            tried = False        # did any operator or method apply?
             if task.primitive:
                 node.subtasks = []
                 for op, unify_head, pre, bind_head in self._ops.get(task.name, ()):
@@ -408,6 +413,7 @@ class Planner:
                             node.how = len(self._steps)
                             self._steps.append((op.name, bind_head(nb)[1], cost))
                             self._cost += cost
+                            tried = True
                             yield self.root
                             if len(trail) > mark:
                                 _undo_marks(trail, mark, loops)
@@ -436,6 +442,7 @@ class Planner:
                             node.how = (m, k, index)
                             if loops is not None and node.subtasks:
                                 loops.enter(node, key)
+                            tried = True
                             yield node
                             if len(trail) > mark:
                                 _undo_marks(trail, mark, loops)
@@ -446,6 +453,8 @@ class Planner:
                             node.how = None
                         if found:
                             break
+            if not tried and explain is not None:
+                explain.dead_end(self, node)
             self.stats.backtracks += 1
 
     def goal_holds(self) -> bool:

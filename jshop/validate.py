@@ -164,8 +164,15 @@ def _why_goal(planner, instance) -> str:
 
 def _show(e, env) -> str:
     """An expression in source form, variables replaced by their bindings."""
+    from .functions import STDLIB_JAVA_NAMES
+    from .terms import CallTerm
+    written = {java: name for name, java in STDLIB_JAVA_NAMES.items()}
+
     def term(t):
-        t = subst(t, env)
+        if type(t) is CallTerm:
+            name = written.get(t.name, t.name)
+            return "(call " + " ".join([name, *[term(a) for a in t.args]]) + ")"
+        t = subst(t, env) if type(t) is not CallTerm else t
         if type(t) is Var:
             return t.name
         if type(t) is tuple:
@@ -178,5 +185,14 @@ def _show(e, env) -> str:
     if isinstance(e, (S.And, S.Or)):
         word = "and" if isinstance(e, S.And) else "or"
         return f"({word} " + " ".join(_show(x, env) for x in e.items) + ")"
+    if isinstance(e, S.CallExpr):
+        return term(e.call)
+    if isinstance(e, S.Equal):
+        return f"(= {term(e.left)} {term(e.right)})"
+    if isinstance(e, S.ForAll):
+        names = " ".join(v.name for v in e.vars)
+        return f"(forall ({names}) {_show(e.cond, env)} {_show(e.then, env)})"
+    if isinstance(e, S.Assign):
+        return f"(assign {e.var.name} {term(e.term)})"
     pos = getattr(e, "pos", None)
     return f"the {type(e).__name__.lower()} expression" + (f" at {pos}" if pos else "")
