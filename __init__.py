@@ -9,12 +9,24 @@ One import package. Its parts are the repository's top-level folders:
 * :mod:`htn.transform` - plan transformations and their evaluation (``eval`` extra);
 * :mod:`htn.cli` - the ``htn`` command line (also ``python -m htn``).
 
-The bundled example domains and problems are in :data:`EXAMPLES`.
+The bundled example domains and problems are in :data:`EXAMPLES`; the
+install extras and the modules each brings are in :data:`EXTRAS`.
 """
 from pathlib import Path
 
 EXAMPLES = Path(__file__).resolve().parent
 """Folder holding the bundled ``domains/`` and ``problems/``."""
+
+EXTRAS = {
+    "sim": ("pybullet", "numpy", "PIL"),       # PyBullet robots, snapshots
+    "eval": ("scipy", "matplotlib"),          # htn evaluate: statistics and plots
+}
+
+
+def missing_modules(extra: str) -> list[str]:
+    """The modules of an install extra that cannot be imported here."""
+    from importlib.util import find_spec
+    return [m for m in EXTRAS[extra] if find_spec(m) is None]
 
 
 def __getattr__(name):

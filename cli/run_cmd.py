@@ -9,6 +9,7 @@ import click
 
 from htn.jshop.errors import HtnError
 
+from .extras import require_extra
 from .output import stdout_is_terminal
 
 OUTCOME_STYLE = {"verified": "green", "finished": "cyan", "failed": "bold red",
@@ -86,7 +87,7 @@ def run(ctx, plan_file, robot_name, sim, gui, snapshots, faults, seed, retries, 
     from htn.jshop.parser import load_domain, load_problem
     from htn.jshop.planfile import read_plan_file
     from htn.jshop.validate import check_steps
-    from htn.robot.backends import RobotRequest, backends, make_robot, missing_modules
+    from htn.robot.backends import RobotRequest, backends, make_robot
     from htn.robot.interface import Robot
 
     if from_log:
@@ -111,10 +112,8 @@ def run(ctx, plan_file, robot_name, sim, gui, snapshots, faults, seed, retries, 
         raise click.UsageError("choose a robot: --sim (PyBullet) or --robot NAME "
                                f"(known: {', '.join(sorted(known))})")
     backend = known.get(robot_name)
-    if backend is not None and backend.extra and missing_modules(backend):
-        what = "htn run --sim" if sim else f"htn run --robot {robot_name}"
-        raise HtnError(f"{what} needs the {backend.extra} extra: "
-                       f"pip install 'htn[{backend.extra}]'")
+    if backend is not None and backend.extra:
+        require_extra(backend.extra, "htn run --sim" if sim else f"htn run --robot {robot_name}")
     if gui and not os.environ.get("DISPLAY"):
         raise click.UsageError("--gui needs a display (DISPLAY is not set); run headless without it")
     pf = read_plan_file(plan_file)

@@ -69,13 +69,11 @@ class Backend:
     factory: Callable
     description: str
     extra: Optional[str] = None      # the install extra it needs ('sim'), if any
-    modules: tuple = ()              # importable when that extra is installed
 
 
 BUILTIN = {
     "pybullet": Backend("pybullet", _pybullet, "PyBullet physics: the domestic robot, or the "
-                        "two-armed kitchen robot for (area ...) problems", "sim",
-                        ("pybullet", "numpy")),
+                        "two-armed kitchen robot for (area ...) problems", "sim"),
     "symbolic": Backend("symbolic", _symbolic, "the domain's own operators on a symbolic "
                         "world; any domain (faults: effect=P)"),
     "projection": Backend("projection", _projection, "the fast kinematic projection of the "
@@ -102,11 +100,6 @@ def _lazy(ep) -> Callable:
                            f"{type(exc).__name__}: {exc}")
         return make(req)
     return factory
-
-
-def missing_modules(backend: Backend) -> list[str]:
-    from importlib.util import find_spec
-    return [m for m in backend.modules if find_spec(m) is None]
 
 
 def make_robot(name: str, request: RobotRequest):
