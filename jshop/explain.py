@@ -118,7 +118,7 @@ class Explainer:
     # ------------------------------------------------------------ reasons
     def _operators(self, planner, task) -> list:
         out = []
-        for op, unify_head, pre, _bind in planner._ops.get(task.name, ()):
+        for op, unify_head, pre, _bind, _cost in planner._ops.get(task.name, ()):
             what = f"operator {_head(op.head)}"
             env = [None] * op.nvars
             if not unify_head(task.args, env):

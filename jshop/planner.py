@@ -42,10 +42,11 @@ from typing import Iterator, Optional
 from . import syntax as S
 from .errors import PlanningError
 from .limits import DEFAULT_MAX_DEPTH
-from .logic import Logic, atom_from_term
+from .logic import Logic
 from .plan import Plan, Step
 from .goals import GoalGuard
 from .loops import LoopCheck
+from .operators import Operators
 from .state import Change, HashedState, State
 from .compile import binder, head_unifier
 from .terms import subst, term_str, variables
@@ -121,6 +122,47 @@ def first_tasks(root: Node, trail: Optional[list] = None) -> list:
     past its achieved leading members. Each change is pushed on the trail; the
     planner undoes those made below a search frame when it backtracks into it.
     """
+    if trail is not None and root.ordered:
+        found = _first_in_order(root, trail)
+        if found is not None:
+            return found
+    return _first_tasks(root, trail)
+
+
+def _first_in_order(root: Node, trail: list) -> Optional[list]:
+    """:func:`first_tasks` while every list met is ordered (the common case,
+    and all of HDDL): one walk down to the first task left; None when an
+    unordered list is met (the caller then takes the general way)."""
+    path = []
+    node, i = root, root.start
+    while True:
+        subs = node.subtasks
+        n = len(subs)
+        while i < n:
+            child = subs[i]
+            cs = child.subtasks
+            if cs is None:
+                return [child]
+            if cs and not child.done:
+                if not child.ordered:
+                    return None
+                path.append((node, i))
+                node, i = child, child.start
+                break
+            if i == node.start:
+                trail.append((node, i))
+                node.start = i + 1
+            i += 1
+        else:
+            if not path:
+                return []
+            node.done = True
+            trail.append(node)
+            node, i = path.pop()
+            i += 1
+
+
+def _first_tasks(root: Node, trail: Optional[list]) -> list:
     res: list = []
     stack = [[root, root.start, -1]]      # node, next member, len(res) on entry
     while stack:
@@ -270,12 +312,16 @@ class Planner:
             for pred in implied.get(atom.pred, ()):    # HDDL supertypes
                 self.state.add(pred, atom.args)
         self.logic = Logic(domain, self.state, functions)
+        self.operators = Operators(self.state, self.logic)
+        self._apply = self.operators.apply
         self._goal = self.guard = None
         if instance.goal is not None:
             self._goal = (self.logic.precondition(instance.goal), instance.goal_nvars)
             self.guard = GoalGuard(domain, instance.goal) or None
         pre = self.logic.precondition
-        self._ops = {name: [(op, head_unifier(op.head.args), pre(op.pre), binder(op.head.args))
+        # (operator, head unifier, precondition, head binder, constant cost or None)
+        self._ops = {name: [(op, head_unifier(op.head.args), pre(op.pre), binder(op.head.args),
+                             op.cost if type(op.cost) is float else None)
                             for op in ops]
                      for name, ops in domain.operators.items()}
         # (precondition, body, body is ordered) per branch; see the module docstring
@@ -299,8 +345,6 @@ class Planner:
             self.root = _list_maker(instance.tasks)([None] * nvars)
         self._steps: list = []
         self._cost = 0.0
-        self._forall_cache: dict = {}
-        self._effects: dict = {}    # id(op) -> (plain deletes, plain adds, op)
         self._trail: list = []     # nodes marked done, see first_tasks
 
     # ------------------------------------------------------------ driver
@@ -321,14 +365,16 @@ class Planner:
         gc.disable()
         t0 = stats.started = clock()
         spent = 0.0
-        stack = [self._frame(self.root)]
-        push, pop = stack.append, stack.pop
-        ticks = 0
+        frame = self._frame
+        stack = [frame(self.root)]
+        push, pop, nxt = stack.append, stack.pop, next
+        max_depth = self.max_depth
+        ticks = stats.expansions
+        stats.expansions += 1
         try:
             while stack:
-                try:
-                    req = next(stack[-1])
-                except StopIteration:
+                req = nxt(stack[-1], None)     # frames never yield None
+                if req is None:
                     pop()
                     continue
                 if req is _PLAN:
@@ -339,6 +385,7 @@ class Planner:
                         plan.tree = snapshot(self.root, plan.steps)
                     spent += clock() - t0
                     stats.elapsed = spent
+                    stats.expansions = ticks + 1
                     t0 = None          # the consumer's time is not search time
                     if gc_was_enabled:
                         gc.enable()
@@ -346,10 +393,10 @@ class Planner:
                     gc.disable()
                     t0 = clock()
                     continue
-                if len(stack) >= self.max_depth:
-                    stats.depth_limit = DepthLimit(self.max_depth, _deepest_task(self.root, req))
+                if len(stack) >= max_depth:
+                    stats.depth_limit = DepthLimit(max_depth, _deepest_task(self.root, req))
                     return
-                push(self._frame(req))
+                push(frame(req))
                 ticks += 1
                 if timeout is not None and not ticks & 255:
                     if clock() - stats.started > timeout:   # wall clock, output included
@@ -360,6 +407,7 @@ class Planner:
             raise
         finally:
             stats.elapsed = spent + (clock() - t0 if t0 is not None else 0.0)
+            stats.expansions = ticks + 1
             for frame in reversed(stack):
                 frame.close()
             if gc_was_enabled:
@@ -372,7 +420,6 @@ class Planner:
         It yields a node to recurse into (the driver runs that call and then
         resumes this one) or ``_PLAN`` when the whole network is achieved.
         """
-        self.stats.expansions += 1
         trail = self._trail
         loops = self.loops
         mark = len(trail)
@@ -390,35 +437,39 @@ class Planner:
             return
         state = self.state
         explain = self.explain
+        root = self.root
         for node in options:
             task = node.task
             tried = False        # did any operator or method apply?
             if task.primitive:
                 node.subtasks = []
-                for op, unify_head, pre, bind_head in self._ops.get(task.name, ()):
+                steps, apply, guard = self._steps, self._apply, self.guard
+                for op, unify_head, pre, bind_head, cost in self._ops.get(task.name, ()):
                     env = [None] * op.nvars
                     if not unify_head(task.args, env):
                         continue
                     for nb in pre(env):
-                        change, ok = self._apply(op, nb)
-                        if ok and self.guard is not None and \
-                                self.guard.broken(change, state, self.root):
+                        change, ok = apply(op, nb)
+                        if ok and guard is not None and guard.broken(change, state, root):
                             ok = False
                         if ok:
                             self.stats.operator_applications += 1
-                            cost = subst(op.cost, nb)
-                            if type(cost) is not float:
-                                raise PlanningError.at(op.pos, f"cost of {op.name} is "
-                                                       f"{term_str(cost)}, not a number")
-                            node.how = len(self._steps)
-                            self._steps.append((op.name, bind_head(nb)[1], cost))
+                            if cost is None:       # a cost term: evaluate it
+                                cost = subst(op.cost, nb)
+                                if type(cost) is not float:
+                                    raise PlanningError.at(op.pos, f"cost of {op.name} is "
+                                                           f"{term_str(cost)}, not a number")
+                            node.how = len(steps)
+                            steps.append((op.name, bind_head(nb)[1], cost))
                             self._cost += cost
                             tried = True
-                            yield self.root
+                            yield root
                             if len(trail) > mark:
                                 _undo_marks(trail, mark, loops)
-                            self._steps.pop()
+                            steps.pop()
                             self._cost -= cost
+                            if type(op.cost) is not float:
+                                cost = None
                         change.undo(state)
                 node.subtasks = None
                 node.how = None
@@ -468,7 +519,7 @@ class Planner:
         is applicable in the current state: operators in definition order,
         then satisfiers of the precondition in JSHOP2's order (lazily; the
         state must be as it was when the next option is asked for)."""
-        for op, unify_head, pre, _bind in self._ops.get(name, ()):
+        for op, unify_head, pre, _bind, _cost in self._ops.get(name, ()):
             env = [None] * op.nvars
             if unify_head(tuple(args), env):
                 for nb in pre(env):
@@ -477,9 +528,7 @@ class Planner:
     def effects(self, op: S.Operator, env: list) -> tuple[list, list]:
         """The ground atoms ``(pred, args)`` an operator would delete and add
         under ``env``, evaluated in the current state (protections left out)."""
-        dels = [a for a in self._effect_atoms(op.delete, env, op) if a[0] is not None]
-        adds = [a for a in self._effect_atoms(op.add, env, op) if a[0] is not None]
-        return dels, adds
+        return self.operators.effects(op, env)
 
     def apply(self, op: S.Operator, env: list) -> Optional[Change]:
         """Apply an operator to the state (manual 5.2.1); the change, to undo
@@ -501,100 +550,3 @@ class Planner:
             if self.apply(op, env) is not None:
                 return True
         return False
-
-    def _plain(self, eff: S.Effects):
-        """``[(pred, binder)]`` for a list of plain atoms, else None (general case)."""
-        if eff.var is not None or not all(isinstance(i, S.Atom) for i in eff.items):
-            return None
-        return [(i.pred, binder(i.args)) for i in eff.items]
-
-    def _apply(self, op: S.Operator, env: list):
-        """Apply an operator (manual 5.2.1); False if it deletes a protected atom."""
-        change = Change()
-        state = self.state
-        plain = self._effects.get(id(op))
-        if plain is None:
-            plain = self._effects[id(op)] = (self._plain(op.delete), self._plain(op.add), op)
-        dels, adds, _ = plain
-        if dels is not None and adds is not None:    # no conditions: nothing to evaluate
-            protections = state.protections
-            for pred, bind in dels:
-                args = bind(env)[1]
-                if (pred, args) in protections:
-                    return change, False
-                i = state.delete(pred, args)
-                if i != -1:
-                    change.deleted.append((pred, args, i))
-            for pred, bind in adds:
-                args = bind(env)[1]
-                if state.add(pred, args):
-                    change.added.append((pred, args))
-            return change, True
-        deletions = self._effect_atoms(op.delete, env, op)
-        additions = self._effect_atoms(op.add, env, op)
-        if op.effects_in_prestate:
-            deletions, additions = list(deletions), list(additions)
-        for pred, args in deletions:
-            if pred is None:  # a protection condition to cancel
-                p, a = args
-                if state.unprotect(p, a):
-                    change.unprotected.append((p, a))
-                continue
-            if state.is_protected(pred, args):
-                return change, False
-            i = state.delete(pred, args)
-            if i != -1:
-                change.deleted.append((pred, args, i))
-        for pred, args in additions:
-            if pred is None:
-                p, a = args
-                state.protect(p, a)
-                change.protected.append((p, a))
-                continue
-            if state.add(pred, args):
-                change.added.append((pred, args))
-        return change, True
-
-    def _effect_atoms(self, eff: S.Effects, env: list, op):
-        """Ground atoms of a delete/add list; protections come as (None, atom).
-
-        Generated lazily: a forall element's condition is evaluated while the
-        atoms before it are already deleted, as in JSHOP2.
-        """
-        if eff.var is not None:
-            lst = env[eff.var.index]
-            if type(lst) is not tuple:
-                raise PlanningError.at(op.pos, f"the effect list variable {eff.var.name} "
-                                       f"of {op.name} is bound to {term_str(lst)}")
-            for t in lst:
-                yield atom_from_term(t, op.pos)
-            return
-        for item in eff.items:
-            if isinstance(item, S.Atom):
-                yield item.pred, binder(item.args)(env)[1]
-            elif isinstance(item, S.VarAtom):
-                yield self._var_atom(item, env)
-            elif isinstance(item, S.Protection):
-                yield None, self._ground(item.atom, env)
-            else:  # EffectForAll
-                cond = self._forall_sat(item)
-                for nb in cond(env):
-                    for a in item.atoms:
-                        yield self._ground(a, nb)
-
-    def _ground(self, a, env):
-        if isinstance(a, S.VarAtom):
-            return self._var_atom(a, env)
-        return a.pred, binder(a.args)(env)[1]
-
-    def _var_atom(self, a: S.VarAtom, env):
-        t = env[a.var.index]
-        if t is None:
-            raise PlanningError.at(a.pos, f"effect variable {a.var.name} is not bound")
-        return atom_from_term(t, a.pos)
-
-    def _forall_sat(self, item: S.EffectForAll):
-        sat = self._forall_cache.get(id(item))
-        if sat is None:
-            sat = self._forall_cache[id(item)] = self.logic.expr(item.cond)
-        return sat

@@ -143,8 +143,8 @@ class Change:
     def __init__(self):
         self.deleted: list = []      # (pred, args, index)
         self.added: list = []        # (pred, args)
-        self.unprotected: list = []  # (pred, args)
-        self.protected: list = []    # (pred, args)
+        self.unprotected: list = _NONE  # (pred, args); a list of its own once used
+        self.protected: list = _NONE    # (pred, args)
 
     def undo(self, state: State) -> None:
         """JSHOP2's ``State.undo``: added out, deleted back in place, protections."""
@@ -156,3 +156,6 @@ class Change:
             state.unprotect(pred, args)
         for pred, args in self.unprotected:
             state.protect(pred, args)
+
+
+_NONE: tuple = ()    # no protection changes (most operators): nothing allocated
