@@ -22,9 +22,9 @@ from pathlib import Path
 from typing import Optional
 
 from lark import Lark, Token, Transformer, v_args
-from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken, VisitError
+from lark.exceptions import VisitError
 
-from . import syntax as S
+from . import lark_errors, syntax as S
 from .errors import HtnError
 from .terms import Var
 
@@ -464,44 +464,15 @@ _TOKEN_NAMES = {
 }
 
 
-def _describe(expected) -> str:
-    names = sorted({_TOKEN_NAMES.get(e, e.lstrip("_").lower().replace("_", "-"))
-                    for e in expected})
-    if len(names) > 6:
-        names = names[:6] + ["..."]
-    return ", ".join(names)
-
-
 def parse_model(text: str, file: str = "<string>"):
     """Parse HDDL text into an :class:`HDomain` or :class:`HProblem`."""
-    try:
-        tree = _lark().parse(text)
-    except UnexpectedCharacters as e:
-        raise HtnError(f"unexpected character {text[e.pos_in_stream]!r}", file, e.line, e.column)
-    except UnexpectedToken as e:
-        tok = e.token
-        if tok.type == "$END":
-            line, col = _end_position(text)
-            raise HtnError("unexpected end of file (missing ')'?)", file, line, col)
-        raise HtnError(f"unexpected {str(tok)!r}; expected {_describe(e.expected)}",
-                       file, tok.line, tok.column)
-    except UnexpectedEOF:
-        line, col = _end_position(text)
-        raise HtnError("unexpected end of file (missing ')'?)", file, line, col)
-    except UnexpectedInput as e:  # pragma: no cover - other lark errors
-        raise HtnError(f"syntax error: {e}", file, getattr(e, "line", None),
-                       getattr(e, "column", None))
+    tree = lark_errors.parse(_lark(), text, file, _TOKEN_NAMES)
     try:
         return Builder(file).transform(tree)
     except VisitError as e:
         if isinstance(e.orig_exc, HtnError):
             raise e.orig_exc from None
         raise
-
-
-def _end_position(text: str) -> tuple[int, int]:
-    lines = text.splitlines() or [""]
-    return len(lines), len(lines[-1]) + 1
 
 
 def parse_text(text: str, file: str = "<string>"):
