@@ -39,7 +39,8 @@ FORMATS = ["text", "jshop", "json", "ipc"]
               help="Show each plan's task tree (decompositions, branches, paths).")
 @click.option("--dot", type=click.Path(dir_okay=False), metavar="FILE",
               help="Write the task tree(s) as Graphviz DOT.")
-@click.option("-q", "--quiet", is_flag=True, help="Do not print domain warnings.")
+@click.option("-q", "--quiet", is_flag=True,
+              help="Do not print domain warnings, nor why there is no plan (unless --explain).")
 @click.option("--jshop2-compat", is_flag=True,
               help="Reproduce JSHOP2 1.0.3 exactly: a method body written (:unordered ...) "
                    "runs in order [default: unordered, as the JSHOP2 manual says].")
@@ -143,8 +144,8 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
     totals["search_ms"] = round(totals["search_ms"], 3)
     if dot:
         _write_dot(dot, found)
-    if not lengths and not explainers and not interrupted and not totals["timed_out"] \
-            and not totals["depth_limit_reached"]:
+    if not lengths and not explainers and not quiet and not interrupted \
+            and not totals["timed_out"] and not totals["depth_limit_reached"]:
         # no plan: search again, recording dead ends this time (planning
         # without --explain pays nothing for them)
         from htn.jshop.explain import explain_search
