@@ -183,3 +183,56 @@ def test_hddl_errors_name_file_line_col(tmp_path, domain, problem, where, messag
     first = result.stderr.splitlines()[0]
     assert first.startswith(str(tmp_path / where)), first
     assert message in first
+
+
+FORMULAS = """(define (domain lights)
+  (:requirements :typing :hierarchy :negative-preconditions :conditional-effects
+                 :universal-preconditions :existential-preconditions :equality)
+  (:types lamp switch - device room)
+  (:constants hall - room)
+  (:predicates (on ?d - device) (in ?d - device ?r - room) (broken ?l - lamp) (lit ?r - room)
+               (wired ?s - switch ?l - lamp))
+  (:task light :parameters (?r - room))
+  (:task press :parameters (?s - switch))
+  (:task toggle-all :parameters ())
+  (:method m-light-done :parameters (?r - room) :task (light ?r)
+    :precondition (exists (?l - lamp) (and (in ?l ?r) (on ?l)))
+    :subtasks ())
+  (:method m-light :parameters (?r - room ?s - switch) :task (light ?r)
+    :precondition (and (in ?s ?r) (forall (?l - lamp) (imply (wired ?s ?l) (not (broken ?l)))))
+    :ordered-subtasks (and (t1 (press ?s)) (t2 (check ?r))))
+  (:method m-press :parameters (?s - switch) :task (press ?s) :subtasks (and (flip ?s)))
+  (:method m-toggle :parameters () :task (toggle-all) :subtasks (toggle))
+  (:action flip :parameters (?s - switch)
+    :precondition (not (on ?s))
+    :effect (and (on ?s) (forall (?l - lamp) (when (wired ?s ?l) (and (on ?l) (not (broken ?l)))))))
+  (:action check :parameters (?r - (either room))
+    :precondition (or (= ?r hall) (exists (?l - lamp) (and (in ?l ?r) (on ?l))))
+    :effect (lit ?r))
+  (:action toggle :parameters ()
+    :effect (forall (?l - lamp) (and (when (on ?l) (not (on ?l))) (when (not (on ?l)) (on ?l))))))
+"""
+
+
+@pytest.mark.parametrize("tasks,state,goal,steps", [
+    # exists and forall/imply in method preconditions, either types, = with a
+    # constant, a conditional effect under forall, a quantified goal
+    ("(light kitchen)", "",
+     "(and (lit kitchen) (forall (?l - lamp) (imply (in ?l kitchen) (on ?l))))",
+     ["(!flip s2)", "(!check kitchen)"]),
+    # conditions are evaluated before the action (PDDL), so toggle swaps l1 and l2
+    ("(toggle-all)", "(on l1)", "(and (on l2) (not (on l1)))", ["(!toggle)"]),
+])
+def test_formulas_and_conditional_effects(tmp_path, tasks, state, goal, steps):
+    problem = f"""(define (problem p) (:domain lights)
+      (:objects l1 l2 - lamp s1 s2 - switch kitchen - room)
+      (:htn :ordered-subtasks (and {tasks}))
+      (:init (in l1 kitchen) (in s1 kitchen) (in s2 kitchen) (wired s1 l2) (wired s2 l1)
+             (broken l2) {state})
+      (:goal {goal}))"""
+    d, p = _write(tmp_path, FORMULAS, problem)
+    plan = tmp_path / "plan.txt"
+    result = run_htn("plan", d, p, "-f", "jshop", "-o", plan)
+    assert result.returncode == 0, result.stderr
+    assert [line for line in result.stdout.splitlines() if line.startswith("(")] == steps
+    assert run_htn("validate", d, p, plan).returncode == 0
