@@ -41,23 +41,26 @@ class GoalGuard:
     def __bool__(self) -> bool:
         return bool(self.needed or self.forbidden)
 
-    def broken(self, change, state, root) -> bool:
+    def broken(self, change, state, root, cursor=None) -> bool:
         """After an action: True if it broke a goal literal that no task
-        left in the network (below ``root``) can mend."""
+        left in the network (below ``root``) can mend. ``cursor``, the
+        planner's path to the action (see ``Planner._first``), lets the
+        nearest tasks be looked at first."""
         for pred, args, _i in change.deleted:
             if (pred, args) in self.needed and not state.has(pred, args) and \
-                    not self._mendable(root, self.adds, pred, args):
+                    not self._mendable(root, cursor, self.adds, pred, args):
                 self.cuts += 1
                 return True
         for pred, args in change.added:
             if (pred, args) in self.forbidden and state.has(pred, args) and \
-                    not self._mendable(root, self.dels, pred, args):
+                    not self._mendable(root, cursor, self.dels, pred, args):
                 self.cuts += 1
                 return True
         return False
 
-    def _mendable(self, root, table: dict, pred: str, args: tuple) -> bool:
-        for task in _pending_tasks(root):
+    def _mendable(self, root, cursor, table: dict, pred: str, args: tuple) -> bool:
+        tasks = _after(cursor) if cursor else _pending_tasks(root)
+        for task in tasks:
             for ppred, pargs in table.get(task.name, ()):
                 if ppred == pred and _matches(pargs, task.args, args):
                     return True
@@ -79,6 +82,14 @@ def _matches(pattern: tuple, task_args: tuple, args: tuple) -> bool:
     return True
 
 
+def _after(cursor: list):
+    """The tasks left after the one at the end of ``cursor``, nearest first:
+    in an ordered network, those of the later members of each ancestor."""
+    for node, i in reversed(cursor):
+        for sibling in node.subtasks[i + 1:]:
+            yield from _pending_tasks(sibling)
+
+
 def _pending_tasks(root):
     """The tasks of the network not reduced or applied yet."""
     stack = [root]
@@ -91,7 +102,7 @@ def _pending_tasks(root):
             continue
         if node.done:
             continue
-        stack.extend(subs[node.start:])
+        stack.extend(reversed(subs[node.start:]))
 
 
 def _summaries(domain: S.Domain) -> tuple[dict, dict]:

@@ -110,7 +110,7 @@ def _list_maker(tl: S.TaskList):
     return lambda env: Node(None, subtasks(env), ordered)
 
 
-def first_tasks(root: Node, trail: Optional[list] = None) -> list:
+def first_tasks(root: Node, trail: Optional[list] = None, path: Optional[list] = None) -> list:
     """JSHOP2's ``TaskList.getFirst``, without recursion.
 
     An ordered list contributes the first tasks of its first non-empty member;
@@ -121,20 +121,35 @@ def first_tasks(root: Node, trail: Optional[list] = None) -> list:
     member with nothing left is marked ``done``, and a list's ``start`` moves
     past its achieved leading members. Each change is pushed on the trail; the
     planner undoes those made below a search frame when it backtracks into it.
+
+    With a ``path`` (an empty list), an ordered network's walk leaves in it
+    where the task found is (see :func:`_first_in_order`); it is emptied if
+    the general way was taken.
     """
     if trail is not None and root.ordered:
-        found = _first_in_order(root, trail)
+        found = _first_in_order(root, trail, path)
         if found is not None:
             return found
+    if path:
+        path.clear()
     return _first_tasks(root, trail)
 
 
-def _first_in_order(root: Node, trail: list) -> Optional[list]:
+def _first_in_order(root: Node, trail: list, path: Optional[list] = None,
+                    at: Optional[tuple] = None) -> Optional[list]:
     """:func:`first_tasks` while every list met is ordered (the common case,
     and all of HDDL): one walk down to the first task left; None when an
-    unordered list is met (the caller then takes the general way)."""
-    path = []
-    node, i = root, root.start
+    unordered list is met (the caller then takes the general way).
+
+    ``path`` is left holding the ``(list, index)`` of each ancestor of the
+    task found, its own last. A later walk can resume from there (``at``, the
+    task's own entry popped off ``path``) instead of walking down from the
+    root again: the planner's cursor, which makes a long tail recursion
+    linear rather than quadratic (see ``Planner._first``).
+    """
+    if path is None:
+        path = []
+    node, i = at if at is not None else (root, root.start)
     while True:
         subs = node.subtasks
         n = len(subs)
@@ -142,6 +157,7 @@ def _first_in_order(root: Node, trail: list) -> Optional[list]:
             child = subs[i]
             cs = child.subtasks
             if cs is None:
+                path.append((node, i))
                 return [child]
             if cs and not child.done:
                 if not child.ordered:
@@ -346,6 +362,8 @@ class Planner:
         self._steps: list = []
         self._cost = 0.0
         self._trail: list = []     # nodes marked done, see first_tasks
+        self._cursor: list = []    # where the last walk found its task, see _first
+        self._cursor_ok = False
 
     # ------------------------------------------------------------ driver
     def plans(self, timeout: Optional[float] = None) -> Iterator[Plan]:
@@ -423,15 +441,17 @@ class Planner:
         trail = self._trail
         loops = self.loops
         mark = len(trail)
-        options = first_tasks(chosen, trail)
+        options = self._first(chosen, trail)
         if loops is not None and len(trail) > mark:
             loops.completed(trail, mark)
         mark = len(trail)
         if not options:
             if chosen is not self.root:
                 yield self.root
+                self._cursor_ok = False
             elif self._goal is None or self.goal_holds():
                 yield _PLAN
+                self._cursor_ok = False
             elif self.explain is not None:
                 self.explain.goal_failed(self)
             return
@@ -450,7 +470,8 @@ class Planner:
                         continue
                     for nb in pre(env):
                         change, ok = apply(op, nb)
-                        if ok and guard is not None and guard.broken(change, state, root):
+                        if ok and guard is not None and guard.broken(
+                                change, state, root, self._cursor if self._cursor_ok else None):
                             ok = False
                         if ok:
                             self.stats.operator_applications += 1
@@ -464,6 +485,7 @@ class Planner:
                             self._cost += cost
                             tried = True
                             yield root
+                            self._cursor_ok = False
                             if len(trail) > mark:
                                 _undo_marks(trail, mark, loops)
                             steps.pop()
@@ -495,6 +517,7 @@ class Planner:
                                 loops.enter(node, key)
                             tried = True
                             yield node
+                            self._cursor_ok = False
                             if len(trail) > mark:
                                 _undo_marks(trail, mark, loops)
                             if node.loop_key is not None:
@@ -507,6 +530,37 @@ class Planner:
             if not tried and explain is not None:
                 explain.dead_end(self, node)
             self.stats.backtracks += 1
+
+    def _first(self, chosen: Node, trail: list) -> list:
+        """``first_tasks(chosen)``, resuming from the cursor when it is valid.
+
+        The cursor is the path (``(list, index)`` pairs from the root) to the
+        task the last walk found. Going forward, the network changes only at
+        that task (it is applied, or reduced and then searched from), so the
+        next walk from the root can resume there. Any backtracking may change
+        the network anywhere above: every frame drops the cursor as soon as
+        one of its ``yield`` returns.
+        """
+        cursor = self._cursor
+        if chosen is self.root:
+            if self._cursor_ok and cursor:
+                found = _first_in_order(chosen, trail, cursor, cursor.pop())
+                if found is not None:
+                    return found
+            cursor.clear()
+            found = first_tasks(chosen, trail, cursor)
+            self._cursor_ok = bool(cursor)
+            return found
+        if self._cursor_ok and cursor and chosen.ordered:
+            parent, i = cursor[-1]
+            if parent.subtasks[i] is chosen:     # searching inside the task just reduced
+                inner: list = []
+                found = _first_in_order(chosen, trail, inner)
+                if found is not None:
+                    cursor.extend(inner)
+                    return found
+        self._cursor_ok = False
+        return first_tasks(chosen, trail)
 
     def goal_holds(self) -> bool:
         """Whether the problem's goal (HDDL) holds in the current state."""
