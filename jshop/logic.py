@@ -139,6 +139,8 @@ class Logic:
         return disj
 
     def _not(self, e: S.Not) -> Sat:
+        if isinstance(e.expr, S.Atom):
+            return self._not_atom(e.expr)
         sat = self.expr(e.expr)
 
         def neg(env):
@@ -239,6 +241,37 @@ class Logic:
             if axioms:
                 yield from prove(axioms, bound, env)
         return atom
+
+    def _not_atom(self, e: S.Atom) -> Sat:
+        """``(not (p ...))``: the same test as :meth:`_atom`, stopping at the
+        first satisfier without making generators for it (the most common
+        negation, so worth its own code)."""
+        pred, args = e.pred, e.args
+        bind = binder(args)
+        lst = self.state.bucket(pred)
+        members = self.state.members[pred]
+        axioms = self._axioms.get(pred)
+        prove = self._prove
+        scanners: dict = {}
+
+        def neg(env):
+            key, bound = bind(env)
+            if key is None:
+                if bound in members:
+                    return
+            elif key >= GENERIC:
+                if next(_scan(lst, bound, env), None) is not None:
+                    return
+            else:
+                scan = scanners.get(key)
+                if scan is None:
+                    scan = scanners[key] = scanner(args, key)
+                if next(scan(lst, bound, env), None) is not None:
+                    return
+            if axioms and next(prove(axioms, bound, env), None) is not None:
+                return
+            yield env
+        return neg
 
     # ------------------------------------------------------------ atoms
     def match(self, pred: str, bound: tuple, env: list) -> Iterator[list]:
