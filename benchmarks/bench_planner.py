@@ -4,7 +4,11 @@ Measures, for each example in ``shared/corpus/jshop2``:
 
 * in-process search time of the first plan (like JSHOP2's ``findPlans`` timing:
   the initial state is built and the domain compiled before the clock starts),
-  min and median over repeats after a warm-up;
+  min and median over repeats after a warm-up. The clock is the process's CPU
+  time (``--clock cpu``, the default): on a machine shared with other work,
+  wall time also counts the time other processes hold the CPU, while JSHOP2's
+  figures were taken on an idle machine, where the two agree; ``--clock
+  wall`` measures wall time;
 * the whole ``htn plan ... --format jshop`` command in a fresh process (median
   of a few runs), against JSHOP2's end-to-end figure (compile + javac + run).
 
@@ -14,8 +18,8 @@ JSHOP2's figures come from each example's ``stats.json``. Run::
     python benchmarks/bench_planner.py --only rover --repeats 20
     python benchmarks/bench_planner.py --json          # machine-readable
 
-Targets: median search at most 2x JSHOP2's; whole command faster than JSHOP2's
-end-to-end time.
+Targets: median search at most JSHOP2's warm median on every example; whole
+command faster than JSHOP2's end-to-end time.
 """
 from __future__ import annotations
 
@@ -35,7 +39,8 @@ FUNCTION_FILES = {"freecell": ROOT / "tests" / "functions" / "freecell.py",
                   "test": ROOT / "tests" / "functions" / "test.py"}
 
 
-def search_times(folder: Path, stats: dict, repeats: int, budget: float) -> list[float]:
+def search_times(folder: Path, stats: dict, repeats: int, budget: float,
+                 clock=time.process_time) -> list[float]:
     from htn.jshop import FunctionTable, Planner, load_domain, load_problem
     table = FunctionTable()
     if folder.name in FUNCTION_FILES:
@@ -47,9 +52,9 @@ def search_times(folder: Path, stats: dict, repeats: int, budget: float) -> list
     def once() -> float:
         planner = Planner(dom, inst, table)
         stream = planner.plans()
-        t = time.perf_counter()
+        t = clock()
         next(stream, None)
-        dt = time.perf_counter() - t
+        dt = clock() - t
         stream.close()
         return dt
 
@@ -86,8 +91,10 @@ def command_time(folder: Path, stats: dict, runs: int) -> float:
 @click.option("--repeats", default=50, show_default=True, help="Timed search calls per example.")
 @click.option("--budget", default=20.0, show_default=True, help="Seconds of timed calls per example.")
 @click.option("--runs", default=3, show_default=True, help="Whole-command runs per example.")
+@click.option("--clock", type=click.Choice(["cpu", "wall"]), default="cpu", show_default=True,
+              help="Time the search by the process's CPU time or by wall time.")
 @click.option("--json", "as_json", is_flag=True, help="Print JSON instead of a table.")
-def main(corpus, only, repeats, budget, runs, as_json):
+def main(corpus, only, repeats, budget, runs, clock, as_json):
     """Time first-plan search on the JSHOP2 corpus against JSHOP2's own figures."""
     corpus = Path(corpus)
     if not (corpus / "SUMMARY.md").is_file():
@@ -98,7 +105,8 @@ def main(corpus, only, repeats, budget, runs, as_json):
         if only and folder.name not in only:
             continue
         stats = json.loads((folder / "stats.json").read_text())
-        times = search_times(folder, stats, repeats, budget)
+        times = search_times(folder, stats, repeats, budget,
+                             time.process_time if clock == "cpu" else time.perf_counter)
         ours_min, ours_med = min(times) * 1000, statistics.median(times) * 1000
         j_min, j_med = stats["search_ms_first_min"], stats["search_ms_first_median"]
         cmd = command_time(folder, stats, runs)
@@ -112,15 +120,15 @@ def main(corpus, only, repeats, budget, runs, as_json):
         if not as_json:
             click.echo(f"{folder.name}: median {ours_med:.3f} ms (JSHOP2 {j_med}), "
                        f"command {cmd:.2f} s (JSHOP2 {stats['end_to_end_s']})", err=True)
-    ok_search = all(r["ratio_median"] <= 2.0 for r in rows)
+    ok_search = all(r["ratio_median"] <= 1.0 for r in rows)
     ok_cmd = all(r["command_ratio"] < 1.0 for r in rows)
     if as_json:
-        click.echo(json.dumps({"examples": rows, "search_within_2x": ok_search,
+        click.echo(json.dumps({"examples": rows, "search_within_jshop2_median": ok_search,
                                "command_faster_than_jshop2": ok_cmd}, indent=1))
         return
     from rich.console import Console
     from rich.table import Table
-    t = Table(title="First-plan search: htn vs JSHOP2 (ms; whole command in s)")
+    t = Table(title=f"First-plan search ({clock} time): htn vs JSHOP2 (ms; whole command in s)")
     for col in ("example", "calls", "ours min", "ours median", "JSHOP2 min", "JSHOP2 median",
                 "ratio (median)", "htn plan s", "JSHOP2 e2e s"):
         t.add_column(col, justify="left" if col == "example" else "right")
@@ -128,10 +136,10 @@ def main(corpus, only, repeats, budget, runs, as_json):
         ratio = f"{r['ratio_median']:.2f}"
         t.add_row(r["example"], str(r["calls"]), f"{r['ours_min_ms']:.3f}",
                   f"{r['ours_median_ms']:.3f}", f"{r['jshop2_min_ms']}", f"{r['jshop2_median_ms']}",
-                  ratio if r["ratio_median"] <= 2 else f"[red]{ratio}[/red]",
+                  ratio if r["ratio_median"] <= 1 else f"[red]{ratio}[/red]",
                   f"{r['command_s']:.2f}", f"{r['jshop2_e2e_s']}")
     Console().print(t)
-    Console().print(f"median search within 2x of JSHOP2 on every example: {ok_search}; "
+    Console().print(f"median search at most JSHOP2's on every example: {ok_search}; "
                     f"whole command faster than JSHOP2 end-to-end on every example: {ok_cmd}")
 
 

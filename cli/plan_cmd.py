@@ -13,10 +13,12 @@ import time
 
 import click
 
+from htn.jshop.limits import DEFAULT_MAX_DEPTH
+
 from .output import AtomicFile, console, stdout_is_terminal, warn
 from .signals import SIGTERM_EXIT, DeadlineExceeded, Terminated, deadline, held
 
-FORMATS = ["text", "jshop", "json"]
+FORMATS = ["text", "jshop", "json", "ipc"]
 
 
 @click.command("plan")
@@ -29,7 +31,9 @@ FORMATS = ["text", "jshop", "json"]
 @click.option("-f", "--format", "fmt", type=click.Choice(FORMATS),
               help="Output format [default: text on a terminal, else jshop]. 'jshop' prints "
                    "exactly what JSHOP2 prints; 'json' is JSON Lines: one object per plan "
-                   "(steps, cost, task tree), then one with the statistics.")
+                   "(steps, cost, task tree), then one with the statistics; 'ipc' the IPC "
+                   "2020 HTN plan format (actions and decompositions), which the "
+                   "competition's verifier reads.")
 @click.option("-o", "--output", type=click.Path(dir_okay=False),
               help="Also write the plans (jshop format, with a header naming the domain and "
                    "problem files) to this file, for 'htn run'.")
@@ -43,9 +47,22 @@ FORMATS = ["text", "jshop", "json"]
               help="Show each plan's task tree (decompositions, branches, paths).")
 @click.option("--dot", type=click.Path(dir_okay=False), metavar="FILE",
               help="Write the task tree(s) as Graphviz DOT.")
-@click.option("-q", "--quiet", is_flag=True, help="Do not print domain warnings.")
+@click.option("-q", "--quiet", is_flag=True,
+              help="Do not print domain warnings, nor why there is no plan (unless --explain).")
+@click.option("--jshop2-compat", is_flag=True,
+              help="Reproduce JSHOP2 1.0.3 exactly: a method body written (:unordered ...) "
+                   "runs in order [default: unordered, as the JSHOP2 manual says].")
+@click.option("--max-depth", type=click.IntRange(min=1), default=DEFAULT_MAX_DEPTH,
+              show_default=True, metavar="N",
+              help="Stop a search that nests deeper than N reductions and steps "
+                   "(a method that decomposes into itself without end).")
+@click.option("--explain", is_flag=True,
+              help="Say why there is no plan (also printed when there is none): the deepest "
+                   "dead end of the search, each operator or method tried and the precondition "
+                   "literal that failed, with file:line:col.")
+@click.option("--explain-all", is_flag=True, help="Like --explain, listing every dead end.")
 def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
-         show_tree, dot, quiet):
+         show_tree, dot, quiet, jshop2_compat, max_depth, explain, explain_all):
     """Find plans for PROBLEM in DOMAIN (JSHOP2 files).
 
     \b
@@ -58,6 +75,7 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
     from htn.jshop.functions import FunctionTable
     from htn.jshop.parser import load_domain, load_problem
     from htn.jshop.planfile import header
+    from htn.jshop.planner import compat_warning
 
     started = time.perf_counter()
     fmt = fmt or ("text" if stdout_is_terminal() else "jshop")
@@ -77,15 +95,20 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
         dom = load_domain(domain, table)
         prob = load_problem(problem, table)
         warnings = check_domain(dom) + check_problem(dom, prob)
+        if jshop2_compat and compat_warning(dom):
+            warnings.append(compat_warning(dom))
         if not quiet:
             for w in warnings:
                 warn(w)
         if out:
             out.write(header(output, domain, problem, functions))
         render = _Renderer(fmt, show_tree, domain, problem)
-        totals, stop = _search(dom, prob, table, render, out, dot_out, started, timeout,
-                               None if all_plans else n_plans,
-                               record_trees=show_tree or bool(dot) or fmt == "json")
+        render.spelling = {**prob.spelling, **dom.spelling}
+        search = _Search(dom, prob, table, jshop2_compat=jshop2_compat, max_depth=max_depth,
+                         explain=explain or explain_all, explain_all=explain_all,
+                         record_trees=show_tree or bool(dot) or fmt in ("json", "ipc"))
+        totals, stop = search.run(render, out, dot_out, started, timeout,
+                                  None if all_plans else n_plans)
         found = totals["plans_found"]
     finally:
         for sink in filter(None, sinks):
@@ -95,6 +118,15 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
                 sink.discard()
     if isinstance(stop, BrokenPipeError):
         raise stop          # the reader went away: main() exits quietly
+    if not found and not quiet and stop is None and not totals["timed_out"] \
+            and not totals["depth_limit_reached"]:
+        search.explain_no_plan()
+    if search.explainers:
+        totals["explain"] = [e.to_dict(full=explain_all) for e in search.explainers]
+        if fmt != "json":
+            for e in search.explainers:
+                for line in e.lines(full=explain_all):
+                    warn(line)
     render.finish(totals)
     if totals["timed_out"]:
         warn(f"timed out after {timeout:g} s; {found} plan(s) found")
@@ -111,51 +143,81 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
         sys.exit(1)
 
 
-def _search(dom, prob, table, render, out, dot_out, started, timeout, limit, record_trees):
-    """Stream the plans of every problem instance to the renderer and the
-    files. Returns the summed statistics and what stopped the stream early
-    (Ctrl-C, SIGTERM or a closed stdout), if anything."""
-    from htn.jshop.planner import Planner
+class _Search:
+    """The plans of every problem instance, streamed to the renderer and the
+    files, with the planner options of the command line."""
 
-    totals = {"plans_found": 0, "search_ms": 0.0, "expansions": 0,
-              "operator_applications": 0, "backtracks": 0, "timed_out": False,
-              "interrupted": False, "shortest_plan": None}
-    stop = None
-    try:
-        with deadline(timeout, started):
-            for k, inst in enumerate(prob.instances):
-                remaining = None
-                if timeout is not None:
-                    remaining = timeout - (time.perf_counter() - started)
-                    if remaining <= 0:
+    def __init__(self, dom, prob, table, jshop2_compat, max_depth, explain, explain_all,
+                 record_trees):
+        self.dom, self.prob, self.table = dom, prob, table
+        self.options = dict(jshop2_compat=jshop2_compat, max_depth=max_depth)
+        self.explain, self.explain_all = explain, explain_all
+        self.record_trees = record_trees
+        self.explainers: list = []     # one per problem instance, see --explain
+
+    def run(self, render, out, dot_out, started, timeout, limit):
+        """Returns the summed statistics and what stopped the stream early
+        (Ctrl-C, SIGTERM or a closed stdout), if anything."""
+        from htn.jshop.planner import Planner
+
+        totals = {"plans_found": 0, "search_ms": 0.0, "expansions": 0,
+                  "operator_applications": 0, "backtracks": 0, "timed_out": False,
+                  "interrupted": False, "depth_limit_reached": False, "shortest_plan": None}
+        stop = None
+        try:
+            with deadline(timeout, started):
+                for k, inst in enumerate(self.prob.instances):
+                    remaining = None
+                    if timeout is not None:
+                        remaining = timeout - (time.perf_counter() - started)
+                        if remaining <= 0:
+                            totals["timed_out"] = True
+                            break
+                    explainer = None
+                    if self.explain:
+                        from htn.jshop.explain import Explainer
+                        explainer = Explainer(keep_all=self.explain_all)
+                        self.explainers.append(explainer)
+                    planner = Planner(self.dom, inst, self.table, record_trees=self.record_trees,
+                                      explain=explainer, **self.options)
+                    try:
+                        for p in planner.plans(remaining):
+                            p.instance = k
+                            with held():    # the files first: they outlive a closed stdout
+                                if out:
+                                    out.write(p.to_jshop())
+                                    out.flush()
+                                if dot_out and p.tree is not None:
+                                    dot_out.add(p.tree)
+                                _count(totals, p)
+                                render.plan(p)
+                            if limit is not None and planner.stats.plans_found >= limit:
+                                break
+                    finally:
+                        _add_stats(totals, planner.stats.as_dict())
+                    if planner.stats.timed_out:
                         totals["timed_out"] = True
                         break
-                planner = Planner(dom, inst, table, record_trees=record_trees)
-                try:
-                    for p in planner.plans(remaining):
-                        p.instance = k
-                        with held():    # the files first: they outlive a closed stdout
-                            if out:
-                                out.write(p.to_jshop())
-                                out.flush()
-                            if dot_out and p.tree is not None:
-                                dot_out.add(p.tree)
-                            _count(totals, p)
-                            render.plan(p)
-                        if limit is not None and planner.stats.plans_found >= limit:
-                            break
-                finally:
-                    _add_stats(totals, planner.stats.as_dict())
-                if planner.stats.timed_out:
-                    totals["timed_out"] = True
-                    break
-    except DeadlineExceeded:
-        totals["timed_out"] = True
-    except (KeyboardInterrupt, BrokenPipeError) as exc:
-        totals["interrupted"] = isinstance(exc, KeyboardInterrupt)
-        stop = exc
-    totals["search_ms"] = round(totals["search_ms"], 3)
-    return totals, stop
+                    if planner.stats.depth_limit is not None:
+                        totals["depth_limit_reached"] = True
+                        warn(planner.stats.depth_limit)
+                        break
+        except DeadlineExceeded:
+            totals["timed_out"] = True
+        except (KeyboardInterrupt, BrokenPipeError) as exc:
+            totals["interrupted"] = isinstance(exc, KeyboardInterrupt)
+            stop = exc
+        totals["search_ms"] = round(totals["search_ms"], 3)
+        return totals, stop
+
+    def explain_no_plan(self) -> None:
+        """No plan: search again, recording dead ends this time (planning
+        without --explain pays nothing for them)."""
+        if self.explainers:
+            return
+        from htn.jshop.explain import explain_search
+        self.explainers = [explain_search(self.dom, inst, self.table, **self.options)
+                           for inst in self.prob.instances]
 
 
 def _count(totals: dict, p) -> None:
@@ -205,7 +267,7 @@ class _DotFile:
 
 
 class _Renderer:
-    """Prints plans as they stream in, in one of the three formats."""
+    """Prints plans as they stream in, in one of the four formats."""
 
     def __init__(self, fmt: str, show_tree: bool, domain: str, problem: str):
         self.fmt = fmt
@@ -214,6 +276,7 @@ class _Renderer:
         self.problem = problem
         self.count = 0
         self._console = None
+        self.spelling: dict = {}    # lower-case name -> as the input wrote it (HDDL)
 
     @property
     def console(self):
@@ -231,6 +294,10 @@ class _Renderer:
                 console(stderr=True, highlight=False).print(rich_tree(p.tree))
         elif self.fmt == "text":
             self._text_plan(p)
+        elif self.fmt == "ipc":
+            from htn.jshop.ipc import ipc_text
+            sys.stdout.write(ipc_text(p, self.spelling))
+            sys.stdout.flush()
         else:
             self._json_line({"type": "plan", "instance": getattr(p, "instance", 0),
                              "index": p.index, "cost": p.cost, "length": len(p.steps),

@@ -85,10 +85,31 @@ def make_binder(args: tuple) -> Callable[[list], tuple]:
                 keys.append(f"(0 if g{a.index} else {bit} if {name} is None else GENERIC)")
             parts.append(name)
             unbound.append(f"({name} if {name} is not None else v{a.index})")
-        elif ta is str or ta is float:
+        elif ta is str or ta is float or (ta is tuple and not a):
             consts[f"c{i}"] = a
             parts.append(f"c{i}")
             unbound.append(f"c{i}")
+        elif ta is tuple and _flat(a):
+            # a flat list such as (on ?x ?z): built inline, without subst
+            inner, inner_unbound, inner_tests = [], [], []
+            for j, x in enumerate(a):
+                if type(x) is Var:
+                    name = f"x{x.index}"
+                    consts[f"v{x.index}"] = x
+                    lines.append(f"    {name} = env[{x.index}]")
+                    inner_tests.append(f"({name} is not None and (type({name}) is str or "
+                                       f"type({name}) is float or is_ground({name})))")
+                    inner.append(name)
+                    inner_unbound.append(f"({name} if {name} is not None else v{x.index})")
+                else:
+                    consts[f"c{i}_{j}"] = x
+                    inner.append(f"c{i}_{j}")
+                    inner_unbound.append(f"c{i}_{j}")
+            lines.append(f"    h{i} = {' and '.join(inner_tests) or 'True'}")
+            tests.append(f"h{i}")
+            keys.append(f"(0 if h{i} else GENERIC)")
+            parts.append("(" + "".join(x + ", " for x in inner) + ")")
+            unbound.append("(" + "".join(x + ", " for x in inner_unbound) + ")")
         else:  # nested list or call term: the generic substitution
             consts[f"c{i}"] = a
             lines.append(f"    y{i} = subst(c{i}, env)")

@@ -20,7 +20,7 @@ from typing import Callable, Iterator
 from . import syntax as S
 from .errors import HtnError, PlanningError
 from .compile import GENERIC, binder, conjunction, head_unifier, scanner, term_binder
-from .terms import Var, is_ground, term_str, unify
+from .terms import Var, is_ground, subst, term_str, unify
 
 Sat = Callable[[list], Iterator[list]]
 
@@ -49,11 +49,30 @@ class Logic:
         self.domain = domain
         self.state = state
         self.functions = functions
-        self._axioms: dict[str, list] = {}
+        # axiom bodies refer to axioms (their own predicate too): every list
+        # exists before any body is compiled, and is filled in place
+        self._axioms: dict[str, list] = {pred: [] for pred in domain.axioms}
         for pred, axs in domain.axioms.items():
-            self._axioms[pred] = [(ax, head_unifier(ax.head.args), binder(ax.head.args),
-                                   [self.precondition(b.pre) for b in ax.branches])
-                                  for ax in axs]
+            self._axioms[pred][:] = self._segments(axs)
+
+    def _segments(self, axs: list) -> list:
+        """A predicate's axioms, in definition order, as segments: a run of
+        facts (a ground head whose first branch is empty, ``(:- (diff-clr s
+        h) nil)``) is matched like state atoms, in one scan; any other axiom
+        is proved by its branches (3.6). The satisfiers and their order are
+        those of proving each axiom in turn."""
+        segments: list = []
+        for ax in axs:
+            if is_ground(ax.head.args) and _always(ax.branches[0].pre):
+                if not segments or segments[-1][0] is not _FACTS:
+                    segments.append((_FACTS, [], {}, None))
+                _, heads, counts, _ = segments[-1]
+                heads.append(ax.head.args)
+                counts[ax.head.args] = counts.get(ax.head.args, 0) + 1
+            else:
+                segments.append((ax, head_unifier(ax.head.args), binder(ax.head.args),
+                                 [self.precondition(b.pre) for b in ax.branches]))
+        return segments
 
     # ------------------------------------------------------------ preconditions
     def precondition(self, pre: S.Precondition) -> Sat:
@@ -118,6 +137,8 @@ class Logic:
         return disj
 
     def _not(self, e: S.Not) -> Sat:
+        if isinstance(e.expr, S.Atom):
+            return self._not_atom(e.expr)
         sat = self.expr(e.expr)
 
         def neg(env):
@@ -137,6 +158,26 @@ class Logic:
                     return
             yield env
         return forall
+
+    def _equal(self, e: S.Equal) -> Sat:
+        left, right, pos = e.left, e.right, e.pos
+
+        def equal(env):
+            a, b = subst(left, env), subst(right, env)
+            if type(a) is Var:
+                if type(b) is Var:
+                    raise PlanningError.at(pos, f"(= {a.name} {b.name}) compares two "
+                                           "unbound variables")
+                new = env[:]
+                new[a.index] = b
+                yield new
+            elif type(b) is Var:
+                new = env[:]
+                new[b.index] = a
+                yield new
+            elif a == b and type(a) is type(b):
+                yield env
+        return equal
 
     def _assign(self, e: S.Assign) -> Sat:
         idx, bind = e.var.index, term_binder(e.term)
@@ -173,31 +214,62 @@ class Logic:
         return varatom
 
     def _atom(self, e: S.Atom) -> Sat:
-        pred = e.pred
-        bind = binder(e.args)
-        state = self.state
-        axioms_of = self._axioms.get
+        pred, args = e.pred, e.args
+        bind = binder(args)
+        # the state keeps one list and one set per predicate for good, so the
+        # compiled atom can hold on to them
+        lst = self.state.bucket(pred)
+        members = self.state.members[pred]
+        axioms = self._axioms.get(pred)
         prove = self._prove
-
         scanners: dict = {}
-        args = e.args
 
         def atom(env):
             key, bound = bind(env)
             if key is None:
-                if state.has(pred, bound):
+                if bound in members:
                     yield env
             elif key >= GENERIC:
-                yield from _scan(state.bucket(pred), bound, env)
+                yield from _scan(lst, bound, env)
             else:
                 scan = scanners.get(key)
                 if scan is None:
                     scan = scanners[key] = scanner(args, key)
-                yield from scan(state.bucket(pred), bound, env)
-            axioms = axioms_of(pred)
+                yield from scan(lst, bound, env)
             if axioms:
                 yield from prove(axioms, bound, env)
         return atom
+
+    def _not_atom(self, e: S.Atom) -> Sat:
+        """``(not (p ...))``: the same test as :meth:`_atom`, stopping at the
+        first satisfier without making generators for it (the most common
+        negation, so worth its own code)."""
+        pred, args = e.pred, e.args
+        bind = binder(args)
+        lst = self.state.bucket(pred)
+        members = self.state.members[pred]
+        axioms = self._axioms.get(pred)
+        prove = self._prove
+        scanners: dict = {}
+
+        def neg(env):
+            key, bound = bind(env)
+            if key is None:
+                if bound in members:
+                    return
+            elif key >= GENERIC:
+                if next(_scan(lst, bound, env), None) is not None:
+                    return
+            else:
+                scan = scanners.get(key)
+                if scan is None:
+                    scan = scanners[key] = scanner(args, key)
+                if next(scan(lst, bound, env), None) is not None:
+                    return
+            if axioms and next(prove(axioms, bound, env), None) is not None:
+                return
+            yield env
+        return neg
 
     # ------------------------------------------------------------ atoms
     def match(self, pred: str, bound: tuple, env: list) -> Iterator[list]:
@@ -214,6 +286,13 @@ class Logic:
 
     def _prove(self, axioms, bound: tuple, env: list) -> Iterator[list]:
         for ax, unify_head, bind_head, branches in axioms:
+            if ax is _FACTS:     # (unify_head, bind_head) are (heads, counts) here
+                if is_ground(bound):
+                    for _ in range(bind_head.get(bound, 0)):
+                        yield env
+                else:
+                    yield from _scan(unify_head, bound, env)
+                continue
             aenv = [None] * ax.nvars
             if not unify_head(bound, aenv):
                 continue
@@ -236,6 +315,15 @@ class Logic:
 
 def _true(env):
     yield env
+
+
+_FACTS = object()    # marks a run of fact axioms, see Logic._segments
+
+
+def _always(pre: S.Precondition) -> bool:
+    """An empty precondition (``nil``): exactly one satisfier, the binding itself."""
+    e = pre.expr
+    return isinstance(e, S.And) and not e.items and pre.sort_var is None
 
 
 def _scan(lst: list, bound: tuple, env: list) -> Iterator[list]:

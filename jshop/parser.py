@@ -18,8 +18,9 @@ from pathlib import Path
 
 from lark import Lark, Token, v_args
 from lark.visitors import Transformer_NonRecursive
-from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken, VisitError
+from lark.exceptions import UnexpectedInput, VisitError
 
+from . import lark_errors
 from . import syntax as S
 from .errors import HtnError
 from .functions import STDLIB_JAVA_NAMES, FunctionTable, arity_error
@@ -39,13 +40,6 @@ _TOKEN_NAMES = {
     "LPAR": "'('", "RPAR": "')'", "NAME": "a symbol", "OPNAME": "an operator name (!name)",
     "VAR": "a variable (?name)", "NUM": "a number", "$END": "end of file",
 }
-
-
-def _describe(expected) -> str:
-    names = sorted({_TOKEN_NAMES.get(e, e.lstrip("_").lower()) for e in expected})
-    if len(names) > 6:
-        names = names[:6] + ["..."]
-    return ", ".join(names)
 
 
 class Builder(Transformer_NonRecursive):
@@ -399,25 +393,16 @@ def _number_axiom(ax: S.Axiom) -> int:
 # ------------------------------------------------------------ entry points
 
 def parse_text(text: str, file: str = "<string>", functions: FunctionTable | None = None):
-    """Parse a domain or problem from text; raise :class:`HtnError` on bad input."""
-    functions = functions or FunctionTable()
+    """Parse a domain or problem from text; raise :class:`HtnError` on bad input.
+
+    HDDL text (``(define (domain ...`` or ``(define (problem ...``) is read by
+    :mod:`htn.jshop.hddl` into the same syntax objects."""
+    from . import hddl
     _check_nesting(text, file)
-    try:
-        tree = _lark().parse(text, start="start")
-    except UnexpectedCharacters as e:
-        raise HtnError(f"unexpected character {text[e.pos_in_stream]!r}", file, e.line, e.column)
-    except UnexpectedToken as e:
-        tok = e.token
-        if tok.type == "$END":
-            line, col = _end_position(text)
-            raise HtnError("unexpected end of file (missing ')'?)", file, line, col)
-        raise HtnError(f"unexpected {str(tok)!r}; expected {_describe(e.expected)}",
-                       file, tok.line, tok.column)
-    except UnexpectedEOF:
-        line, col = _end_position(text)
-        raise HtnError("unexpected end of file (missing ')'?)", file, line, col)
-    except UnexpectedInput as e:  # pragma: no cover - other lark errors
-        raise HtnError(f"syntax error: {e}", file, getattr(e, "line", None), getattr(e, "column", None))
+    if hddl.is_hddl(text):
+        return hddl.parse_text(text, file)
+    functions = functions or FunctionTable()
+    tree = lark_errors.parse(_lark(), text, file, _TOKEN_NAMES, start="start")
     try:
         return Builder(file, functions).transform(tree)
     except VisitError as e:
@@ -471,11 +456,6 @@ def _position(text: str, offset: int) -> tuple[int, int]:
     return line, offset - (text.rfind("\n", 0, offset) + 1) + 1
 
 
-def _end_position(text: str) -> tuple[int, int]:
-    lines = text.splitlines() or [""]
-    return len(lines), len(lines[-1]) + 1
-
-
 def parse_file(path: str, functions: FunctionTable | None = None):
     if not os.path.exists(path):
         raise HtnError("no such file", path)
@@ -506,12 +486,14 @@ def read_source(path: str) -> str:
 def load_domain(path: str, functions: FunctionTable | None = None) -> S.Domain:
     d = parse_file(path, functions)
     if not isinstance(d, S.Domain):
-        raise HtnError.at(d.pos, "expected a (defdomain ...) here, found a problem")
+        wanted = "(define (domain ...))" if d.language == "hddl" else "(defdomain ...)"
+        raise HtnError.at(d.pos, f"expected a {wanted} here, found a problem")
     return d
 
 
 def load_problem(path: str, functions: FunctionTable | None = None) -> S.Problem:
     p = parse_file(path, functions)
     if not isinstance(p, S.Problem):
-        raise HtnError.at(p.pos, "expected a (defproblem ...) here, found a domain")
+        wanted = "(define (problem ...))" if p.language == "hddl" else "(defproblem ...)"
+        raise HtnError.at(p.pos, f"expected a {wanted} here, found a domain")
     return p

@@ -20,10 +20,18 @@ stream are what ``-rN`` prints and the whole stream is ``-ra``. The recursion of
 ``findPlanHelper`` is run as an explicit stack of generator frames, so plan
 length is not limited by Python's recursion limit.
 
-Deliberately kept JSHOP2 1.0.3 behaviour: when a method reduces a task, only
-the subtasks of the method's task list replace the task; the task keeps its
-"ordered" flag, so a method body written ``(:unordered ...)`` at top level is
-ordered (nested ``:unordered`` lists keep their meaning).
+A method body written ``(:unordered ...)`` is unordered, as the manual says
+(3.8, 5.2.2: the reduced task is replaced by the body, flag included). JSHOP2
+1.0.3 differs: its ``TaskList.replace`` keeps the reduced task's "ordered"
+flag, so such a body runs in order. ``jshop2_compat=True`` reproduces that
+(nested ``:unordered`` lists keep their meaning in both modes).
+
+The search depth (the number of nested ``findPlanHelper`` calls, i.e. frames
+on the stack) is bounded by ``max_depth``: a method that decomposes into
+itself without end would otherwise grow the stack until memory runs out
+(JSHOP2 ends such a search with a ``StackOverflowError``). Reaching the bound
+ends the search like a timeout; ``stats.depth_limit`` then names the task
+that was being reduced deepest.
 """
 from __future__ import annotations
 
@@ -33,9 +41,13 @@ from typing import Iterator, Optional
 
 from . import syntax as S
 from .errors import PlanningError
-from .logic import Logic, atom_from_term
+from .limits import DEFAULT_MAX_DEPTH
+from .logic import Logic
 from .plan import Plan, Step
-from .state import Change, State
+from .goals import GoalGuard
+from .loops import LoopCheck
+from .operators import Operators
+from .state import Change, HashedState, State
 from .compile import binder, head_unifier
 from .terms import subst, term_str, variables
 from .tree import snapshot
@@ -65,7 +77,7 @@ class Node:
     ``how`` records what reduced an atomic node (for the task tree): a
     ``(method, branch_index, method_index)`` triple or the plan step's index.
     """
-    __slots__ = ("task", "subtasks", "ordered", "how", "done", "start")
+    __slots__ = ("task", "subtasks", "ordered", "how", "done", "start", "loop_key")
 
     def __init__(self, task=None, subtasks=None, ordered=True):
         self.task = task
@@ -74,6 +86,7 @@ class Node:
         self.how = None
         self.done = False   # cached: every task below is achieved
         self.start = 0      # cached: members before this index are achieved
+        self.loop_key = None   # the active method instance it is, see loops.py
 
 
 def compile_tasks(tl):
@@ -97,7 +110,7 @@ def _list_maker(tl: S.TaskList):
     return lambda env: Node(None, subtasks(env), ordered)
 
 
-def first_tasks(root: Node, trail: Optional[list] = None) -> list:
+def first_tasks(root: Node, trail: Optional[list] = None, path: Optional[list] = None) -> list:
     """JSHOP2's ``TaskList.getFirst``, without recursion.
 
     An ordered list contributes the first tasks of its first non-empty member;
@@ -108,7 +121,64 @@ def first_tasks(root: Node, trail: Optional[list] = None) -> list:
     member with nothing left is marked ``done``, and a list's ``start`` moves
     past its achieved leading members. Each change is pushed on the trail; the
     planner undoes those made below a search frame when it backtracks into it.
+
+    With a ``path`` (an empty list), an ordered network's walk leaves in it
+    where the task found is (see :func:`_first_in_order`); it is emptied if
+    the general way was taken.
     """
+    if trail is not None and root.ordered:
+        found = _first_in_order(root, trail, path)
+        if found is not None:
+            return found
+    if path:
+        path.clear()
+    return _first_tasks(root, trail)
+
+
+def _first_in_order(root: Node, trail: list, path: Optional[list] = None,
+                    at: Optional[tuple] = None) -> Optional[list]:
+    """:func:`first_tasks` while every list met is ordered (the common case,
+    and all of HDDL): one walk down to the first task left; None when an
+    unordered list is met (the caller then takes the general way).
+
+    ``path`` is left holding the ``(list, index)`` of each ancestor of the
+    task found, its own last. A later walk can resume from there (``at``, the
+    task's own entry popped off ``path``) instead of walking down from the
+    root again: the planner's cursor, which makes a long tail recursion
+    linear rather than quadratic (see ``Planner._first``).
+    """
+    if path is None:
+        path = []
+    node, i = at if at is not None else (root, root.start)
+    while True:
+        subs = node.subtasks
+        n = len(subs)
+        while i < n:
+            child = subs[i]
+            cs = child.subtasks
+            if cs is None:
+                path.append((node, i))
+                return [child]
+            if cs and not child.done:
+                if not child.ordered:
+                    return None
+                path.append((node, i))
+                node, i = child, child.start
+                break
+            if i == node.start:
+                trail.append((node, i))
+                node.start = i + 1
+            i += 1
+        else:
+            if not path:
+                return []
+            node.done = True
+            trail.append(node)
+            node, i = path.pop()
+            i += 1
+
+
+def _first_tasks(root: Node, trail: Optional[list]) -> list:
     res: list = []
     stack = [[root, root.start, -1]]      # node, next member, len(res) on entry
     while stack:
@@ -143,7 +213,7 @@ def first_tasks(root: Node, trail: Optional[list] = None) -> list:
     return res
 
 
-def _undo_marks(trail: list, mark: int) -> None:
+def _undo_marks(trail: list, mark: int, loops=None) -> None:
     """Forget what :func:`first_tasks` cached since ``mark``."""
     while len(trail) > mark:
         entry = trail.pop()
@@ -151,11 +221,46 @@ def _undo_marks(trail: list, mark: int) -> None:
             entry[0].start = entry[1]
         else:
             entry.done = False
+            if loops is not None:
+                loops.reopened(entry)
+
+
+def compat_warning(domain: S.Domain):
+    """The one warning ``--jshop2-compat`` gives for a domain whose method
+    bodies are written ``(:unordered ...)`` (they will run in order), or None."""
+    from .checks import Warning_
+    bodies = [b for ms in domain.methods.values() for m in ms for b in m.branches
+              if not b.tasks.ordered]
+    if not bodies:
+        return None
+    more = f" (and {len(bodies) - 1} more)" if len(bodies) > 1 else ""
+    return Warning_(bodies[0].tasks.pos or bodies[0].pos,
+                    f"--jshop2-compat: this (:unordered ...) method body{more} runs in "
+                    "order, as in JSHOP2 1.0.3; without the option it is unordered")
+
+
+def _deepest_task(root: Node, req: Node) -> Optional[Task]:
+    """The task to name when the search is too deep: the one just reduced, or
+    else the deepest reduced compound task of the network."""
+    if req.task is not None and not req.task.primitive:
+        return req.task
+    best, best_depth = None, -1
+    stack = [(root, 0)]
+    while stack:
+        node, depth = stack.pop()
+        if node.task is not None and node.subtasks is not None and not node.task.primitive:
+            depth += 1
+            if depth > best_depth:
+                best, best_depth = node.task, depth
+        for child in node.subtasks or ():
+            stack.append((child, depth))
+    return best
 
 
 class Stats:
     __slots__ = ("plans_found", "expansions", "operator_applications",
-                 "backtracks", "started", "elapsed", "timed_out", "interrupted")
+                 "backtracks", "started", "elapsed", "timed_out", "interrupted",
+                 "depth_limit")
 
     def __init__(self):
         self.plans_found = 0
@@ -166,6 +271,7 @@ class Stats:
         self.elapsed = 0.0
         self.timed_out = False
         self.interrupted = False
+        self.depth_limit = None    # a DepthLimit when the search hit max_depth
 
     def as_dict(self) -> dict:
         return {
@@ -176,39 +282,88 @@ class Stats:
             "backtracks": self.backtracks,
             "timed_out": self.timed_out,
             "interrupted": self.interrupted,
+            "depth_limit_reached": self.depth_limit is not None,
         }
+
+
+class DepthLimit:
+    """Why the search stopped at ``max_depth``: the task being reduced deepest."""
+    __slots__ = ("limit", "task")
+
+    def __init__(self, limit: int, task: Optional[Task]):
+        self.limit = limit
+        self.task = task
+
+    def __str__(self) -> str:
+        where = ""
+        if self.task is not None:
+            pos = getattr(self.task.src, "pos", None)
+            where = f"{pos}: " if pos else ""
+            what = f"task {self.task} recurses past the search depth limit"
+        else:
+            what = "the search reached its depth limit"
+        return (f"{where}{what} ({self.limit:,} nested reductions and steps); "
+                "search stopped (raise it with --max-depth N)")
 
 
 class Planner:
     """Finds plans for one problem instance of a domain."""
 
     def __init__(self, domain: S.Domain, instance: S.ProblemInstance,
-                 functions=None, record_trees: bool = False):
+                 functions=None, record_trees: bool = False,
+                 jshop2_compat: bool = False, max_depth: int = DEFAULT_MAX_DEPTH,
+                 loop_check: Optional[bool] = None, explain=None):
         self.domain = domain
+        self.explain = explain      # an explain.Explainer collecting dead ends, or None
         self.instance = instance
         self.record_trees = record_trees
-        self.state = State()
-        for atom in instance.state:
+        self.max_depth = max_depth
+        if loop_check is None:           # on for HDDL, off for JSHOP2 (its own semantics)
+            loop_check = domain.language == "hddl"
+        self.state = HashedState() if loop_check else State()
+        self.loops = LoopCheck(self.state) if loop_check else None
+        implied = domain.implied
+        for atom in (*domain.facts, *instance.state):
             self.state.add(atom.pred, atom.args)
+            for pred in implied.get(atom.pred, ()):    # HDDL supertypes
+                self.state.add(pred, atom.args)
         self.logic = Logic(domain, self.state, functions)
+        self.operators = Operators(self.state, self.logic)
+        self._apply = self.operators.apply
+        self._goal = self.guard = None
+        if instance.goal is not None:
+            self._goal = (self.logic.precondition(instance.goal), instance.goal_nvars)
+            self.guard = GoalGuard(domain, instance.goal) or None
         pre = self.logic.precondition
-        self._ops = {name: [(op, head_unifier(op.head.args), pre(op.pre), binder(op.head.args))
+        # (operator, head unifier, precondition, head binder, constant cost or None)
+        self._ops = {name: [(op, head_unifier(op.head.args), pre(op.pre), binder(op.head.args),
+                             op.cost if type(op.cost) is float else None)
                             for op in ops]
                      for name, ops in domain.operators.items()}
+        # (precondition, body, body is ordered) per branch; see the module docstring
         self._methods = {name: [(m, head_unifier(m.head.args),
-                                 [(pre(b.pre), compile_tasks(b.tasks)) for b in m.branches])
+                                 [(pre(b.pre), compile_tasks(b.tasks),
+                                   jshop2_compat or b.tasks.ordered) for b in m.branches])
                                 for m in ms]
                          for name, ms in domain.methods.items()}
         self.stats = Stats()
         # the problem's own variables (if any) stay unbound, like a method's
         nvars = 1 + max((v.index for t in S.task_atoms(instance.tasks)
                          for v in variables(t.args, [])), default=-1)
-        self.root = _list_maker(instance.tasks)([None] * nvars)
+        if instance.top is not None:     # HDDL: a root task binds the network's parameters
+            from .hddl_domain import top_method
+            m = top_method(domain, instance.top)
+            self._methods[m.name] = [(m, head_unifier(m.head.args),
+                                      [(pre(b.pre), compile_tasks(b.tasks), True)
+                                       for b in m.branches])]
+            self.root = _list_maker(S.TaskList([m.head]))([])
+        else:
+            self.root = _list_maker(instance.tasks)([None] * nvars)
         self._steps: list = []
         self._cost = 0.0
-        self._forall_cache: dict = {}
-        self._effects: dict = {}    # id(op) -> (plain deletes, plain adds, op)
         self._trail: list = []     # nodes marked done, see first_tasks
+        self._cursor: list = []    # where the last walk found its task, see _first
+        self._cursor_ok = False
 
     # ------------------------------------------------------------ driver
     def plans(self, timeout: Optional[float] = None) -> Iterator[Plan]:
@@ -228,14 +383,16 @@ class Planner:
         gc.disable()
         t0 = stats.started = clock()
         spent = 0.0
-        stack = [self._frame(self.root)]
-        push, pop = stack.append, stack.pop
-        ticks = 0
+        frame = self._frame
+        stack = [frame(self.root)]
+        push, pop, nxt = stack.append, stack.pop, next
+        max_depth = self.max_depth
+        ticks = stats.expansions
+        stats.expansions += 1
         try:
             while stack:
-                try:
-                    req = next(stack[-1])
-                except StopIteration:
+                req = nxt(stack[-1], None)     # frames never yield None
+                if req is None:
                     pop()
                     continue
                 if req is _PLAN:
@@ -246,6 +403,7 @@ class Planner:
                         plan.tree = snapshot(self.root, plan.steps)
                     spent += clock() - t0
                     stats.elapsed = spent
+                    stats.expansions = ticks + 1
                     t0 = None          # the consumer's time is not search time
                     if gc_was_enabled:
                         gc.enable()
@@ -253,7 +411,10 @@ class Planner:
                     gc.disable()
                     t0 = clock()
                     continue
-                push(self._frame(req))
+                if len(stack) >= max_depth:
+                    stats.depth_limit = DepthLimit(max_depth, _deepest_task(self.root, req))
+                    return
+                push(frame(req))
                 ticks += 1
                 if timeout is not None and not ticks & 255:
                     if clock() - stats.started > timeout:   # wall clock, output included
@@ -264,6 +425,7 @@ class Planner:
             raise
         finally:
             stats.elapsed = spent + (clock() - t0 if t0 is not None else 0.0)
+            stats.expansions = ticks + 1
             for frame in reversed(stack):
                 frame.close()
             if gc_was_enabled:
@@ -276,41 +438,60 @@ class Planner:
         It yields a node to recurse into (the driver runs that call and then
         resumes this one) or ``_PLAN`` when the whole network is achieved.
         """
-        self.stats.expansions += 1
         trail = self._trail
-        options = first_tasks(chosen, trail)
+        loops = self.loops
+        mark = len(trail)
+        options = self._first(chosen, trail)
+        if loops is not None and len(trail) > mark:
+            loops.completed(trail, mark)
         mark = len(trail)
         if not options:
             if chosen is not self.root:
                 yield self.root
-            else:
+                self._cursor_ok = False
+            elif self._goal is None or self.goal_holds():
                 yield _PLAN
+                self._cursor_ok = False
+            elif self.explain is not None:
+                self.explain.goal_failed(self)
             return
         state = self.state
+        explain = self.explain
+        root = self.root
         for node in options:
             task = node.task
+            tried = False        # did any operator or method apply?
             if task.primitive:
                 node.subtasks = []
-                for op, unify_head, pre, bind_head in self._ops.get(task.name, ()):
+                steps, apply, guard = self._steps, self._apply, self.guard
+                for op, unify_head, pre, bind_head, cost in self._ops.get(task.name, ()):
                     env = [None] * op.nvars
                     if not unify_head(task.args, env):
                         continue
                     for nb in pre(env):
-                        change, ok = self._apply(op, nb)
+                        change, ok = apply(op, nb)
+                        if ok and guard is not None and guard.broken(
+                                change, state, root, self._cursor if self._cursor_ok else None):
+                            ok = False
                         if ok:
                             self.stats.operator_applications += 1
-                            cost = subst(op.cost, nb)
-                            if type(cost) is not float:
-                                raise PlanningError.at(op.pos, f"cost of {op.name} is "
-                                                       f"{term_str(cost)}, not a number")
-                            node.how = len(self._steps)
-                            self._steps.append((op.name, bind_head(nb)[1], cost))
+                            if cost is None:       # a cost term: evaluate it
+                                cost = subst(op.cost, nb)
+                                if type(cost) is not float:
+                                    raise PlanningError.at(op.pos, f"cost of {op.name} is "
+                                                           f"{term_str(cost)}, not a number")
+                            node.how = len(steps)
+                            steps.append((op.name, bind_head(nb)[1], cost))
                             self._cost += cost
-                            yield self.root
+                            tried = True
+                            yield root
+                            self._cursor_ok = False
                             if len(trail) > mark:
-                                _undo_marks(trail, mark)
-                            self._steps.pop()
+                                _undo_marks(trail, mark, loops)
+                            steps.pop()
                             self._cost -= cost
+                            if type(op.cost) is not float:
+                                cost = None
                         change.undo(state)
                 node.subtasks = None
                 node.how = None
@@ -320,20 +501,71 @@ class Planner:
                     env = [None] * m.nvars
                     if not unify_head(task.args, env):
                         continue
-                    for k, (sat, reduce) in enumerate(branches):
+                    for k, (sat, reduce, ordered) in enumerate(branches):
                         found = False
                         for nb in sat(env):
+                            if loops is not None:
+                                key = loops.key(m, k, nb)
+                                if key in loops.active:
+                                    loops.cut += 1
+                                    found = True
+                                    continue
                             node.subtasks = reduce(nb)
+                            node.ordered = ordered
                             node.how = (m, k, index)
+                            if loops is not None and node.subtasks:
+                                loops.enter(node, key)
+                            tried = True
                             yield node
+                            self._cursor_ok = False
                             if len(trail) > mark:
-                                _undo_marks(trail, mark)
+                                _undo_marks(trail, mark, loops)
+                            if node.loop_key is not None:
+                                loops.leave(node)
                             found = True
                             node.subtasks = None
                             node.how = None
                         if found:
                             break
+            if not tried and explain is not None:
+                explain.dead_end(self, node)
             self.stats.backtracks += 1
+
+    def _first(self, chosen: Node, trail: list) -> list:
+        """``first_tasks(chosen)``, resuming from the cursor when it is valid.
+
+        The cursor is the path (``(list, index)`` pairs from the root) to the
+        task the last walk found. Going forward, the network changes only at
+        that task (it is applied, or reduced and then searched from), so the
+        next walk from the root can resume there. Any backtracking may change
+        the network anywhere above: every frame drops the cursor as soon as
+        one of its ``yield`` returns.
+        """
+        cursor = self._cursor
+        if chosen is self.root:
+            if self._cursor_ok and cursor:
+                found = _first_in_order(chosen, trail, cursor, cursor.pop())
+                if found is not None:
+                    return found
+            cursor.clear()
+            found = first_tasks(chosen, trail, cursor)
+            self._cursor_ok = bool(cursor)
+            return found
+        if self._cursor_ok and cursor and chosen.ordered:
+            parent, i = cursor[-1]
+            if parent.subtasks[i] is chosen:     # searching inside the task just reduced
+                inner: list = []
+                found = _first_in_order(chosen, trail, inner)
+                if found is not None:
+                    cursor.extend(inner)
+                    return found
+        self._cursor_ok = False
+        return first_tasks(chosen, trail)
+
+    def goal_holds(self) -> bool:
+        """Whether the problem's goal (HDDL) holds in the current state."""
+        sat, nvars = self._goal
+        return next(iter(sat([None] * nvars)), None) is not None
 
     # ------------------------------------------------------------ operators
     def step_options(self, name: str, args: tuple):
@@ -341,7 +573,7 @@ class Planner:
         is applicable in the current state: operators in definition order,
         then satisfiers of the precondition in JSHOP2's order (lazily; the
         state must be as it was when the next option is asked for)."""
-        for op, unify_head, pre, _bind in self._ops.get(name, ()):
+        for op, unify_head, pre, _bind, _cost in self._ops.get(name, ()):
             env = [None] * op.nvars
             if unify_head(tuple(args), env):
                 for nb in pre(env):
@@ -350,9 +582,7 @@ class Planner:
     def effects(self, op: S.Operator, env: list) -> tuple[list, list]:
         """The ground atoms ``(pred, args)`` an operator would delete and add
         under ``env``, evaluated in the current state (protections left out)."""
-        dels = [a for a in self._effect_atoms(op.delete, env, op) if a[0] is not None]
-        adds = [a for a in self._effect_atoms(op.add, env, op) if a[0] is not None]
-        return dels, adds
+        return self.operators.effects(op, env)
 
     def apply(self, op: S.Operator, env: list) -> Optional[Change]:
         """Apply an operator to the state (manual 5.2.1); the change, to undo
@@ -374,96 +604,3 @@ class Planner:
             if self.apply(op, env) is not None:
                 return True
         return False
-
-    def _plain(self, eff: S.Effects):
-        """``[(pred, binder)]`` for a list of plain atoms, else None (general case)."""
-        if eff.var is not None or not all(isinstance(i, S.Atom) for i in eff.items):
-            return None
-        return [(i.pred, binder(i.args)) for i in eff.items]
-
-    def _apply(self, op: S.Operator, env: list):
-        """Apply an operator (manual 5.2.1); False if it deletes a protected atom."""
-        change = Change()
-        state = self.state
-        plain = self._effects.get(id(op))
-        if plain is None:
-            plain = self._effects[id(op)] = (self._plain(op.delete), self._plain(op.add), op)
-        dels, adds, _ = plain
-        if dels is not None and adds is not None:
-            protections = state.protections
-            for pred, bind in dels:
-                args = bind(env)[1]
-                if (pred, args) in protections:
-                    return change, False
-                i = state.delete(pred, args)
-                if i != -1:
-                    change.deleted.append((pred, args, i))
-            for pred, bind in adds:
-                args = bind(env)[1]
-                if state.add(pred, args):
-                    change.added.append((pred, args))
-            return change, True
-        for pred, args in self._effect_atoms(op.delete, env, op):
-            if pred is None:  # a protection condition to cancel
-                p, a = args
-                if state.unprotect(p, a):
-                    change.unprotected.append((p, a))
-                continue
-            if state.is_protected(pred, args):
-                return change, False
-            i = state.delete(pred, args)
-            if i != -1:
-                change.deleted.append((pred, args, i))
-        for pred, args in self._effect_atoms(op.add, env, op):
-            if pred is None:
-                p, a = args
-                state.protect(p, a)
-                change.protected.append((p, a))
-                continue
-            if state.add(pred, args):
-                change.added.append((pred, args))
-        return change, True
-
-    def _effect_atoms(self, eff: S.Effects, env: list, op):
-        """Ground atoms of a delete/add list; protections come as (None, atom).
-
-        Generated lazily: a forall element's condition is evaluated while the
-        atoms before it are already deleted, as in JSHOP2.
-        """
-        if eff.var is not None:
-            lst = env[eff.var.index]
-            if type(lst) is not tuple:
-                raise PlanningError.at(op.pos, f"the effect list variable {eff.var.name} "
-                                       f"of {op.name} is bound to {term_str(lst)}")
-            for t in lst:
-                yield atom_from_term(t, op.pos)
-            return
-        for item in eff.items:
-            if isinstance(item, S.Atom):
-                yield item.pred, binder(item.args)(env)[1]
-            elif isinstance(item, S.VarAtom):
-                yield self._var_atom(item, env)
-            elif isinstance(item, S.Protection):
-                yield None, self._ground(item.atom, env)
-            else:  # EffectForAll
-                cond = self._forall_sat(item)
-                for nb in cond(env):
-                    for a in item.atoms:
-                        yield self._ground(a, nb)
-
-    def _ground(self, a, env):
-        if isinstance(a, S.VarAtom):
-            return self._var_atom(a, env)
-        return a.pred, binder(a.args)(env)[1]
-
-    def _var_atom(self, a: S.VarAtom, env):
-        t = env[a.var.index]
-        if t is None:
-            raise PlanningError.at(a.pos, f"effect variable {a.var.name} is not bound")
-        return atom_from_term(t, a.pos)
-
-    def _forall_sat(self, item: S.EffectForAll):
-        sat = self._forall_cache.get(id(item))
-        if sat is None:
-            sat = self._forall_cache[id(item)] = self.logic.expr(item.cond)
-        return sat

@@ -105,6 +105,37 @@ class State:
         return sum(len(v) for v in self.atoms.values())
 
 
+class HashedState(State):
+    """A state that keeps a hash of its atoms up to date (``key``), so that
+    two states can be compared in constant time (see :mod:`htn.jshop.loops`).
+    Equal states have equal keys; unequal states almost surely differ."""
+    __slots__ = ("key",)
+
+    def __init__(self):
+        super().__init__()
+        self.key = 0
+
+    def add(self, pred: str, args: tuple) -> bool:
+        if State.add(self, pred, args):
+            self.key ^= hash((pred, args))
+            return True
+        return False
+
+    def delete(self, pred: str, args: tuple) -> int:
+        i = State.delete(self, pred, args)
+        if i != -1:
+            self.key ^= hash((pred, args))
+        return i
+
+    def restore(self, pred: str, args: tuple, index: int) -> None:
+        State.restore(self, pred, args, index)
+        self.key ^= hash((pred, args))
+
+    def retract(self, pred: str, args: tuple) -> None:
+        State.retract(self, pred, args)
+        self.key ^= hash((pred, args))
+
+
 class Change:
     """What one operator application did, to be undone on backtracking."""
     __slots__ = ("deleted", "added", "unprotected", "protected")
@@ -112,8 +143,8 @@ class Change:
     def __init__(self):
         self.deleted: list = []      # (pred, args, index)
         self.added: list = []        # (pred, args)
-        self.unprotected: list = []  # (pred, args)
-        self.protected: list = []    # (pred, args)
+        self.unprotected: list = _NONE  # (pred, args); a list of its own once used
+        self.protected: list = _NONE    # (pred, args)
 
     def undo(self, state: State) -> None:
         """JSHOP2's ``State.undo``: added out, deleted back in place, protections."""
@@ -125,3 +156,6 @@ class Change:
             state.unprotect(pred, args)
         for pred, args in self.unprotected:
             state.protect(pred, args)
+
+
+_NONE: tuple = ()    # no protection changes (most operators): nothing allocated

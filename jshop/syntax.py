@@ -66,6 +66,15 @@ class ForAll:
 
 
 @dataclass
+class Equal:
+    """``(= t1 t2)`` (HDDL/PDDL equality): true when both sides are the same
+    term; a side that is an unbound variable is bound to the other side."""
+    left: Any
+    right: Any
+    pos: Optional[Pos] = None
+
+
+@dataclass
 class Assign:
     var: Var
     term: Any
@@ -155,6 +164,11 @@ class Operator:
     cost: Any            # a term; default 1.0
     nvars: int = 0
     pos: Optional[Pos] = None
+    # PDDL/HDDL semantics: every effect condition (forall, when) is evaluated
+    # in the state before the operator, then deletions, then additions. JSHOP2
+    # evaluates a delete list's forall while earlier atoms are already deleted
+    # and the add list after all deletions (manual 5.2.1).
+    effects_in_prestate: bool = False
 
     @property
     def name(self) -> str:
@@ -209,6 +223,14 @@ class Domain:
     axioms: dict = field(default_factory=dict)      # pred -> [Axiom]
     file: str = ""
     pos: Optional[Pos] = None
+    language: str = "jshop2"                        # or "hddl": the file it was read from
+    # HDDL typing (empty for JSHOP2): ground atoms true in every problem (the
+    # domain's constants and their types), and for a type predicate the
+    # predicates of its supertypes ((truck t) also means (vehicle t)).
+    facts: list = field(default_factory=list)       # [Atom]
+    implied: dict = field(default_factory=dict)     # pred -> [pred]
+    spelling: dict = field(default_factory=dict)    # lower-case name -> as written
+    hddl: Any = None                                # the HDDL model it was read from
 
     def elements(self):
         for ops in self.operators.values():
@@ -241,10 +263,16 @@ class Domain:
 
 @dataclass
 class ProblemInstance:
-    """One state/task-list pair of a ``defproblem`` (3.12)."""
+    """One state/task-list pair of a ``defproblem`` (3.12); an HDDL problem
+    also has a goal, which a plan's final state must satisfy."""
     state: list      # [Atom], ground
     tasks: TaskList
     pos: Optional[Pos] = None
+    goal: Optional[Precondition] = None
+    goal_nvars: int = 0
+    # an HDDL initial task network with parameters: the (HDDL) method of an
+    # artificial root task whose body is ``tasks`` and which binds them
+    top: Any = None
 
 
 @dataclass
@@ -255,3 +283,5 @@ class Problem:
     file: str = ""
     pos: Optional[Pos] = None
     domain_pos: Optional[Pos] = None   # where the domain's name is written
+    language: str = "jshop2"
+    spelling: dict = field(default_factory=dict)    # lower-case name -> as written

@@ -9,8 +9,11 @@ costs. When a precondition binds variables the step does not show (so
 several satisfiers may give different effects or costs), every distinct
 choice is tried, with backtracking, as the planner would have.
 
-Validation does not check that the plan is a decomposition of the problem's
-tasks: any applicable operator sequence with the right cost is valid.
+An HDDL problem's goal must also hold in the final state (HDDL, Höller et
+al. 2020). Validation does not check that the plan is a decomposition of the
+problem's tasks: any applicable operator sequence with the right cost (and
+reaching the goal) is valid; for HDDL, the IPC 2020 verifier checks the
+decomposition that ``htn plan -f ipc`` prints.
 """
 from __future__ import annotations
 
@@ -50,7 +53,10 @@ def validate_plan(domain: S.Domain, instance: S.ProblemInstance, plan,
     """Replay ``plan`` (a :class:`~htn.jshop.plan.Plan`) from ``instance``'s
     initial state; see the module docstring for what valid means."""
     from .planner import Planner
-    planner = Planner(domain, S.ProblemInstance(instance.state, S.TaskList([])), functions)
+    planner = Planner(domain, S.ProblemInstance(instance.state, S.TaskList([]),
+                                                goal=instance.goal,
+                                                goal_nvars=instance.goal_nvars),
+                      functions, loop_check=False)
     steps = plan.steps
     n = len(steps)
     changes: list = []            # applied change of each step so far
@@ -61,9 +67,15 @@ def validate_plan(domain: S.Domain, instance: S.ProblemInstance, plan,
         k = len(changes)
         if k == n:
             total = sum(costs)
-            if plan.cost is None or abs(total - plan.cost) <= 1e-9 * max(1.0, abs(total)):
+            cost_ok = plan.cost is None or abs(total - plan.cost) <= 1e-9 * max(1.0, abs(total))
+            goal_ok = instance.goal is None or planner.goal_holds()
+            if cost_ok and goal_ok:
                 return Verdict(True, n, total)
-            if deepest.failed_step is None:
+            if not goal_ok:
+                if deepest.failed_step is None or deepest.failed_step < n:
+                    deepest = Verdict(False, n, total, n, _why_goal(planner, instance),
+                                      getattr(plan, "line", 0))
+            elif deepest.failed_step is None:
                 deepest = Verdict(False, n, total, n, f"the plan's cost is "
                                   f"{term_str(float(plan.cost))} but its steps cost "
                                   f"{term_str(float(total))}", getattr(plan, "line", 0))
@@ -139,10 +151,28 @@ def _why(planner, step) -> str:
     return "; ".join(reasons) or f"no operator applies to {step}"
 
 
+def _why_goal(planner, instance) -> str:
+    """The first conjunct of the goal that does not hold in the final state."""
+    expr = instance.goal.expr
+    items = expr.items if isinstance(expr, S.And) else [expr]
+    env = [None] * instance.goal_nvars
+    for item in items:
+        if next(iter(planner.logic.expr(item)(env)), None) is None:
+            return f"the goal does not hold in the final state: {_show(item, env)} is false"
+    return "the goal does not hold in the final state"
+
+
 def _show(e, env) -> str:
     """An expression in source form, variables replaced by their bindings."""
+    from .functions import STDLIB_JAVA_NAMES
+    from .terms import CallTerm
+    written = {java: name for name, java in STDLIB_JAVA_NAMES.items()}
+
     def term(t):
-        t = subst(t, env)
+        if type(t) is CallTerm:
+            name = written.get(t.name, t.name)
+            return "(call " + " ".join([name, *[term(a) for a in t.args]]) + ")"
+        t = subst(t, env) if type(t) is not CallTerm else t
         if type(t) is Var:
             return t.name
         if type(t) is tuple:
@@ -155,5 +185,14 @@ def _show(e, env) -> str:
     if isinstance(e, (S.And, S.Or)):
         word = "and" if isinstance(e, S.And) else "or"
         return f"({word} " + " ".join(_show(x, env) for x in e.items) + ")"
+    if isinstance(e, S.CallExpr):
+        return term(e.call)
+    if isinstance(e, S.Equal):
+        return f"(= {term(e.left)} {term(e.right)})"
+    if isinstance(e, S.ForAll):
+        names = " ".join(v.name for v in e.vars)
+        return f"(forall ({names}) {_show(e.cond, env)} {_show(e.then, env)})"
+    if isinstance(e, S.Assign):
+        return f"(assign {e.var.name} {term(e.term)})"
     pos = getattr(e, "pos", None)
     return f"the {type(e).__name__.lower()} expression" + (f" at {pos}" if pos else "")

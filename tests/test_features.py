@@ -186,9 +186,13 @@ def test_nested_task_lists_and_comments():
     assert plans(d, "(defproblem p d () ((m)))") == [["(!a 1.0)", "(!a 2.0)", "(!a 3.0)"]]
 
 
-def test_method_top_level_unordered_is_ordered_as_in_jshop2():
+def test_method_top_level_unordered_interleaves_unless_jshop2_compat():
     d = f"(defdomain d ({ops('!a')} (:method (m) () (:unordered (!a 1) (!a 2)))))"
-    assert plans(d, "(defproblem p d () ((m)))") == [["(!a 1.0)", "(!a 2.0)"]]
+    assert plans(d, "(defproblem p d () ((m)))") == [["(!a 1.0)", "(!a 2.0)"],
+                                                     ["(!a 2.0)", "(!a 1.0)"]]
+    dom, prob = parse_text(d, "d.jshop"), parse_text("(defproblem p d () ((m)))", "p.jshop")
+    compat = Planner(dom, prob.instances[0], jshop2_compat=True)
+    assert [p.lines() for p in compat.plans()] == [["(!a 1.0)", "(!a 2.0)"]]
 
 
 def test_defproblem_with_several_state_and_task_list_pairs():

@@ -1,0 +1,68 @@
+"""Loop detection for total-order HTN search (used for HDDL domains).
+
+IPC domains are recursive, and plain depth-first decomposition can recurse
+without end: Transport's ``get_to`` reduces to ``get_to`` of a neighbour
+first, Hiking's ``trip_to2`` to itself. HyperTensioN ("dejavu", Magnaguagno
+et al., IPC 2020) marks the method instances that recursion can reach and
+refuses one while an identical one is still being decomposed; this planner
+does the same with the state added, so that recursion that makes progress
+(Towers' moves, a snake's walk) is never cut:
+
+    a method instance (method, branch, binding of all its variables) is not
+    applied in a state while the same instance, applied in the same state, is
+    an ancestor in the decomposition (it is still "active": reduced, its
+    subtasks not all achieved).
+
+A loop cut this way would only repeat, below itself, a decomposition already
+under way from the same state. The search then terminates on every problem
+with finitely many objects: an infinite branch would repeat some method
+instance and state on one ancestor chain. It is not complete for every HTN
+problem (a plan that needs a method instance to re-enter itself in an
+unchanged state is lost), which is the trade-off total-order planners make.
+
+States are compared by an incremental hash (:class:`~htn.jshop.state.HashedState`).
+"Active" is tracked with the planner's own bookkeeping: a reduced node is
+active from its reduction until :func:`~htn.jshop.planner.first_tasks` marks
+it done, and again if that mark is undone on backtracking.
+"""
+from __future__ import annotations
+
+
+class LoopCheck:
+    """The active method instances of the current search path."""
+    __slots__ = ("state", "active", "cut")
+
+    def __init__(self, state):
+        self.state = state          # a HashedState
+        self.active: dict = {}      # key -> count
+        self.cut = 0                # reductions refused
+
+    def key(self, method, branch: int, env: list) -> tuple:
+        return (id(method), branch, tuple(env), self.state.key)
+
+    def enter(self, node, key) -> None:
+        node.loop_key = key
+        self.active[key] = self.active.get(key, 0) + 1
+
+    def leave(self, node) -> None:
+        self._drop(node.loop_key)
+        node.loop_key = None
+
+    def completed(self, trail: list, start: int) -> None:
+        """Nodes that ``first_tasks`` marked done since ``start`` are no longer active."""
+        for i in range(start, len(trail)):
+            entry = trail[i]
+            if type(entry) is not tuple and entry.loop_key is not None:
+                self._drop(entry.loop_key)
+
+    def reopened(self, node) -> None:
+        """A done mark was undone: the node is active again."""
+        if node.loop_key is not None:
+            self.active[node.loop_key] = self.active.get(node.loop_key, 0) + 1
+
+    def _drop(self, key) -> None:
+        n = self.active[key]
+        if n <= 1:
+            del self.active[key]
+        else:
+            self.active[key] = n - 1
