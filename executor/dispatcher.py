@@ -64,7 +64,7 @@ class TaskDispatcher:
 
     def __init__(self, robot, domain: S.Domain, instance: S.ProblemInstance, steps: list,
                  retries: dict[str, int], log: EventLog, replan: bool = False,
-                 functions=None, max_replans: int = 3, tree=None):
+                 functions=None, max_replans: int = 10, tree=None):
         self.robot = robot
         self.domain = domain
         self.instance = instance
