@@ -88,7 +88,11 @@ def run(ctx, plan_file, robot_name, sim, gui, snapshots, faults, seed, retries, 
              replan, log_path, from_log, plan_index, domain, problem, functions, bt_dot, quiet)
     except KeyboardInterrupt:        # before the robot runs: nothing to stop
         click.echo("terminated" if signals.terminated else "interrupted", err=True)
-        sys.exit(signals.exit_code())
+        # leave at once: after a Ctrl-C inside PyBullet (building the world),
+        # interpreter shutdown was seen to end by SIGINT instead of the exit code
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(signals.exit_code())
     finally:
         signals.restore()
 

@@ -57,7 +57,8 @@ def check_runnable(domain: S.Domain, instance: S.ProblemInstance, plan, plan_fil
         if var is not None:
             text = lines[s.line - 1] if 0 < s.line <= len(lines) else ""
             col = text.find(var.name) + 1 if var.name in text else 1
-            raise HtnError(f"{s} has a variable, {var.name}: a plan to run must be ground",
+            shown = text.strip() or s.name
+            raise HtnError(f"{shown} has a variable, {var.name}: a plan to run must be ground",
                            plan_file, s.line or None, col if s.line else None)
     verdict = validate_plan(domain, instance, Plan(plan.steps, None), functions)
     if not verdict.valid:
