@@ -92,30 +92,18 @@ def behaviour_rows(root, running, failed, events: dict) -> list[Row]:
 
 def fit(rows: list[Row], height: int) -> list[Optional[Row]]:
     """At most ``height`` lines: every row marked ``must`` (the running action
-    and its ancestors) and as many rows around it as fit; ``None`` stands for
-    rows left out."""
+    and its ancestors) and as many rows around it as fit, nearest first;
+    ``None`` stands for rows left out."""
     if len(rows) <= height:
         return list(rows)
-    must = [i for i, r in enumerate(rows) if r.must]
-    if not must:
-        must = [0]
+    must = [i for i, r in enumerate(rows) if r.must] or [len(rows) - 1]
     if len(must) >= height:       # a tiny terminal: the nearest ancestors and the action
         return [rows[i] for i in must[-height:]]
+    centre = max(must)
     chosen = set(must)
-    lo = hi = max(must)
-
-    def lines(sel):
-        s = sorted(sel)
-        gaps = sum(1 for a, b in zip(s, s[1:]) if b > a + 1) + (s[0] > 0) + (s[-1] < len(rows) - 1)
-        return len(s) + gaps
-    grow = True
-    while grow:
-        grow = False
-        for nxt in (hi + 1, lo - 1):
-            if 0 <= nxt < len(rows) and nxt not in chosen and lines(chosen | {nxt}) <= height:
-                chosen.add(nxt)
-                lo, hi = min(lo, nxt), max(hi, nxt)
-                grow = True
+    for i in sorted(range(len(rows)), key=lambda i: (abs(i - centre), i < centre)):
+        if i not in chosen and _lines(chosen | {i}, len(rows)) <= height:
+            chosen.add(i)
     out: list[Optional[Row]] = []
     prev = -1
     for i in sorted(chosen):
@@ -126,6 +114,13 @@ def fit(rows: list[Row], height: int) -> list[Optional[Row]]:
     if prev < len(rows) - 1:
         out.append(None)
     return out
+
+
+def _lines(chosen: set, total: int) -> int:
+    """Lines needed to show rows ``chosen`` of ``total``, one ``…`` per gap."""
+    s = sorted(chosen)
+    gaps = sum(1 for a, b in zip(s, s[1:]) if b > a + 1) + (s[0] > 0) + (s[-1] < total - 1)
+    return len(s) + gaps
 
 
 def render_rows(rows: list[Optional[Row]]):

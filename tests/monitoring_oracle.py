@@ -34,14 +34,26 @@ class Oracle:
         self.held_at_start: list = []
         self.aborts = 0
         self.unexplained: list[str] = []
-        self.fault_to_abort: list[tuple] = []     # (fault kind, fault sim_t, abort sim_t)
+        self.fault_to_abort: list[tuple] = []     # (kind, fault sim_t, detail, abort sim_t, action)
         self._last_fault = None
 
     # ------------------------------------------------------------ simulator truth
-    def _grippers(self):
+    def _arms(self):
         bodies = getattr(self.robot, "arm_body", None)
-        arms = list(bodies.values()) if bodies else [self.robot.arm]
-        return [self.p.getLinkState(b, EE_LINK, physicsClientId=self.c)[4] for b in arms]
+        return list(bodies.values()) if bodies else [self.robot.arm]
+
+    def _grippers(self):
+        return [self.p.getLinkState(b, EE_LINK, physicsClientId=self.c)[4] for b in self._arms()]
+
+    def _attached(self, obj):
+        """Is a constraint holding ``obj`` to an arm (the simulator's grasp)?"""
+        p, c, body, arms = self.p, self.c, self.robot.body_of[obj], set(self._arms())
+        for i in range(p.getNumConstraints(physicsClientId=c)):
+            info = p.getConstraintInfo(p.getConstraintUniqueId(i, physicsClientId=c),
+                                       physicsClientId=c)
+            if info[0] in arms and info[2] == body:
+                return True
+        return False
 
     def _pos(self, name):
         return self.p.getBasePositionAndOrientation(self.robot.body_of[name],
@@ -87,7 +99,8 @@ class Oracle:
         if pred in ("robot_at", "robot-at"):
             return self._base_at(args[-1])
         if pred == "holding":
-            return self._at_gripper(args[-1], 0.06) and self._lifted(args[-1])
+            obj = args[-1]
+            return self._attached(obj) and self._at_gripper(obj, 0.06) and self._lifted(obj)
         if pred in ("object_on", "at"):
             obj, where = args
             return where in self.robot.furniture_top and self._on(obj, where)
@@ -105,10 +118,10 @@ class Oracle:
     # ------------------------------------------------------------ events
     def event(self, rec) -> None:
         if rec["event"] == "fault":
-            self._last_fault = (rec["kind"], rec["sim_t"])
+            self._last_fault = (rec["kind"], rec["sim_t"], rec["detail"])
         if rec["event"] == "start":
             self.held_at_start = [o for o in self.robot.world.things
-                                  if o in self.robot.body_of and self._at_gripper(o, 0.06)]
+                                  if o in self.robot.body_of and self._attached(o)]
         if rec["event"] != "aborted":
             return
         self.aborts += 1
@@ -124,7 +137,8 @@ class Oracle:
         if hold == "no collision":
             return self._touching()
         if hold is not None:
-            return any(not self._at_gripper(o, 0.15) for o in self.held_at_start)
+            return any(not (self._attached(o) and self._at_gripper(o, 0.15))
+                       for o in self.held_at_start)
         from htn.jshop.parser import parse_step
         step = parse_step(rec["action"], "<log>", 1)
         added = set()
@@ -147,21 +161,31 @@ class Oracle:
             self.model.apply_step(step.name, tuple(step.args))
 
 
+_LOADED: dict = {}
+
+
+def _load(problem_file: str):
+    """Domain, problem instance and domain path of a problem (parsed once per process)."""
+    if problem_file not in _LOADED:
+        from htn.jshop import load_domain, load_problem
+        from htn.robot.world import is_kitchen_state
+        inst = load_problem(problem_file).instances[0]
+        domain = str(ROOT / "domains" / ("kitchen.jshop" if is_kitchen_state(inst.state)
+                                         else "domestic.jshop"))
+        _LOADED[problem_file] = (load_domain(domain), inst, domain)
+    return _LOADED[problem_file]
+
+
 def run_checked(problem: str, faults: str, seed: int, replan: bool, steps=None,
                 problem_file=None) -> dict:
     """One monitored run in PyBullet with the oracle listening."""
     from htn.executor.config import load_retries
     from htn.executor.dispatcher import TaskDispatcher
     from htn.executor.log import EventLog
-    from htn.jshop import Planner, load_domain, load_problem
+    from htn.jshop import Planner
     from htn.robot import simulated_robot
     from htn.robot.faults import Faults
-    from htn.robot.world import is_kitchen_state
-    prob = load_problem(str(problem_file or ROOT / "problems" / f"{problem}.jshop"))
-    inst = prob.instances[0]
-    domain = str(ROOT / "domains" / ("kitchen.jshop" if is_kitchen_state(inst.state)
-                                     else "domestic.jshop"))
-    dom = load_domain(domain)
+    dom, inst, domain = _load(str(problem_file or ROOT / "problems" / f"{problem}.jshop"))
     tree = None
     if steps is None:
         plan = next(Planner(dom, inst, record_trees=True).plans())
