@@ -45,6 +45,7 @@ DEFAULT_SHAPE = (0.033, 0.12, (0.9, 0.2, 0.1, 1))
 ROWS = (0.70, 0.84)                 # u of the spots where objects stand on a table
 SPOT_VS = tuple(round(-0.55 + 0.1 * i, 2) for i in range(12))
 TRAY_BASE_SPEED, TRAY_TURN_SPEED = 0.35, 0.6
+ARM_AND_FINGERS = [*ARM_JOINTS, *FINGERS]
 DOCK = 0.35                         # backing away from a table before turning
 
 
@@ -267,10 +268,10 @@ class KitchenRobot(Drawers, Trays, PyBulletRobot):
         if self.hold_tray is not None:
             self._follow_tray()
         for arm, body in self.arm_body.items():   # nothing pushes the arms around
-            for j, v in zip(ARM_JOINTS, self.q_cmd[arm]):
-                p.resetJointState(body, j, v, physicsClientId=c)
-            for j in FINGERS:
-                p.resetJointState(body, j, self.f_cmd[arm], physicsClientId=c)
+            f = self.f_cmd[arm]
+            p.resetJointStatesMultiDof(body, ARM_AND_FINGERS,
+                                       [[v] for v in self.q_cmd[arm]] + [[f], [f]],
+                                       physicsClientId=c)
         super()._physics_step()
 
     def _mounted(self) -> list:
