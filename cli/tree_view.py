@@ -90,54 +90,40 @@ def behaviour_rows(root, running, failed, events: dict) -> list[Row]:
     return rows
 
 
-def fit(rows: list[Row], height: int) -> list[Optional[Row]]:
-    """At most ``height`` lines: every row marked ``must`` (the running action
-    and its ancestors) and as many rows around it as fit, nearest first;
-    ``None`` stands for rows left out."""
-    if len(rows) <= height:
-        return list(rows)
-    must = [i for i, r in enumerate(rows) if r.must] or [len(rows) - 1]
-    if len(must) >= height:       # a tiny terminal: the nearest ancestors and the action
-        return [rows[i] for i in must[-height:]]
+def fit(rows: list[Row], height: int) -> list[tuple[Row, bool]]:
+    """At most ``height`` rows: every row marked ``must`` (the running action
+    and its ancestors; on a tiny terminal the nearest of them) and as many
+    rows around it as fit, nearest first. Each comes with whether rows were
+    left out just before it (drawn as ``…`` in its margin, taking no line)."""
+    must = [i for i, r in enumerate(rows) if r.must] or [0, len(rows) - 1]
+    chosen = set(must[-height:])
     centre = max(must)
-    chosen = set(must)
     for i in sorted(range(len(rows)), key=lambda i: (abs(i - centre), i < centre)):
-        if i not in chosen and _lines(chosen | {i}, len(rows)) <= height:
-            chosen.add(i)
-    out: list[Optional[Row]] = []
-    prev = -1
+        if len(chosen) >= height:
+            break
+        chosen.add(i)
+    out, prev = [], -1
     for i in sorted(chosen):
-        if i > prev + 1:
-            out.append(None)
-        out.append(rows[i])
+        out.append((rows[i], i > prev + 1))
         prev = i
-    if prev < len(rows) - 1:
-        out.append(None)
     return out
 
 
-def _lines(chosen: set, total: int) -> int:
-    """Lines needed to show rows ``chosen`` of ``total``, one ``…`` per gap."""
-    s = sorted(chosen)
-    gaps = sum(1 for a, b in zip(s, s[1:]) if b > a + 1) + (s[0] > 0) + (s[-1] < total - 1)
-    return len(s) + gaps
-
-
-def render_rows(rows: list[Optional[Row]]):
+def render_rows(shown: list[tuple[Row, bool]], more_below: bool = False):
     from rich.text import Text
     text = Text(no_wrap=True, overflow="ellipsis")
-    for k, r in enumerate(rows):
+    for k, (r, gap) in enumerate(shown):
         if k:
             text.append("\n")
-        if r is None:
-            text.append("  …", style="dim")
-            continue
+        text.append("… " if gap else "  ", style="dim")
         text.append("  " * r.depth)
         text.append(r.mark, style=STATUS_STYLE.get(r.mark, ""))
         text.append(" ")
         text.append(r.text, style="bold" if r.must else "")
         if r.note:
             text.append("  " + r.note, style="dim")
+    if more_below:
+        text.append("\n… ", style="dim")
     return text
 
 
@@ -179,8 +165,9 @@ class LiveTreeView:
             return
         from rich.console import Group
         from rich.text import Text
-        height = max(3, self.console.size.height - 2)
+        height = max(3, self.console.size.height - 3)
         rows = behaviour_rows(d.root, d.running, d.failed, self.last)
         shown = fit(rows, height)
-        self.live.update(Group(Text(self.header, style="bold"), render_rows(shown)),
+        below = bool(shown) and shown[-1][0] is not rows[-1]
+        self.live.update(Group(Text(self.header, style="bold"), render_rows(shown, below)),
                          refresh=True)
