@@ -103,19 +103,22 @@ class Robot:
 
     # ---- by name
     def act(self, name: str, *args) -> Outcome:
-        """Start skill ``name``: a result, or a generator to tick (see module doc)."""
-        attr = self._skills.get(name)
-        if attr is None:
+        """Start skill ``name``: a result, or a generator to tick (see module
+        doc). A robot written without the decorator offers its method of the
+        same name."""
+        fn = getattr(self, self._skills.get(name, name), None)
+        if not callable(fn):
             return SkillResult(False, f"{type(self).__name__} cannot {name.replace('_', ' ')}")
-        return getattr(self, attr)(*args)
+        return fn(*args)
 
     def check(self, name: str, *args) -> Check:
-        """Run check ``name`` on the world as it is now."""
-        attr = self._checks.get(name)
-        if attr is None:
+        """Run check ``name`` on the world as it is now (without the
+        decorator: the method ``check_NAME``)."""
+        fn = getattr(self, self._checks.get(name, f"check_{name}"), None)
+        if not callable(fn):
             return Check(False, f"{name.replace('_', ' ')} is not observable on "
                                 f"{type(self).__name__}")
-        return getattr(self, attr)(*args)
+        return fn(*args)
 
     @classmethod
     def skill_names(cls) -> list[str]:
@@ -123,7 +126,8 @@ class Robot:
 
     @classmethod
     def check_names(cls) -> list[str]:
-        return sorted(cls._checks)
+        return sorted({*cls._checks, *(a[6:] for a in dir(cls) if a.startswith("check_")
+                                       and a != "check_names")})
 
     # ---- control and state estimation
     def apply_internal(self, name: str, args: tuple) -> None:
