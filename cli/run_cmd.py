@@ -171,7 +171,7 @@ def _run(ctx, signals, plan_file, robot_name, sim, gui, snapshots, faults, seed,
                        f"{', '.join(unknown)}")
     limits.update(overrides)
     check_runnable(dom, instance, plan, plan_file, table)
-    tree = recover_tree(dom, instance, steps, table)
+    tree = recover_tree(dom, instance, steps, table, tasks=pf.notes.get("tasks", (None,))[0])
 
     robot = make_robot(robot_name, RobotRequest(dom, instance, faults or "", seed, gui, table))
     try:
@@ -360,11 +360,21 @@ def _make_folder(path: str, option: str) -> None:
 
 
 def _write_dot(root, path: str) -> None:
+    """py_trees' DOT export of the tree. Node paths hold ':' (``:call 2``),
+    which pydot would read as a port: it is written as U+2236 (looks alike)."""
     import py_trees
 
     from .output import atomic_write
+    names = {b: b.name for b in root.iterate()}
+    for b in names:
+        b.name = b.name.replace(":", "\u2236")
+    try:
+        text = py_trees.display.dot_tree(root).to_string()
+    finally:
+        for b, name in names.items():
+            b.name = name
     with atomic_write(path) as fh:
-        fh.write(py_trees.display.dot_tree(root).to_string())
+        fh.write(text)
 
 
 def run_header(plan_file, plan_index, domain, problem, functions, robot, seed, faults,

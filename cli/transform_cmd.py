@@ -32,6 +32,7 @@ def transform(domain, problem, rules, metric, output, as_json):
     step's precondition holds in sequence from the initial state; a rewrite
     that breaks the plan or costs more on --metric is rolled back.
     """
+    from htn.jshop import syntax as S
     from htn.jshop.parser import load_domain, load_problem
     from htn.transform.framework import METRICS, Workspace, default_framework
 
@@ -69,6 +70,8 @@ def transform(domain, problem, rules, metric, output, as_json):
     if output:
         with atomic_write(output) as fh:
             fh.write(header(output, domain, problem))
+            # the rewritten task list: htn run recovers the plan's task tree from it
+            fh.write(f"; tasks: {' '.join(_task_text(t) for t in S.task_atoms(ws.task_list()))}\n")
             fh.write(ws.plan.to_jshop())
     if as_json:
         click.echo(json.dumps(result, indent=1))

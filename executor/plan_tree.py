@@ -4,8 +4,9 @@ A plan file holds only the plan's steps. Its task tree (which the behaviour
 tree mirrors, and which repair re-plans in) is recovered by planning the
 problem again with trees recorded and taking the first plan whose steps are
 the file's: ``htn plan -o`` writes the planner's plans in that order.
-A plan no decomposition of the problem's tasks gives (a transformed plan, a
-hand-written one) has no recoverable tree; it runs as one sequence.
+A transformed plan's file notes its task list (``; tasks:``), which is planned
+instead. A plan no decomposition gives (a hand-written one) has no
+recoverable tree; it runs as one sequence.
 """
 from __future__ import annotations
 
@@ -21,8 +22,19 @@ RECOVER_PLANS = 50        # plans looked at, at most
 
 
 def recover_tree(domain: S.Domain, instance: S.ProblemInstance, steps, functions=None,
-                 timeout: float = RECOVER_TIMEOUT, max_plans: int = RECOVER_PLANS):
-    """The task tree of the first plan of ``instance`` whose steps are ``steps``, or None."""
+                 timeout: float = RECOVER_TIMEOUT, max_plans: int = RECOVER_PLANS,
+                 tasks: Optional[str] = None):
+    """The task tree of the first plan of ``instance`` whose steps are ``steps``,
+    or None. ``tasks`` (a task list's text, as ``htn transform -o`` notes it)
+    replaces the problem's task list."""
+    if tasks:
+        from htn.jshop.parser import parse_text
+        try:
+            listed = parse_text(f"(defproblem tasks {domain.name} () ({tasks}))",
+                                "<tasks>").instances[0].tasks
+        except HtnError:
+            return None
+        instance = S.ProblemInstance(instance.state, listed, instance.pos)
     want = [str(s) for s in steps]
     plans = Planner(domain, instance, functions, record_trees=True).plans(timeout=timeout)
     for k, plan in enumerate(plans):

@@ -163,3 +163,17 @@ def test_the_behaviour_tree_has_the_task_tree_shape(tmp_path):
     assert ("report", "retry <= 2") in edges and ("retry <= 2", "attempt") in edges
     assert ("attempt", "execute | hold") in edges and ("attempt", "monitor") in edges
     assert ("execute | hold", "execute") in edges
+
+
+def test_a_transformed_plan_runs_as_the_tree_of_its_transformed_task_list(tmp_path):
+    plan, dot = tmp_path / "t.txt", tmp_path / "bt.dot"
+    r = run_htn("transform", ROOT / "domains" / "kitchen.jshop",
+                ROOT / "problems" / "tray_three.jshop", "-o", plan)
+    assert r.returncode == 0, r.stderr
+    tasks = next(line for line in plan.read_text().splitlines() if line.startswith("; tasks: "))
+    assert "(carrying-tray tray1 sink_area)" in tasks
+    r = run_htn("run", plan, "--robot", "symbolic", "--bt-dot", dot, "-q")
+    assert r.returncode == 0, r.stderr
+    text = dot.read_text()
+    # ':' of ':call N' is written as U+2236 (pydot reads ':' as a port)
+    assert 'plan -> "carrying-tray"' in text and 'plan -> "loading-tray \u2236call 1"' in text
