@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import os
-import signal
 import sys
 
 import click
@@ -10,6 +9,7 @@ import click
 from htn.jshop.errors import HtnError
 
 from .output import stdout_is_terminal
+from .run_checks import Signals, check_display, check_folder, check_writable_file, make_folder
 
 RUN_OPTIONS = ("plan_file", "robot_name", "sim", "faults", "seed", "retries", "replan",
                "plan_index", "domain", "problem", "functions")
@@ -82,7 +82,7 @@ def run(ctx, plan_file, robot_name, sim, gui, snapshots, faults, seed, retries, 
       htn run plan.txt --sim --faults moved=1 --replan
       htn run plan.txt --robot symbolic --faults effect=0.2
     """
-    signals = _Signals()
+    signals = Signals()
     try:
         _run(ctx, signals, plan_file, robot_name, sim, gui, snapshots, faults, seed, retries,
              replan, log_path, from_log, plan_index, domain, problem, functions, bt_dot, quiet)
@@ -138,12 +138,12 @@ def _run(ctx, signals, plan_file, robot_name, sim, gui, snapshots, faults, seed,
         raise HtnError(f"{what} needs the {backend.extra} extra: "
                        f"pip install 'htn[{backend.extra}]'")
     if gui:
-        _check_display()
+        check_display()
     for path, option in ((log_path, "--log"), (bt_dot, "--bt-dot")):
         if path:
-            _check_writable_file(path, option)
+            check_writable_file(path, option)
     if snapshots:
-        _check_folder(snapshots, "--snapshots")
+        check_folder(snapshots, "--snapshots")
     pf = read_plan_file(plan_file)
     domain = domain or pf.domain
     problem = problem or pf.problem
@@ -183,7 +183,7 @@ def _run(ctx, signals, plan_file, robot_name, sim, gui, snapshots, faults, seed,
         if snapshots and type(robot).snapshot is Robot.snapshot:
             raise click.UsageError(f"--snapshots: the {robot_name} robot has no camera")
         if snapshots:   # only once the world could be built from the problem
-            _make_folder(snapshots, "--snapshots")
+            make_folder(snapshots, "--snapshots")
         log = EventLog(log_path, clock=lambda: robot.sim_time)
     except BaseException:
         robot.close()
@@ -258,105 +258,6 @@ def _interrupted_summary(log, dispatcher, steps, robot):
     summary = RunSummary("interrupted", len(steps), 0, 0, 0, round(robot.sim_time, 3))
     log.emit(None, None, "summary", None, "interrupted", **summary.as_dict())
     return summary
-
-
-class _Signals:
-    """Ctrl-C and SIGTERM: between two ticks of the behaviour tree they halt
-    it (the robot holds its pose, the log gets its summary); at any other
-    time they interrupt at once, without a traceback."""
-
-    def __init__(self):
-        self.terminated = False
-        self.dispatcher = None
-        self.saved = {}
-        for sig in (signal.SIGINT, signal.SIGTERM):
-            try:
-                self.saved[sig] = signal.signal(sig, self._handle)
-            except ValueError:     # not the main thread (a library caller)
-                pass
-
-    def _handle(self, signum, frame):
-        self.terminated = self.terminated or signum == signal.SIGTERM
-        why = "stopped by SIGTERM" if signum == signal.SIGTERM else "stopped by the user"
-        d = self.dispatcher
-        if d is not None and d.in_tick:
-            d.halt(why)
-            return
-        raise KeyboardInterrupt
-
-    def watch(self, dispatcher) -> None:
-        self.dispatcher = dispatcher
-
-    def ignore(self) -> None:
-        for sig in self.saved:
-            signal.signal(sig, signal.SIG_IGN)
-
-    def restore(self) -> None:
-        for sig, handler in self.saved.items():
-            signal.signal(sig, handler)
-
-    def exit_code(self) -> int:
-        return 143 if self.terminated else 130
-
-
-def _check_display() -> None:
-    """--gui needs an X server PyBullet can open a window on: check it answers
-    (PyBullet itself exits without a word when it cannot)."""
-    import socket
-    disp = os.environ.get("DISPLAY")
-    if not disp:
-        raise click.UsageError("--gui needs a display (DISPLAY is not set); run headless without it")
-    host, _, rest = disp.rpartition(":")
-    number = rest.split(".")[0]
-    if not number.isdigit():
-        raise HtnError(f"--gui: DISPLAY={disp!r} is not an X display name")
-    try:
-        if host in ("", "unix"):
-            with socket.socket(socket.AF_UNIX) as s:
-                s.settimeout(2.0)
-                s.connect(f"/tmp/.X11-unix/X{number}")
-        else:
-            socket.create_connection((host, 6000 + int(number)), timeout=2.0).close()
-    except OSError:
-        raise HtnError(f"--gui: no X server answers on DISPLAY={disp}; run headless without --gui")
-
-
-def _check_writable_file(path: str, option: str) -> None:
-    folder = os.path.dirname(os.path.abspath(path))
-    if not os.path.isdir(folder):
-        raise HtnError(f"{option}: no such folder {folder}", path)
-    if os.path.isdir(path):
-        raise HtnError(f"{option}: {path} is a folder")
-    _probe(folder, option)
-
-
-def _check_folder(path: str, option: str) -> None:
-    if os.path.exists(path) and not os.path.isdir(path):
-        raise HtnError(f"{option}: {path} is not a folder")
-    existing = os.path.abspath(path)
-    while not os.path.exists(existing):
-        existing = os.path.dirname(existing)
-    if not os.path.isdir(existing):
-        raise HtnError(f"{option}: cannot make a folder under {existing}, which is a file")
-    _probe(existing, option)
-
-
-def _probe(folder: str, option: str) -> None:
-    """Can files be created in ``folder``? (Asked by creating one: permission
-    bits say nothing to root, read-only file systems say it only then.)"""
-    import tempfile
-    try:
-        tempfile.TemporaryFile(dir=folder, prefix=".htn-").close()
-    except OSError as exc:
-        raise HtnError(f"{option}: cannot write in {folder}: {exc.strerror or exc}")
-
-
-def _make_folder(path: str, option: str) -> None:
-    try:
-        os.makedirs(path, exist_ok=True)
-    except OSError as exc:
-        raise HtnError(f"{option}: cannot make the folder {path}: {exc.strerror or exc}")
-    _probe(path, option)
 
 
 def _write_dot(root, path: str) -> None:

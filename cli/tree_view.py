@@ -2,8 +2,6 @@
 (display only; the trees live in ``jshop.tree`` and ``executor.task_bt``)."""
 from __future__ import annotations
 
-from typing import Optional
-
 STATUS_STYLE = {"✓": "green", "✕": "bold red", "*": "yellow", "-": "dim"}
 
 
