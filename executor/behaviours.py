@@ -75,6 +75,7 @@ class Execute(ActionBehaviour):
     def initialise(self) -> None:
         ctx = self.ctx
         ctx.attempt += 1
+        self.executor.started += ctx.attempt == 1
         ctx.outcome, ctx.preempted = None, False
         self.executor.running = ctx
         self.emit("start")
@@ -185,6 +186,7 @@ class ApplyInternal(ActionBehaviour):
     def update(self) -> Status:
         ctx = self.ctx
         self.executor.running = ctx
+        self.executor.started += 1
         ok = self.executor.apply_internal(ctx.step)
         ctx.attempt, ctx.outcome = 1, Outcome.VERIFIED if ok else Outcome.FAILED
         self.emit(ctx.outcome.value, "internal operator applied to the belief state"
@@ -198,6 +200,7 @@ class Unavailable(ActionBehaviour):
 
     def update(self) -> Status:
         self.executor.running = self.ctx
+        self.executor.started += 1
         self.ctx.attempt, self.ctx.outcome = 1, Outcome.FAILED
         self.emit(Outcome.FAILED.value, f"no action state machine is registered for "
                                         f"{self.ctx.step.name}")

@@ -38,13 +38,14 @@ from .task_bt import actions, build, flat_tree
 @dataclass
 class RunSummary:
     result: str              # verified | failed | aborted | interrupted
-    steps: int               # steps of the plan (as repaired)
+    steps: int               # steps of the plan (as repaired), executed or not
     verified: int
     retries: int
     replans: int
     sim_time: float
     failed_step: Optional[str] = None    # the action that ended the run
     failed_at: Optional[int] = None      # its 1-based step
+    executed: int = 0                    # steps started (each once, however many attempts)
 
     def as_dict(self) -> dict:
         return dict(self.__dict__)
@@ -78,7 +79,7 @@ class TaskDispatcher:
         self.done: list[ActionContext] = []       # verified steps, in order
         self.failed: Optional[ActionContext] = None
         self.running: Optional[ActionContext] = None
-        self.retries = self.replans = 0
+        self.retries = self.replans = self.started = 0
         self._faults_seen = 0
         self._halt: Optional[str] = None
         self.in_tick = False
@@ -200,7 +201,8 @@ class TaskDispatcher:
         pending = sum(1 for a in actions(self.root) if not a.done)
         summary = RunSummary(result, len(self.done) + pending, len(self.done), self.retries,
                              self.replans, round(self.robot.sim_time, 3),
-                             ctx.text if ctx else None, self.number(ctx) if ctx else None)
+                             ctx.text if ctx else None, self.number(ctx) if ctx else None,
+                             self.started)
         self.log.emit(None, None, "summary", None, result, **summary.as_dict())
         return summary
 
