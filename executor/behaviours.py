@@ -4,8 +4,8 @@ As PlanSys2 builds one small behaviour tree per action, every operator
 instance becomes this subtree (the paper's execute -> monitor -> report,
 section 4, with the hold-monitors running beside execute)::
 
-    OneShot  "(!grasp jenny pringles kitchen_counter)"   done once verified
-      Report                                             outcome to the dispatcher
+    Report  "(!grasp jenny pringles kitchen_counter)"    outcome to the dispatcher;
+                                                         a one-shot: done once verified
         RetryAborted  "retry <= 2"                       emits retrying
           Sequence  "attempt"
             Parallel  "execute | hold"                   succeeds when execute does
@@ -52,10 +52,10 @@ class ActionContext:
     number: Optional[int] = None    # its 1-based step, once verified
     detail: str = ""
     holds: list = field(default_factory=list)
+    text: str = ""                  # the step as the plan shows it
 
-    @property
-    def text(self) -> str:
-        return str(self.step)
+    def __post_init__(self):
+        self.text = str(self.step)
 
 
 class ActionBehaviour(py_trees.behaviour.Behaviour):
@@ -165,15 +165,19 @@ class RetryAborted(py_trees.decorators.Retry):
         return Status.FAILURE
 
 
-class Report(py_trees.decorators.Decorator):
+class Report(py_trees.decorators.OneShot):
     """The paper's status report: the action's final outcome goes to the task
-    dispatcher (which updates its belief state and the plan's progress)."""
+    dispatcher (which updates its belief state and the plan's progress).
+    Once verified, the action is done: py_trees' one-shot, which a repaired
+    tree ticks again, returns success without running it again."""
 
     def __init__(self, child, ctx: ActionContext, executor):
-        super().__init__("report", child)
+        super().__init__(ctx.text, child, OneShotPolicy.ON_SUCCESSFUL_COMPLETION)
         self.ctx, self.executor = ctx, executor
 
     def update(self) -> Status:
+        if self.final_status:
+            return self.final_status
         status = self.decorated.status
         if status != Status.RUNNING:
             self.executor.report(self.ctx, status == Status.SUCCESS)
@@ -181,10 +185,12 @@ class Report(py_trees.decorators.Decorator):
 
 
 class ApplyInternal(ActionBehaviour):
-    """An internal operator (``!!``): applied to the belief state only."""
+    """An internal operator (``!!``): applied to the belief state only (once)."""
 
     def update(self) -> Status:
         ctx = self.ctx
+        if ctx.done:
+            return Status.SUCCESS
         self.executor.running = ctx
         self.executor.started += 1
         ok = self.executor.apply_internal(ctx.step)
@@ -209,20 +215,22 @@ class Unavailable(ActionBehaviour):
 
 
 def action_subtree(ctx: ActionContext, executor, holds: list) -> py_trees.behaviour.Behaviour:
-    """The behaviour tree of one plan step (see the module docstring)."""
+    """The behaviour tree of one plan step (see the module docstring). On a
+    robot whose skills are instantaneous there is nothing to watch while they
+    run: execute stands alone, without the parallel and hold-monitors."""
     if ctx.step.internal:
-        body = ApplyInternal("apply to belief", ctx, executor)
+        top = ApplyInternal(ctx.text, ctx, executor)
     elif ctx.machine is None:
-        body = Unavailable("no action state machine", ctx, executor)
+        top = Unavailable(ctx.text, ctx, executor)
     else:
         execute = Execute("execute", ctx, executor)
-        watch = [Hold(label, ctx, executor, fn) for label, fn in holds]
-        ctx.holds = [label for label, _ in holds]
-        attempt = py_trees.composites.Sequence("attempt", memory=True, children=[
-            py_trees.composites.Parallel("execute | hold", ParallelPolicy.SuccessOnSelected(
-                [execute]), children=[execute, *watch]),
-            Monitor("monitor", ctx, executor)])
-        body = Report(RetryAborted(attempt, ctx, executor), ctx, executor)
-    shot = py_trees.decorators.OneShot(ctx.text, body, OneShotPolicy.ON_SUCCESSFUL_COMPLETION)
-    shot.htn_action = ctx
-    return shot
+        if holds:
+            ctx.holds = [label for label, _ in holds]
+            execute = py_trees.composites.Parallel(
+                "execute | hold", ParallelPolicy.SuccessOnSelected([execute]),
+                children=[execute, *(Hold(label, ctx, executor, fn) for label, fn in holds)])
+        attempt = py_trees.composites.Sequence("attempt", memory=True,
+                                               children=[execute, Monitor("monitor", ctx, executor)])
+        top = Report(RetryAborted(attempt, ctx, executor), ctx, executor)
+    top.htn_action = ctx
+    return top

@@ -92,7 +92,7 @@ class TaskDispatcher:
         machine = None if step.internal else machine_for(step.name, self.domain.name, self.robot)
         ctx = ActionContext(step, machine, self.limits.get(step.name, 0), node)
         holds = []
-        if machine is not None:
+        if machine is not None and not self.robot.instantaneous:
             holds = machine.holds(self.robot, *step.args)
             if self.carry_checks:
                 holds = [*holds, ("what it carries stays in the gripper",
@@ -146,6 +146,9 @@ class TaskDispatcher:
         return all_of(*(self.robot.check("still_held", o) for o in objs))
 
     def _flush_faults(self) -> None:
+        if len(getattr(self.robot, "injected", ())) <= self._faults_seen and \
+                hasattr(self.robot, "injected"):
+            return           # nothing new (the common case, on every event)
         faults = self.robot.injected_faults()
         while self._faults_seen < len(faults):
             f = faults[self._faults_seen]

@@ -86,6 +86,7 @@ class Robot:
     sim_time: float = 0.0
     executes_operator_model: bool = False
     steps_per_tick: int = 1            # physics steps a skill advances per tick
+    instantaneous: bool = False        # every skill ends as it starts: nothing to hold-monitor
     _skills: dict = {}
     _checks: dict = {}
 

@@ -88,6 +88,8 @@ def world_from_atoms(atoms) -> ProjectedWorld:
 class ProjectionRobot(Robot):
     """A two-armed robot in a projected world; deterministic for a seed."""
 
+    instantaneous = True
+
     def __init__(self, world: ProjectedWorld, seed: int = 0,
                  failures: Optional[FailureRates] = None, pose_noise: float = 0.25):
         self.world = world

@@ -31,6 +31,7 @@ class SymbolicRobot(Robot):
 
     FAULTS = ("effect",)
     executes_operator_model = True
+    instantaneous = True
 
     def __init__(self, domain: S.Domain, instance: S.ProblemInstance, functions=None,
                  faults: Optional[dict] = None, seed: int = 0):

@@ -148,7 +148,7 @@ def test_the_behaviour_tree_has_the_task_tree_shape(tmp_path):
     plan, dot = tmp_path / "plan.txt", tmp_path / "bt.dot"
     assert run_htn("plan", ROOT / "domains" / "domestic.jshop",
                    ROOT / "problems" / "bring_object.jshop", "-o", plan).returncode == 0
-    r = run_htn("run", plan, "--robot", "symbolic", "--bt-dot", dot, "-q")
+    r = run_htn("run", plan, "--sim", "--bt-dot", dot, "-q")
     assert r.returncode == 0, r.stderr
     text = dot.read_text()
     assert text.startswith("digraph")
@@ -158,11 +158,13 @@ def test_the_behaviour_tree_has_the_task_tree_shape(tmp_path):
     assert ("bring_object", "bring_object/fetch_object") in edges
     assert ("bring_object/fetch_object/grasp_object",
             "(!grasp jenny pringles kitchen_counter)") in edges
-    # each step: its action state machine (retry of [execute | hold] -> monitor)
-    assert ("(!grasp jenny pringles kitchen_counter)", "report") in edges
-    assert ("report", "retry <= 2") in edges and ("retry <= 2", "attempt") in edges
+    # each step: its action state machine (report of retry of [execute | hold] -> monitor)
+    assert ("(!grasp jenny pringles kitchen_counter)", "retry <= 2") in edges
+    assert ("retry <= 2", "attempt") in edges
     assert ("attempt", "execute | hold") in edges and ("attempt", "monitor") in edges
     assert ("execute | hold", "execute") in edges
+    assert ("execute | hold", "what it carries stays in the gripper") in edges
+    assert ("execute | hold", "no collision") in edges
 
 
 def test_a_transformed_plan_runs_as_the_tree_of_its_transformed_task_list(tmp_path):
