@@ -32,7 +32,8 @@ RUN_OPTIONS = ("plan_file", "robot_name", "sim", "faults", "seed", "retries", "r
 @click.option("--retries", multiple=True, metavar="OPERATOR=N",
               help="Override retry limits of the domain's .toml, e.g. grasp=3.")
 @click.option("--replan", is_flag=True,
-              help="On a failed or aborted action, re-plan from the observed state and go on.")
+              help="On a failed or aborted action, re-plan the smallest enclosing task "
+                   "from the observed state, graft it into the tree and go on.")
 @click.option("--log", "log_path", type=click.Path(dir_okay=False), metavar="FILE.jsonl",
               help="Write every event as a JSON line, flushed as it happens; the first "
                    "line (header) records what is needed to re-run it.")

@@ -83,6 +83,7 @@ class TaskDispatcher:
         self._faults_seen = 0
         self._halt: Optional[str] = None
         self.in_tick = False
+        self._carrying: tuple = (None, [])        # (action, attempt) -> what it carries
         self.carry_checks = "still_held" in getattr(robot, "check_names", lambda: [])()
         steps = list(steps)
         self.root = build(tree if tree is not None else flat_tree(steps), steps, self._action)
@@ -140,7 +141,9 @@ class TaskDispatcher:
 
     def _carried_in_gripper(self, ctx: ActionContext):
         from htn.robot.interface import Check
-        objs = self.carried(ctx)
+        if self._carrying[0] != (id(ctx), ctx.attempt):   # the belief is fixed while it runs
+            self._carrying = ((id(ctx), ctx.attempt), self.carried(ctx))
+        objs = self._carrying[1]
         if not objs:
             return Check(True, "carries nothing")
         return all_of(*(self.robot.check("still_held", o) for o in objs))
