@@ -4,14 +4,14 @@ As PlanSys2 builds one small behaviour tree per action, every operator
 instance becomes this subtree (the paper's execute -> monitor -> report,
 section 4, with the hold-monitors running beside execute)::
 
-    Report  "(!grasp jenny pringles kitchen_counter)"    outcome to the dispatcher;
-                                                         a one-shot: done once verified
-        RetryAborted  "retry <= 2"                       emits retrying
-          Sequence  "attempt"
-            Parallel  "execute | hold"                   succeeds when execute does
-              Execute  "execute"                         ticks the robot skill
-              Hold  "pringles in gripper"                one per hold-monitor
-            Monitor  "monitor"                           verified / aborted
+    Report  "(!move_base jenny counter_front sofa_front)"  outcome to the dispatcher;
+      RetryAborted  "retry <= 2"                          a one-shot: done once verified
+        Sequence  "attempt"                               (retrying is emitted here)
+          Parallel  "execute | hold"                      succeeds when execute does
+            Execute  "execute"                            ticks the robot skill
+            Hold  "no collision"                          one per hold-monitor
+            Hold  "what it carries stays in the gripper"
+          Monitor  "monitor"                              verified / aborted
 
 Each behaviour keeps py_trees' life cycle (``initialise`` / ``update`` /
 ``terminate``): ``Execute`` starts the skill in ``initialise``, advances it by
