@@ -74,7 +74,7 @@ def behaviour_rows(root, running, failed, events: dict) -> list[Row]:
             if on_path:
                 note = f"try {ctx.attempt} · {events.get(id(ctx), '')}"
             rows.append(Row(depth, mark, ctx.text, note, on_path))
-            if on_path and ctx.holds and running is ctx:
+            if on_path and ctx.holds and running is ctx and failed is not ctx:
                 rows.append(Row(depth + 1, "*", "execute | hold: " + ", ".join(ctx.holds),
                                 must=True))
             continue

@@ -195,6 +195,7 @@ class TaskDispatcher:
         self.root.stop(Status.INVALID)   # running behaviours terminate: the skill is preempted
         self.robot.hold()
         ctx = self.running if self.running is not None and not self.running.done else None
+        self.failed = ctx              # the action the run ended in
         self.emit(ctx, "interrupted", f"{self._halt or 'stopped by the user'}; the robot holds "
                                       "its pose")
         return self._summary("interrupted", ctx)
