@@ -1,4 +1,4 @@
 """``python -m htn``: the same as the ``htn`` command."""
-from htn.cli.main import main
+from htn.cli.start import main
 
 main()

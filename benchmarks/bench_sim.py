@@ -47,7 +47,7 @@ def main(problem, runs, faults, transformed):
         from htn.transform.framework import Workspace, default_framework
         plan = default_framework().apply_all_transformations(Workspace.from_problem(dom, inst)).plan
     else:
-        plan = next(Planner(dom, inst).plans())
+        plan = next(Planner(dom, inst, record_trees=True).plans())
     exec_factor, total_factor, sims = [], [], []
     for seed in range(runs):
         t0 = time.perf_counter()
@@ -55,7 +55,8 @@ def main(problem, runs, faults, transformed):
         built = time.perf_counter()
         start_sim = robot.sim_time
         log = EventLog(None, clock=lambda: robot.sim_time)
-        summary = TaskDispatcher(robot, dom, inst, plan.steps, load_retries(domain), log).run()
+        summary = TaskDispatcher(robot, dom, inst, plan.steps, load_retries(domain), log,
+                                 tree=plan.tree).run()   # the behaviour tree htn run ticks
         done = time.perf_counter()
         sim = robot.sim_time - start_sim
         robot.close()

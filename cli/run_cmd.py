@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import os
-import signal
 import sys
 
 import click
@@ -11,11 +10,7 @@ from htn.jshop.errors import HtnError
 
 from .extras import require_extra
 from .output import stdout_is_terminal
-
-OUTCOME_STYLE = {"verified": "green", "finished": "cyan", "failed": "bold red",
-                 "aborted": "red", "retrying": "yellow", "start": "dim",
-                 "replanned": "magenta", "interrupted": "bold red"}
-
+from .run_checks import Signals, check_display, check_folder, check_writable_file, make_folder
 
 RUN_OPTIONS = ("plan_file", "robot_name", "sim", "faults", "seed", "retries", "replan",
                "plan_index", "domain", "problem", "functions")
@@ -38,7 +33,8 @@ RUN_OPTIONS = ("plan_file", "robot_name", "sim", "faults", "seed", "retries", "r
 @click.option("--retries", multiple=True, metavar="OPERATOR=N",
               help="Override retry limits of the domain's .toml, e.g. grasp=3.")
 @click.option("--replan", is_flag=True,
-              help="On a failed or aborted action, re-plan from the observed state and go on.")
+              help="On a failed or aborted action, re-plan the smallest enclosing task "
+                   "from the observed state, graft it into the tree and go on.")
 @click.option("--log", "log_path", type=click.Path(dir_okay=False), metavar="FILE.jsonl",
               help="Write every event as a JSON line, flushed as it happens; the first "
                    "line (header) records what is needed to re-run it.")
@@ -53,15 +49,24 @@ RUN_OPTIONS = ("plan_file", "robot_name", "sim", "faults", "seed", "retries", "r
               help="Problem file (default: the one named in the plan file).")
 @click.option("--functions", type=click.Path(dir_okay=False), metavar="FILE.py",
               help="User functions for (call ...) (default: the plan file's, if any).")
+@click.option("--bt-dot", "bt_dot", type=click.Path(dir_okay=False), metavar="FILE.dot",
+              help="Write the behaviour tree (py_trees' DOT export) before the run, and "
+                   "again after it if it was repaired.")
 @click.option("-q", "--quiet", is_flag=True, help="Print only the summary.")
 @click.pass_context
 def run(ctx, plan_file, robot_name, sim, gui, snapshots, faults, seed, retries, replan,
-        log_path, from_log, plan_index, domain, problem, functions, quiet):
+        log_path, from_log, plan_index, domain, problem, functions, bt_dot, quiet):
     """Execute PLAN_FILE (written by 'htn plan -o') with per-action monitoring.
 
-    Each step runs as an action state machine: execute, monitor, report
-    (finished / verified / failed / aborted / retrying). Exit code 0 when every
-    action is verified, 1 when execution failed or was aborted, 130 on Ctrl-C.
+    The plan's task tree runs as a behaviour tree (py_trees) of the same
+    shape; each step is an action state machine: execute (with hold-monitors
+    on every tick), monitor, report (finished / verified / failed / aborted /
+    retrying). With --replan a failed or aborted action is repaired in the
+    task tree: the smallest enclosing task that has a plan from the observed
+    state is re-planned and grafted in. The whole plan is checked before the
+    robot moves. Exit code 0 when every action is verified, 1 when execution
+    failed or was aborted, 2 for bad input, 130 on Ctrl-C, 143 on SIGTERM
+    (both stop between two ticks; the robot holds its pose).
 
     Robots: 'pybullet' (--sim; the 'sim' extra) builds a simulated world from
     the problem's initial state: the domestic robot (one arm) for problems with
@@ -79,10 +84,28 @@ def run(ctx, plan_file, robot_name, sim, gui, snapshots, faults, seed, retries, 
       htn run plan.txt --sim --faults moved=1 --replan
       htn run plan.txt --robot symbolic --faults effect=0.2
     """
+    signals = Signals()
+    try:
+        _run(ctx, signals, plan_file, robot_name, sim, gui, snapshots, faults, seed, retries,
+             replan, log_path, from_log, plan_index, domain, problem, functions, bt_dot, quiet)
+    except KeyboardInterrupt:        # before the robot runs: nothing to stop
+        click.echo("terminated" if signals.terminated else "interrupted", err=True)
+        # leave at once: after a Ctrl-C inside PyBullet (building the world),
+        # interpreter shutdown was seen to end by SIGINT instead of the exit code
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(signals.exit_code())
+    finally:
+        signals.restore()
+
+
+def _run(ctx, signals, plan_file, robot_name, sim, gui, snapshots, faults, seed, retries,
+         replan, log_path, from_log, plan_index, domain, problem, functions, bt_dot, quiet):
     from htn.executor.actions import machine_for
     from htn.executor.config import load_retries, parse_overrides
     from htn.executor.dispatcher import TaskDispatcher
     from htn.executor.log import EventLog
+    from htn.executor.plan_tree import check_runnable, recover_tree
     from htn.jshop.functions import FunctionTable
     from htn.jshop.parser import load_domain, load_problem
     from htn.jshop.planfile import read_plan_file
@@ -114,8 +137,13 @@ def run(ctx, plan_file, robot_name, sim, gui, snapshots, faults, seed, retries, 
     backend = known.get(robot_name)
     if backend is not None and backend.extra:
         require_extra(backend.extra, "htn run --sim" if sim else f"htn run --robot {robot_name}")
-    if gui and not os.environ.get("DISPLAY"):
-        raise click.UsageError("--gui needs a display (DISPLAY is not set); run headless without it")
+    if gui:
+        check_display()
+    for path, option in ((log_path, "--log"), (bt_dot, "--bt-dot")):
+        if path:
+            check_writable_file(path, option)
+    if snapshots:
+        check_folder(snapshots, "--snapshots")
     pf = read_plan_file(plan_file)
     domain = domain or pf.domain
     problem = problem or pf.problem
@@ -132,10 +160,18 @@ def run(ctx, plan_file, robot_name, sim, gui, snapshots, faults, seed, retries, 
     dom = load_domain(domain, table)
     prob = load_problem(problem, table)
     instance = prob.instances[0]
-    steps = pf.plans[plan_index - 1].steps
+    plan = pf.plans[plan_index - 1]
+    steps = plan.steps
     check_steps(dom, steps, plan_file)
     limits = load_retries(domain)
-    limits.update(parse_overrides(retries))
+    overrides = parse_overrides(retries)
+    unknown = sorted(op for op in overrides if op not in dom.operators)
+    if unknown:
+        raise HtnError(f"--retries: the domain {dom.name} has no operator "
+                       f"{', '.join(unknown)}")
+    limits.update(overrides)
+    check_runnable(dom, instance, plan, plan_file, table)
+    tree = recover_tree(dom, instance, steps, table, tasks=pf.notes.get("tasks", (None,))[0])
 
     robot = make_robot(robot_name, RobotRequest(dom, instance, faults or "", seed, gui, table))
     try:
@@ -146,48 +182,100 @@ def run(ctx, plan_file, robot_name, sim, gui, snapshots, faults, seed, retries, 
                                plan_file, s.line, 1)
         if snapshots and type(robot).snapshot is Robot.snapshot:
             raise click.UsageError(f"--snapshots: the {robot_name} robot has no camera")
+        if snapshots:   # only once the world could be built from the problem
+            make_folder(snapshots, "--snapshots")
+        log = EventLog(log_path, clock=lambda: robot.sim_time)
     except BaseException:
         robot.close()
         raise
-    if snapshots:   # only once the world could be built from the problem
-        os.makedirs(snapshots, exist_ok=True)
-    log = EventLog(log_path, clock=lambda: robot.sim_time)
-    log.emit(None, None, "header", None, "", **run_header(
-        plan_file, plan_index, domain, problem, functions, robot_name, seed, faults or "",
-        limits, replan))
-    view = None
-    if not quiet:
-        view = _LiveView() if stdout_is_terminal() else _PlainView()
-        log.listeners.append(view.event)
-    if snapshots:
-        log.listeners.append(_snapshotter(robot, snapshots))
-    dispatcher = TaskDispatcher(robot, dom, instance, steps, limits, log,
-                                replan=replan, functions=table)
+    dispatcher = None
     try:
-        if isinstance(view, _LiveView):
+        log.emit(None, None, "header", None, "", **run_header(
+            plan_file, plan_index, domain, problem, functions, robot_name, seed, faults or "",
+            limits, replan))
+        dispatcher = TaskDispatcher(robot, dom, instance, steps, limits, log,
+                                    replan=replan, functions=table, tree=tree)
+        if bt_dot:
+            _write_dot(dispatcher.root, bt_dot)
+        view = None
+        if not quiet:
+            if stdout_is_terminal():
+                from .tree_view import LiveTreeView
+                view = LiveTreeView(lambda: dispatcher)
+            else:
+                view = _PlainView()
+            log.listeners.append(view.event)
+        if snapshots:
+            log.listeners.append(_snapshotter(robot, snapshots))
+        signals.watch(dispatcher)
+        if hasattr(view, "live"):
             with view:
                 summary = dispatcher.run()
         else:
             summary = dispatcher.run()
-        if summary.result == "interrupted":
-            # the robot holds and the log is complete: shut down in order,
-            # ignoring a second Ctrl-C
-            signal.signal(signal.SIGINT, signal.SIG_IGN)
+        signals.ignore()       # the robot holds and the log is complete: shut down in order
+        if bt_dot and summary.replans:
+            _write_dot(dispatcher.root, bt_dot)
+    except KeyboardInterrupt:
+        # interrupted after the log was opened but before the tick loop: the
+        # log still ends with its outcome and a summary
+        signals.ignore()
+        summary = _interrupted_summary(log, dispatcher, steps, robot)
+    except BaseException as exc:
+        log.emit(None, None, "summary", None, f"error: {type(exc).__name__}: {exc}",
+                 result="error")
+        raise
     finally:
         log.close()
         robot.close()
-    click.echo(f"{summary.result}: {summary.verified} of {summary.steps} steps verified, "
-               f"{summary.retries} retries, {summary.replans} replans, "
-               f"{summary.sim_time:.1f} s simulated"
-               + (f"; stopped at {summary.failed_step}" if summary.failed_step else ""))
+    click.echo(summary_line(summary))
     if summary.result == "interrupted":
         # Log closed, robot disconnected: leave at once. Interpreter shutdown
         # after a Ctrl-C inside PyBullet was seen (rarely) to end by SIGINT
         # instead of exit code 130.
         sys.stdout.flush()
         sys.stderr.flush()
-        os._exit(130)
+        os._exit(signals.exit_code())
     sys.exit(0 if summary.result == "verified" else 1)
+
+
+def summary_line(summary) -> str:
+    """``aborted: 3 of 8 steps verified, ...; aborted at step 4: (!grasp ...)``."""
+    line = (f"{summary.result}: {summary.verified} of {summary.steps} steps verified, "
+            f"{summary.retries} retries, {summary.replans} replans, "
+            f"{summary.sim_time:.1f} s simulated")
+    if summary.failed_step:
+        line += f"; {summary.result} at step {summary.failed_at}: {summary.failed_step}"
+    return line
+
+
+def _interrupted_summary(log, dispatcher, steps, robot):
+    if dispatcher is not None:
+        return dispatcher._interrupted()
+    from htn.executor.dispatcher import RunSummary
+    robot.hold()
+    log.emit(None, None, "interrupted", None, "stopped by the user before the first step")
+    summary = RunSummary("interrupted", len(steps), 0, 0, 0, round(robot.sim_time, 3))
+    log.emit(None, None, "summary", None, "interrupted", **summary.as_dict())
+    return summary
+
+
+def _write_dot(root, path: str) -> None:
+    """py_trees' DOT export of the tree. Node paths hold ':' (``:call 2``),
+    which pydot would read as a port: it is written as U+2236 (looks alike)."""
+    import py_trees
+
+    from .output import atomic_write
+    names = {b: b.name for b in root.iterate()}
+    for b in names:
+        b.name = b.name.replace(":", "\u2236")
+    try:
+        text = py_trees.display.dot_tree(root).to_string()
+    finally:
+        for b, name in names.items():
+            b.name = name
+    with atomic_write(path) as fh:
+        fh.write(text)
 
 
 def run_header(plan_file, plan_index, domain, problem, functions, robot, seed, faults,
@@ -253,62 +341,26 @@ def _check_digest(plan_file: str, digest, log_path: str) -> None:
 def _snapshotter(robot, folder):
     def on_event(rec):
         if rec["event"] in ("verified", "failed", "aborted") and rec["step"] is not None:
-            name = f"step{rec['step'] + 1:02d}_try{rec['attempt'] or 1}_{rec['event']}.png"
+            name = f"step{rec['step']:02d}_try{rec['attempt'] or 1}_{rec['event']}.png"
             robot.snapshot(os.path.join(folder, name))
     return on_event
 
 
 class _PlainView:
-    """One line per action outcome (when stdout is not a terminal)."""
+    """One line per action outcome, fault and repair (when stdout is not a terminal)."""
+
+    SHOWN = ("verified", "failed", "aborted", "retrying", "replanned", "replan_failed",
+             "interrupted", "fault")
 
     def event(self, rec) -> None:
-        if rec["event"] in ("verified", "failed", "aborted", "retrying", "replanned", "interrupted"):
-            step = "" if rec["step"] is None else f"{rec['step'] + 1:>2} "
-            click.echo(f"{step}{rec['event']:<11} {rec['action'] or ''}  "
-                       f"[try {rec['attempt'] or '-'}, t={rec['t']:.1f}s] {rec['detail']}")
-
-
-class _LiveView:
-    """A rich live table: one row per action with its outcome, attempt and duration."""
-
-    def __init__(self):
-        from rich.console import Console
-        from rich.live import Live
-        self.rows: dict = {}
-        self.console = Console()
-        self.live = Live(self._table(), console=self.console, refresh_per_second=10,
-                         transient=False)
-
-    def __enter__(self):
-        self.live.__enter__()
-        return self
-
-    def __exit__(self, *exc):
-        self.live.update(self._table())
-        return self.live.__exit__(*exc)
-
-    def event(self, rec) -> None:
-        if rec["step"] is None or rec["event"] == "summary":
-            return
-        key = rec["step"], rec["action"]
-        row = self.rows.setdefault(key, {"action": rec["action"], "start": rec["t"],
-                                         "event": "", "attempt": 1, "detail": ""})
-        if rec["event"] == "feedback":
-            return
-        row.update(event=rec["event"], attempt=rec["attempt"] or row["attempt"],
-                   detail=rec["detail"], end=rec["t"])
-        self.live.update(self._table())
-
-    def _table(self):
-        from rich.markup import escape
-        from rich.table import Table
-        t = Table(title="execution", expand=False)
-        for col in ("#", "action", "outcome", "try", "time", "detail"):
-            t.add_column(col, overflow="fold")
-        for (step, _), row in self.rows.items():
-            style = OUTCOME_STYLE.get(row["event"], "")
-            t.add_row(str(step + 1), escape(row["action"] or ""),
-                      f"[{style}]{row['event']}[/{style}]" if style else row["event"],
-                      str(row["attempt"]), f"{row.get('end', row['start']) - row['start']:.1f}s",
-                      escape(row["detail"][:60]))
-        return t
+        if rec["event"] in self.SHOWN:
+            step = "" if rec["step"] is None else f"{rec['step']:>2} "
+            what = rec["action"] or ""
+            if rec["event"] == "fault":
+                what = f"{rec['kind']}: {rec['detail']}"
+                click.echo(f"{step}{'fault':<11} {what}  [t={rec['sim_t']:.2f}s]")
+                return
+            if rec["event"] == "replanned":
+                what = rec["path"]
+            click.echo(f"{step}{rec['event']:<11} {what}  "
+                       f"[try {rec['attempt'] or '-'}, t={rec['sim_t']:.1f}s] {rec['detail']}")

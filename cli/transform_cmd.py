@@ -33,6 +33,7 @@ def transform(domain, problem, rules, metric, output, as_json):
     step's precondition holds in sequence from the initial state; a rewrite
     that breaks the plan or costs more on --metric is rolled back.
     """
+    from htn.jshop import syntax as S
     from htn.jshop.planfile import header
 
     # a bad -o fails before the work; the file is replaced once all is done
@@ -40,6 +41,8 @@ def transform(domain, problem, rules, metric, output, as_json):
         result, ws = _transform(domain, problem, rules, metric)
         if out:
             out.write(header(output, domain, problem))
+            # the rewritten task list: htn run recovers the plan's task tree from it
+            out.write(f"; tasks: {' '.join(_task_text(t) for t in S.task_atoms(ws.task_list()))}\n")
             out.write(ws.plan.to_jshop())
     if as_json:
         click.echo(json.dumps(result, indent=1))

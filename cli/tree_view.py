@@ -1,5 +1,8 @@
-"""Rich rendering of a task tree (display only; the tree lives in jshop.tree)."""
+"""Rich rendering of task trees and of the behaviour tree being executed
+(display only; the trees live in ``jshop.tree`` and ``executor.task_bt``)."""
 from __future__ import annotations
+
+STATUS_STYLE = {"✓": "green", "✕": "bold red", "*": "yellow", "-": "dim"}
 
 
 def rich_tree(tree):
@@ -24,3 +27,145 @@ def _label(node) -> str:
         return (f"[bold]{text}[/bold] [dim]method #{node.method_index + 1}, branch "
                 f"{escape(node.branch)} · {escape(node.path)}[/dim]")
     return f"{text} [red](not decomposed)[/red]"
+
+
+# ---------------------------------------------------------------- the behaviour tree, live
+
+class Row:
+    __slots__ = ("depth", "mark", "text", "note", "must")
+
+    def __init__(self, depth, mark, text, note="", must=False):
+        self.depth, self.mark, self.text, self.note, self.must = depth, mark, text, note, must
+
+
+def _actions(b) -> list:
+    return [x.htn_action for x in b.iterate() if hasattr(x, "htn_action")]
+
+
+def _mark(ctxs, running, failed) -> str:
+    if failed is not None and any(c is failed for c in ctxs):
+        return "✕"
+    if all(c.done for c in ctxs):
+        return "✓"
+    if running is not None and any(c is running for c in ctxs):
+        return "*"
+    return "-"
+
+
+def behaviour_rows(root, running, failed, events: dict) -> list[Row]:
+    """The rows of the view: every ancestor of the running (or failed) action
+    expanded, with its children; other tasks collapsed to one row each."""
+    focus = running if running is not None and not running.done else failed
+    path_ids = set()
+    if focus is not None:
+        node = next((b for b in root.iterate() if getattr(b, "htn_action", None) is focus), None)
+        while node is not None:
+            path_ids.add(id(node))
+            node = node.parent
+    rows: list[Row] = []
+    stack = [(root, 0)]
+    while stack:
+        b, depth = stack.pop()
+        if hasattr(b, "htn_action"):
+            ctx = b.htn_action
+            mark = _mark([ctx], focus if focus is running else None, failed)
+            on_path = id(b) in path_ids
+            note = f"step {ctx.number}" if ctx.done else ""
+            if on_path:
+                note = f"try {ctx.attempt} · {events.get(id(ctx), '')}"
+            rows.append(Row(depth, mark, ctx.text, note, on_path))
+            if on_path and ctx.holds and running is ctx and failed is not ctx:
+                rows.append(Row(depth + 1, "*", "execute | hold: " + ", ".join(ctx.holds),
+                                must=True))
+            continue
+        ctxs = _actions(b)
+        mark = _mark(ctxs, focus if focus is running else None, failed)
+        on_path = id(b) in path_ids
+        done = sum(c.done for c in ctxs)
+        rows.append(Row(depth, mark, b.name, f"{done}/{len(ctxs)} steps", on_path))
+        if on_path or depth == 0:
+            stack.extend((c, depth + 1) for c in reversed(b.children))
+    return rows
+
+
+def fit(rows: list[Row], height: int) -> list[tuple[Row, bool]]:
+    """At most ``height`` rows: every row marked ``must`` (the running action
+    and its ancestors; on a tiny terminal the nearest of them) and as many
+    rows around it as fit, nearest first. Each comes with whether rows were
+    left out just before it (drawn as ``…`` in its margin, taking no line)."""
+    must = [i for i, r in enumerate(rows) if r.must] or [0, len(rows) - 1]
+    chosen = set(must[-height:])
+    centre = max(must)
+    for i in sorted(range(len(rows)), key=lambda i: (abs(i - centre), i < centre)):
+        if len(chosen) >= height:
+            break
+        chosen.add(i)
+    out, prev = [], -1
+    for i in sorted(chosen):
+        out.append((rows[i], i > prev + 1))
+        prev = i
+    return out
+
+
+def render_rows(shown: list[tuple[Row, bool]], more_below: bool = False):
+    from rich.text import Text
+    text = Text(no_wrap=True, overflow="ellipsis")
+    for k, (r, gap) in enumerate(shown):
+        if k:
+            text.append("\n")
+        text.append("… " if gap else "  ", style="dim")
+        text.append("  " * r.depth)
+        text.append(r.mark, style=STATUS_STYLE.get(r.mark, ""))
+        text.append(" ")
+        text.append(r.text, style="bold" if r.must else "")
+        if r.note:
+            text.append("  " + r.note, style="dim")
+    if more_below:
+        text.append("\n… ", style="dim")
+    return text
+
+
+class LiveTreeView:
+    """The behaviour tree around the running action, redrawn on every event."""
+
+    def __init__(self, dispatcher_ref):
+        from rich.console import Console
+        from rich.live import Live
+        self.dispatcher = dispatcher_ref      # a callable returning the dispatcher
+        self.console = Console()
+        self.last: dict = {}                  # id(action context) -> last event text
+        self.header = ""
+        self.live = Live(console=self.console, auto_refresh=False, transient=False,
+                         vertical_overflow="crop")
+
+    def __enter__(self):
+        self.live.__enter__()
+        return self
+
+    def __exit__(self, *exc):
+        self._draw()
+        return self.live.__exit__(*exc)
+
+    def event(self, rec) -> None:
+        d = self.dispatcher()
+        if d is None or rec["event"] in ("header", "summary"):
+            return
+        ctx = d.running
+        if ctx is not None and rec["event"] not in ("feedback",):
+            self.last[id(ctx)] = f"{rec['event']} {rec['detail']}"[:60]
+        self.header = (f"sim {rec['sim_t']:.1f} s · {rec['event']}"
+                       + (f" · step {rec['step']}" if rec["step"] else ""))
+        self._draw()
+
+    def _draw(self) -> None:
+        d = self.dispatcher()
+        if d is None:
+            return
+        from rich.console import Group
+        from rich.text import Text
+        height = max(3, self.console.size.height - 3)
+        rows = behaviour_rows(d.root, d.running, d.failed, self.last)
+        shown = fit(rows, height)
+        below = bool(shown) and shown[-1][0] is not rows[-1]
+        self.live.update(Group(Text(self.header, style="bold"), render_rows(shown, below)),
+                         refresh=True)

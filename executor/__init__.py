@@ -1,5 +1,4 @@
-"""Task dispatcher and action state machines (execution with monitoring).
+"""Task dispatcher, action state machines as behaviour trees, repair, event log.
 
-Not implemented yet: see the executor issue. Nothing here is imported by
-``jshop``.
+Nothing here is imported by ``jshop``.
 """

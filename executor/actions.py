@@ -7,29 +7,37 @@ machine with three states: **execute** the action, run its **monitor**, and
 * ``finished``  - the action reports that it is done (feedback);
 * ``verified``  - its monitor observed the expected effect in the world;
 * ``failed``    - the action itself failed (internal error);
-* ``aborted``   - it finished, but the monitor did not observe the effect;
+* ``aborted``   - it finished, but the monitor did not observe the effect, or
+  a hold-monitor saw a condition break while it ran (it is then preempted);
 * ``retrying``  - it will be tried again (up to the operator's retry limit).
 
-Registering an action for a new operator is a few lines::
+An :class:`ActionMachine` says what to execute, what to monitor afterwards,
+and what must hold while it executes (:meth:`ActionMachine.holds`); the task
+executor runs it as a behaviour tree (:mod:`htn.executor.behaviours`).
+Registering one for a new operator is a few lines::
 
     @action("!wave")
     class Wave(ActionMachine):
         def execute(self, robot, hand):
-            return robot.wave(hand)
+            return robot.act("wave", hand)
         def monitor(self, robot, hand):
-            return robot.check_waving(hand)
+            return robot.check("waving", hand)
 
-Other packages register theirs through the entry-point group ``htn.actions``:
-each entry point names a module (importing it runs its ``@action``
-decorators) or a function called once with no arguments. They are loaded the
-first time a machine is looked up.
+``execute`` may return a :class:`~htn.robot.interface.SkillResult` at once
+or a generator that the executor ticks (see :mod:`htn.robot.interface`).
+Other packages register machines through the entry-point group
+``htn.actions``: each entry point names a module (importing it runs its
+``@action`` decorators) or a function called once with no arguments. They
+are loaded the first time a machine is looked up. The machines for the
+bundled domains are in :mod:`htn.executor.domestic` and
+:mod:`htn.executor.kitchen`.
 """
 from __future__ import annotations
 
 from enum import Enum
 from typing import Callable, Optional
 
-from htn.robot.interface import Check, Robot, SkillResult
+from htn.robot.interface import Check, Robot, SkillResult, complete
 
 
 class Outcome(str, Enum):
@@ -40,25 +48,35 @@ class Outcome(str, Enum):
     RETRYING = "retrying"
 
 
+HoldMonitor = tuple[str, Callable[[], Check]]    # (what must hold, how to check it)
+
+
 class ActionMachine:
     """Execute -> monitor -> report, for one operator instance.
 
-    Subclasses define :meth:`execute` (call a robot skill) and :meth:`monitor`
-    (check the world); arguments are the plan step's parameters.
+    Subclasses define :meth:`execute` (start a robot skill) and
+    :meth:`monitor` (check the world afterwards), and may define
+    :meth:`holds` (conditions checked on every tick while the action runs);
+    arguments are the plan step's parameters.
     """
 
     name = ""
 
-    def execute(self, robot: Robot, *args) -> SkillResult:  # pragma: no cover - abstract
+    def execute(self, robot: Robot, *args):  # pragma: no cover - abstract
         raise NotImplementedError
 
     def monitor(self, robot: Robot, *args) -> Check:  # pragma: no cover - abstract
         raise NotImplementedError
 
+    def holds(self, robot: Robot, *args) -> list[HoldMonitor]:
+        """Hold-monitors of this action: what must stay true while it executes."""
+        return []
+
     def run(self, robot: Robot, args: tuple, emit: Callable[[str, str], None]) -> Outcome:
-        """One attempt: the three states; returns verified, failed or aborted."""
+        """One attempt run to its end without ticking (no hold-monitors): for
+        scripts and tests. Returns verified, failed or aborted."""
         try:
-            result = self.execute(robot, *args)
+            result = complete(self.execute(robot, *args))
         except TypeError as exc:  # wrong number of parameters in the plan step
             emit(Outcome.FAILED.value, f"bad parameters: {exc}")
             return Outcome.FAILED
@@ -92,7 +110,7 @@ _plugins_loaded = False
 
 
 def load_plugins() -> None:
-    """Load the ``htn.actions`` entry points (once)."""
+    """Load the bundled machines and the ``htn.actions`` entry points (once)."""
     global _plugins_loaded
     if _plugins_loaded:
         return
@@ -101,6 +119,8 @@ def load_plugins() -> None:
     from importlib.metadata import entry_points
 
     from htn.jshop.errors import HtnError
+
+    from . import domestic, kitchen  # noqa: F401  (their @action decorators register)
     for ep in entry_points(group="htn.actions"):
         try:
             obj = ep.load()
@@ -132,183 +152,17 @@ class OperatorModelAction(ActionMachine):
         self.name = operator
 
     def execute(self, robot, *args):
-        return robot.apply_operator(self.name, args)
+        return robot.act("operator", self.name, args)
 
     def monitor(self, robot, *args):
-        return robot.check_operator_effects(self.name, args)
+        return robot.check("operator_effects", self.name, args)
 
 
-def _all(*checks: Check) -> Check:
+def all_of(*checks: Check) -> Check:
+    """One observation from several: ok when all are; the details of the failing ones."""
     bad = [c for c in checks if not c.ok]
     return Check(not bad, "; ".join(c.detail for c in (bad or checks)))
 
 
-# ---------------------------------------------------------------- the domestic robot
-
-@action("!move_base")
-class MoveBase(ActionMachine):
-    def execute(self, robot, who, start, goal):
-        return robot.move_base(goal)
-
-    def monitor(self, robot, who, start, goal):
-        checks = [robot.check_base_at(goal), robot.check_no_collision()]
-        if robot.carrying:   # what the robot believes it carries must still be in the hand
-            checks.append(robot.check_in_gripper(robot.carrying))
-        return _all(*checks)
-
-
-@action("!detect_object")
-class DetectObject(ActionMachine):
-    def execute(self, robot, who, obj, furniture):
-        return robot.detect_object(obj, furniture)
-
-    def monitor(self, robot, who, obj, furniture):
-        return robot.check_detection(obj)
-
-
-@action("!grasp")
-class Grasp(ActionMachine):
-    def execute(self, robot, who, obj, furniture):
-        if not robot.has_detection(obj):   # e.g. on a retry: look again first
-            robot.detect_object(obj, furniture)
-        return robot.grasp(obj, furniture)
-
-    def monitor(self, robot, who, obj, furniture):
-        return robot.check_in_gripper(obj)
-
-
-@action("!place")
-class Place(ActionMachine):
-    def execute(self, robot, who, obj, furniture):
-        return robot.place_object(obj, furniture)
-
-    def monitor(self, robot, who, obj, furniture):
-        return robot.check_on(obj, furniture)
-
-
-@action("!find_person")
-class FindPerson(ActionMachine):
-    def execute(self, robot, who, person, place):
-        return robot.find_person(person)
-
-    def monitor(self, robot, who, person, place):
-        return robot.check_person_visible(person)
-
-
-@action("!hand_over")
-class HandOver(ActionMachine):
-    def execute(self, robot, who, obj, person):
-        return robot.hand_over(obj, person)
-
-    def monitor(self, robot, who, obj, person):
-        return robot.check_handed(obj, person)
-
-
-@action("!say")
-class Say(ActionMachine):
-    def execute(self, robot, who, message):
-        return robot.say(message)
-
-    def monitor(self, robot, who, message):
-        return robot.check_said(message)
-
-
-# ---------------------------------------------------------------- the kitchen (pick and place)
-
-@action("!navigate", domain="kitchen")
-class Navigate(ActionMachine):
-    def execute(self, robot, start, goal):
-        return robot.move_base(goal)
-
-    def monitor(self, robot, start, goal):
-        return robot.check_base_at(goal)
-
-
-@action("!look-for", domain="kitchen")
-class LookFor(ActionMachine):
-    def execute(self, robot, obj, area):
-        return robot.detect_object(obj, area)
-
-    def monitor(self, robot, obj, area):
-        return robot.check_detection(obj)
-
-
-@action("!grasp", domain="kitchen")
-class GraspWithArm(ActionMachine):
-    def execute(self, robot, obj, area, arm):
-        return robot.grasp(obj, area, arm)
-
-    def monitor(self, robot, obj, area, arm):
-        return robot.check_in_gripper(obj)
-
-
-@action("!grasp-from", domain="kitchen")
-class GraspFromContainer(ActionMachine):
-    def execute(self, robot, obj, container, arm):
-        return robot.grasp(obj, container, arm)
-
-    def monitor(self, robot, obj, container, arm):
-        return robot.check_in_gripper(obj)
-
-
-@action("!place", domain="kitchen")
-class PlaceWithArm(ActionMachine):
-    def execute(self, robot, obj, area, arm):
-        return robot.place_object(obj, area, arm)
-
-    def monitor(self, robot, obj, area, arm):
-        return robot.check_on(obj, area)
-
-
-@action("!open", domain="kitchen")
-class OpenContainer(ActionMachine):
-    def execute(self, robot, container):
-        return robot.open_container(container)
-
-    def monitor(self, robot, container):
-        return robot.check_opened(container, True)
-
-
-@action("!close", domain="kitchen")
-class CloseContainer(ActionMachine):
-    def execute(self, robot, container):
-        return robot.close_container(container)
-
-    def monitor(self, robot, container):
-        return robot.check_opened(container, False)
-
-
-@action("!put-on-tray", domain="kitchen")
-class PutOnTray(ActionMachine):
-    def execute(self, robot, obj, tray, arm):
-        return robot.put_on_tray(obj, tray, arm)
-
-    def monitor(self, robot, obj, tray, arm):
-        return robot.check_on_tray(obj, tray)
-
-
-@action("!lift-tray", domain="kitchen")
-class LiftTray(ActionMachine):
-    def execute(self, robot, tray):
-        return robot.lift_tray(tray)
-
-    def monitor(self, robot, tray):
-        return robot.check_tray_carried(tray, True)
-
-
-@action("!lower-tray", domain="kitchen")
-class LowerTray(ActionMachine):
-    def execute(self, robot, tray, area):
-        return robot.lower_tray(tray, area)
-
-    def monitor(self, robot, tray, area):
-        return robot.check_tray_carried(tray, False, area)
-
-
-@action("!take-from-tray", domain="kitchen")
-class TakeFromTray(ActionMachine):
-    def execute(self, robot, obj, tray, arm):
-        return robot.take_from_tray(obj, tray, arm)
-
-    def monitor(self, robot, obj, tray, arm):
-        return robot.check_in_gripper(obj)
+__all__ = ["Outcome", "ActionMachine", "action", "machine_for", "all_of", "SkillResult",
+           "Check", "HoldMonitor"]

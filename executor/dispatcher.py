@@ -1,38 +1,51 @@
-"""Task dispatcher and task executor (the paper's task management, section 4).
+"""Task dispatcher (the paper's task management, section 4), on a behaviour tree.
 
-The **task dispatcher** walks the plan and sends one step at a time to the
-**task executor**, which parses the step into a name and parameters and runs
-the action state machine registered for that operator (:mod:`htn.executor.actions`),
-retrying it while its monitor does not verify it, up to the operator's limit.
-Internal operators (``!!``) are not sent to the robot: they are applied to the
-belief state only.
+The plan's task tree becomes a py_trees behaviour tree of the same shape
+(:mod:`htn.executor.task_bt`): compound tasks are sequences, each operator is
+its action state machine's subtree (:mod:`htn.executor.behaviours`). The
+**task dispatcher** ticks the tree; each tick advances the running robot
+skill by a few physics steps and runs the action's hold-monitors. The
+outcome of every action is reported back to the dispatcher, which keeps the
+belief state (the verified effects) and the plan's progress. Internal
+operators (``!!``) are applied to the belief state only.
 
 When an action ends failed or aborted, the robot stops and holds its pose (as
-in the paper). With ``replan=True`` the dispatcher instead builds the current
-state from what the robot observes, plans the original tasks again from there
-and continues with the new plan.
+in the paper). With ``replan=True`` the dispatcher repairs the task tree
+instead (:mod:`htn.executor.repair`) and goes on. :meth:`TaskDispatcher.halt`
+(Ctrl-C, SIGTERM) stops the tree between two ticks.
+
+Events go to an :class:`~htn.executor.log.EventLog`; ``step`` is the action's
+1-based position in the plan as executed (steps verified before it, plus
+one). Each fault the robot injects becomes a ``fault`` event as it happens.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
 from typing import Optional
 
+from py_trees.common import Status
+
 from htn.jshop import syntax as S
 from htn.jshop.planner import Planner
 
-from .actions import Outcome, machine_for
+from .actions import Outcome, all_of, machine_for
+from .behaviours import ActionContext, action_subtree
 from .log import EventLog
+from .repair import find_repair, graft, observed_instance
+from .task_bt import actions, build, flat_tree
 
 
 @dataclass
 class RunSummary:
     result: str              # verified | failed | aborted | interrupted
-    steps: int               # steps executed (all attempts' steps counted once)
+    steps: int               # steps of the plan (as repaired), executed or not
     verified: int
     retries: int
     replans: int
     sim_time: float
-    failed_step: Optional[str] = None
+    failed_step: Optional[str] = None    # the action that ended the run
+    failed_at: Optional[int] = None      # its 1-based step
+    executed: int = 0                    # steps started (each once, however many attempts)
 
     def as_dict(self) -> dict:
         return dict(self.__dict__)
@@ -43,131 +56,182 @@ def dynamic_predicates(domain: S.Domain) -> set[str]:
     return domain.dynamic_predicates()
 
 
-class TaskExecutor:
-    """Runs one plan step on the robot through its action state machine."""
-
-    def __init__(self, robot, retries: dict[str, int], log: EventLog,
-                 domain: Optional[str] = None):
-        self.robot = robot
-        self.retries = retries
-        self.log = log
-        self.domain = domain
-        self.retry_count = 0
-
-    def execute(self, index: int, step) -> Outcome:
-        name, args = step.name, tuple(step.args)
-        action = str(step)
-        machine = machine_for(name, self.domain, self.robot)
-        if machine is None:
-            self.log.emit(index, action, Outcome.FAILED.value, 1,
-                          f"no action state machine is registered for {name}")
-            return Outcome.FAILED
-        limit = self.retries.get(name, 0)
-        attempt = 1
-        while True:
-            self.log.emit(index, action, "start", attempt, "")
-
-            def emit(event: str, detail: str, attempt=attempt) -> None:
-                if event == Outcome.FINISHED.value:
-                    self.log.emit(index, action, "feedback", attempt, detail)
-                self.log.emit(index, action, event, attempt, detail)
-
-            outcome = machine.run(self.robot, args, emit)
-            if outcome is Outcome.ABORTED and attempt <= limit:
-                self.log.emit(index, action, Outcome.RETRYING.value, attempt,
-                              f"retry {attempt} of {limit}")
-                self.retry_count += 1
-                attempt += 1
-                continue
-            return outcome
-
-
 class TaskDispatcher:
-    """Walks a plan, dispatching each step to the task executor."""
+    """Ticks the behaviour tree of a plan on a robot, repairing it on request.
+
+    ``tree`` is the plan's task tree (``Plan.tree``; its leaves index
+    ``steps``); without it the plan runs as one sequence of actions.
+    """
 
     def __init__(self, robot, domain: S.Domain, instance: S.ProblemInstance, steps: list,
                  retries: dict[str, int], log: EventLog, replan: bool = False,
-                 functions=None, max_replans: int = 3):
+                 functions=None, max_replans: int = 10, tree=None):
         self.robot = robot
         self.domain = domain
         self.instance = instance
-        self.steps = list(steps)
+        self.limits = retries
         self.log = log
         self.replan = replan
         self.functions = functions
         self.max_replans = max_replans
-        self.executor = TaskExecutor(robot, retries, log, domain.name)
+        self.tree_known = tree is not None
         self.belief = Planner(domain, S.ProblemInstance(instance.state, S.TaskList([])), functions)
+        self.done: list[ActionContext] = []       # verified steps, in order
+        self.failed: Optional[ActionContext] = None
+        self.running: Optional[ActionContext] = None
+        self.retries = self.replans = self.started = 0
+        self._faults_seen = 0
+        self._halt: Optional[str] = None
+        self.in_tick = False
+        self._carrying: tuple = (None, [])        # (action, attempt) -> what it carries
+        self.carry_checks = "still_held" in getattr(robot, "check_names", lambda: [])()
+        steps = list(steps)
+        self.root = build(tree if tree is not None else flat_tree(steps), steps, self._action)
+
+    # ------------------------------------------------------------ building
+    def _action(self, step, node):
+        machine = None if step.internal else machine_for(step.name, self.domain.name, self.robot)
+        ctx = ActionContext(step, machine, self.limits.get(step.name, 0), node)
+        holds = []
+        if machine is not None and not self.robot.instantaneous:
+            holds = machine.holds(self.robot, *step.args)
+            if self.carry_checks:
+                holds = [*holds, ("what it carries stays in the gripper",
+                                  lambda: self._carried_in_gripper(ctx))]
+        return action_subtree(ctx, self, holds)
+
+    # ------------------------------------------------------------ what the behaviours call
+    def number(self, ctx: ActionContext) -> int:
+        return ctx.number or len(self.done) + 1
+
+    def emit(self, ctx: Optional[ActionContext], event: str, detail: str = "", **extra) -> None:
+        self._flush_faults()
+        self.log.emit(self.number(ctx) if ctx else None, ctx.text if ctx else None, event,
+                      ctx.attempt if ctx else None, detail, **extra)
+
+    def report(self, ctx: ActionContext, ok: bool) -> None:
+        """The final outcome of an action (the paper's status report)."""
+        if ok:
+            if not ctx.step.internal:
+                self.belief.apply_step(ctx.step.name, tuple(ctx.step.args))
+            ctx.done = True
+            self.done.append(ctx)
+            ctx.number = len(self.done)
+        else:
+            self.failed = ctx
+
+    def apply_internal(self, step) -> bool:
+        ok = self.belief.apply_step(step.name, tuple(step.args))
+        if ok:
+            self.robot.apply_internal(step.name, tuple(step.args))
+        return ok
+
+    def carried(self, ctx: ActionContext) -> list[str]:
+        """What the belief state says the robot holds (``(holding ... ?obj)``),
+        except what this step lets go of."""
+        held = [args[-1] for pred, args in self.belief.state.facts() if pred == "holding"]
+        if not held:
+            return []
+        released = set()
+        for op, env in self.belief.step_options(ctx.step.name, tuple(ctx.step.args)):
+            deleted, _ = self.belief.effects(op, env)
+            released |= {args[-1] for pred, args in deleted if pred == "holding"}
+            break
+        return [o for o in held if o not in released]
+
+    def _carried_in_gripper(self, ctx: ActionContext):
+        from htn.robot.interface import Check
+        if self._carrying[0] != (id(ctx), ctx.attempt):   # the belief is fixed while it runs
+            self._carrying = ((id(ctx), ctx.attempt), self.carried(ctx))
+        objs = self._carrying[1]
+        if not objs:
+            return Check(True, "carries nothing")
+        return all_of(*(self.robot.check("still_held", o) for o in objs))
+
+    def _flush_faults(self) -> None:
+        if len(getattr(self.robot, "injected", ())) <= self._faults_seen and \
+                hasattr(self.robot, "injected"):
+            return           # nothing new (the common case, on every event)
+        faults = self.robot.injected_faults()
+        while self._faults_seen < len(faults):
+            f = faults[self._faults_seen]
+            self._faults_seen += 1
+            ctx = self.running
+            self.log.emit(self.number(ctx) if ctx else None, ctx.text if ctx else None, "fault",
+                          None, f.get("detail", ""), kind=f.get("kind", f.get("fault")),
+                          sim_t=f.get("sim_t", f.get("t")))
+
+    # ------------------------------------------------------------ the tick loop
+    def halt(self, why: str = "stopped by the user") -> None:
+        """Stop the tree before its next tick (safe from a signal handler)."""
+        self._halt = why
 
     def run(self) -> RunSummary:
-        verified = executed = replans = 0
-        steps = self.steps
-        i = 0
         try:
-            while i < len(steps):
-                step = steps[i]
-                executed += 1
-                if step.internal:
-                    ok = self.belief.apply_step(step.name, step.args)
-                    if ok:
-                        self.robot.apply_internal(step.name, step.args)
-                    self.log.emit(i, str(step), Outcome.VERIFIED.value if ok else Outcome.FAILED.value,
-                                  1, "internal operator applied to the belief state"
-                                  if ok else "internal operator not applicable")
-                    if ok:
-                        verified += 1
-                        i += 1
+            while True:
+                if self._halt:
+                    return self._interrupted()
+                # the root alone: py_trees' BehaviourTree.tick would also visit
+                # every node of the whole tree on each tick
+                self.in_tick = True
+                try:
+                    self.root.tick_once()
+                finally:
+                    self.in_tick = False
+                self._flush_faults()
+                status = self.root.status
+                if status == Status.SUCCESS:
+                    return self._summary(Outcome.VERIFIED.value)
+                if status == Status.FAILURE:
+                    ctx = self.failed
+                    if self.replan and self.replans < self.max_replans and self._repair(ctx):
                         continue
-                    outcome = Outcome.FAILED
-                else:
-                    outcome = self.executor.execute(i, step)
-                    if outcome is Outcome.VERIFIED:
-                        self.belief.apply_step(step.name, step.args)
-                        verified += 1
-                        i += 1
-                        continue
-                if self.replan and replans < self.max_replans:
-                    new = self._replan(i, step)
-                    if new is not None:
-                        replans += 1
-                        steps, i = new, 0
-                        continue
-                self.robot.hold()
-                return self._summary(outcome.value, executed, verified, replans, str(step))
+                    self.robot.hold()
+                    return self._summary(ctx.outcome.value, ctx)
         except KeyboardInterrupt:
-            self.robot.hold()
-            self.log.emit(i if i < len(steps) else None, str(steps[i]) if i < len(steps) else None,
-                          "interrupted", None, "stopped by the user; the robot holds its pose")
-            return self._summary("interrupted", executed, verified, replans, None)
-        return self._summary(Outcome.VERIFIED.value, executed, verified, replans, None)
+            return self._interrupted()
 
-    def _summary(self, result, executed, verified, replans, failed) -> RunSummary:
-        summary = RunSummary(result, executed, verified, self.executor.retry_count, replans,
-                             round(self.robot.sim_time, 3), failed)
+    def _interrupted(self) -> RunSummary:
+        self.root.stop(Status.INVALID)   # running behaviours terminate: the skill is preempted
+        self.robot.hold()
+        ctx = self.running if self.running is not None and not self.running.done else None
+        self.failed = ctx              # the action the run ended in
+        self.emit(ctx, "interrupted", f"{self._halt or 'stopped by the user'}; the robot holds "
+                                      "its pose")
+        return self._summary("interrupted", ctx)
+
+    def plan_lines(self) -> list[str]:
+        """The plan as executed and repaired: verified steps, then the pending ones."""
+        return [c.text for c in self.done] + [a.text for a in actions(self.root) if not a.done]
+
+    def _summary(self, result: str, ctx: Optional[ActionContext] = None) -> RunSummary:
+        pending = sum(1 for a in actions(self.root) if not a.done)
+        summary = RunSummary(result, len(self.done) + pending, len(self.done), self.retries,
+                             self.replans, round(self.robot.sim_time, 3),
+                             ctx.text if ctx else None, self.number(ctx) if ctx else None,
+                             self.started)
         self.log.emit(None, None, "summary", None, result, **summary.as_dict())
         return summary
 
-    def observed_instance(self) -> S.ProblemInstance:
-        """The current state as the robot observes it: static facts of the
-        problem plus the observed facts of the domain's dynamic predicates."""
-        dynamic = dynamic_predicates(self.domain)
-        atoms = [a for a in self.instance.state if a.pred not in dynamic]
-        for pred, args in self.robot.observe():
-            atoms.append(S.Atom(pred, tuple(args)))
-        return S.ProblemInstance(atoms, self.instance.tasks, self.instance.pos)
-
-    def _replan(self, index: int, step) -> Optional[list]:
-        instance = self.observed_instance()
-        planner = Planner(self.domain, instance, self.functions)
-        plan = next(planner.plans(timeout=30.0), None)
-        if plan is None:
-            self.log.emit(index, str(step), "replanned", None,
-                          "no plan from the observed state")
-            return None
-        self.instance = instance
-        self.belief = Planner(self.domain, S.ProblemInstance(instance.state, S.TaskList([])),
+    # ------------------------------------------------------------ repair
+    def _repair(self, ctx: ActionContext) -> bool:
+        shot = next(b for b in self.root.iterate() if getattr(b, "htn_action", None) is ctx)
+        observed = observed_instance(self.domain, self.instance, self.robot)
+        repair, tried = find_repair(shot, self.root, self.tree_known, self.domain, observed,
+                                    self.instance.tasks, self.functions)
+        if repair is None:
+            self.emit(ctx, "replan_failed", "no enclosing task has a plan from the observed "
+                      f"state (tried {', '.join(tried)})", tried=tried)
+            return False
+        self.replans += 1
+        self.tree_known = True
+        paths = repair.paths
+        graft(repair, self.root, self._action)
+        self.belief = Planner(self.domain, S.ProblemInstance(observed.state, S.TaskList([])),
                               self.functions)
-        self.log.emit(index, str(step), "replanned", None,
-                      f"new plan of {len(plan.steps)} steps from the observed state",
-                      plan=plan.lines())
-        return plan.steps
+        self.failed = None
+        self.emit(ctx, "replanned", f"re-planned {tried[-1]} from the observed state: "
+                  f"{len(repair.plan.steps)} new steps", path=repair.path, paths=paths,
+                  tasks=repair.tasks, steps=repair.plan.lines(), tried=tried,
+                  plan=self.plan_lines())
+        return True

@@ -8,10 +8,11 @@ from typing import IO, Optional
 
 
 class EventLog:
-    """Writes ``{"t", "step", "action", "event", "attempt", "detail"}`` lines.
+    """Writes ``{"t", "sim_t", "step", "action", "event", "attempt", "detail"}`` lines.
 
-    ``t`` is seconds of simulated (robot) time; ``wall`` seconds since start.
-    Listeners (e.g. the live view) get every event too.
+    ``t`` is wall-clock seconds since the log was opened, ``sim_t`` seconds of
+    simulated (robot) time; ``step`` is 1-based. Listeners (e.g. the live
+    view) get every event too.
     """
 
     def __init__(self, path: Optional[str] = None, clock=None):
@@ -23,10 +24,12 @@ class EventLog:
         self.events: list[dict] = []
 
     def emit(self, step: Optional[int], action: Optional[str], event: str,
-             attempt: Optional[int] = None, detail: str = "", **extra) -> dict:
-        record = {"t": round(self.clock(), 4), "step": step, "action": action, "event": event,
-                  "attempt": attempt, "detail": detail,
-                  "wall": round(time.perf_counter() - self.start, 4), **extra}
+             attempt: Optional[int] = None, detail: str = "", sim_t: Optional[float] = None,
+             **extra) -> dict:
+        record = {"t": round(time.perf_counter() - self.start, 4),
+                  "sim_t": round(self.clock() if sim_t is None else sim_t, 4),
+                  "step": step, "action": action, "event": event, "attempt": attempt,
+                  "detail": detail, **extra}
         self.events.append(record)
         if self._fh is not None:
             self._fh.write(json.dumps(record) + "\n")

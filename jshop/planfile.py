@@ -16,7 +16,8 @@ the plan file is moved, absolute (and the ``--functions`` file, if any)::
     --------------------
 
 Plain JSHOP2 output (no header) is a plan file too; its domain and problem
-are then given on the command line.
+are then given on the command line. Other ``; key: value`` lines are kept as
+notes: ``htn transform -o`` writes the transformed task list as ``; tasks:``.
 """
 from __future__ import annotations
 
@@ -50,6 +51,7 @@ class PlanFile:
     path: str
     plans: list = field(default_factory=list)
     named: dict = field(default_factory=dict)    # "domain" -> [(candidate path, line)]
+    notes: dict = field(default_factory=dict)    # other "; key: value" lines -> (value, line)
 
     def file(self, kind: str) -> Optional[str]:
         """The ``kind`` ("domain", "problem", "functions") file the header
@@ -95,6 +97,8 @@ def read_plan_file(path: str) -> PlanFile:
             if kind in NAMED and value:
                 where = os.path.normpath(os.path.join(base, value))
                 pf.named.setdefault(kind, []).append((where, n))
+            elif key and value:
+                pf.notes.setdefault(key, (value, n))
             continue
         if text.startswith("Plan cost:"):
             try:

@@ -36,7 +36,8 @@ def parse_faults(text: Optional[str], known: Iterable[str]) -> dict[str, float]:
 @dataclass
 class Faults:
     """Probabilities of the PyBullet robots' injected faults (each in [0, 1])."""
-    slip: float = 0.0     # object slips out of the gripper while it is lifted and carried
+    slip: float = 0.0     # object slips out of the gripper: while a grasp lifts it, and
+                          # (drawn again for each drive) while the base drives with it
     nav: float = 0.0      # navigation stops short of the goal
     detect: float = 0.0   # object detection misses
     moved: float = 0.0    # a person moves the object (once) just before the robot grasps it

@@ -1,15 +1,29 @@
-"""The robot interface: the skills the domain's operators need, and what the
-robot can observe of the world to monitor them.
+"""The robot interface: skills and checks by name, a clock, and what it observes.
 
-A skill returns a :class:`SkillResult`: ``ok`` is the robot's own belief that it
-finished (``False`` only for an internal failure, e.g. an unreachable arm
-pose). Whether the effect really happened is for a monitor to decide, using
-the ``observe``/``check_*`` methods, which look at the world itself.
+A robot offers **skills** (act on the world) and **checks** (look at the
+world), each registered by name with the :func:`skill` and :func:`check`
+decorators; the action state machines call them with :meth:`Robot.act` and
+:meth:`Robot.check`. A robot that lacks a skill or check answers with an
+internal failure (the action ends ``failed``) or an unobservable check (the
+monitor does not verify), never with an exception.
+
+A skill returns a :class:`SkillResult` at once (an instantaneous robot, such
+as the symbolic or the projected one) or a generator that advances the
+simulation by one physics step per ``next()`` and finally returns its
+:class:`SkillResult` (the PyBullet robots). The task executor ticks such a
+skill, ``steps_per_tick`` physics steps per tick of the behaviour tree, and
+runs the action's hold-monitors between ticks; closing the generator preempts
+the skill where it is (``finally`` blocks run, the robot then holds its pose).
+
+``SkillResult.ok`` is the robot's own belief that it finished (``False`` only
+for an internal failure, e.g. an unreachable arm pose). Whether the effect
+really happened is for a monitor to decide with the checks, which look at the
+world itself.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any, Optional
+from typing import Any, Callable, Iterator, Optional, Union
 
 
 @dataclass
@@ -26,119 +40,101 @@ class Check:
     detail: str = ""
 
 
+Ticking = Iterator[None]      # a skill in progress: one physics step per next()
+Outcome = Union[SkillResult, Ticking]
+
+
+def skill(name: str) -> Callable:
+    """Method decorator: register the method as the robot's skill ``name``."""
+    def mark(fn):
+        fn.htn_skills = (*getattr(fn, "htn_skills", ()), name)
+        return fn
+    return mark
+
+
+def check(name: str) -> Callable:
+    """Method decorator: register the method as the robot's check ``name``."""
+    def mark(fn):
+        fn.htn_checks = (*getattr(fn, "htn_checks", ()), name)
+        return fn
+    return mark
+
+
+def complete(result: Outcome) -> SkillResult:
+    """Run a skill to its end without ticking (set-up, tests, plugins)."""
+    if isinstance(result, SkillResult):
+        return result
+    while True:
+        try:
+            next(result)
+        except StopIteration as stop:
+            return stop.value
+
+
 class Robot:
     """A robot back end: skills (act), checks (observe) and state estimation.
 
     Every robot has a clock (``sim_time``), can ``hold`` its pose and report
-    what it ``observe``s of the domain's dynamic predicates. Skills and checks
-    are the methods the action state machines call; a robot that lacks one
-    reports an internal failure, so the action ends ``failed`` (a skill) or
-    ``aborted`` (a check) instead of crashing. A robot whose
-    ``executes_operator_model`` is true runs every operator through
-    ``apply_operator`` / ``check_operator_effects`` (the symbolic robot).
+    what it ``observe``s of the domain's dynamic predicates. A robot whose
+    ``executes_operator_model`` is true runs every operator through the
+    ``operator`` skill and the ``operator_effects`` check (the symbolic robot).
+    Faults a robot injects are appended to ``injected`` (kind, sim time,
+    detail), which the task executor turns into ``fault`` events.
     """
 
     world: Any = None
     sim_time: float = 0.0
-    carrying: Optional[str] = None        # what the robot believes it carries
     executes_operator_model: bool = False
+    steps_per_tick: int = 1            # physics steps a skill advances per tick
+    instantaneous: bool = False        # every skill ends as it starts: nothing to hold-monitor
+    _skills: dict = {}
+    _checks: dict = {}
 
-    def _lacks(self, what: str) -> SkillResult:
-        return SkillResult(False, f"{type(self).__name__} cannot {what}")
+    def __init_subclass__(cls, **kw):
+        # collect the marked methods of the whole class hierarchy, robot
+        # parts (mixins) included; a subclass's method overrides by name
+        super().__init_subclass__(**kw)
+        cls._skills, cls._checks = {}, {}
+        for klass in reversed(cls.__mro__):
+            for attr, fn in vars(klass).items():
+                for name in getattr(fn, "htn_skills", ()):
+                    cls._skills[name] = attr
+                for name in getattr(fn, "htn_checks", ()):
+                    cls._checks[name] = attr
 
-    def _unobservable(self) -> Check:
-        return Check(False, f"not observable on {type(self).__name__}")
+    # ---- by name
+    def act(self, name: str, *args) -> Outcome:
+        """Start skill ``name``: a result, or a generator to tick (see module
+        doc). A robot written without the decorator offers its method of the
+        same name."""
+        fn = getattr(self, self._skills.get(name, name), None)
+        if not callable(fn):
+            return SkillResult(False, f"{type(self).__name__} cannot {name.replace('_', ' ')}")
+        return fn(*args)
 
-    # ---- the domestic robot's skills
-    def move_base(self, place: str) -> SkillResult:
-        return self._lacks("move its base")
+    def check(self, name: str, *args) -> Check:
+        """Run check ``name`` on the world as it is now (without the
+        decorator: the method ``check_NAME``)."""
+        fn = getattr(self, self._checks.get(name, f"check_{name}"), None)
+        if not callable(fn):
+            return Check(False, f"{name.replace('_', ' ')} is not observable on "
+                                f"{type(self).__name__}")
+        return fn(*args)
 
-    def detect_object(self, obj: str, furniture: str) -> SkillResult:
-        return self._lacks("detect objects")
+    @classmethod
+    def skill_names(cls) -> list[str]:
+        return sorted(cls._skills)
 
-    def has_detection(self, obj: str) -> bool:
-        return False
+    @classmethod
+    def check_names(cls) -> list[str]:
+        return sorted({*cls._checks, *(a[6:] for a in dir(cls) if a.startswith("check_")
+                                       and a != "check_names")})
 
-    def grasp(self, obj: str, furniture: str, arm: Optional[str] = None) -> SkillResult:
-        return self._lacks("grasp")
-
-    def place_object(self, obj: str, furniture: str, arm: Optional[str] = None) -> SkillResult:
-        return self._lacks("place objects")
-
-    def find_person(self, person: str) -> SkillResult:
-        return self._lacks("look for persons")
-
-    def hand_over(self, obj: str, person: str) -> SkillResult:
-        return self._lacks("hand objects over")
-
-    def say(self, message: str) -> SkillResult:
-        return self._lacks("speak")
-
-    # ---- the kitchen robot's skills: containers and a tray
-    def open_container(self, container: str) -> SkillResult:
-        return self._lacks("open containers")
-
-    def close_container(self, container: str) -> SkillResult:
-        return self._lacks("close containers")
-
-    def put_on_tray(self, obj: str, tray: str, arm: Optional[str] = None) -> SkillResult:
-        return self._lacks("use a tray")
-
-    def lift_tray(self, tray: str) -> SkillResult:
-        return self._lacks("use a tray")
-
-    def lower_tray(self, tray: str, where: str) -> SkillResult:
-        return self._lacks("use a tray")
-
-    def take_from_tray(self, obj: str, tray: str, arm: Optional[str] = None) -> SkillResult:
-        return self._lacks("use a tray")
-
-    # ---- the operator model (see executes_operator_model)
-    def apply_operator(self, name: str, args: tuple) -> SkillResult:
-        return self._lacks(f"execute {name} from its operator model")
-
-    def check_operator_effects(self, name: str, args: tuple) -> Check:
-        return self._unobservable()
-
+    # ---- control and state estimation
     def apply_internal(self, name: str, args: tuple) -> None:
         """An internal (``!!``) step was applied to the belief state; a robot
         whose world is the operator model applies it too."""
 
-    # ---- checks used by monitors
-    def check_base_at(self, place: str) -> Check:
-        return self._unobservable()
-
-    def check_no_collision(self) -> Check:
-        return self._unobservable()
-
-    def check_in_gripper(self, obj: str) -> Check:
-        return self._unobservable()
-
-    def check_on(self, obj: str, furniture: str) -> Check:
-        return self._unobservable()
-
-    def check_handed(self, obj: str, person: str) -> Check:
-        return self._unobservable()
-
-    def check_person_visible(self, person: str) -> Check:
-        return self._unobservable()
-
-    def check_detection(self, obj: str) -> Check:
-        return self._unobservable()
-
-    def check_said(self, message: str) -> Check:
-        return self._unobservable()
-
-    def check_opened(self, container: str, opened: bool) -> Check:
-        return self._unobservable()
-
-    def check_on_tray(self, obj: str, tray: str) -> Check:
-        return self._unobservable()
-
-    def check_tray_carried(self, tray: str, carried: bool, where: Optional[str] = None) -> Check:
-        return self._unobservable()
-
-    # ---- control and state estimation
     def hold(self) -> None:
         """Stop all motion and keep the current pose (after a failure)."""
 
@@ -146,8 +142,13 @@ class Robot:
         """Facts of the domain's dynamic predicates, as the robot perceives them."""
         return []
 
+    def inject(self, kind: str, detail: str) -> None:
+        """Record a fault this robot injects now (see ``--faults``)."""
+        self.__dict__.setdefault("injected", []).append(
+            {"kind": kind, "sim_t": round(self.sim_time, 4), "detail": detail})
+
     def injected_faults(self) -> list[dict]:
-        """The faults injected so far (kind, sim time, detail), oldest first."""
+        """The faults injected so far (kind, sim_t, detail), oldest first."""
         return list(getattr(self, "injected", []))
 
     def close(self) -> None:

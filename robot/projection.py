@@ -24,7 +24,7 @@ import random
 from dataclasses import dataclass, field
 from typing import Optional
 
-from .interface import Check, Robot, SkillResult
+from .interface import Check, Robot, SkillResult, check, skill
 
 ARM_REST = {"left": (0.1, 0.35, 0.9), "right": (0.1, -0.35, 0.9)}   # relative to the base
 BASE_SPEED, ARM_SPEED, ACTION_TIME = 0.5, 0.25, 1.0
@@ -88,6 +88,8 @@ def world_from_atoms(atoms) -> ProjectedWorld:
 class ProjectionRobot(Robot):
     """A two-armed robot in a projected world; deterministic for a seed."""
 
+    instantaneous = True
+
     def __init__(self, world: ProjectedWorld, seed: int = 0,
                  failures: Optional[FailureRates] = None, pose_noise: float = 0.25):
         self.world = world
@@ -110,11 +112,6 @@ class ProjectionRobot(Robot):
     @property
     def sim_time(self) -> float:
         return self.metrics.sim_time
-
-    @property
-    def carrying(self) -> Optional[str]:
-        held = [o for o in self.hands.values() if o]
-        return held[0] if len(held) == 1 else None
 
     def _act(self, kind: str) -> bool:
         """Count an action attempt; True if it fails (probability by kind)."""
@@ -160,6 +157,7 @@ class ProjectionRobot(Robot):
         return self.world.containers.get(where, self.trays.get(where, where))
 
     # ------------------------------------------------------------ skills
+    @skill("move_base")
     def move_base(self, place: str) -> SkillResult:
         if place not in self.world.places:
             return SkillResult(False, f"unknown place {place}")
@@ -175,6 +173,7 @@ class ProjectionRobot(Robot):
         self.at = None if failed else place
         return SkillResult(True, f"at {x:.2f} {y:.2f}")
 
+    @skill("detect_object")
     def detect_object(self, obj: str, where: str) -> SkillResult:
         failed = self._act("detect")
         if not failed and (self.where.get(obj) in (where, *self._contents_of(where))
@@ -185,6 +184,7 @@ class ProjectionRobot(Robot):
     def _contents_of(self, area: str) -> tuple:
         return tuple(c for c, a in self.world.containers.items() if a == area)
 
+    @skill("grasp")
     def grasp(self, obj: str, where: str, arm: Optional[str] = None) -> SkillResult:
         arm = arm or ("left" if self.hands["left"] is None else "right")
         if self.hands.get(arm) is not None:
@@ -199,6 +199,7 @@ class ProjectionRobot(Robot):
             self.where[obj] = ("hand", arm)
         return SkillResult(True, f"{arm} gripper closed")
 
+    @skill("place_object")
     def place_object(self, obj: str, where: str, arm: Optional[str] = None) -> SkillResult:
         arm = arm or next((a for a, o in self.hands.items() if o == obj), None)
         if arm is None or self.hands.get(arm) != obj:
@@ -210,6 +211,7 @@ class ProjectionRobot(Robot):
             self.where[obj] = where
         return SkillResult(True, f"{arm} gripper opened")
 
+    @skill("open_container")
     def open_container(self, container: str) -> SkillResult:
         failed = self._act("container")
         self._arm_motion("right", self._area_of(container))
@@ -217,6 +219,7 @@ class ProjectionRobot(Robot):
             self.opened.add(container)
         return SkillResult(True, "pulled")
 
+    @skill("close_container")
     def close_container(self, container: str) -> SkillResult:
         failed = self._act("container")
         self._arm_motion("right", self._area_of(container))
@@ -224,6 +227,7 @@ class ProjectionRobot(Robot):
             self.opened.discard(container)
         return SkillResult(True, "pushed")
 
+    @skill("put_on_tray")
     def put_on_tray(self, obj: str, tray: str, arm: Optional[str] = None) -> SkillResult:
         arm = arm or next((a for a, o in self.hands.items() if o == obj), None)
         if arm is None:
@@ -235,6 +239,7 @@ class ProjectionRobot(Robot):
             self.where[obj] = tray
         return SkillResult(True, "released over the tray")
 
+    @skill("lift_tray")
     def lift_tray(self, tray: str) -> SkillResult:
         failed = self._act("tray")
         self._arm_motion("left", self.trays.get(tray) or self.at)
@@ -243,6 +248,7 @@ class ProjectionRobot(Robot):
             self.carrying_tray, self.trays[tray] = tray, None
         return SkillResult(True, "both grippers closed on the tray")
 
+    @skill("lower_tray")
     def lower_tray(self, tray: str, where: str) -> SkillResult:
         failed = self._act("tray")
         self._arm_motion("left", where)
@@ -251,6 +257,7 @@ class ProjectionRobot(Robot):
             self.carrying_tray, self.trays[tray] = None, where
         return SkillResult(True, "tray lowered")
 
+    @skill("take_from_tray")
     def take_from_tray(self, obj: str, tray: str, arm: Optional[str] = None) -> SkillResult:
         arm = arm or ("left" if self.hands["left"] is None else "right")
         failed = self._act("grasp")
@@ -260,11 +267,13 @@ class ProjectionRobot(Robot):
             self.where[obj] = ("hand", arm)
         return SkillResult(True, f"{arm} gripper closed")
 
+    @skill("find_person")
     def find_person(self, person: str) -> SkillResult:
         self._act("detect")
         self.detections.add(person)
         return SkillResult(True, "looked")
 
+    @skill("hand_over")
     def hand_over(self, obj: str, person: str) -> SkillResult:
         arm = next((a for a, o in self.hands.items() if o == obj), None)
         self._act("place")
@@ -273,6 +282,7 @@ class ProjectionRobot(Robot):
             self.where[obj] = person
         return SkillResult(True, "handed")
 
+    @skill("say")
     def say(self, message: str) -> SkillResult:
         self.metrics.actions += 1
         self.metrics.sim_time += ACTION_TIME
@@ -283,37 +293,49 @@ class ProjectionRobot(Robot):
         pass
 
     # ------------------------------------------------------------ checks
+    @check("base_at")
     def check_base_at(self, place: str) -> Check:
         return Check(self.at == place, f"at {self.at or 'somewhere on the way'}")
 
+    @check("no_collision")
     def check_no_collision(self) -> Check:
         return Check(True, "projection has no collisions")
 
+    @check("still_held")
+    @check("in_gripper")
     def check_in_gripper(self, obj: str) -> Check:
         return Check(obj in self.hands.values(), f"{obj} {'in' if obj in self.hands.values() else 'not in'} a hand")
 
+    @check("on")
     def check_on(self, obj: str, where: str) -> Check:
         return Check(self.where.get(obj) == where, f"{obj} at {self.where.get(obj)}")
 
+    @check("handed")
     def check_handed(self, obj: str, person: str) -> Check:
         return Check(self.where.get(obj) == person, f"{obj} at {self.where.get(obj)}")
 
+    @check("person_visible")
     def check_person_visible(self, person: str) -> Check:
         return Check(person in self.detections, "seen")
 
+    @check("detection")
     def check_detection(self, obj: str) -> Check:
         return Check(obj in self.detections, "seen" if obj in self.detections else "not seen")
 
+    @check("said")
     def check_said(self, message: str) -> Check:
         return Check(bool(self.spoken) and self.spoken[-1] == message, "spoken")
 
+    @check("opened")
     def check_opened(self, container: str, opened: bool) -> Check:
         return Check((container in self.opened) == opened,
                      f"{container} is {'open' if container in self.opened else 'closed'}")
 
+    @check("on_tray")
     def check_on_tray(self, obj: str, tray: str) -> Check:
         return Check(self.where.get(obj) == tray, f"{obj} at {self.where.get(obj)}")
 
+    @check("tray_carried")
     def check_tray_carried(self, tray: str, carried: bool, where: Optional[str] = None) -> Check:
         ok = (self.carrying_tray == tray) if carried else (self.trays.get(tray) == where)
         return Check(ok, f"tray at {self.trays.get(tray)}")

@@ -21,7 +21,7 @@ from typing import Optional
 from htn.jshop import syntax as S
 from htn.jshop.terms import atom_str
 
-from .interface import Check, Robot, SkillResult
+from .interface import Check, Robot, SkillResult, check, skill
 
 ACTION_TIME = 1.0
 
@@ -31,6 +31,7 @@ class SymbolicRobot(Robot):
 
     FAULTS = ("effect",)
     executes_operator_model = True
+    instantaneous = True
 
     def __init__(self, domain: S.Domain, instance: S.ProblemInstance, functions=None,
                  faults: Optional[dict] = None, seed: int = 0):
@@ -45,6 +46,7 @@ class SymbolicRobot(Robot):
         self.injected: list[dict] = []
         self._expected: dict = {}     # (name, args) -> (deleted, added) of its last execution
 
+    @skill("operator")
     def apply_operator(self, name: str, args: tuple) -> SkillResult:
         args = tuple(args)
         self.sim_time += ACTION_TIME
@@ -61,11 +63,11 @@ class SymbolicRobot(Robot):
                                              [a for a in added if state.has(*a)])
             if self.effect_fault and self.rng.random() < self.effect_fault:
                 change.undo(state)
-                self.injected.append({"fault": "effect", "t": round(self.sim_time, 4),
-                                      "detail": f"the effects of {step} do not happen"})
+                self.inject("effect", f"the effects of {step} do not happen")
             return SkillResult(True, f"executed {step}")
         return SkillResult(False, f"the precondition of {step} does not hold in the world")
 
+    @check("operator_effects")
     def check_operator_effects(self, name: str, args: tuple) -> Check:
         expected = self._expected.get((name, tuple(args)))
         if expected is None:

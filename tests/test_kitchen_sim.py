@@ -16,6 +16,7 @@ from conftest import ROOT, run_htn
 from htn.executor.actions import Outcome, machine_for
 from htn.executor.config import load_retries
 from htn.executor.dispatcher import TaskDispatcher, dynamic_predicates
+from htn.executor.repair import observed_instance
 from htn.executor.log import EventLog
 from htn.jshop import Planner, load_domain, load_problem
 from htn.jshop import syntax as S
@@ -70,7 +71,7 @@ def test_transformed_set_table_and_clean_up_runs_verified_in_pybullet(tmp_path):
     text = plan.read_text()
     for step in ("(!lift-tray tray1)", "(!grasp bowl2 sink_area right)", "(!close drawer)"):
         assert step in text   # tray, both-hands and container rewrites are in the plan
-    assert text.count("(!open drawer)") == 1
+    assert text.splitlines().count("(!open drawer)") == 1   # a step line (the ; tasks: note has it too)
     assert text.count("(!look-for tray1 kitchen_island)") == 5   # before each load and the lift
     r = run_htn("run", plan, "--sim", "--log", log)
     assert r.returncode == 0, r.stdout + r.stderr
@@ -164,9 +165,10 @@ def test_tray_needs_both_hands_and_carries_what_stands_on_it():
 
 
 def test_faults_are_recovered_by_retries():
+    # (a slip while driving is not: see test_monitoring.py)
     steps = transformed_plan("set_table_and_clean_up").plan.steps
     summary, events, robot = execute("set_table_and_clean_up", steps,
-                                     faults="detect=0.2,slip=0.1,nav=0.1", seed=3)
+                                     faults="detect=0.2,nav=0.1", seed=3)
     try:
         assert robot.injected, "the seed injects faults"
         assert summary.result == "verified" and summary.retries >= len(robot.injected) > 0
@@ -180,9 +182,7 @@ def test_replanning_from_where_a_navigation_stopped():
     robot = KitchenRobot(kitchen_world_from_state(inst.state), faults=Faults.parse("nav=1"))
     try:
         assert run_steps(robot, ["(!navigate start kitchen_island)"]) == [Outcome.ABORTED]
-        log = EventLog(None)
-        dispatcher = TaskDispatcher(robot, dom, inst, [], {}, log)
-        observed = dispatcher.observed_instance()
+        observed = observed_instance(dom, inst, robot)
         here = [a for a in observed.state if a.pred == "area" and a.args[0] == "here"]
         assert len(here) == 1 and ("robot-at", ("here",)) in robot.observe()
         x, y = here[0].args[1:]

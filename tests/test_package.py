@@ -142,15 +142,20 @@ from htn.executor.actions import ActionMachine, action
 
 @action("!pickup", domain="basic")
 class Pickup(ActionMachine):
+    # skills and checks by name, as the bundled machines call them
     def execute(self, robot, thing):
-        return robot.pick_up(thing)
+        return robot.act("pick_up", thing)
 
     def monitor(self, robot, thing):
-        return robot.check_have(thing, True)
+        return robot.check("have", thing, True)
+
+    def holds(self, robot, thing):     # checked on every tick while it runs
+        return [("toy hand works", lambda: robot.check("hand_ok"))]
 
 
 @action("!drop", domain="basic")
 class Drop(ActionMachine):
+    # or the robot's own methods, called directly
     def execute(self, robot, thing):
         return robot.drop(thing)
 
@@ -160,13 +165,14 @@ class Drop(ActionMachine):
 
 PLUGIN_ROBOT = '''
 """A toy robot with one hand that remembers what it has."""
-from htn.robot.interface import Check, Robot, SkillResult
+from htn.robot.interface import Check, Robot, SkillResult, check, skill
 
 
 class ToyRobot(Robot):
     def __init__(self, have):
         self.have = set(have)
 
+    @skill("pick_up")
     def pick_up(self, thing):
         self.sim_time += 0.5
         self.have.add(thing)
@@ -177,8 +183,12 @@ class ToyRobot(Robot):
         self.have.discard(thing)
         return SkillResult(True, f"toy hand let go of {thing}")
 
-    def check_have(self, thing, expected):
+    def check_have(self, thing, expected):       # the check "have", by its method name
         return Check((thing in self.have) == expected, f"toy sees {sorted(self.have)}")
+
+    @check("hand_ok")
+    def hand_is_fine(self):
+        return Check(True, "fine")
 
     def observe(self):
         return [("have", (t,)) for t in sorted(self.have)]

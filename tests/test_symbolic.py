@@ -179,7 +179,7 @@ def test_the_log_header_reproduces_a_pybullet_run(tmp_path):
     assert (r2.returncode, r2.stdout) == (r.returncode, r.stdout), r2.stderr
 
     def strip(events):
-        return [{k: v for k, v in e.items() if k not in ("wall", "argv")} for e in events]
+        return [{k: v for k, v in e.items() if k not in ("t", "argv")} for e in events]
     assert strip(events_of(first)) == strip(events_of(again))
     # a plan that changed is not the same run
     plan.write_text(plan.read_text() + "\n")

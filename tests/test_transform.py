@@ -179,7 +179,7 @@ def test_htn_transform_cli(tmp_path):
     assert doc["applied"] == ["tray", "container", "both-hands"]
     assert doc["transformed"]["navigation"] < doc["original"]["navigation"]
     text = out.read_text()
-    assert text.startswith("; htn plan file") and text.count("(!open drawer)") == 1
+    assert text.startswith("; htn plan file") and text.splitlines().count("(!open drawer)") == 1
     bad = run_htn("transform", DOMAIN, PROBLEMS / "tray_three.jshop", "--rules", "nope")
     assert bad.returncode == 2 and "unknown rule" in bad.stderr
 

@@ -25,7 +25,7 @@ def project(domain: S.Domain, instance: S.ProblemInstance, steps, seed: int,
     log = EventLog(None, clock=lambda: robot.sim_time)
     summary = TaskDispatcher(robot, domain, instance, steps, retries or {}, log).run()
     m = robot.metrics
-    outcomes = {e["step"]: e["event"] for e in log.events
+    outcomes = {e["step"] - 1: e["event"] for e in log.events   # log steps are 1-based
                 if e["event"] in ("verified", "aborted", "failed") and e["step"] is not None}
     return {"navigation": m.navigation, "manipulation": m.manipulation,
             "actions": float(m.actions), "failures": m.failures / max(m.actions, 1),

@@ -239,7 +239,13 @@ class Framework:
         """Apply every enabled transformation, highest priority first, each as
         often as its rule finds untransformed tasks; keep only those that leave
         a valid plan that is not costlier on ``metric``."""
-        cost = METRICS[metric]
+        metric_cost = METRICS[metric]
+        known: dict = {}      # id(plan) -> (plan, cost): each plan is projected once
+
+        def cost(ws, plan):
+            if id(plan) not in known:
+                known[id(plan)] = (plan, metric_cost(ws, plan))
+            return known[id(plan)][1]
         for t in self.transformations:
             if not t.enabled:
                 continue

@@ -1,0 +1,87 @@
+"""The task tree behind a plan read from a file, and checks before it runs.
+
+A plan file holds only the plan's steps. Its task tree (which the behaviour
+tree mirrors, and which repair re-plans in) is recovered by planning the
+problem again with trees recorded and taking the first plan whose steps are
+the file's: ``htn plan -o`` writes the planner's plans in that order.
+A transformed plan's file notes its task list (``; tasks:``), which is planned
+instead. A plan no decomposition gives (a hand-written one) has no
+recoverable tree; it runs as one sequence.
+"""
+from __future__ import annotations
+
+from typing import Optional
+
+from htn.jshop import syntax as S
+from htn.jshop.errors import HtnError
+from htn.jshop.planner import Planner
+from htn.jshop.terms import Var
+
+RECOVER_TIMEOUT = 5.0     # seconds of search
+RECOVER_PLANS = 50        # plans looked at, at most
+
+
+def recover_tree(domain: S.Domain, instance: S.ProblemInstance, steps, functions=None,
+                 timeout: float = RECOVER_TIMEOUT, max_plans: int = RECOVER_PLANS,
+                 tasks: Optional[str] = None):
+    """The task tree of the first plan of ``instance`` whose steps are ``steps``,
+    or None. ``tasks`` (a task list's text, as ``htn transform -o`` notes it)
+    replaces the problem's task list."""
+    if tasks:
+        from htn.jshop.parser import parse_text
+        try:
+            listed = parse_text(f"(defproblem tasks {domain.name} () ({tasks}))",
+                                "<tasks>").instances[0].tasks
+        except HtnError:
+            return None
+        instance = S.ProblemInstance(instance.state, listed, instance.pos)
+    want = [str(s) for s in steps]
+    plans = Planner(domain, instance, functions, record_trees=True).plans(timeout=timeout)
+    for k, plan in enumerate(plans):
+        if plan.lines() == want:
+            return plan.tree
+        if k + 1 >= max_plans:
+            break
+    return None
+
+
+def _variable(term) -> Optional[Var]:
+    stack = [term]
+    while stack:
+        t = stack.pop()
+        if isinstance(t, Var):
+            return t
+        if isinstance(t, (list, tuple)):
+            stack.extend(t)
+    return None
+
+
+def check_runnable(domain: S.Domain, instance: S.ProblemInstance, plan, plan_file: str,
+                   functions=None) -> None:
+    """Before the robot moves: every step is ground, and the steps apply in
+    sequence from the problem's initial state (manual 5.2.1; the plan's cost
+    is not checked). A bad step is an input error at its line of the plan file."""
+    from htn.jshop.plan import Plan
+    from htn.jshop.validate import validate_plan
+    lines = _read_lines(plan_file)
+    for s in plan.steps:
+        var = next((v for v in map(_variable, s.args) if v is not None), None)
+        if var is not None:
+            text = lines[s.line - 1] if 0 < s.line <= len(lines) else ""
+            col = text.find(var.name) + 1 if var.name in text else 1
+            shown = text.strip() or s.name
+            raise HtnError(f"{shown} has a variable, {var.name}: a plan to run must be ground",
+                           plan_file, s.line or None, col if s.line else None)
+    verdict = validate_plan(domain, instance, Plan(plan.steps, None), functions)
+    if not verdict.valid:
+        where = verdict.line or None
+        raise HtnError(f"step {verdict.failed_step + 1} cannot run: {verdict.reason}",
+                       plan_file, where, 1 if where else None)
+
+
+def _read_lines(path: str) -> list[str]:
+    try:
+        with open(path, encoding="utf-8") as fh:
+            return fh.read().splitlines()
+    except (OSError, UnicodeDecodeError):
+        return []

@@ -1,0 +1,145 @@
+"""Repair in the task tree: re-plan the smallest enclosing task that can be
+re-planned from what the robot observes, and graft it into the behaviour tree.
+
+When an action ends failed or aborted, the tasks that enclose it are tried
+from the nearest up: each is planned again (JSHOP2's search, this planner's
+:class:`~htn.jshop.planner.Planner`, on that one task atom) from the
+**observed state**: the problem's static facts plus what the robot observes of
+the domain's dynamic predicates. A plan is accepted when what comes after the
+task in the current plan still applies after it (each remaining step's
+precondition holds in sequence); the task's subtree in the behaviour tree is
+then replaced by the new one, and what is done and what comes after stays as
+it is. At the root, the pending top-level tasks are planned together (or,
+when the plan's task tree is unknown, the problem's tasks). If no enclosing
+task has a plan, there is no repair and the robot holds its pose.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Optional
+
+from htn.jshop import syntax as S
+from htn.jshop.planner import Planner
+
+from .task_bt import ROOT_NAME, actions, build, enclosing_tasks, label_among, rebase, task_atom
+
+PLAN_TIMEOUT = 10.0       # seconds of search per candidate task
+
+
+@dataclass
+class Repair:
+    """A repair found: the task replaced (node path), its new plan, and the
+    behaviours it replaces."""
+    path: str                        # the node path of the (first) task re-planned
+    tasks: list
+    plan: object
+    target: object                   # the sequence repaired (the root for the root)
+    replaced: list = field(default_factory=list)
+
+    @property
+    def paths(self) -> list[str]:
+        """Node paths of every task replaced."""
+        return [getattr(b, "htn_task", None).path if hasattr(b, "htn_task")
+                else b.htn_action.node.path for b in self.replaced]
+
+
+def observed_instance(domain: S.Domain, instance: S.ProblemInstance, robot,
+                      tasks=None) -> S.ProblemInstance:
+    """The current state as the robot observes it: static facts of the
+    problem plus the observed facts of the domain's dynamic predicates."""
+    dynamic = domain.dynamic_predicates()
+    atoms = [a for a in instance.state if a.pred not in dynamic]
+    atoms += [S.Atom(pred, tuple(args)) for pred, args in robot.observe()]
+    return S.ProblemInstance(atoms, tasks if tasks is not None else instance.tasks, instance.pos)
+
+
+def _done(behaviour) -> bool:
+    return all(a.done for a in actions(behaviour))
+
+
+def _task_of(behaviour) -> S.TaskAtom:
+    if hasattr(behaviour, "htn_task"):
+        return task_atom(behaviour.htn_task)
+    step = behaviour.htn_action.step
+    return S.TaskAtom(step.name, tuple(step.args))
+
+
+def candidates(shot, root, tree_known: bool, problem_tasks: S.TaskList):
+    """(sequence, behaviours it replaces, task list to plan), nearest first:
+    each enclosing task alone, then together with the tasks after it in its
+    parent (so that what those were planned for need not hold any more),
+    then the parent."""
+    for seq in enclosing_tasks(shot):
+        if seq is not root:
+            yield seq, [seq], S.TaskList([task_atom(seq.htn_task)])
+            siblings = seq.parent.children
+            later = siblings[siblings.index(seq):]
+            if len(later) > 1:
+                yield seq, later, S.TaskList([_task_of(b) for b in later])
+            continue
+        pending = [c for c in root.children if not _done(c)]
+        tasks = S.TaskList([_task_of(c) for c in pending]) if tree_known else problem_tasks
+        yield seq, pending, tasks
+
+
+def find_repair(shot, root, tree_known: bool, domain, observed: S.ProblemInstance,
+                problem_tasks, functions=None) -> tuple[Optional[Repair], list[str]]:
+    """The repair for the failed action subtree ``shot``, and the node paths tried."""
+    tried = []
+    for seq, replaced, tasks in candidates(shot, root, tree_known, problem_tasks):
+        path = seq.name if seq is not root else ROOT_NAME
+        tried.append(path if seq is root or len(replaced) == 1 else
+                     f"{path} and the {len(replaced) - 1} task(s) after it")
+        if not tasks.items:
+            continue
+        inst = S.ProblemInstance(observed.state, tasks, observed.pos)
+        plan = next(Planner(domain, inst, functions, record_trees=True).plans(
+            timeout=PLAN_TIMEOUT), None)
+        if plan is None:
+            continue
+        gone = {id(a) for b in replaced for a in actions(b)}
+        rest = [a.step for a in actions(root) if not a.done and id(a) not in gone]
+        if _applies(domain, observed, functions, [*plan.steps, *rest]):
+            return Repair(path, [str(t) for t in _atoms(tasks)], plan, seq, replaced), tried
+    return None, tried
+
+
+def _atoms(tasks: S.TaskList) -> list:
+    from htn.jshop.terms import atom_str
+    return [atom_str(t.name, t.args) for t in S.task_atoms(tasks)]
+
+
+def _applies(domain, observed: S.ProblemInstance, functions, steps) -> bool:
+    """Do ``steps`` apply in sequence from the observed state?"""
+    checker = Planner(domain, S.ProblemInstance(observed.state, S.TaskList([])), functions)
+    return all(checker.apply_step(s.name, tuple(s.args)) for s in steps)
+
+
+def graft(repair: Repair, root, make_action) -> list:
+    """Put the repair's new subtrees into the behaviour tree; returns them."""
+    plan, seq = repair.plan, repair.target
+    if seq is not root:
+        parent = seq.parent
+        at = parent.children.index(repair.replaced[0])
+        added = []
+        for old, node in zip(repair.replaced, plan.tree.children):
+            rebase(node, old.htn_task.path if hasattr(old, "htn_task")
+                   else old.htn_action.node.path)
+            parent.remove_child(old)
+            added.append(build(node, plan.steps, make_action))
+        for k, new in enumerate(added):
+            parent.insert_child(new, at + k)
+        return added
+    for b in repair.replaced:
+        root.remove_child(b)
+    taken = {c.name for c in root.children}
+    names = [n.name for n in plan.tree.children]
+    added = []
+    for node in plan.tree.children:
+        label = label_among(node.name, taken, names.count(node.name))
+        taken.add(label)
+        rebase(node, label)
+        new = build(node, plan.steps, make_action)
+        root.add_child(new)
+        added.append(new)
+    return added

@@ -1,0 +1,124 @@
+"""The PyBullet side of the simulated robots: the physics client, its clock,
+and the bodies both robots build their worlds from (floor, tables, cylinders).
+
+The clock advances only through :meth:`Physics._step`, a generator that runs
+one physics step (``DT``) per ``next()``: skills ``yield from`` it, so the task
+executor can tick a skill and preempt it between two steps. World building,
+which happens before anything is ticked, runs its steps to the end with
+:func:`~htn.robot.interface.complete`.
+"""
+from __future__ import annotations
+
+import ctypes
+import os
+import sys
+from contextlib import contextmanager
+
+import numpy as np
+
+from .interface import complete
+
+DT = 1.0 / 120.0        # physics step; motion is kinematic, so 120 Hz is stable
+STEPS_PER_TICK = 4      # a tick of the behaviour tree: 1/30 s of simulated time
+
+
+@contextmanager
+def quiet_fds():
+    """Silence C-level output on fds 1 and 2 (PyBullet prints banners and warnings)."""
+    libc = ctypes.CDLL(None)
+    sys.stdout.flush()
+    sys.stderr.flush()
+    saved = os.dup(1), os.dup(2)
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    try:
+        os.dup2(devnull, 1)
+        os.dup2(devnull, 2)
+        yield
+    finally:
+        libc.fflush(None)
+        os.dup2(saved[0], 1)
+        os.dup2(saved[1], 2)
+        for fd in (*saved, devnull):
+            os.close(fd)
+
+
+def yaw_quat(p, yaw: float):
+    return p.getQuaternionFromEuler((0.0, 0.0, yaw))
+
+
+class Physics:
+    """A PyBullet client with a clock; the part every simulated robot has."""
+
+    steps_per_tick = STEPS_PER_TICK
+
+    def _connect(self, gui: bool) -> None:
+        with quiet_fds():   # importing pybullet prints its build time on fd 1
+            import pybullet as p
+            import pybullet_data
+        self.p = p
+        self.sim_time = 0.0
+        with quiet_fds():
+            self.cid = p.connect(p.GUI if gui else p.DIRECT)
+        if self.cid < 0:
+            from htn.jshop.errors import HtnError
+            raise HtnError("--gui: PyBullet cannot open a window on display "
+                           f"{os.environ.get('DISPLAY', '(none)')!r}")
+        p.setAdditionalSearchPath(pybullet_data.getDataPath(), physicsClientId=self.cid)
+
+    def _build_ground(self) -> None:
+        """Gravity, the clock and the floor; no bodies named yet."""
+        p, c = self.p, self.cid
+        p.setGravity(0, 0, -9.81, physicsClientId=c)
+        p.setTimeStep(DT, physicsClientId=c)
+        self.plane = p.loadURDF("plane.urdf", physicsClientId=c)
+        self.body_of: dict[str, int] = {}
+        self.furniture_top: dict[str, float] = {}
+
+    def _load_table(self, name: str, x: float, y: float, yaw: float = 0.0) -> int:
+        p, c = self.p, self.cid
+        bid = p.loadURDF("table/table.urdf", [x, y, 0.0], yaw_quat(p, yaw),
+                         useFixedBase=True, physicsClientId=c)
+        self.body_of[name] = bid
+        self.furniture_top[name] = p.getAABB(bid, physicsClientId=c)[1][2]
+        return bid
+
+    def _make_cylinder(self, r: float, h: float, mass: float, rgba, x: float, y: float,
+                       z: float) -> int:
+        p, c = self.p, self.cid
+        col = p.createCollisionShape(p.GEOM_CYLINDER, radius=r, height=h, physicsClientId=c)
+        vis = p.createVisualShape(p.GEOM_CYLINDER, radius=r, length=h, rgbaColor=rgba,
+                                  physicsClientId=c)
+        bid = p.createMultiBody(mass, col, vis, [x, y, z], physicsClientId=c)
+        p.changeDynamics(bid, -1, lateralFriction=1.0, physicsClientId=c)
+        return bid
+
+    # ------------------------------------------------------------ clock
+    def _physics_step(self) -> None:
+        self.p.stepSimulation(physicsClientId=self.cid)
+        self.sim_time += DT
+
+    def _step(self, n: int = 1):
+        """Advance the simulation ``n`` steps, yielding after each."""
+        for _ in range(n):
+            self._physics_step()
+            yield
+
+    def _settle(self, seconds: float):
+        return self._step(int(seconds / DT))
+
+    def _run(self, ticking):
+        """Run steps to their end now (world building, outside any tick)."""
+        return complete(ticking)
+
+    # ------------------------------------------------------------ bodies
+    def _pos(self, body: int) -> np.ndarray:
+        return np.array(self.p.getBasePositionAndOrientation(body, physicsClientId=self.cid)[0])
+
+    def _body_pos(self, name: str) -> np.ndarray:
+        return self._pos(self.body_of[name])
+
+    def close(self) -> None:
+        try:
+            self.p.disconnect(physicsClientId=self.cid)
+        except Exception:  # already disconnected
+            pass
