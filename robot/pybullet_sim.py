@@ -13,6 +13,10 @@ takes an object the same way when the gripper brings it within reach.
 
 Faults (``slip``, ``nav``, ``detect``, ``moved``) are injected with a seeded
 random generator, so the same seed gives the same run.
+
+Each robot keeps an :class:`Odometry`: how far its base and its grippers have
+moved, the navigation and manipulation costs that ``htn evaluate --robot
+pybullet`` compares.
 """
 from __future__ import annotations
 
@@ -76,6 +80,38 @@ def _angle_diff(a: float, b: float) -> float:
     return (a - b + math.pi) % (2 * math.pi) - math.pi
 
 
+class Odometry:
+    """Distances travelled, read from the simulation each time the robot's
+    clock advances (every base and arm motion of both robots ends that way).
+
+    ``base`` is the path of the base in the plane (m); ``grippers`` the summed
+    paths of the gripper frames relative to the base (m), so that driving with
+    still arms adds nothing to it. They are the navigation and manipulation
+    costs of the plan-transformations paper (Section IV-A: distances between
+    key points of the base and gripper trajectories), here measured at every
+    physics step of the motion instead of between key points.
+    """
+
+    def __init__(self):
+        self.base = 0.0
+        self.grippers = 0.0
+        self._last: Optional[tuple] = None     # base (x, y), grippers in the base frame
+
+    def sample(self, robot: "PyBulletRobot") -> None:
+        x, y, yaw = robot.base
+        cos, sin = math.cos(yaw), math.sin(yaw)
+        grippers = []
+        for body, _ in robot._mounted():       # the arms ride on the base
+            gx, gy, gz = robot.p.getLinkState(body, EE_LINK, physicsClientId=robot.cid)[4]
+            dx, dy = gx - x, gy - y
+            grippers.append((cos * dx + sin * dy, cos * dy - sin * dx, gz))
+        if self._last is not None:
+            (lx, ly), last = self._last
+            self.base += math.hypot(x - lx, y - ly)
+            self.grippers += sum(math.dist(a, b) for a, b in zip(grippers, last))
+        self._last = ((x, y), grippers)
+
+
 class PyBulletRobot(Robot):
     """The simulated robot; ``gui=True`` opens a window (needs a display)."""
 
@@ -88,6 +124,7 @@ class PyBulletRobot(Robot):
         self.world = world
         self.faults = faults or Faults()
         self.rng = random.Random(seed)
+        self.odometry: Optional[Odometry] = None     # from when the world is built
         self.sim_time = 0.0
         self.spoken: list[str] = []
         self.injected: list[dict] = []       # faults injected so far (for tests and logs)
@@ -104,6 +141,21 @@ class PyBulletRobot(Robot):
             p.setAdditionalSearchPath(pybullet_data.getDataPath(), physicsClientId=self.cid)
             self._build()
         self.bodies_named = {v: k for k, v in self.body_of.items()}
+        self.odometry = Odometry()
+        self.odometry.sample(self)
+
+    @property
+    def sim_time(self) -> float:
+        """Simulated seconds since the world was built."""
+        return self._sim_time
+
+    @sim_time.setter
+    def sim_time(self, value: float) -> None:
+        # both robots' _step advance this clock after every motion increment,
+        # so the odometer is read here rather than in each of them
+        self._sim_time = value
+        if self.odometry is not None:
+            self.odometry.sample(self)
 
     # ------------------------------------------------------------ building
     def _build_ground(self) -> None:
