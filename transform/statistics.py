@@ -6,7 +6,8 @@ failure rate also the pooled proportion of failed attempts with its Wilson
 
 A statistic that is undefined is ``None`` (JSON ``null``, shown as "n/a"),
 never NaN: a standard deviation of fewer than two runs, a p-value with fewer
-than two runs on a side or no variance on either, a change from a mean of 0.
+than two runs on a side or no variance on either (none, or so little that
+scipy reports precision loss), a change from a mean of 0.
 """
 from __future__ import annotations
 
@@ -69,12 +70,15 @@ def welch_p(a, b) -> Optional[float]:
     if len(a) < 2 or len(b) < 2 or (statistics.pvariance(a) == 0 == statistics.pvariance(b)):
         return None
     from scipy import stats
-    with warnings.catch_warnings():
-        # nearly identical samples make scipy warn about precision loss; the
-        # result is then NaN, reported as n/a below
-        warnings.simplefilter("ignore", RuntimeWarning)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
         p = float(stats.ttest_ind(a, b, equal_var=False).pvalue)
-    return None if math.isnan(p) else p
+    # scipy warns of precision loss when the samples are nearly identical
+    # (e.g. physics runs that differ by rounding only): the p-value is then
+    # noise, NaN or absurdly small, and is not a result
+    if math.isnan(p) or any(issubclass(w.category, RuntimeWarning) for w in caught):
+        return None
+    return p
 
 
 def pooled_failures(records) -> dict:
