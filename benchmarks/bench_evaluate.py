@@ -1,0 +1,82 @@
+"""Benchmark: the runs of ``htn evaluate`` on 1 and 2 workers.
+
+Times the runs phase of an evaluation (from sending the first batch to the
+last result: what the number of workers changes) for projected runs on this
+process (1 worker) and on a local Dask cluster of 2 worker processes that is
+already up, as a cluster reached with ``--scheduler`` would be. The first
+evaluation on fresh workers (they unpack and prepare the study) is shown
+apart from the median of the repeats. Then physics runs per minute on the
+PyBullet robot, on 1 and 2 workers. Target: 2 workers at most 0.75x the
+time of 1 on 2 cores. Run::
+
+    python benchmarks/bench_evaluate.py                    # 200 projected runs, 4 physics runs
+    python benchmarks/bench_evaluate.py --repeats 9 --physics-runs 8
+
+Each "run" is one run of both plans (the original and the transformed one).
+"""
+from __future__ import annotations
+
+import statistics
+import time
+from pathlib import Path
+
+import click
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def _runs_phase(study, problem, applied, runs, runner) -> float:
+    from htn.transform.evaluate import run_study
+    return run_study(study, problem, applied, runs, 0, runner).seconds
+
+
+def _projected(problem: str, runs: int, repeats: int) -> dict:
+    from htn.transform.cluster import open_runner
+    from htn.transform.evaluate import prepare_study
+    study, applied = prepare_study(str(ROOT / "domains" / "kitchen.jshop"), problem)
+    times = {}
+    for workers in (1, 2):
+        started = time.perf_counter()
+        with open_runner(workers) as runner:
+            up = time.perf_counter() - started
+            first = _runs_phase(study, problem, applied, runs, runner)
+            rest = [_runs_phase(study, problem, applied, runs, runner) for _ in range(repeats)]
+        times[workers] = statistics.median(rest)
+        click.echo(f"  {workers} worker(s): runs phase median {times[workers]:.3f} s "
+                   f"(min {min(rest):.3f}, max {max(rest):.3f}, {repeats} repeats); "
+                   f"first on fresh workers {first:.3f} s; cluster start {up:.2f} s")
+    return times
+
+
+def _physics(problem: str, runs: int) -> None:
+    from htn.transform.cluster import open_runner
+    from htn.transform.evaluate import prepare_study
+    study, applied = prepare_study(str(ROOT / "domains" / "kitchen.jshop"), problem,
+                                   robot="pybullet")
+    for workers in (1, 2):
+        with open_runner(workers) as runner:
+            seconds = _runs_phase(study, problem, applied, runs, runner)
+        executions = runs * len(study.plans)
+        click.echo(f"  {workers} worker(s): {executions} physics runs in {seconds:.1f} s = "
+                   f"{executions / seconds * 60:.1f} runs per minute")
+
+
+@click.command()
+@click.option("--problem", default="transport_four", show_default=True)
+@click.option("--runs", default=200, show_default=True, help="Projected runs of each plan.")
+@click.option("--repeats", default=5, show_default=True)
+@click.option("--physics-runs", default=4, show_default=True,
+              help="PyBullet runs of each plan (0: skip).")
+def main(problem, runs, repeats, physics_runs):
+    """Time projected runs on 1 and 2 workers; count physics runs per minute."""
+    path = str(ROOT / "problems" / f"{problem}.jshop")
+    click.echo(f"{runs} projected runs of each plan of {problem}:")
+    times = _projected(path, runs, repeats)
+    click.echo(f"  2 workers / 1 worker: {times[2] / times[1]:.2f}x (target <= 0.75x)")
+    if physics_runs:
+        click.echo(f"{physics_runs} PyBullet runs of each plan of {problem}:")
+        _physics(path, physics_runs)
+
+
+if __name__ == "__main__":
+    main()
