@@ -10,9 +10,6 @@ import click
 
 from htn.jshop.errors import HtnError
 
-ROBOTS = ("projection", "pybullet")      # those htn.transform.runs.MEASURES can evaluate
-
-
 def _domain_for(problem: str) -> str:
     """The problem's domain file: ../domains/NAME.jshop beside it, domains/
     here, or the bundled one of that name."""
@@ -56,9 +53,10 @@ def _check_options(problem, domain, robot, faults, workers, scheduler, plot_dir,
         raise HtnError("no such file", problem)
     if domain is not None and not os.path.isfile(domain):
         raise HtnError("no such file", domain)
-    if robot not in ROBOTS:
+    from htn.transform.runs import MEASURES
+    if robot not in MEASURES:
         raise HtnError(f"--robot {robot}: this robot cannot be evaluated (choose from "
-                       f"{', '.join(ROBOTS)})")
+                       f"{', '.join(MEASURES)})")
     if robot == "pybullet":
         require_extra("sim", "htn evaluate --robot pybullet")
     if scheduler is not None and workers is not None:
@@ -70,7 +68,6 @@ def _check_options(problem, domain, robot, faults, workers, scheduler, plot_dir,
             raise HtnError("htn evaluate --workers/--scheduler needs Dask distributed, in the "
                            "eval extra: pip install 'htn[eval]'")
     from htn.robot.faults import parse_faults
-    from htn.transform.runs import MEASURES
     parse_faults(faults, MEASURES[robot].fault_kinds)
     if plot_dir is not None:
         _writable_folder(plot_dir, "--plot")

@@ -23,8 +23,7 @@ from .cluster import open_runner
 from .runs import MEASURES, Study, project, projected_tree, run_batch  # noqa: F401 (API)
 from .statistics import METRIC_NAMES, Comparison  # noqa: F401 (API)
 
-BATCH_RUNS = {"projection": 25, "pybullet": 1}   # about 40 ms / 4 s of work per batch
-BATCHES_PER_WORKER = 4                           # enough to even out uneven batches
+BATCHES_PER_WORKER = 4          # at least, to even out batches of uneven length
 
 
 def prepare_study(domain_path: str, problem_path: str, robot: str = "projection",
@@ -55,7 +54,7 @@ def run_study(study: Study, problem: str, applied: list, runs: int, seed: int, r
     """Execute ``runs`` runs of every plan of ``study`` on ``runner``;
     ``on_batch`` gets each batch's new records as they arrive."""
     workers = runner.workers
-    size = max(1, min(BATCH_RUNS.get(study.robot, 1),
+    size = max(1, min(MEASURES[study.robot].batch,
                       math.ceil(runs / (workers * BATCHES_PER_WORKER))))
     key, blob = study.pack()
     tasks = [(key, blob, batch) for batch in batches(runs, seed, size)]

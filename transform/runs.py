@@ -59,12 +59,15 @@ def run_plan(robot, domain: S.Domain, instance: S.ProblemInstance, steps,
 class Measure:
     """How one robot back end is evaluated: the fault kinds it injects, how
     a process prepares a study for it (once), how it builds the robot of a
-    run, and how it reads the run's distances and failed attempts."""
+    run, how it reads the run's distances and failed attempts, and how many
+    runs make a batch (about 40 ms of projection, one physics run: enough
+    to outweigh sending a task, few enough to balance the workers)."""
     fault_kinds: tuple
     prepare: Callable            # Study -> what robot() needs, built once per process
     robot: Callable              # (prepared, seed) -> robot
     read: Callable               # (robot, RunSummary) -> {navigation, manipulation, actions, failed}
     description: str
+    batch: int
 
 
 def _projection_prepare(study: Study):
@@ -100,11 +103,10 @@ MEASURES: dict[str, Measure] = {
     "projection": Measure(
         PROJECTION_FAULTS, _projection_prepare,
         lambda prepared, seed: ProjectionRobot(prepared[0], seed=seed, failures=prepared[1]),
-        _projection_read,
-        "projected"),
+        _projection_read, "projected", batch=25),
     "pybullet": Measure(
-        Faults.kinds(), lambda study: study, _pybullet_robot,
-        _pybullet_read, "PyBullet"),
+        Faults.kinds(), lambda study: study, _pybullet_robot, _pybullet_read, "PyBullet",
+        batch=1),
 }
 
 
