@@ -114,9 +114,12 @@ def open_runner(workers: int = 1, scheduler: Optional[str] = None,
             raise HtnError(f"--scheduler {scheduler}: the scheduler has no workers "
                            f"(waited {timeout})") from None
     else:
-        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                               dashboard_address=None, silence_logs=logging.ERROR,
-                               preload=list(preload))
+        # the workers' statistical profiler feeds the dashboard, which is not
+        # started; sampling the runs' Python stacks every 10 ms slows them
+        with dask.config.set({"distributed.worker.profile.enabled": False}):
+            cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                                   dashboard_address=None, silence_logs=logging.ERROR,
+                                   preload=list(preload))
         client = Client(cluster, set_as_default=False)
     try:
         yield DaskRunner(client)
