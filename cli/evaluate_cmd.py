@@ -157,7 +157,7 @@ def evaluate(problem, domain, runs, seed, robot, faults, workers, scheduler, rec
     if as_json:
         click.echo(json.dumps({"problem": problem, "runs": runs, "applied": comp.applied,
                                "metrics": stats, "plots": plots, "robot": robot,
-                               "workers": comp.workers,
+                               "results": comp.results(), "workers": comp.workers,
                                "runs_per_s": round(comp.runs_per_s, 3)}, indent=1))
         return
     _print_table(comp, stats, problem)
@@ -195,6 +195,9 @@ def _print_table(comp, stats: dict, problem: str) -> None:
         f"{p['failed']}/{p['attempts']} = {cell(p['rate'], '{:.1%}')}"
         + (f" [{p['wilson95'][0]:.1%}, {p['wilson95'][1]:.1%}]" if p["wilson95"] else "")
         for p in pooled))
+    out.print("runs ended: " + " \u2192 ".join(
+        ", ".join(f"{n} {result}" for result, n in sorted(ended.items()))
+        for ended in comp.results().values()))
     done = len(comp.original) + len(comp.transformed)
     out.print(f"{done} runs in {comp.seconds:.1f} s ({comp.runs_per_s:.1f} runs/s) on "
               f"{comp.workers} worker(s)")

@@ -150,6 +150,7 @@ def test_physics_backed_evaluation(tmp_path):
     assert r.returncode == 0, r.stderr
     doc = json.loads(r.stdout)
     assert (doc["robot"], doc["workers"], doc["applied"]) == ("pybullet", 1, ["tray"])
+    assert doc["results"] == {"original": {"verified": 1}, "transformed": {"verified": 1}}
     m = doc["metrics"]
     # measured in the physics world: the tray saves driving and costs arm motion
     assert 0 < m["navigation"]["transformed"]["mean"] < m["navigation"]["original"]["mean"]

@@ -40,6 +40,13 @@ class Comparison:
         done = len(self.original) + len(self.transformed)
         return done / self.seconds if self.seconds > 0 else 0.0
 
+    def results(self) -> dict:
+        """How the runs of each plan ended (verified, aborted, failed, ...).
+        Every run counts in the metrics, a stopped one with what it did
+        until it stopped."""
+        return {side: dict(Counter(r["result"] for r in getattr(self, side)))
+                for side in ("original", "transformed")}
+
     def metrics(self) -> dict:
         out = {}
         for name in METRIC_NAMES:
