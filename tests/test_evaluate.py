@@ -196,6 +196,21 @@ def test_statistics_edge_cases():
     assert applied_rules([]) == "none"
 
 
+def test_figures_of_runs_that_differ_by_rounding_only(tmp_path):
+    from htn.transform.figures import plot
+    from htn.transform.statistics import Comparison
+
+    def run(navigation, manipulation):
+        return {"navigation": navigation, "manipulation": manipulation, "actions": 15,
+                "failed": 0, "failures": 0.0}
+    # two physics runs without faults: the same distances but for the last bits
+    comp = Comparison("tray_three.jshop", 2, ["tray"], robot="pybullet",
+                      original=[run(6.177372650994691, 10.1), run(6.177372650994689, 10.2)],
+                      transformed=[run(2.4829454599947622, 24.5), run(2.48294545999476, 24.6)])
+    files = plot(comp, str(tmp_path))
+    assert len(files) == 6 and all(os.path.getsize(f) > 1000 for f in files)
+
+
 def test_output_options_are_checked_before_any_work(tmp_path):
     blocker = tmp_path / "a-file"
     blocker.write_text("not a folder\n")

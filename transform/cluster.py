@@ -52,8 +52,8 @@ class DaskRunner:
             raise ClusterError(f"a batch of runs was lost with every worker that took it "
                                f"({exc}); giving up") from None
         except ModuleNotFoundError as exc:
-            raise ClusterError(f"a Dask worker cannot import {exc.name}: install htn (with "
-                               "its eval extra) on every worker") from None
+            raise ClusterError(f"a Dask worker cannot import {exc.name}: every worker needs "
+                               "htn[eval], and htn[sim] for --robot pybullet") from None
         finally:
             for f in futures:
                 f.release()

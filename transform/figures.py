@@ -134,7 +134,7 @@ def _distributions_figure(comp: Comparison, name: str):
     axes = fig.subplots(1, len(shown))
     for ax, metric in zip(axes, shown):
         values = {side: [r[metric] for r in getattr(comp, side)] for side in SERIES}
-        edges = _shared_bins(values["original"] + values["transformed"], metric == "actions")
+        edges = _shared_bins(list(values.values()), metric == "actions")
         for side, (label, colour) in SERIES.items():
             ax.hist(values[side], bins=edges, histtype="step", linewidth=1.3, color=colour,
                     label=label)
@@ -150,12 +150,24 @@ def _distributions_figure(comp: Comparison, name: str):
     return fig
 
 
-def _shared_bins(values: list, integers: bool, most: int = 40):
-    """Bin edges for both plans' values together: unit bins for counts, else
-    numpy's automatic choice, at most ``most`` bins."""
+def _shared_bins(series: list, integers: bool, most: int = 40):
+    """Bin edges shared by both plans: unit bins for counts; else the width
+    numpy's automatic rule gives the finer of the two plans' values (so two
+    narrow, far apart distributions each keep their shape), at most ``most``
+    bins over both. Values that differ by rounding only (physics runs
+    without faults) count as one value."""
     import numpy as np
-    low, high = (min(values), max(values)) if values else (0.0, 1.0)
+    values = [v for vs in series for v in vs]
+    low, high = (min(values), max(values)) if values else (0.0, 0.0)
     if integers:
         return np.arange(np.floor(low) - 0.5, np.ceil(high) + 1.0, 1.0)
-    edges = np.histogram_bin_edges(values, bins="auto")
-    return edges if len(edges) <= most + 1 else np.linspace(low, high, most + 1)
+
+    def spread(vs) -> bool:
+        return max(vs) - min(vs) > 1e-9 * max(1.0, abs(max(vs)), abs(min(vs)))
+
+    if not values or not spread(values):
+        return np.array([low - 0.5, high + 0.5])      # numpy's rule for one value
+    widths = [np.diff(np.histogram_bin_edges(vs, bins="auto"))[0]
+              for vs in series if len(vs) > 1 and spread(vs)]
+    step = min(widths) if widths else (high - low) / 10
+    return np.linspace(low, high, min(most, max(1, int(np.ceil((high - low) / step)))) + 1)
