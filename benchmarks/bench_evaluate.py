@@ -7,7 +7,8 @@ already up, as a cluster reached with ``--scheduler`` would be. The first
 evaluation on fresh workers (they unpack and prepare the study) is shown
 apart from the median of the repeats. Then physics runs per minute on the
 PyBullet robot, on 1 and 2 workers. Target: 2 workers at most 0.75x the
-time of 1 on 2 cores. Run::
+time of 1 on 2 cores. A control (a CPU-bound loop split over two processes)
+shows what the two cores give while the benchmark runs. Run::
 
     python benchmarks/bench_evaluate.py                    # 200 projected runs, 4 physics runs
     python benchmarks/bench_evaluate.py --repeats 15 --physics-runs 8
@@ -53,6 +54,31 @@ def _projected(problem: str, runs: int, repeats: int) -> list:
     return pairs
 
 
+def _spin(n: int) -> int:
+    total = 0
+    for i in range(n):
+        total += i * i
+    return total
+
+
+def _control(repeats: int, n: int = 4_000_000) -> None:
+    """What two cores give right now: a pure-Python loop in one process
+    against its two halves in two (about 0.5 on two idle cores; other work
+    on the machine pushes it towards 1)."""
+    from concurrent.futures import ProcessPoolExecutor
+    ratios = []
+    with ProcessPoolExecutor(2) as pool:
+        list(pool.map(_spin, [10, 10]))
+        for _ in range(repeats):
+            t0 = time.perf_counter()
+            _spin(n)
+            t1 = time.perf_counter()
+            list(pool.map(_spin, [n // 2, n // 2]))
+            ratios.append((time.perf_counter() - t1) / (t1 - t0))
+    click.echo(f"  control, a CPU-bound loop split over 2 processes / 1 process: median "
+               f"{statistics.median(ratios):.2f}x (min {min(ratios):.2f}x, max {max(ratios):.2f}x)")
+
+
 def _physics(problem: str, runs: int) -> None:
     from htn.transform.cluster import open_runner
     from htn.transform.evaluate import prepare_study
@@ -80,6 +106,7 @@ def main(problem, runs, repeats, physics_runs):
     ratios = sorted(two / one for one, two in pairs)
     click.echo(f"  2 workers / 1 worker, pair by pair: median {statistics.median(ratios):.2f}x "
                f"(min {ratios[0]:.2f}x, max {ratios[-1]:.2f}x; target <= 0.75x)")
+    _control(repeats)
     if physics_runs:
         click.echo(f"{physics_runs} PyBullet runs of each plan of {problem}:")
         _physics(path, physics_runs)
