@@ -10,6 +10,8 @@ import click
 
 from htn.jshop.errors import HtnError
 
+from .output import warn
+
 def _domain_for(problem: str) -> str:
     """The problem's domain file: ../domains/NAME.jshop beside it, domains/
     here, or the bundled one of that name."""
@@ -98,7 +100,7 @@ def _check_options(problem, domain, robot, faults, workers, scheduler, plot_dir,
                    "cluster  [default: 1]")
 @click.option("--scheduler", metavar="tcp://HOST:PORT",
               help="Run on an existing Dask cluster (dask scheduler / dask worker, SSH, "
-                   "SLURM, Kubernetes); its workers need htn installed.")
+                   "SLURM, Kubernetes); its scheduler and workers need htn installed.")
 @click.option("--records", type=click.Path(), metavar="FILE",
               help="Write one JSON line per run of each plan (streamed as runs finish; in "
                    "run order when all are done).")
@@ -133,6 +135,8 @@ def evaluate(problem, domain, runs, seed, robot, faults, workers, scheduler, rec
     stream = None
     try:
         with open_runner(workers or 1, scheduler) as runner:
+            for note in runner.notes:
+                warn(f"warning: {note}")
             study, applied = prepare_study(domain, problem, robot, faults)
             stream = RecordsFile(records) if records else None
             with Progress(console=console, transient=True,

@@ -12,6 +12,7 @@ twice.
 from __future__ import annotations
 
 import logging
+import warnings
 from contextlib import contextmanager
 from typing import Callable, Iterable, Iterator, Optional
 
@@ -25,6 +26,7 @@ class ClusterError(RuntimeError):
 class InProcess:
     """Runs the batches one after another in this process."""
     workers = 1
+    notes: list = []
 
     def results(self, function: Callable, batches: Iterable[tuple]) -> Iterator:
         for args in batches:
@@ -36,6 +38,7 @@ class DaskRunner:
 
     def __init__(self, client):
         self.client = client
+        self.notes: list[str] = []      # one-line warnings about the cluster
 
     @property
     def workers(self) -> int:
@@ -51,12 +54,56 @@ class DaskRunner:
         except KilledWorker as exc:
             raise ClusterError(f"a batch of runs was lost with every worker that took it "
                                f"({exc}); giving up") from None
-        except ModuleNotFoundError as exc:
-            raise ClusterError(f"a Dask worker cannot import {exc.name}: every worker needs "
-                               "htn[eval], and htn[sim] for --robot pybullet") from None
+        except (ImportError, RuntimeError) as exc:
+            # e.g. a worker without pybullet, or Dask's "Error during
+            # deserialization of the task graph" caused by one
+            missing = _missing_module(exc)
+            if missing is None:
+                raise
+            raise ClusterError(f"the Dask cluster cannot import {missing}: {NEEDS}") from None
         finally:
             for f in futures:
                 f.release()
+
+
+NEEDS = "the scheduler and every worker need htn[eval], and htn[sim] for --robot pybullet"
+
+
+def _missing_module(exc: BaseException) -> Optional[str]:
+    while exc is not None:
+        if isinstance(exc, ModuleNotFoundError):
+            return exc.name
+        exc = exc.__cause__ or exc.__context__
+    return None
+
+
+def _lacking_htn(client) -> list[str]:
+    """The scheduler and workers of ``client`` that cannot import htn."""
+    # a lambda travels by value, so it runs where htn is missing
+    probe = lambda: __import__("importlib.util").util.find_spec("htn") is not None  # noqa: E731
+    lacking = [address for address, ok in client.run(probe).items() if not ok]
+    try:
+        if not client.run_on_scheduler(probe):
+            lacking.insert(0, "the scheduler")
+    except Exception:   # a scheduler may refuse to run code; its error comes later then
+        pass
+    return lacking
+
+
+def _version_notes(caught) -> list[str]:
+    """Dask's version-mismatch warnings as one line each."""
+    notes = []
+    for w in caught:
+        rows = [[c.strip() for c in line.strip("|").split("|")]
+                for line in str(w.message).splitlines() if line.startswith("|")]
+        if len(rows) > 1:
+            header = rows[0][1:]
+            notes.append("package versions differ on the Dask cluster: " + "; ".join(
+                f"{row[0]} " + ", ".join(f"{h.lower()} {v}" for h, v in zip(header, row[1:]))
+                for row in rows[1:]))
+        else:
+            notes.append(" ".join(str(w.message).split()))
+    return notes
 
 
 def check_scheduler_address(address: str) -> None:
@@ -101,18 +148,27 @@ def open_runner(workers: int = 1, scheduler: Optional[str] = None,
     if scheduler is not None:
         check_scheduler_address(scheduler)
         timeout = dask.config.get("distributed.comm.timeouts.connect")
+        from distributed.versions import VersionMismatchWarning
         try:
-            client = Client(scheduler, timeout=timeout, set_as_default=False)
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always", VersionMismatchWarning)
+                client = Client(scheduler, timeout=timeout, set_as_default=False)
         except OSError as exc:
             raise HtnError(f"--scheduler {scheduler}: cannot reach the Dask scheduler "
                            f"({exc})") from None
         cluster = None
         try:
             client.wait_for_workers(1, timeout=timeout)
+            lacking = _lacking_htn(client)
         except TimeoutError:
             client.close()
             raise HtnError(f"--scheduler {scheduler}: the scheduler has no workers "
                            f"(waited {timeout})") from None
+        if lacking:
+            client.close()
+            raise HtnError(f"--scheduler {scheduler}: htn is not installed on "
+                           f"{', '.join(lacking)}; {NEEDS}")
+        notes = _version_notes(caught)
     else:
         # the workers' statistical profiler feeds the dashboard, which is not
         # started; sampling the runs' Python stacks every 10 ms slows them
@@ -121,8 +177,11 @@ def open_runner(workers: int = 1, scheduler: Optional[str] = None,
                                    dashboard_address=None, silence_logs=logging.ERROR,
                                    preload=list(preload))
         client = Client(cluster, set_as_default=False)
+        notes = []
     try:
-        yield DaskRunner(client)
+        runner = DaskRunner(client)
+        runner.notes = notes
+        yield runner
     finally:
         client.close()
         if cluster is not None:
