@@ -2,7 +2,7 @@
 cluster of worker processes, or on an existing Dask distributed cluster
 reached through its scheduler (the ``dask scheduler`` / ``dask worker``
 commands, or any deployment of them: SSH, SLURM via dask-jobqueue,
-Kubernetes; every worker needs htn installed).
+Kubernetes; the scheduler and every worker need htn installed).
 
 A runner executes batches of runs and yields each batch's results as soon as
 it finishes, in whatever order. Dask gives the batches of a lost worker to
@@ -66,7 +66,7 @@ class DaskRunner:
                 f.release()
 
 
-NEEDS = "the scheduler and every worker need htn[eval], and htn[sim] for --robot pybullet"
+NEEDS = "the scheduler and every worker need htn, with its sim extra for --robot pybullet"
 
 
 def _missing_module(exc: BaseException) -> Optional[str]:
