@@ -19,7 +19,7 @@ EXAMPLES = Path(__file__).resolve().parent
 
 EXTRAS = {
     "sim": ("pybullet", "numpy", "PIL"),       # PyBullet robots, snapshots
-    "eval": ("scipy", "matplotlib"),          # htn evaluate: statistics and plots
+    "eval": ("scipy", "matplotlib", "distributed"),   # htn evaluate: statistics, plots, Dask
 }
 
 

@@ -1,13 +1,16 @@
-"""``htn evaluate PROBLEM``: projected runs with and without transformation."""
+"""``htn evaluate PROBLEM``: runs of a plan with and without transformation,
+on one process, a local Dask cluster or an existing one."""
 from __future__ import annotations
 
 import json
 import os
+import tempfile
 
 import click
 
 from htn.jshop.errors import HtnError
 
+from .output import warn
 
 def _domain_for(problem: str) -> str:
     """The problem's domain file: ../domains/NAME.jshop beside it, domains/
@@ -23,60 +26,182 @@ def _domain_for(problem: str) -> str:
     raise HtnError(f"cannot find the domain file {name}.jshop; give it with --domain", problem)
 
 
+def _writable_folder(path: str, option: str) -> None:
+    try:
+        os.makedirs(path, exist_ok=True)
+        tempfile.TemporaryFile(dir=path).close()
+    except OSError as exc:
+        raise HtnError(f"{option}: cannot write files into this folder ({exc.strerror})",
+                       path) from None
+
+
+def _writable_file(path: str, option: str) -> None:
+    if os.path.isdir(path):
+        raise HtnError(f"{option}: this is a folder, not a file", path)
+    existed = os.path.exists(path)
+    try:
+        open(path, "a").close()            # appending changes nothing that is there
+    except OSError as exc:
+        raise HtnError(f"{option}: cannot write this file ({exc.strerror})", path) from None
+    if not existed:
+        os.unlink(path)
+
+
+def _check_options(problem, domain, robot, faults, workers, scheduler, plot_dir, records):
+    """Every input and output option, before any work starts."""
+    from .extras import require_extra
+    require_extra("eval", "htn evaluate")
+    if not os.path.isfile(problem):
+        raise HtnError("no such file", problem)
+    if domain is not None and not os.path.isfile(domain):
+        raise HtnError("no such file", domain)
+    from htn.transform.runs import MEASURES
+    if robot not in MEASURES:
+        raise HtnError(f"--robot {robot}: this robot cannot be evaluated (choose from "
+                       f"{', '.join(MEASURES)})")
+    if robot == "pybullet":
+        require_extra("sim", "htn evaluate --robot pybullet")
+    if scheduler is not None and workers is not None:
+        raise HtnError("--workers starts a local cluster, --scheduler uses an existing "
+                       "one and its workers: give one of them")
+    if scheduler is not None or (workers or 1) > 1:
+        from importlib.util import find_spec
+        if find_spec("distributed") is None:
+            raise HtnError("htn evaluate --workers/--scheduler needs Dask distributed, in the "
+                           "eval extra: pip install 'htn[eval]'")
+    from htn.robot.faults import parse_faults
+    parse_faults(faults, MEASURES[robot].fault_kinds)
+    if plot_dir is not None:
+        _writable_folder(plot_dir, "--plot")
+    if records is not None:
+        _writable_file(records, "--records")
+    if scheduler is not None:
+        from htn.transform.cluster import check_scheduler_address
+        check_scheduler_address(scheduler)
+
+
 @click.command("evaluate")
 @click.argument("problem", type=click.Path(dir_okay=False))
 @click.option("--domain", type=click.Path(dir_okay=False),
               help="Domain file [default: ../domains/<domain name>.jshop beside PROBLEM].")
-@click.option("--runs", type=click.IntRange(min=2), default=200, show_default=True,
-              help="Projected runs of each plan.")
-@click.option("--seed", type=int, default=0, show_default=True, help="Seed of the first run.")
-@click.option("--workers", type=click.IntRange(min=1), default=1, show_default=True,
-              help="Worker processes.")
-@click.option("--plot", "plot_dir", type=click.Path(file_okay=False), metavar="DIR",
-              help="Write PNG plots of the metrics (like the paper's Fig. 8 and 9).")
+@click.option("--runs", type=click.IntRange(min=1), default=200, show_default=True,
+              help="Runs of each plan.")
+@click.option("--seed", type=int, default=0, show_default=True,
+              help="Seed of the first run (run i uses seed + i, for both plans).")
+@click.option("--robot", default="projection", show_default=True, metavar="NAME",
+              help="Robot the runs execute on: 'projection' (the paper's fast kinematic "
+                   "projection) or 'pybullet' (the physics robot; the 'sim' extra).")
+@click.option("--faults", default="", metavar="KIND=P,...",
+              help="Failure probabilities. projection: navigate, detect, grasp, grasp_busy, "
+                   "place, container, tray (defaults 0.02-0.10; given ones replace them); "
+                   "pybullet: slip, nav, detect, moved (default none).")
+@click.option("--workers", type=click.IntRange(min=1), default=None, metavar="N",
+              help="Worker processes: 1 runs in this process, more start a local Dask "
+                   "cluster  [default: 1]")
+@click.option("--scheduler", metavar="tcp://HOST:PORT",
+              help="Run on an existing Dask cluster (dask scheduler / dask worker, SSH, "
+                   "SLURM, Kubernetes); its scheduler and workers need htn installed.")
+@click.option("--records", type=click.Path(), metavar="FILE",
+              help="Write one JSON line per run of each plan (streamed as runs finish; in "
+                   "run order when all are done).")
+@click.option("--plot", "plot_dir", type=click.Path(), metavar="DIR",
+              help="Write figures as PNG (300 dpi), PDF and SVG (like the paper's Fig. 8, 9).")
 @click.option("--json", "as_json", is_flag=True, help="Print JSON instead of a table.")
-def evaluate(problem, domain, runs, seed, workers, plot_dir, as_json):
-    """Project PROBLEM's plan and its transformed plan RUNS times each and
-    compare navigation distance, manipulation cost, actions and failure rate
-    (mean, standard deviation, change, Welch t-test p-value).
+def evaluate(problem, domain, runs, seed, robot, faults, workers, scheduler, records,
+             plot_dir, as_json):
+    """Execute PROBLEM's plan and its transformed plan RUNS times each and
+    compare navigation, manipulation, actions and failure rate (mean,
+    standard deviation, change, Welch t-test p-value; pooled failure
+    proportion with a Wilson 95% interval). The metrics for a seed are the
+    same on any number of workers.
 
     \b
-    Example:
+    Examples:
       htn evaluate problems/transport_four.jshop --runs 200 --plot plots/
+      htn evaluate problems/tray_three.jshop --workers 2 --records runs.jsonl
+      htn evaluate problems/tray_three.jshop --robot pybullet --faults slip=0.1 --runs 20
+      htn evaluate problems/tray_three.jshop --scheduler tcp://10.0.0.5:8786
     """
+    _check_options(problem, domain, robot, faults, workers, scheduler, plot_dir, records)
+    domain = domain or _domain_for(problem)
+
     from rich.console import Console
     from rich.progress import Progress
 
-    from .extras import require_extra
-    require_extra("eval", "htn evaluate")
-    from htn.transform.evaluate import METRIC_NAMES, compare, plot
+    from htn.transform.cluster import ClusterError, open_runner
+    from htn.transform.evaluate import RecordsFile, plot, prepare_study, run_study
 
-    if not os.path.isfile(problem):
-        raise HtnError("no such file", problem)
-    domain = domain or _domain_for(problem)
     console = Console(stderr=True)
-    with Progress(console=console, transient=True, disable=as_json and not console.is_terminal) as bar:
-        task = bar.add_task("projecting", total=runs)
-        comp = compare(domain, problem, runs, seed, workers,
-                       progress=lambda: bar.advance(task))
+    stream = None
+    try:
+        with open_runner(workers or 1, scheduler) as runner:
+            for note in runner.notes:
+                warn(f"warning: {note}")
+            study, applied = prepare_study(domain, problem, robot, faults)
+            stream = RecordsFile(records) if records else None
+            with Progress(console=console, transient=True,
+                          disable=not console.is_terminal) as bar:
+                task = bar.add_task(f"{robot} runs on {runner.workers} worker(s)", total=runs)
+
+                def on_batch(new: list) -> None:
+                    bar.advance(task, len(new) / len(study.plans))
+                    if stream:
+                        stream.write(new)
+
+                comp = run_study(study, problem, applied, runs, seed, runner, on_batch)
+    except ClusterError as exc:
+        raise click.ClickException(str(exc)) from None
+    finally:
+        if stream:
+            stream.close()
+    if stream:
+        stream.finish(comp)
     stats = comp.metrics()
     plots = plot(comp, plot_dir) if plot_dir else []
     if as_json:
         click.echo(json.dumps({"problem": problem, "runs": runs, "applied": comp.applied,
-                               "metrics": stats, "plots": plots}, indent=1))
+                               "metrics": stats, "plots": plots, "robot": robot,
+                               "results": comp.results(), "workers": comp.workers,
+                               "runs_per_s": round(comp.runs_per_s, 3)}, indent=1))
         return
+    _print_table(comp, stats, problem)
+    for path in plots:
+        click.echo(f"plot: {path}")
+
+
+def _print_table(comp, stats: dict, problem: str) -> None:
+    from rich.console import Console
     from rich.table import Table
-    t = Table(title=f"{os.path.basename(problem)}: {runs} projected runs each; applied: "
-                    f"{', '.join(comp.applied) or 'none'}")
-    for col in ("metric", "original mean ± sd", "transformed mean ± sd", "change", "p (Welch)"):
+
+    from htn.transform.runs import MEASURES
+    from htn.transform.statistics import METRIC_NAMES, applied_rules, format_change, format_p
+
+    def cell(value, fmt: str) -> str:
+        return "n/a" if value is None else fmt.format(value)
+
+    t = Table(title=f"{os.path.basename(problem)}: {comp.runs} "
+                    f"{MEASURES[comp.robot].description} run{'s' if comp.runs > 1 else ''} "
+                    f"of each plan; applied: {applied_rules(comp.applied)}",
+              caption="mean \u00b1 SD over runs; p: Welch's two-sided t-test")
+    for col in ("metric", "original mean \u00b1 sd", "transformed mean \u00b1 sd", "change",
+                "p (Welch)"):
         t.add_column(col, justify="left" if col == "metric" else "right")
     for name in METRIC_NAMES:
         s = stats[name]
         fmt = "{:.1%}" if name == "failures" else "{:.2f}"
-        t.add_row(name,
-                  f"{fmt.format(s['original']['mean'])} ± {fmt.format(s['original']['sd'])}",
-                  f"{fmt.format(s['transformed']['mean'])} ± {fmt.format(s['transformed']['sd'])}",
-                  f"{s['change_pct']:+.1f}%", f"{s['p_value']:.2g}")
-    Console().print(t)
-    for path in plots:
-        click.echo(f"plot: {path}")
+        t.add_row(name, *[f"{cell(s[side]['mean'], fmt)} \u00b1 {cell(s[side]['sd'], fmt)}"
+                          for side in ("original", "transformed")],
+                  format_change(s["change_pct"]), format_p(s["p_value"]))
+    out = Console()
+    out.print(t)
+    pooled = [stats["failures"][side] for side in ("original", "transformed")]
+    out.print("failed / attempted actions, pooled (Wilson 95% CI): " + " \u2192 ".join(
+        f"{p['failed']}/{p['attempts']} = {cell(p['rate'], '{:.1%}')}"
+        + (f" [{p['wilson95'][0]:.1%}, {p['wilson95'][1]:.1%}]" if p["wilson95"] else "")
+        for p in pooled))
+    out.print("runs ended: " + " \u2192 ".join(
+        ", ".join(f"{n} {result}" for result, n in sorted(ended.items()))
+        for ended in comp.results().values()))
+    done = len(comp.original) + len(comp.transformed)
+    out.print(f"{done} runs in {comp.seconds:.1f} s ({comp.runs_per_s:.1f} runs/s) on "
+              f"{comp.workers} worker(s)")

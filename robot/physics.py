@@ -57,6 +57,7 @@ class Physics:
             import pybullet_data
         self.p = p
         self.sim_time = 0.0
+        self.odometry = None      # an Odometry, once the world is built
         with quiet_fds():
             self.cid = p.connect(p.GUI if gui else p.DIRECT)
         if self.cid < 0:
@@ -96,6 +97,8 @@ class Physics:
     def _physics_step(self) -> None:
         self.p.stepSimulation(physicsClientId=self.cid)
         self.sim_time += DT
+        if self.odometry is not None:
+            self.odometry.sample(self)
 
     def _step(self, n: int = 1):
         """Advance the simulation ``n`` steps, yielding after each."""

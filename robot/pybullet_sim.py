@@ -27,6 +27,7 @@ from .arm import ARM_JOINTS, Arm
 from .base import MobileBase
 from .faults import Faults
 from .interface import Check, Robot, SkillResult, check, skill
+from .odometry import Odometry
 from .perception import Perception
 from .physics import Physics, quiet_fds, yaw_quat
 from .world import World
@@ -57,6 +58,8 @@ class PyBulletRobot(Physics, MobileBase, Arm, Perception, Robot):
         with quiet_fds():
             self._build()
         self.bodies_named = {v: k for k, v in self.body_of.items()}
+        self.odometry = Odometry()      # distances from here on (htn evaluate --robot pybullet)
+        self.odometry.sample(self)
 
     # ------------------------------------------------------------ building
     def _build(self) -> None:

@@ -190,7 +190,7 @@ def test_projection_is_fast_deterministic_and_monitored():
     import time
     from htn.executor.config import load_retries
     from htn.robot.projection import FailureRates
-    from htn.transform.evaluate import project
+    from htn.transform.runs import project
     ws = workspace("transport_four")
     retries = load_retries(DOMAIN)
     t0 = time.perf_counter()
@@ -219,22 +219,9 @@ def test_evaluate_reproduces_the_papers_findings():
     assert tray["actions"]["change_pct"] > 20 and -15 < tray["navigation"]["change_pct"] < 0
 
 
-def test_htn_evaluate_json_and_plots(tmp_path):
-    r = run_htn("evaluate", PROBLEMS / "transport_four.jshop", "--runs", "30", "--json",
-                "--plot", tmp_path, "--workers", "2")
-    assert r.returncode == 0, r.stderr
-    doc = json.loads(r.stdout)
-    assert doc["applied"] == ["both-hands", "both-hands"] and doc["runs"] == 30
-    for name in ("navigation", "manipulation", "actions", "failures"):
-        m = doc["metrics"][name]
-        assert {"original", "transformed", "change_pct", "p_value"} <= set(m)
-        assert {"mean", "sd"} <= set(m["original"])
-    assert all(open(p, "rb").read(4) == b"\x89PNG" for p in doc["plots"])
-
-
 def test_task_tree_annotated_by_a_projected_run():
     from htn.executor.config import load_retries
-    from htn.transform.evaluate import projected_tree
+    from htn.transform.runs import projected_tree
     ws = workspace("transport_four")
     framework().apply_all_transformations(ws)
     tree = ws.annotated_tree()

@@ -160,7 +160,7 @@ def projected(metric: str) -> Callable:
     so the same plan always gets the same cost)."""
     def cost(ws: "Workspace", plan) -> float:
         from htn.executor.config import load_retries
-        from .evaluate import project
+        from .runs import project
         retries = load_retries(ws.domain.file) if ws.domain.file else {}
         runs = [project(ws.domain, ws.instance, plan.steps, seed, retries=retries)
                 for seed in PROJECTION_SEEDS]

@@ -1,0 +1,244 @@
+"""``htn evaluate``: the same numbers on one process, a local Dask cluster or
+a real one (a scheduler and two workers on 127.0.0.1, one of them killed
+mid-evaluation), physics-backed runs, the figures, the statistics' edge
+cases, and output options checked before any work."""
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import time
+import warnings
+from contextlib import contextmanager
+from pathlib import Path
+
+import pytest
+
+from conftest import ROOT, run_htn
+
+PROBLEM = "problems/transport_four.jshop"
+RUNS, SEED = "600", "5"          # about a second of projected runs on two workers
+
+
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory):
+    """The evaluation in one process (--workers 1): JSON and records."""
+    records = tmp_path_factory.mktemp("reference") / "runs.jsonl"
+    r = run_htn("evaluate", PROBLEM, "--runs", RUNS, "--seed", SEED, "--json",
+                "--records", records)
+    assert r.returncode == 0, r.stderr
+    return json.loads(r.stdout), records.read_text()
+
+
+@contextmanager
+def dask_cluster(folder: Path, workers: int = 2):
+    """A Dask scheduler and ``workers`` workers on 127.0.0.1, each its own
+    process (``dask scheduler``, ``dask worker``); yields the scheduler's
+    address and the worker processes."""
+    info = folder / "scheduler.json"
+    procs = []
+
+    def start(*args, log: str):
+        procs.append(subprocess.Popen([sys.executable, "-m", "dask", *map(str, args)],
+                                      stdout=subprocess.DEVNULL,
+                                      stderr=open(folder / log, "w"), cwd=folder))
+        return procs[-1]
+
+    try:
+        start("scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
+              "--scheduler-file", info, log="scheduler.log")
+        deadline = time.monotonic() + 60
+        while not info.is_file() and time.monotonic() < deadline:
+            time.sleep(0.05)
+        address = json.loads(info.read_text())["address"]
+        nodes = [start("worker", address, "--host", "127.0.0.1", "--nthreads", "1",
+                       "--no-nanny", "--no-dashboard", "--name", f"w{i}", log=f"w{i}.log")
+                 for i in range(workers)]
+        from distributed import Client
+        with Client(address, timeout="30s") as client:
+            client.wait_for_workers(workers, timeout=60)
+        yield address, nodes
+    finally:
+        # workers first: a worker whose scheduler has gone waits to reconnect
+        for group in (procs[1:], procs[:1]):
+            for p in group:
+                p.terminate()
+            for p in group:
+                try:
+                    p.wait(timeout=20)
+                except subprocess.TimeoutExpired:
+                    p.kill()
+                    p.wait()
+
+
+def test_a_dask_scheduler_gives_the_numbers_of_one_process(reference, tmp_path):
+    records = tmp_path / "runs.jsonl"
+    with dask_cluster(tmp_path) as (address, _):
+        r = run_htn("evaluate", PROBLEM, "--runs", RUNS, "--seed", SEED, "--json",
+                    "--records", records, "--scheduler", address)
+    assert r.returncode == 0, r.stderr
+    doc, (ref, ref_records) = json.loads(r.stdout), reference
+    assert doc["metrics"] == ref["metrics"] and doc["applied"] == ref["applied"]
+    assert (doc["workers"], ref["workers"], doc["robot"]) == (2, 1, "projection")
+    assert doc["runs_per_s"] > 0
+    assert records.read_text() == ref_records        # run by run, in run order
+    assert len(ref_records.splitlines()) == 2 * int(RUNS)
+
+
+def test_a_worker_killed_mid_evaluation_is_survived(reference, tmp_path):
+    records = tmp_path / "runs.jsonl"
+    with dask_cluster(tmp_path) as (address, workers):
+        proc = subprocess.Popen(
+            [sys.executable, "-m", "htn", "evaluate", PROBLEM, "--runs", RUNS, "--seed", SEED,
+             "--json", "--records", str(records), "--scheduler", address],
+            cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        # records stream in as batches finish: kill a worker once the first are in
+        deadline = time.monotonic() + 120
+        while not (records.is_file() and records.read_text().count("\n")):
+            if proc.poll() is not None or time.monotonic() > deadline:
+                proc.kill()
+                pytest.fail(f"no records streamed before the end: {proc.communicate()[1]}")
+            time.sleep(0.005)
+        workers[1].kill()
+        done_when_killed = records.read_text().count("\n")
+        still_running = proc.poll() is None
+        out, err = proc.communicate(timeout=300)
+    assert proc.returncode == 0, err
+    assert still_running and done_when_killed < 2 * int(RUNS)
+    doc, (ref, ref_records) = json.loads(out), reference
+    assert doc["metrics"] == ref["metrics"]            # complete, nothing counted twice
+    assert records.read_text() == ref_records
+
+
+def test_local_workers_and_figures(tmp_path):
+    plots = tmp_path / "plots"
+    r = run_htn("evaluate", PROBLEM, "--runs", "30", "--json", "--plot", plots,
+                "--workers", "2")
+    one = run_htn("evaluate", PROBLEM, "--runs", "30", "--json")
+    assert r.returncode == 0, r.stderr
+    doc = json.loads(r.stdout)
+    assert doc["metrics"] == json.loads(one.stdout)["metrics"] and doc["workers"] == 2
+    assert doc["applied"] == ["both-hands", "both-hands"] and doc["runs"] == 30
+    for name in ("navigation", "manipulation", "actions", "failures"):
+        m = doc["metrics"][name]
+        assert {"original", "transformed", "change_pct", "p_value"} <= set(m)
+        assert {"mean", "sd"} <= set(m["original"])
+    pooled = doc["metrics"]["failures"]["transformed"]
+    assert 0 <= pooled["wilson95"][0] <= pooled["rate"] <= pooled["wilson95"][1] <= 1
+    files = sorted(Path(p).name for p in doc["plots"])
+    assert files == sorted(f"transport_four_{fig}.{ext}" for fig in ("metrics", "distributions")
+                           for ext in ("png", "pdf", "svg"))
+    from PIL import Image
+    for fig in ("metrics", "distributions"):
+        stem = plots / f"transport_four_{fig}"
+        assert round(Image.open(f"{stem}.png").info["dpi"][0]) == 300
+        assert (stem.with_suffix(".pdf")).read_bytes().startswith(b"%PDF")
+        svg = (stem.with_suffix(".svg")).read_text()
+        # one colour per series in every figure, none of matplotlib's default cycle
+        assert "#0072b2" in svg and "#d55e00" in svg
+        assert "#1f77b4" not in svg and "#ff7f0e" not in svg
+        assert "applied: both-hands \u00d72" in svg and svg.count("both-hands") == 1
+    metrics_svg = (plots / "transport_four_metrics.svg").read_text()
+    assert "SD" in metrics_svg and "Wilson 95% CI" in metrics_svg
+
+
+def test_physics_backed_evaluation(tmp_path):
+    records = tmp_path / "runs.jsonl"
+    r = run_htn("evaluate", "problems/tray_three.jshop", "--robot", "pybullet", "--runs", "1",
+                "--faults", "slip=0", "--json", "--records", records)
+    assert r.returncode == 0, r.stderr
+    doc = json.loads(r.stdout)
+    assert (doc["robot"], doc["workers"], doc["applied"]) == ("pybullet", 1, ["tray"])
+    assert doc["results"] == {"original": {"verified": 1}, "transformed": {"verified": 1}}
+    m = doc["metrics"]
+    # measured in the physics world: the tray saves driving and costs arm motion
+    assert 0 < m["navigation"]["transformed"]["mean"] < m["navigation"]["original"]["mean"]
+    assert 0 < m["manipulation"]["original"]["mean"] < m["manipulation"]["transformed"]["mean"]
+    assert m["actions"]["transformed"]["mean"] > m["actions"]["original"]["mean"]
+    # one run: no standard deviation, no test
+    assert all(v["p_value"] is None and v["original"]["sd"] is None for v in m.values())
+    runs = [json.loads(line) for line in records.read_text().splitlines()]
+    assert [(x["run"], x["plan"], x["result"]) for x in runs] == \
+        [(0, "original", "verified"), (0, "transformed", "verified")]
+
+
+def test_few_runs_print_na_and_leak_no_warning():
+    r = subprocess.run([sys.executable, "-W", "always", "-m", "htn", "evaluate", PROBLEM,
+                        "--runs", "1"], cwd=ROOT, capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0 and r.stderr == "", r.stderr
+    assert "n/a" in r.stdout and "nan" not in r.stdout
+    r = subprocess.run([sys.executable, "-W", "always", "-m", "htn", "evaluate", PROBLEM,
+                        "--runs", "3", "--json"], cwd=ROOT, capture_output=True, text=True,
+                       timeout=120)
+    assert r.returncode == 0 and r.stderr == "", r.stderr
+    assert "NaN" not in r.stdout and json.loads(r.stdout)["runs"] == 3
+
+
+def test_statistics_edge_cases():
+    from htn.transform.statistics import applied_rules, format_p, pooled_failures, welch_p
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert welch_p([1.0], [2.0, 3.0]) is None                  # fewer than 2 runs
+        assert welch_p([20.0] * 3, [16.0] * 3) is None             # no variance
+        # physics runs that differ by rounding only: scipy's p would be 1.5e-27
+        assert welch_p([6.177372650994691, 6.177372650994689],
+                       [2.4829454599947622, 2.4829454599947596]) is None
+        assert 0 < welch_p([1.0, 2.0, 3.0], [2.0, 3.0, 5.0]) < 1
+        underflow = welch_p([0.0, 0.1] * 200, [100.0, 100.1] * 200)
+    assert underflow == 0.0 and format_p(underflow) == "< 1e-300"
+    assert (format_p(None), format_p(5.38e-129), format_p(0.0829)) == \
+        ("n/a", "5.4e-129", "0.083")
+    none_failed = pooled_failures([{"failed": 0, "actions": 20}] * 3)
+    assert none_failed["rate"] == 0 and none_failed["wilson95"][0] == 0 < none_failed["wilson95"][1]
+    assert applied_rules(["both-hands", "both-hands"]) == "both-hands \u00d72"
+    assert applied_rules(["tray", "container", "both-hands"]) == "tray, container, both-hands"
+    assert applied_rules([]) == "none"
+
+
+def test_figures_of_runs_that_differ_by_rounding_only(tmp_path):
+    from htn.transform.figures import plot
+    from htn.transform.statistics import Comparison
+
+    def run(navigation, manipulation):
+        return {"navigation": navigation, "manipulation": manipulation, "actions": 15,
+                "failed": 0, "failures": 0.0}
+    # two physics runs without faults: the same distances but for the last bits
+    comp = Comparison("tray_three.jshop", 2, ["tray"], robot="pybullet",
+                      original=[run(6.177372650994691, 10.1), run(6.177372650994689, 10.2)],
+                      transformed=[run(2.4829454599947622, 24.5), run(2.48294545999476, 24.6)])
+    files = plot(comp, str(tmp_path))
+    assert len(files) == 6 and all(os.path.getsize(f) > 1000 for f in files)
+
+
+def test_output_options_are_checked_before_any_work(tmp_path):
+    blocker = tmp_path / "a-file"
+    blocker.write_text("not a folder\n")
+    records = tmp_path / "runs.jsonl"
+
+    def evaluate(*args, env=None):
+        return subprocess.run([sys.executable, "-m", "htn", "evaluate", PROBLEM, *map(str, args)],
+                              cwd=ROOT, capture_output=True, text=True, timeout=120,
+                              env={**os.environ, **(env or {})})
+
+    cases = [
+        (("--plot", blocker / "plots", "--records", records), f"{blocker}/plots: --plot"),
+        (("--records", tmp_path / "missing" / "runs.jsonl"), "--records: cannot write"),
+        (("--records", tmp_path), "--records: this is a folder"),
+        (("--scheduler", "127.0.0.1:8786"), "not a Dask scheduler address"),
+        (("--scheduler", "tcp://127.0.0.1:99999"), "not a Dask scheduler address"),
+        (("--workers", "2", "--scheduler", "tcp://127.0.0.1:8786"), "give one of them"),
+        (("--robot", "symbolic"), "cannot be evaluated"),
+        (("--faults", "slip=0.5"), "unknown fault 'slip'"),
+    ]
+    for args, message in cases:
+        r = evaluate(*args)
+        assert r.returncode == 2, (args, r.stderr)
+        assert message in r.stderr and "Traceback" not in r.stderr, (args, r.stderr)
+        assert len(r.stderr.strip().splitlines()) == 1, r.stderr
+    assert not records.exists()
+    # a scheduler nobody listens on is found before planning, within the connect timeout
+    r = evaluate("--scheduler", "tcp://127.0.0.1:9", "--records", records,
+                 env={"DASK_DISTRIBUTED__COMM__TIMEOUTS__CONNECT": "1s"})
+    assert r.returncode == 2 and "cannot reach the Dask scheduler" in r.stderr, r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1 and not records.exists()
