@@ -14,7 +14,7 @@ by raising :class:`~htn.jshop.errors.HtnError`, before anything moves.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any, Callable, Optional
 
 from htn.jshop import syntax as S
@@ -34,7 +34,6 @@ class RobotRequest:
     seed: int = 0
     gui: bool = False
     functions: Any = None
-    options: dict = field(default_factory=dict)
 
     def fault_rates(self, known) -> dict[str, float]:
         """The ``--faults`` probabilities, checked against the kinds ``known``."""
@@ -55,11 +54,9 @@ def _symbolic(req: RobotRequest):
 
 
 def _projection(req: RobotRequest):
-    from dataclasses import fields
-
     from .projection import FailureRates, ProjectionRobot, world_from_atoms
-    kinds = [f.name for f in fields(FailureRates)]
-    rates = FailureRates(**req.fault_rates(kinds)) if req.faults else FailureRates.none()
+    # like the other robots, nothing fails unless --faults says so
+    rates = FailureRates.none().with_faults(req.faults)
     return ProjectionRobot(world_from_atoms(req.instance.state), seed=req.seed, failures=rates)
 
 

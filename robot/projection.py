@@ -21,9 +21,10 @@ from __future__ import annotations
 
 import math
 import random
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields, replace
 from typing import Optional
 
+from .faults import parse_faults
 from .interface import Check, Robot, SkillResult, check, skill
 
 ARM_REST = {"left": (0.1, 0.35, 0.9), "right": (0.1, -0.35, 0.9)}   # relative to the base
@@ -45,6 +46,15 @@ class FailureRates:
     @classmethod
     def none(cls) -> "FailureRates":
         return cls(0, 0, 0, 0, 0, 0, 0)
+
+    @classmethod
+    def kinds(cls) -> tuple[str, ...]:
+        return tuple(f.name for f in fields(cls))
+
+    def with_faults(self, text: Optional[str]) -> "FailureRates":
+        """These rates, with the ``--faults`` probabilities ``text`` gives
+        (``grasp=0.3,navigate=0.1``) in place of theirs."""
+        return replace(self, **parse_faults(text, self.kinds()))
 
 
 @dataclass
@@ -339,9 +349,6 @@ class ProjectionRobot(Robot):
     def check_tray_carried(self, tray: str, carried: bool, where: Optional[str] = None) -> Check:
         ok = (self.carrying_tray == tray) if carried else (self.trays.get(tray) == where)
         return Check(ok, f"tray at {self.trays.get(tray)}")
-
-    def has_detection(self, obj: str) -> bool:
-        return obj in self.detections
 
     def observe(self) -> list[tuple[str, tuple]]:
         facts = [("robot-at", (self.at,))] if self.at else []

@@ -206,3 +206,15 @@ def test_python_dash_m_htn_and_stats_from_any_folder(tmp_path):
     assert r.returncode == 0, r.stderr
     rows = json.loads(r.stdout)["scenarios"]
     assert [(row["plans"], row["min_length"]) for row in rows] == [(3, 8), (1, 5)]
+
+
+def test_the_projection_robot_fails_only_as_its_faults_say(tmp_path):
+    plan = tmp_path / "plan.txt"
+    assert run_htn("plan", ROOT / "domains" / "kitchen.jshop",
+                   ROOT / "problems" / "transport_four.jshop", "-o", plan).returncode == 0
+    for seed in range(1, 7):        # switching one kind off must not switch the others on
+        r = run_htn("run", plan, "--robot", "projection", "--faults", "navigate=0",
+                    "--seed", seed, "-q")
+        assert r.returncode == 0 and " 0 retries" in r.stdout, (seed, r.stdout)
+    r = run_htn("run", plan, "--robot", "projection", "--faults", "grasp=1", "-q")
+    assert r.returncode == 1 and r.stdout.startswith("aborted:")

@@ -19,13 +19,13 @@ from __future__ import annotations
 import hashlib
 import pickle
 from collections import OrderedDict
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field
 from typing import Callable, Optional
 
 from htn.executor.dispatcher import RunSummary, TaskDispatcher
 from htn.executor.log import EventLog
 from htn.jshop import syntax as S
-from htn.robot.faults import Faults, parse_faults
+from htn.robot.faults import Faults
 from htn.robot.projection import FailureRates, ProjectionRobot, world_from_atoms
 
 
@@ -73,8 +73,7 @@ class Measure:
 def _projection_prepare(study: Study):
     # the paper's projection fails now and then: its rates are the default,
     # and --faults overrides some of them
-    rates = FailureRates(**parse_faults(study.faults, PROJECTION_FAULTS))
-    return world_from_atoms(study.instance.state), rates
+    return world_from_atoms(study.instance.state), FailureRates().with_faults(study.faults)
 
 
 def _projection_read(robot: ProjectionRobot, summary: RunSummary) -> dict:
@@ -97,11 +96,9 @@ def _pybullet_read(robot, summary: RunSummary) -> dict:
             "actions": attempts, "failed": attempts - summary.verified}
 
 
-PROJECTION_FAULTS = tuple(f.name for f in fields(FailureRates))
-
 MEASURES: dict[str, Measure] = {
     "projection": Measure(
-        PROJECTION_FAULTS, _projection_prepare,
+        FailureRates.kinds(), _projection_prepare,
         lambda prepared, seed: ProjectionRobot(prepared[0], seed=seed, failures=prepared[1]),
         _projection_read, "projected", batch=25),
     "pybullet": Measure(
@@ -110,14 +107,19 @@ MEASURES: dict[str, Measure] = {
 }
 
 
-def execute(study: Study, prepared, name: str, seed: int) -> dict:
-    """One run of the plan ``name``: its metrics, sim time and result."""
+def execute(study: Study, prepared, name: str, seed: int, outcomes: bool = False) -> dict:
+    """One run of the plan ``name``: its metrics, sim time and result; with
+    ``outcomes``, also each step's final outcome (0-based step -> event)."""
     measure = MEASURES[study.robot]
     robot = measure.robot(prepared, seed)
     try:
-        summary, _ = run_plan(robot, study.domain, study.instance, study.plans[name],
-                              study.retries)
+        summary, log = run_plan(robot, study.domain, study.instance, study.plans[name],
+                                study.retries)
         record = measure.read(robot, summary)
+        if outcomes:
+            record["outcomes"] = {e["step"] - 1: e["event"] for e in log.events  # 1-based steps
+                                  if e["event"] in ("verified", "aborted", "failed")
+                                  and e["step"] is not None}
     finally:
         close = getattr(robot, "close", None)
         if close:
@@ -154,15 +156,11 @@ def project(domain: S.Domain, instance: S.ProblemInstance, steps, seed: int,
     """Execute ``steps`` once on the projection robot; metrics of the run and
     the outcome of each step (for :func:`projected_tree`).
 
-    ``failures`` is the share of action attempts that failed (0..1)."""
-    robot = ProjectionRobot(world_from_atoms(instance.state), seed=seed, failures=rates)
-    summary, log = run_plan(robot, domain, instance, steps, retries or {})
-    m = robot.metrics
-    outcomes = {e["step"] - 1: e["event"] for e in log.events   # log steps are 1-based
-                if e["event"] in ("verified", "aborted", "failed") and e["step"] is not None}
-    return {"navigation": m.navigation, "manipulation": m.manipulation,
-            "actions": float(m.actions), "failures": m.failures / max(m.actions, 1),
-            "sim_time": m.sim_time, "result": summary.result, "outcomes": outcomes}
+    ``failures`` is the share of action attempts that failed (0..1); the
+    rates default to the paper's (:class:`FailureRates`)."""
+    study = Study(domain, instance, {"plan": steps}, retries or {})
+    prepared = world_from_atoms(instance.state), rates or FailureRates()
+    return execute(study, prepared, "plan", seed, outcomes=True)
 
 
 def projected_tree(domain: S.Domain, instance: S.ProblemInstance, plan, seed: int = 0,
