@@ -127,30 +127,31 @@ class Arm:
         self._release()
         self._set_fingers(0.04)
 
-    def _in_hand(self, obj: str, ee, constraint, tolerance: float) -> tuple[bool, str]:
-        """Is ``obj`` held up by a gripper at ``ee``: close to it, above every
-        table top, and attached?"""
-        pos = self._body_pos(obj)
-        d = float(np.linalg.norm(pos - ee))
-        lifted = pos[2] > max(self.furniture_top.values(), default=0.0) + 0.1
-        ok = d < tolerance and lifted and constraint is not None
-        return ok, f"{obj} is {d:.3f} m from the gripper" + ("" if lifted else ", not lifted")
+    # how far a held object's centre may be from the gripper for a grasp to count
+    GRIP_TOLERANCE = 0.05
 
     def _gripper_of(self, obj: str):
-        """(gripper position, its constraint) of the gripper holding ``obj``, or None."""
+        """(gripper position, its constraint, its name) of the gripper holding
+        ``obj``, or None."""
         if self.held != obj:
             return None
-        return self._ee(), self._grip_constraint
+        return self._ee(), self._grip_constraint, "the gripper"
 
     @check("in_gripper")
     def check_in_gripper(self, obj: str) -> Check:
-        """The effect of a grasp: the object is in the gripper, lifted."""
+        """The effect of a grasp: the object is held up by the gripper holding
+        it: close to it, above every table top, and attached."""
         if obj not in self.body_of:
             return Check(False, f"no object {obj}")
         grip = self._gripper_of(obj)
         if grip is None:
             return Check(False, f"{obj} is in no gripper")
-        return Check(*self._in_hand(obj, grip[0], grip[1], 0.05))
+        ee, constraint, name = grip
+        pos = self._body_pos(obj)
+        d = float(np.linalg.norm(pos - ee))
+        lifted = pos[2] > max(self.furniture_top.values(), default=0.0) + 0.1
+        ok = d < self.GRIP_TOLERANCE and lifted and constraint is not None
+        return Check(ok, f"{obj} is {d:.3f} m from {name}" + ("" if lifted else ", not lifted"))
 
     @check("still_held")
     def check_still_held(self, obj: str) -> Check:
