@@ -122,10 +122,6 @@ class Robot:
         return fn(*args)
 
     @classmethod
-    def skill_names(cls) -> list[str]:
-        return sorted(cls._skills)
-
-    @classmethod
     def check_names(cls) -> list[str]:
         return sorted({*cls._checks, *(a[6:] for a in dir(cls) if a.startswith("check_")
                                        and a != "check_names")})

@@ -51,9 +51,6 @@ class Perception:
             self.detections[obj] = self._noisy_pos(obj)
         return pixels
 
-    def has_detection(self, obj: str) -> bool:
-        return obj in self.detections
-
     @check("detection")
     def check_detection(self, obj: str) -> Check:
         det = self.detections.get(obj)

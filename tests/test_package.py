@@ -133,7 +133,23 @@ toy = "toyplug.actions"
 
 [project.entry-points."htn.robots"]
 toy = "toyplug.robot:make_robot"
+
+[project.entry-points."htn.transformations"]
+toy = "toyplug.rules:register"
 """
+
+PLUGIN_RULES = '''
+"""A transformation rule that applies wherever a transport exists and
+changes nothing (the framework then leaves the plan as it is)."""
+
+
+def keep(workspace, schemas):
+    return None
+
+
+def register(framework):
+    framework.register_transformation(keep, "(transport ?t ?o ?f ?d ?k)", "toy-keep")
+'''
 
 PLUGIN_ACTIONS = '''
 """Action state machines for the basic domain's operators on the toy robot."""
@@ -207,6 +223,7 @@ def test_a_plugin_adds_an_action_machine_and_a_robot(core, tmp_path, elsewhere):
     (plugin / "toyplug" / "__init__.py").write_text("")
     (plugin / "toyplug" / "actions.py").write_text(PLUGIN_ACTIONS)
     (plugin / "toyplug" / "robot.py").write_text(PLUGIN_ROBOT)
+    (plugin / "toyplug" / "rules.py").write_text(PLUGIN_RULES)
     core.pip(plugin)
     (elsewhere / "basic").write_text(BASIC_DOMAIN)
     (elsewhere / "problem").write_text(BASIC_PROBLEM)
@@ -223,6 +240,15 @@ def test_a_plugin_adds_an_action_machine_and_a_robot(core, tmp_path, elsewhere):
     r = core.run("htn", "run", "plan.txt", "--domain", "basic", "--problem", "problem",
                  "--robot", "toy", "--faults", "effect=0.5", cwd=elsewhere)
     assert r.returncode == 2 and "unknown fault 'effect'" in r.stderr
+    # the transformation rule registered through htn.transformations
+    assert core.run("htn", "examples", ".", cwd=elsewhere).returncode == 0
+    r = core.run("htn", "transform", "domains/kitchen.jshop", "problems/tray_three.jshop",
+                 "--rules", "toy-keep", cwd=elsewhere)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.startswith("no transformation applies")
+    r = core.run("htn", "transform", "domains/kitchen.jshop", "problems/tray_three.jshop",
+                 "--rules", "toy-nothing", cwd=elsewhere)
+    assert r.returncode == 2 and "toy-keep" in r.stderr     # the known rules include it
 
 
 def test_robot_framework_and_htn_side_by_side(tmp_path_factory, wheel, elsewhere):

@@ -20,8 +20,8 @@ from typing import Callable, Optional
 from htn.executor.config import load_retries
 
 from .cluster import open_runner
-from .runs import MEASURES, Study, project, projected_tree, run_batch  # noqa: F401 (API)
-from .statistics import METRIC_NAMES, Comparison  # noqa: F401 (API)
+from .runs import MEASURES, Study, run_batch
+from .statistics import Comparison
 
 BATCHES_PER_WORKER = 4          # at least, to even out batches of uneven length
 
