@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import pytest
 
-from conftest import ROOT, run_htn
+from conftest import run_htn, start_htn
 
 DOMAIN = """(defdomain d (
   (:operator (!go ?a ?b) ((at ?a)) ((at ?a)) ((at ?b)))
@@ -188,20 +188,19 @@ def test_output_file_is_not_left_half_written(tmp_path):
 
 def test_ctrl_c_on_a_streaming_all_keeps_whole_plans(tmp_path):
     import signal
-    import subprocess
-    import sys
-    import time
     d, p = write(tmp_path, domain="""(defdomain d ((:operator (!a) () () ())
       (:method (m) () ((!a))) (:method (m) () ((!a) (m)))))""",
                  problem="(defproblem p d () ((m)))")
     out = tmp_path / "plans.txt"
-    proc = subprocess.Popen([sys.executable, "-m", "htn", "plan", str(d), str(p), "--all",
-                             "-f", "jshop", "-o", str(out)], cwd=ROOT, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
-    time.sleep(2.0)
+    proc = start_htn("plan", d, p, "--all", "-f", "jshop", "-o", out)
+    printed = []
+    while printed.count("--------------------\n") < 11:      # eleven whole plans, then Ctrl-C
+        printed.append(proc.stdout.readline())
+        assert printed[-1], f"htn plan ended early: {proc.stderr.read()}"
     proc.send_signal(signal.SIGINT)
-    stdout, stderr = proc.communicate(timeout=60)
-    assert proc.returncode == 130 and "Traceback" not in stderr
+    # not communicate(): it would skip what readline() buffered
+    stdout, stderr = "".join(printed) + proc.stdout.read(), proc.stderr.read()
+    assert proc.wait(timeout=60) == 130 and "Traceback" not in stderr
     n = stdout.count("Plan cost:")
     assert n > 10 and stdout.endswith("--------------------\n")
     assert stdout.count("--------------------\n") == n
