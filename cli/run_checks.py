@@ -1,60 +1,12 @@
 """What ``htn run`` checks before any work starts (output paths, the display
-for ``--gui``), and how it takes Ctrl-C and SIGTERM while it runs."""
+for ``--gui``)."""
 from __future__ import annotations
 
 import os
-import signal
 
 import click
 
 from htn.jshop.errors import HtnError
-
-
-class Signals:
-    """Ctrl-C and SIGTERM: between two ticks of the behaviour tree they halt
-    it (the robot holds its pose, the log gets its summary); at any other
-    time they interrupt at once, without a traceback."""
-
-    def __init__(self):
-        self.terminated = False
-        self.pending = False       # a signal arrived before the tree ran
-        self.dispatcher = None
-        self.saved = {}
-        for sig in (signal.SIGINT, signal.SIGTERM):
-            try:
-                self.saved[sig] = signal.signal(sig, self._handle)
-            except ValueError:     # not the main thread (a library caller)
-                pass
-
-    def _handle(self, signum, frame):
-        self.terminated = self.terminated or signum == signal.SIGTERM
-        why = "stopped by SIGTERM" if signum == signal.SIGTERM else "stopped by the user"
-        d = self.dispatcher
-        if d is not None and d.in_tick:
-            d.halt(why)
-            return
-        # Python drops an exception raised where it cannot propagate (e.g. in
-        # an import lock's callback): the flag makes watch() raise it again
-        self.pending = True
-        raise KeyboardInterrupt
-
-    def watch(self, dispatcher) -> None:
-        """From now on a signal halts ``dispatcher`` between ticks; one that
-        came before (and may have been swallowed) interrupts now."""
-        if self.pending:
-            raise KeyboardInterrupt
-        self.dispatcher = dispatcher
-
-    def ignore(self) -> None:
-        for sig in self.saved:
-            signal.signal(sig, signal.SIG_IGN)
-
-    def restore(self) -> None:
-        for sig, handler in self.saved.items():
-            signal.signal(sig, handler)
-
-    def exit_code(self) -> int:
-        return 143 if self.terminated else 130
 
 
 def check_display() -> None:

@@ -10,7 +10,8 @@ from htn.jshop.errors import HtnError
 
 from .extras import require_extra
 from .output import stdout_is_terminal
-from .run_checks import Signals, check_display, check_folder, check_writable_file, make_folder
+from .run_checks import check_display, check_folder, check_writable_file, make_folder
+from .signals import Signals, interrupt_exit
 
 RUN_OPTIONS = ("plan_file", "robot_name", "sim", "faults", "seed", "retries", "replan",
                "plan_index", "domain", "problem", "functions")
@@ -88,13 +89,8 @@ def run(ctx, plan_file, robot_name, sim, gui, snapshots, faults, seed, retries, 
     try:
         _run(ctx, signals, plan_file, robot_name, sim, gui, snapshots, faults, seed, retries,
              replan, log_path, from_log, plan_index, domain, problem, functions, bt_dot, quiet)
-    except KeyboardInterrupt:        # before the robot runs: nothing to stop
-        click.echo("terminated" if signals.terminated else "interrupted", err=True)
-        # leave at once: after a Ctrl-C inside PyBullet (building the world),
-        # interpreter shutdown was seen to end by SIGINT instead of the exit code
-        sys.stdout.flush()
-        sys.stderr.flush()
-        os._exit(signals.exit_code())
+    except KeyboardInterrupt as exc:        # before the robot runs: nothing to stop
+        interrupt_exit(exc, now=True)       # now: PyBullet may have been interrupted
     finally:
         signals.restore()
 
@@ -229,13 +225,8 @@ def _run(ctx, signals, plan_file, robot_name, sim, gui, snapshots, faults, seed,
         log.close()
         robot.close()
     click.echo(summary_line(summary))
-    if summary.result == "interrupted":
-        # Log closed, robot disconnected: leave at once. Interpreter shutdown
-        # after a Ctrl-C inside PyBullet was seen (rarely) to end by SIGINT
-        # instead of exit code 130.
-        sys.stdout.flush()
-        sys.stderr.flush()
-        os._exit(signals.exit_code())
+    if summary.result == "interrupted":     # log closed, robot disconnected
+        interrupt_exit(signals.received, now=True)
     sys.exit(0 if summary.result == "verified" else 1)
 
 

@@ -35,6 +35,9 @@ from .repair import find_repair, graft, observed_instance
 from .task_bt import actions, build, flat_tree
 
 
+STOPPED_BY_USER = "stopped by the user"     # why a run halted, unless told otherwise
+
+
 @dataclass
 class RunSummary:
     result: str              # verified | failed | aborted | interrupted
@@ -162,9 +165,10 @@ class TaskDispatcher:
                           sim_t=f.get("sim_t", f.get("t")))
 
     # ------------------------------------------------------------ the tick loop
-    def halt(self, why: str = "stopped by the user") -> None:
-        """Stop the tree before its next tick (safe from a signal handler)."""
-        self._halt = why
+    def halt(self, why: str = "") -> None:
+        """Stop the tree before its next tick (safe from a signal handler);
+        ``why`` is logged with the ``interrupted`` event."""
+        self._halt = why or STOPPED_BY_USER
 
     def run(self) -> RunSummary:
         try:
@@ -188,7 +192,11 @@ class TaskDispatcher:
                         continue
                     self.robot.hold()
                     return self._summary(ctx.outcome.value, ctx)
-        except KeyboardInterrupt:
+        except KeyboardInterrupt as exc:
+            # an interrupt between two ticks (e.g. while repair plans) halts
+            # the same way; its message, if any, says why (SIGTERM's does:
+            # htn.cli.signals.Terminated)
+            self.halt(str(exc))
             return self._interrupted()
 
     def _interrupted(self) -> RunSummary:
@@ -196,8 +204,7 @@ class TaskDispatcher:
         self.robot.hold()
         ctx = self.running if self.running is not None and not self.running.done else None
         self.failed = ctx              # the action the run ended in
-        self.emit(ctx, "interrupted", f"{self._halt or 'stopped by the user'}; the robot holds "
-                                      "its pose")
+        self.emit(ctx, "interrupted", f"{self._halt or STOPPED_BY_USER}; the robot holds its pose")
         return self._summary("interrupted", ctx)
 
     def plan_lines(self) -> list[str]:

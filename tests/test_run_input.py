@@ -118,6 +118,46 @@ def test_sigterm_halts_the_tree_like_ctrl_c(plan, tmp_path):
     assert out.startswith("interrupted: ")
 
 
+# (push-it ?x) calls a user function. In one process its first call is quick
+# (planning, or recovering the task tree before the run); the second one is
+# repair planning, between two ticks: it leaves a marker and takes long.
+PUSHING = """(defdomain pushing ((:operator (!push ?x) () () ((pushed ?x)))
+  (:method (push-it ?x) ((call slow ?x)) ((!push ?x)))))"""
+SLOW_SECOND = """import time
+calls = 0
+def slow(x):
+    global calls
+    calls += 1
+    if calls > 1:
+        open(__file__ + ".repairing", "w").close()
+        time.sleep(30)
+    return 1
+"""
+
+
+def test_sigterm_while_repair_plans_between_ticks_is_logged_as_sigterm(tmp_path):
+    domain, problem, fns = tmp_path / "d.jshop", tmp_path / "p.jshop", tmp_path / "slow.py"
+    domain.write_text(PUSHING)
+    problem.write_text("(defproblem one pushing () ((push-it box)))")
+    fns.write_text(SLOW_SECOND)
+    plan, log = tmp_path / "plan.txt", tmp_path / "run.jsonl"
+    assert run_htn("plan", domain, problem, "--functions", fns, "-o", plan).returncode == 0
+    # the push never has its effect: aborted, and repair re-plans (push-it box)
+    proc = start_htn("run", plan, "--robot", "symbolic", "--faults", "effect=1", "--replan",
+                     "--log", log, "-q")
+    wait_until((tmp_path / "slow.py.repairing").exists, "repair planning", proc)
+    proc.send_signal(signal.SIGTERM)
+    out, err = proc.communicate(timeout=60)
+    assert proc.returncode == 143, out + err
+    assert "Traceback" not in err
+    evs = events(log)
+    assert [e["event"] for e in evs if e["event"] in ("aborted", "replanned")] == ["aborted"]
+    assert evs[-2]["event"] == "interrupted"
+    assert evs[-2]["detail"] == "stopped by SIGTERM; the robot holds its pose"
+    assert evs[-1]["event"] == "summary" and evs[-1]["result"] == "interrupted"
+    assert out.startswith("interrupted: 0 of 1 steps verified")
+
+
 # counted from the moment htn's entry point has its handlers (before that,
 # the interpreter itself is starting up and a Ctrl-C is Python's to report)
 @pytest.mark.parametrize("delay", [0.0, 0.1, 0.3, 0.7])
