@@ -4,13 +4,14 @@ from __future__ import annotations
 
 import json
 import os
-import tempfile
 
 import click
 
 from htn.jshop.errors import HtnError
 
-from .output import warn
+from .extras import require_extra
+from .output import check_output_file, check_output_folder, make_output_folder, warn
+
 
 def _domain_for(problem: str) -> str:
     """The problem's domain file: ../domains/NAME.jshop beside it, domains/
@@ -26,30 +27,8 @@ def _domain_for(problem: str) -> str:
     raise HtnError(f"cannot find the domain file {name}.jshop; give it with --domain", problem)
 
 
-def _writable_folder(path: str, option: str) -> None:
-    try:
-        os.makedirs(path, exist_ok=True)
-        tempfile.TemporaryFile(dir=path).close()
-    except OSError as exc:
-        raise HtnError(f"{option}: cannot write files into this folder ({exc.strerror})",
-                       path) from None
-
-
-def _writable_file(path: str, option: str) -> None:
-    if os.path.isdir(path):
-        raise HtnError(f"{option}: this is a folder, not a file", path)
-    existed = os.path.exists(path)
-    try:
-        open(path, "a").close()            # appending changes nothing that is there
-    except OSError as exc:
-        raise HtnError(f"{option}: cannot write this file ({exc.strerror})", path) from None
-    if not existed:
-        os.unlink(path)
-
-
 def _check_options(problem, domain, robot, faults, workers, scheduler, plot_dir, records):
     """Every input and output option, before any work starts."""
-    from .extras import require_extra
     require_extra("eval", "htn evaluate")
     if not os.path.isfile(problem):
         raise HtnError("no such file", problem)
@@ -72,9 +51,9 @@ def _check_options(problem, domain, robot, faults, workers, scheduler, plot_dir,
     from htn.robot.faults import parse_faults
     parse_faults(faults, MEASURES[robot].fault_kinds)
     if plot_dir is not None:
-        _writable_folder(plot_dir, "--plot")
+        check_output_folder(plot_dir, "--plot")
     if records is not None:
-        _writable_file(records, "--records")
+        check_output_file(records, "--records")
     if scheduler is not None:
         from htn.transform.cluster import check_scheduler_address
         check_scheduler_address(scheduler)
@@ -135,6 +114,8 @@ def evaluate(problem, domain, runs, seed, robot, faults, workers, scheduler, rec
     stream = None
     try:
         with open_runner(workers or 1, scheduler) as runner:
+            if plot_dir is not None:    # all options are checked now
+                make_output_folder(plot_dir, "--plot")
             for note in runner.notes:
                 warn(f"warning: {note}")
             study, applied = prepare_study(domain, problem, robot, faults)

@@ -1,5 +1,5 @@
-"""What ``htn run`` checks before any work starts (output paths, the display
-for ``--gui``)."""
+"""What ``htn run --gui`` checks before any work starts: a display PyBullet
+can open a window on. (Output paths are checked by :mod:`htn.cli.output`.)"""
 from __future__ import annotations
 
 import os
@@ -29,41 +29,3 @@ def check_display() -> None:
             socket.create_connection((host, 6000 + int(number)), timeout=2.0).close()
     except OSError:
         raise HtnError(f"--gui: no X server answers on DISPLAY={disp}; run headless without --gui")
-
-
-def check_writable_file(path: str, option: str) -> None:
-    folder = os.path.dirname(os.path.abspath(path))
-    if not os.path.isdir(folder):
-        raise HtnError(f"{option}: no such folder {folder}", path)
-    if os.path.isdir(path):
-        raise HtnError(f"{option}: {path} is a folder")
-    _probe(folder, option)
-
-
-def check_folder(path: str, option: str) -> None:
-    if os.path.exists(path) and not os.path.isdir(path):
-        raise HtnError(f"{option}: {path} is not a folder")
-    existing = os.path.abspath(path)
-    while not os.path.exists(existing):
-        existing = os.path.dirname(existing)
-    if not os.path.isdir(existing):
-        raise HtnError(f"{option}: cannot make a folder under {existing}, which is a file")
-    _probe(existing, option)
-
-
-def _probe(folder: str, option: str) -> None:
-    """Can files be created in ``folder``? (Asked by creating one: permission
-    bits say nothing to root, read-only file systems say it only then.)"""
-    import tempfile
-    try:
-        tempfile.TemporaryFile(dir=folder, prefix=".htn-").close()
-    except OSError as exc:
-        raise HtnError(f"{option}: cannot write in {folder}: {exc.strerror or exc}")
-
-
-def make_folder(path: str, option: str) -> None:
-    try:
-        os.makedirs(path, exist_ok=True)
-    except OSError as exc:
-        raise HtnError(f"{option}: cannot make the folder {path}: {exc.strerror or exc}")
-    _probe(path, option)

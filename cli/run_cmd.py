@@ -9,8 +9,8 @@ import click
 from htn.jshop.errors import HtnError
 
 from .extras import require_extra
-from .output import stdout_is_terminal
-from .run_checks import check_display, check_folder, check_writable_file, make_folder
+from .output import check_output_file, check_output_folder, make_output_folder, stdout_is_terminal
+from .run_checks import check_display
 from .signals import Signals, interrupt_exit
 
 RUN_OPTIONS = ("plan_file", "robot_name", "sim", "faults", "seed", "retries", "replan",
@@ -137,9 +137,9 @@ def _run(ctx, signals, plan_file, robot_name, sim, gui, snapshots, faults, seed,
         check_display()
     for path, option in ((log_path, "--log"), (bt_dot, "--bt-dot")):
         if path:
-            check_writable_file(path, option)
+            check_output_file(path, option)
     if snapshots:
-        check_folder(snapshots, "--snapshots")
+        check_output_folder(snapshots, "--snapshots")
     pf = read_plan_file(plan_file)
     domain = domain or pf.domain
     problem = problem or pf.problem
@@ -179,7 +179,7 @@ def _run(ctx, signals, plan_file, robot_name, sim, gui, snapshots, faults, seed,
         if snapshots and type(robot).snapshot is Robot.snapshot:
             raise click.UsageError(f"--snapshots: the {robot_name} robot has no camera")
         if snapshots:   # only once the world could be built from the problem
-            make_folder(snapshots, "--snapshots")
+            make_output_folder(snapshots, "--snapshots")
         log = EventLog(log_path, clock=lambda: robot.sim_time)
     except BaseException:
         robot.close()
@@ -265,7 +265,7 @@ def _write_dot(root, path: str) -> None:
     finally:
         for b, name in names.items():
             b.name = name
-    with atomic_write(path) as fh:
+    with atomic_write(path, "--bt-dot") as fh:
         fh.write(text)
 
 

@@ -203,7 +203,7 @@ def test_figures_of_runs_that_differ_by_rounding_only(tmp_path):
 def test_output_options_are_checked_before_any_work(tmp_path):
     blocker = tmp_path / "a-file"
     blocker.write_text("not a folder\n")
-    records = tmp_path / "runs.jsonl"
+    records, plots = tmp_path / "runs.jsonl", tmp_path / "plots"
 
     def evaluate(*args, env=None):
         return run_htn("evaluate", PROBLEM, *args, env={**os.environ, **(env or {})},
@@ -211,9 +211,9 @@ def test_output_options_are_checked_before_any_work(tmp_path):
 
     cases = [
         (("--plot", blocker / "plots", "--records", records), f"{blocker}/plots: --plot"),
-        (("--records", tmp_path / "missing" / "runs.jsonl"), "--records: cannot write"),
-        (("--records", tmp_path), "--records: this is a folder"),
-        (("--scheduler", "127.0.0.1:8786"), "not a Dask scheduler address"),
+        (("--records", tmp_path / "missing" / "runs.jsonl"), "--records: no such folder"),
+        (("--plot", plots, "--records", tmp_path), f"{tmp_path}: --records: is a folder, not a file"),
+        (("--plot", plots, "--scheduler", "127.0.0.1:8786"), "not a Dask scheduler address"),
         (("--scheduler", "tcp://127.0.0.1:99999"), "not a Dask scheduler address"),
         (("--workers", "2", "--scheduler", "tcp://127.0.0.1:8786"), "give one of them"),
         (("--robot", "symbolic"), "cannot be evaluated"),
@@ -225,8 +225,10 @@ def test_output_options_are_checked_before_any_work(tmp_path):
         assert message in r.stderr and "Traceback" not in r.stderr, (args, r.stderr)
         assert len(r.stderr.strip().splitlines()) == 1, r.stderr
     assert not records.exists()
+    assert not plots.exists()          # --plot is made only once every option is checked
     # a scheduler nobody listens on is found before planning, within the connect timeout
-    r = evaluate("--scheduler", "tcp://127.0.0.1:9", "--records", records,
+    r = evaluate("--scheduler", "tcp://127.0.0.1:9", "--records", records, "--plot", plots,
                  env={"DASK_DISTRIBUTED__COMM__TIMEOUTS__CONNECT": "1s"})
     assert r.returncode == 2 and "cannot reach the Dask scheduler" in r.stderr, r.stderr
-    assert len(r.stderr.strip().splitlines()) == 1 and not records.exists()
+    assert len(r.stderr.strip().splitlines()) == 1
+    assert sorted(os.listdir(tmp_path)) == ["a-file"]      # nothing written

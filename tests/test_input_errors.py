@@ -333,8 +333,9 @@ def test_encodings(tmp_path):
 def test_unwritable_outputs_are_found_before_planning(tmp_path, option):
     d, p = write(tmp_path, domain=DOMAIN.replace("((at ?from))", "((at ?from) (call mark ?from))"))
     fns = functions_file(tmp_path)
-    for target, message in [(tmp_path / "missing" / "x.out", "directory does not exist"),
-                            (tmp_path, "is a directory")]:
+    for target, message in [(tmp_path / "missing" / "x.out",
+                             f"no such folder {tmp_path / 'missing'}"),
+                            (tmp_path, "is a directory")]:     # click's check
         r = run_htn("plan", d, p, "--functions", fns, option, target)
         assert r.returncode == 2 and message in r.stderr and "Traceback" not in r.stderr
         assert not (tmp_path / "fns.txt.called").exists()         # nothing was planned
@@ -347,4 +348,4 @@ def test_other_commands_check_options_first(tmp_path):
     r = run_htn("transform", tmp_path / "no.jshop", p, "--rules", "bogus")
     assert r.returncode == 2 and "unknown rule(s) bogus" in r.stderr    # before the files
     r = run_htn("transform", d, p, "-o", tmp_path / "missing" / "t.txt")
-    check_error(r, f"{tmp_path / 'missing' / 't.txt'}:", "directory does not exist")
+    check_error(r, f"{tmp_path / 'missing' / 't.txt'}:", f"no such folder {tmp_path / 'missing'}")

@@ -75,9 +75,10 @@ def test_output_folders_are_checked_before_work_starts(plan, tmp_path):
     blocker = tmp_path / "a-file"
     blocker.write_text("")
     r = run_htn("run", plan, "--sim", "--snapshots", blocker / "shots")
-    assert one_error_line(r) == f"--snapshots: cannot make a folder under {blocker}, which is a file"
+    assert one_error_line(r) == (f"{blocker / 'shots'}: --snapshots: cannot make a folder "
+                                 f"under {blocker}, which is a file")
     r = run_htn("run", plan, "--sim", "--snapshots", "/proc/htn-shots")   # read-only, even for root
-    assert one_error_line(r).startswith("--snapshots: cannot write in /proc")
+    assert one_error_line(r).startswith("/proc/htn-shots: --snapshots: cannot write in /proc: ")
     r = run_htn("run", plan, "--sim", "--bt-dot", tmp_path / "missing" / "bt.dot")
     assert "--bt-dot: no such folder" in one_error_line(r)
     assert sorted(os.listdir(tmp_path)) == ["a-file", "plan.txt"]     # nothing written
