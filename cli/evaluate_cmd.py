@@ -9,7 +9,7 @@ import click
 
 from htn.jshop.errors import HtnError
 
-from .extras import require_extra
+from .extras import require_extra, require_robot_extra
 from .output import check_output_file, check_output_folder, make_output_folder, warn
 
 
@@ -38,8 +38,7 @@ def _check_options(problem, domain, robot, faults, workers, scheduler, plot_dir,
     if robot not in MEASURES:
         raise HtnError(f"--robot {robot}: this robot cannot be evaluated (choose from "
                        f"{', '.join(MEASURES)})")
-    if robot == "pybullet":
-        require_extra("sim", "htn evaluate --robot pybullet")
+    require_robot_extra(robot, f"htn evaluate --robot {robot}")
     if scheduler is not None and workers is not None:
         raise HtnError("--workers starts a local cluster, --scheduler uses an existing "
                        "one and its workers: give one of them")

@@ -8,7 +8,7 @@ import click
 
 from htn.jshop.errors import HtnError
 
-from .extras import require_extra
+from .extras import require_robot_extra
 from .output import check_output_file, check_output_folder, make_output_folder, stdout_is_terminal
 from .run_checks import check_display
 from .signals import Signals, interrupt_exit
@@ -130,9 +130,7 @@ def _run(ctx, signals, plan_file, robot_name, sim, gui, snapshots, faults, seed,
     if robot_name is None:
         raise click.UsageError("choose a robot: --sim (PyBullet) or --robot NAME "
                                f"(known: {', '.join(sorted(known))})")
-    backend = known.get(robot_name)
-    if backend is not None and backend.extra:
-        require_extra(backend.extra, "htn run --sim" if sim else f"htn run --robot {robot_name}")
+    require_robot_extra(robot_name, "htn run --sim" if sim else f"htn run --robot {robot_name}")
     if gui:
         check_display()
     for path, option in ((log_path, "--log"), (bt_dot, "--bt-dot")):
