@@ -28,7 +28,9 @@ def _domain_for(problem: str) -> str:
 
 
 def _check_options(problem, domain, robot, faults, workers, scheduler, plot_dir, records):
-    """Every input and output option, before any work starts."""
+    """Every input and output option, before any work starts (the scheduler's
+    address is checked where it is used, by ``open_runner``; nothing is
+    written before that)."""
     require_extra("eval", "htn evaluate")
     if not os.path.isfile(problem):
         raise HtnError("no such file", problem)
@@ -42,20 +44,12 @@ def _check_options(problem, domain, robot, faults, workers, scheduler, plot_dir,
     if scheduler is not None and workers is not None:
         raise HtnError("--workers starts a local cluster, --scheduler uses an existing "
                        "one and its workers: give one of them")
-    if scheduler is not None or (workers or 1) > 1:
-        from importlib.util import find_spec
-        if find_spec("distributed") is None:
-            raise HtnError("htn evaluate --workers/--scheduler needs Dask distributed, in the "
-                           "eval extra: pip install 'htn[eval]'")
     from htn.robot.faults import parse_faults
     parse_faults(faults, MEASURES[robot].fault_kinds)
     if plot_dir is not None:
         check_output_folder(plot_dir, "--plot")
     if records is not None:
         check_output_file(records, "--records")
-    if scheduler is not None:
-        from htn.transform.cluster import check_scheduler_address
-        check_scheduler_address(scheduler)
 
 
 @click.command("evaluate")
@@ -113,7 +107,7 @@ def evaluate(problem, domain, runs, seed, robot, faults, workers, scheduler, rec
     stream = None
     try:
         with open_runner(workers or 1, scheduler) as runner:
-            if plot_dir is not None:    # all options are checked now
+            if plot_dir is not None:    # all options are checked now (the scheduler last)
                 make_output_folder(plot_dir, "--plot")
             for note in runner.notes:
                 warn(f"warning: {note}")
