@@ -1,6 +1,7 @@
 """``htn run PLAN``: execute a plan with per-action monitoring on a robot back end."""
 from __future__ import annotations
 
+import contextlib
 import os
 import sys
 
@@ -11,7 +12,7 @@ from htn.jshop.errors import HtnError
 from .extras import require_robot_extra
 from .output import check_output_file, check_output_folder, make_output_folder, stdout_is_terminal
 from .run_checks import check_display
-from .signals import Signals, interrupt_exit
+from .signals import Signals, held, interrupt_exit
 
 RUN_OPTIONS = ("plan_file", "robot_name", "sim", "faults", "seed", "retries", "replan",
                "plan_index", "domain", "problem", "functions")
@@ -100,7 +101,7 @@ def _run(ctx, signals, plan_file, robot_name, sim, gui, snapshots, faults, seed,
     from htn.executor.actions import machine_for
     from htn.executor.config import load_retries, parse_overrides
     from htn.executor.dispatcher import TaskDispatcher
-    from htn.executor.log import EventLog
+    from htn.executor.log import EventLog, check_plan_digest, read_header, run_header
     from htn.executor.plan_tree import check_runnable, recover_tree
     from htn.jshop.functions import FunctionTable
     from htn.jshop.parser import load_domain, load_problem
@@ -120,7 +121,7 @@ def _run(ctx, signals, plan_file, robot_name, sim, gui, snapshots, faults, seed,
         faults, plan_index = rec["faults"], rec["plan_index"]
         domain, problem, functions = rec["domain"], rec["problem"], rec.get("functions")
         retries = [",".join(f"{k}={v}" for k, v in rec["retries"].items())] if rec["retries"] else []
-        _check_digest(plan_file, rec.get("plan_sha256"), from_log)
+        check_plan_digest(plan_file, rec.get("plan_sha256"), from_log)
     if plan_file is None:
         raise click.UsageError("give a PLAN_FILE (or --from-log FILE.jsonl)")
     if sim and robot_name not in (None, "pybullet"):
@@ -168,6 +169,7 @@ def _run(ctx, signals, plan_file, robot_name, sim, gui, snapshots, faults, seed,
     tree = recover_tree(dom, instance, steps, table, tasks=pf.notes.get("tasks", (None,))[0])
 
     robot = make_robot(robot_name, RobotRequest(dom, instance, faults or "", seed, gui, table))
+    log = dispatcher = None
     try:
         for s in steps:
             if not s.internal and machine_for(s.name, dom.name, robot) is None:
@@ -178,17 +180,15 @@ def _run(ctx, signals, plan_file, robot_name, sim, gui, snapshots, faults, seed,
             raise click.UsageError(f"--snapshots: the {robot_name} robot has no camera")
         if snapshots:   # only once the world could be built from the problem
             make_output_folder(snapshots, "--snapshots")
-        log = EventLog(log_path, clock=lambda: robot.sim_time)
-    except BaseException:
-        robot.close()
-        raise
-    dispatcher = None
-    try:
-        log.emit(None, None, "header", None, "", **run_header(
-            plan_file, plan_index, domain, problem, functions, robot_name, seed, faults or "",
-            limits, replan))
-        dispatcher = TaskDispatcher(robot, dom, instance, steps, limits, log,
-                                    replan=replan, functions=table, tree=tree)
+        # the log begins only together with the dispatcher that will end it
+        # (an interrupt meanwhile arrives right after, see below)
+        with held():
+            log = EventLog(log_path, clock=lambda: robot.sim_time)
+            log.emit(None, None, "header", None, "", **run_header(
+                plan_file, plan_index, domain, problem, functions, robot_name, seed,
+                faults or "", limits, replan, argv=["htn", *sys.argv[1:]]))
+            dispatcher = TaskDispatcher(robot, dom, instance, steps, limits, log,
+                                        replan=replan, functions=table, tree=tree)
         if bt_dot:
             _write_dot(dispatcher.root, bt_dot)
         view = None
@@ -202,25 +202,26 @@ def _run(ctx, signals, plan_file, robot_name, sim, gui, snapshots, faults, seed,
         if snapshots:
             log.listeners.append(_snapshotter(robot, snapshots))
         signals.watch(dispatcher)
-        if hasattr(view, "live"):
-            with view:
-                summary = dispatcher.run()
-        else:
+        with view or contextlib.nullcontext():
             summary = dispatcher.run()
         signals.ignore()       # the robot holds and the log is complete: shut down in order
         if bt_dot and summary.replans:
             _write_dot(dispatcher.root, bt_dot)
-    except KeyboardInterrupt:
-        # interrupted after the log was opened but before the tick loop: the
-        # log still ends with its outcome and a summary
+    except KeyboardInterrupt as exc:
+        if dispatcher is None:     # no log yet: nothing to end
+            raise
+        # before the tick loop (or between it and the end): the log still
+        # ends with its outcome and a summary
         signals.ignore()
-        summary = _interrupted_summary(log, dispatcher, steps, robot)
+        summary = dispatcher.interrupted(str(exc))
     except BaseException as exc:
-        log.emit(None, None, "summary", None, f"error: {type(exc).__name__}: {exc}",
-                 result="error")
+        if log is not None:
+            log.emit(None, None, "summary", None, f"error: {type(exc).__name__}: {exc}",
+                     result="error")
         raise
     finally:
-        log.close()
+        if log is not None:
+            log.close()
         robot.close()
     click.echo(summary_line(summary))
     if summary.result == "interrupted":     # log closed, robot disconnected
@@ -236,17 +237,6 @@ def summary_line(summary) -> str:
     if summary.failed_step:
         line += f"; {summary.result} at step {summary.failed_at}: {summary.failed_step}"
     return line
-
-
-def _interrupted_summary(log, dispatcher, steps, robot):
-    if dispatcher is not None:
-        return dispatcher._interrupted()
-    from htn.executor.dispatcher import RunSummary
-    robot.hold()
-    log.emit(None, None, "interrupted", None, "stopped by the user before the first step")
-    summary = RunSummary("interrupted", len(steps), 0, 0, 0, round(robot.sim_time, 3))
-    log.emit(None, None, "summary", None, "interrupted", **summary.as_dict())
-    return summary
 
 
 def _write_dot(root, path: str) -> None:
@@ -267,66 +257,6 @@ def _write_dot(root, path: str) -> None:
         fh.write(text)
 
 
-def run_header(plan_file, plan_index, domain, problem, functions, robot, seed, faults,
-               retries, replan) -> dict:
-    """What a log's first event records: enough to run the same thing again."""
-    import hashlib
-    import platform
-    from importlib.metadata import PackageNotFoundError, version
-
-    import htn
-
-    def installed(name):
-        try:
-            return version(name)
-        except PackageNotFoundError:
-            return None
-    with open(plan_file, "rb") as fh:
-        digest = hashlib.sha256(fh.read()).hexdigest()
-    absolute = lambda p: os.path.abspath(p) if p else None  # noqa: E731
-    return {"htn": htn.__version__, "argv": ["htn", *sys.argv[1:]],
-            "plan": absolute(plan_file), "plan_sha256": digest, "plan_index": plan_index,
-            "domain": absolute(domain), "problem": absolute(problem),
-            "functions": absolute(functions), "robot": robot, "seed": seed, "faults": faults,
-            "retries": dict(sorted(retries.items())), "replan": replan,
-            "python": platform.python_version(), "pybullet": installed("pybullet")}
-
-
-HEADER_KEYS = ("plan", "plan_index", "domain", "problem", "robot", "seed", "faults",
-               "retries", "replan")
-
-
-def read_header(path: str) -> dict:
-    """The header event of a log written by ``htn run --log``."""
-    import json
-    if not os.path.isfile(path):
-        raise HtnError("no such log file", path)
-    try:
-        with open(path, encoding="utf-8") as fh:
-            first = fh.readline()
-        rec = json.loads(first)
-    except (OSError, UnicodeDecodeError, ValueError) as exc:
-        raise HtnError(f"not a log of htn run --log: {exc}", path, 1, 1)
-    if not isinstance(rec, dict) or rec.get("event") != "header":
-        raise HtnError("not a log of htn run --log: its first line is no header event",
-                       path, 1, 1)
-    missing = [k for k in HEADER_KEYS if k not in rec]
-    if missing:
-        raise HtnError(f"the header lacks {', '.join(missing)}", path, 1, 1)
-    return rec
-
-
-def _check_digest(plan_file: str, digest, log_path: str) -> None:
-    import hashlib
-    if not os.path.isfile(plan_file):
-        raise HtnError(f"the plan file of this run is missing: {plan_file}", log_path, 1, 1)
-    with open(plan_file, "rb") as fh:
-        now = hashlib.sha256(fh.read()).hexdigest()
-    if digest and now != digest:
-        raise HtnError(f"the plan file {plan_file} has changed since this run (SHA-256 "
-                       f"{now[:12]}..., the log says {digest[:12]}...)", log_path, 1, 1)
-
-
 def _snapshotter(robot, folder):
     def on_event(rec):
         if rec["event"] in ("verified", "failed", "aborted") and rec["step"] is not None:
@@ -337,6 +267,12 @@ def _snapshotter(robot, folder):
 
 class _PlainView:
     """One line per action outcome, fault and repair (when stdout is not a terminal)."""
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc) -> None:
+        pass
 
     SHOWN = ("verified", "failed", "aborted", "retrying", "replanned", "replan_failed",
              "interrupted", "fault")

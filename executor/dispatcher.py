@@ -174,7 +174,7 @@ class TaskDispatcher:
         try:
             while True:
                 if self._halt:
-                    return self._interrupted()
+                    return self.interrupted()
                 # the root alone: py_trees' BehaviourTree.tick would also visit
                 # every node of the whole tree on each tick
                 self.in_tick = True
@@ -196,15 +196,23 @@ class TaskDispatcher:
             # an interrupt between two ticks (e.g. while repair plans) halts
             # the same way; its message, if any, says why (SIGTERM's does:
             # htn.cli.signals.Terminated)
-            self.halt(str(exc))
-            return self._interrupted()
+            return self.interrupted(str(exc))
 
-    def _interrupted(self) -> RunSummary:
-        self.root.stop(Status.INVALID)   # running behaviours terminate: the skill is preempted
+    def interrupted(self, why: str = "") -> RunSummary:
+        """End the run as interrupted, now (the tree halted, or an interrupt
+        came between ticks or before the first one): running behaviours
+        terminate, so the skill is preempted; the robot holds its pose; the
+        log gets the ``interrupted`` event (``why``, or the halt's reason)
+        and the summary."""
+        if why:
+            self.halt(why)
+        self.root.stop(Status.INVALID)
         self.robot.hold()
         ctx = self.running if self.running is not None and not self.running.done else None
         self.failed = ctx              # the action the run ended in
-        self.emit(ctx, "interrupted", f"{self._halt or STOPPED_BY_USER}; the robot holds its pose")
+        why = self._halt or STOPPED_BY_USER
+        self.emit(ctx, "interrupted", f"{why}; the robot holds its pose" if self.started
+                  else f"{why} before the first step")
         return self._summary("interrupted", ctx)
 
     def plan_lines(self) -> list[str]:
