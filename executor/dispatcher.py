@@ -54,11 +54,6 @@ class RunSummary:
         return dict(self.__dict__)
 
 
-def dynamic_predicates(domain: S.Domain) -> set[str]:
-    """Predicates some operator adds or deletes: the ones to observe."""
-    return domain.dynamic_predicates()
-
-
 class TaskDispatcher:
     """Ticks the behaviour tree of a plan on a robot, repairing it on request.
 
@@ -87,7 +82,7 @@ class TaskDispatcher:
         self._halt: Optional[str] = None
         self.in_tick = False
         self._carrying: tuple = (None, [])        # (action, attempt) -> what it carries
-        self.carry_checks = "still_held" in getattr(robot, "check_names", lambda: [])()
+        self.carry_checks = "still_held" in robot.check_names()
         steps = list(steps)
         self.root = build(tree if tree is not None else flat_tree(steps), steps, self._action)
 
@@ -152,17 +147,12 @@ class TaskDispatcher:
         return all_of(*(self.robot.check("still_held", o) for o in objs))
 
     def _flush_faults(self) -> None:
-        if len(getattr(self.robot, "injected", ())) <= self._faults_seen and \
-                hasattr(self.robot, "injected"):
-            return           # nothing new (the common case, on every event)
-        faults = self.robot.injected_faults()
-        while self._faults_seen < len(faults):
-            f = faults[self._faults_seen]
+        """A ``fault`` event for each fault the robot injected since the last call."""
+        for f in self.robot.injected_faults()[self._faults_seen:]:
             self._faults_seen += 1
             ctx = self.running
             self.log.emit(self.number(ctx) if ctx else None, ctx.text if ctx else None, "fault",
-                          None, f.get("detail", ""), kind=f.get("kind", f.get("fault")),
-                          sim_t=f.get("sim_t", f.get("t")))
+                          None, f["detail"], kind=f["kind"], sim_t=f["sim_t"])
 
     # ------------------------------------------------------------ the tick loop
     def halt(self, why: str = "") -> None:
