@@ -1,6 +1,7 @@
 """Shared fixtures: where the JSHOP2 corpus is, and how to run ``htn``."""
 from __future__ import annotations
 
+import json
 import os
 import subprocess
 import sys
@@ -59,6 +60,20 @@ def wait_until(condition, what: str, proc=None, timeout: float = 60.0, every: fl
             pytest.fail(message)
         time.sleep(every)
 
+
+def interrupt_run(proc, sig: int, log: Path):
+    """Send ``sig`` (SIGINT, SIGTERM) to a running ``htn run --log LOG``; it
+    must end with exit code 128 + sig, without a traceback, and its log with
+    the ``interrupted`` event and the summary. Returns stdout, stderr and the
+    log's events."""
+    proc.send_signal(sig)
+    out, err = proc.communicate(timeout=60)
+    assert proc.returncode == 128 + sig, out + err
+    assert "Traceback" not in err
+    events = [json.loads(line) for line in log.read_text().splitlines()]   # all lines parse
+    assert events[-2]["event"] == "interrupted"
+    assert events[-1]["event"] == "summary" and events[-1]["result"] == "interrupted"
+    return out, err, events
 
 GOLDEN = Path(__file__).resolve().parent / "golden"
 
