@@ -210,8 +210,8 @@ def _run(ctx, signals, plan_file, robot_name, sim, gui, snapshots, faults, seed,
     except KeyboardInterrupt as exc:
         if dispatcher is None:     # no log yet: nothing to end
             raise
-        # before the tick loop (or between it and the end): the log still
-        # ends with its outcome and a summary
+        # outside dispatcher.run() (e.g. while --bt-dot is written): the log
+        # still ends with the outcome and a summary
         signals.ignore()
         summary = dispatcher.interrupted(str(exc))
     except BaseException as exc:
