@@ -4,13 +4,14 @@ from __future__ import annotations
 
 import json
 import os
-import tempfile
 
 import click
 
 from htn.jshop.errors import HtnError
 
-from .output import warn
+from .extras import require_extra, require_robot_extra
+from .output import check_output_file, check_output_folder, make_output_folder, warn
+
 
 def _domain_for(problem: str) -> str:
     """The problem's domain file: ../domains/NAME.jshop beside it, domains/
@@ -26,30 +27,10 @@ def _domain_for(problem: str) -> str:
     raise HtnError(f"cannot find the domain file {name}.jshop; give it with --domain", problem)
 
 
-def _writable_folder(path: str, option: str) -> None:
-    try:
-        os.makedirs(path, exist_ok=True)
-        tempfile.TemporaryFile(dir=path).close()
-    except OSError as exc:
-        raise HtnError(f"{option}: cannot write files into this folder ({exc.strerror})",
-                       path) from None
-
-
-def _writable_file(path: str, option: str) -> None:
-    if os.path.isdir(path):
-        raise HtnError(f"{option}: this is a folder, not a file", path)
-    existed = os.path.exists(path)
-    try:
-        open(path, "a").close()            # appending changes nothing that is there
-    except OSError as exc:
-        raise HtnError(f"{option}: cannot write this file ({exc.strerror})", path) from None
-    if not existed:
-        os.unlink(path)
-
-
 def _check_options(problem, domain, robot, faults, workers, scheduler, plot_dir, records):
-    """Every input and output option, before any work starts."""
-    from .extras import require_extra
+    """Every input and output option, before any work starts (the scheduler's
+    address is checked where it is used, by ``open_runner``; nothing is
+    written before that)."""
     require_extra("eval", "htn evaluate")
     if not os.path.isfile(problem):
         raise HtnError("no such file", problem)
@@ -59,25 +40,16 @@ def _check_options(problem, domain, robot, faults, workers, scheduler, plot_dir,
     if robot not in MEASURES:
         raise HtnError(f"--robot {robot}: this robot cannot be evaluated (choose from "
                        f"{', '.join(MEASURES)})")
-    if robot == "pybullet":
-        require_extra("sim", "htn evaluate --robot pybullet")
+    require_robot_extra(robot, f"htn evaluate --robot {robot}")
     if scheduler is not None and workers is not None:
         raise HtnError("--workers starts a local cluster, --scheduler uses an existing "
                        "one and its workers: give one of them")
-    if scheduler is not None or (workers or 1) > 1:
-        from importlib.util import find_spec
-        if find_spec("distributed") is None:
-            raise HtnError("htn evaluate --workers/--scheduler needs Dask distributed, in the "
-                           "eval extra: pip install 'htn[eval]'")
     from htn.robot.faults import parse_faults
     parse_faults(faults, MEASURES[robot].fault_kinds)
     if plot_dir is not None:
-        _writable_folder(plot_dir, "--plot")
+        check_output_folder(plot_dir, "--plot")
     if records is not None:
-        _writable_file(records, "--records")
-    if scheduler is not None:
-        from htn.transform.cluster import check_scheduler_address
-        check_scheduler_address(scheduler)
+        check_output_file(records, "--records")
 
 
 @click.command("evaluate")
@@ -135,6 +107,8 @@ def evaluate(problem, domain, runs, seed, robot, faults, workers, scheduler, rec
     stream = None
     try:
         with open_runner(workers or 1, scheduler) as runner:
+            if plot_dir is not None:    # all options are checked now (the scheduler last)
+                make_output_folder(plot_dir, "--plot")
             for note in runner.notes:
                 warn(f"warning: {note}")
             study, applied = prepare_study(domain, problem, robot, faults)

@@ -9,7 +9,6 @@ plan ... | head -1``) ends the command quietly with 0.
 """
 from __future__ import annotations
 
-import os
 import sys
 
 import click
@@ -17,7 +16,7 @@ import click
 from htn.jshop.errors import HtnError
 
 from .output import fail
-from .signals import SIGTERM_EXIT, Terminated, sigterm_as_interrupt
+from .signals import interrupt_exit, sigterm_as_interrupt, silence_stdout
 
 CONTEXT = dict(help_option_names=["-h", "--help"], max_content_width=100)
 
@@ -30,7 +29,7 @@ class HtnGroup(click.Group):
         try:
             return super().invoke(ctx)
         except BrokenPipeError:
-            _silence_stdout()
+            silence_stdout()
             ctx.exit(0)
         except SystemExit as exc:
             # rich's Console exits 1 on a broken pipe (after silencing stdout)
@@ -38,19 +37,7 @@ class HtnGroup(click.Group):
                 ctx.exit(0)
             raise
         except KeyboardInterrupt as exc:
-            terminated = isinstance(exc, Terminated)
-            click.echo("terminated" if terminated else "interrupted", err=True)
-            ctx.exit(SIGTERM_EXIT if terminated else 130)
-
-
-def _silence_stdout() -> None:
-    """Point stdout at /dev/null: the reader is gone, and Python's final
-    flush must not fail again."""
-    try:
-        devnull = os.open(os.devnull, os.O_WRONLY)
-        os.dup2(devnull, sys.stdout.fileno())
-    except (OSError, ValueError):   # no real file descriptor (tests capture stdout)
-        pass
+            interrupt_exit(exc)
 
 
 @click.group(cls=HtnGroup, context_settings=CONTEXT)
@@ -92,19 +79,15 @@ def main(argv=None) -> None:
     except HtnError as exc:
         fail(exc)
         sys.exit(2)
-    except click.exceptions.Abort as exc:
-        terminated = isinstance(exc.__context__, Terminated)
-        click.echo("terminated" if terminated else "interrupted", err=True)
-        sys.exit(SIGTERM_EXIT if terminated else 130)
+    except click.exceptions.Abort as exc:    # click's form of an interrupt outside a command
+        interrupt_exit(exc.__context__)
     except click.ClickException as exc:
         exc.show()
         sys.exit(exc.exit_code)
     except KeyboardInterrupt as exc:
-        terminated = isinstance(exc, Terminated)
-        click.echo("terminated" if terminated else "interrupted", err=True)
-        sys.exit(SIGTERM_EXIT if terminated else 130)
+        interrupt_exit(exc)
     except BrokenPipeError:
-        _silence_stdout()
+        silence_stdout()
         sys.exit(0)
     sys.exit(code or 0)
 

@@ -1,5 +1,6 @@
-"""Shared output helpers for the command line: messages on stderr, files
-that are replaced only by a complete new result."""
+"""Shared output helpers for the command line: messages on stderr, output
+paths checked before any work, files that are replaced only by a complete
+new result."""
 from __future__ import annotations
 
 import atexit
@@ -28,6 +29,63 @@ TEMP_PREFIX = ".htn-"
 _pending: set = set()       # temporary files of this process not yet committed
 
 
+# ---------------------------------------------------------------- output paths
+# Every output a command writes is checked before any work starts, with one
+# message style: "PATH: OPTION: what is wrong" (OPTION left out where the
+# caller does not name it).
+
+def _refused(path: str, option: str | None, message: str):
+    from htn.jshop.errors import HtnError
+    return HtnError(f"{option}: {message}" if option else message, path)
+
+
+def check_output_file(path: str, option: str | None = None) -> str:
+    """Can ``path`` be written as a new file? It is not a folder, its folder
+    exists and takes new files, and a file already there may be replaced.
+    Returns the folder."""
+    folder = os.path.dirname(os.path.abspath(path))
+    if os.path.isdir(path):
+        raise _refused(path, option, "is a folder, not a file")
+    if not os.path.isdir(folder):
+        raise _refused(path, option, f"no such folder {folder}")
+    if os.path.exists(path) and not os.access(path, os.W_OK):
+        raise _refused(path, option, "cannot write: permission denied")
+    _probe(folder, path, option)
+    return folder
+
+
+def check_output_folder(path: str, option: str) -> None:
+    """Can ``path`` be a folder to write files in? It is one, or it can be
+    made under the nearest folder that exists. Nothing is made here (see
+    :func:`make_output_folder`), so a later check that fails leaves no trace."""
+    if os.path.exists(path) and not os.path.isdir(path):
+        raise _refused(path, option, "is a file, not a folder")
+    existing = os.path.abspath(path)
+    while not os.path.exists(existing):
+        existing = os.path.dirname(existing)
+    if not os.path.isdir(existing):
+        raise _refused(path, option, f"cannot make a folder under {existing}, which is a file")
+    _probe(existing, path, option)
+
+
+def make_output_folder(path: str, option: str) -> None:
+    """Make the folder ``path`` (checked with :func:`check_output_folder`)."""
+    try:
+        os.makedirs(path, exist_ok=True)
+    except OSError as exc:
+        raise _refused(path, option, f"cannot make the folder: {exc.strerror or exc}") from None
+    _probe(path, path, option)
+
+
+def _probe(folder: str, path: str, option: str | None) -> None:
+    """Can files be created in ``folder``? (Asked by creating one: permission
+    bits say nothing to root, read-only file systems say it only then.)"""
+    try:
+        tempfile.TemporaryFile(dir=folder, prefix=TEMP_PREFIX).close()
+    except OSError as exc:
+        raise _refused(path, option, f"cannot write in {folder}: {exc.strerror or exc}") from None
+
+
 class AtomicFile:
     """A file that replaces ``path`` only when :meth:`commit` is called.
 
@@ -35,24 +93,19 @@ class AtomicFile:
     end of the process, or the next htn writing to that folder after a
     SIGKILL) removes it, so readers never see a half-written file and an
     earlier file is replaced only by a complete new one. Opening checks that
-    the file can be written at all, so a bad path fails before any work.
+    the file can be written at all (:func:`check_output_file`; ``option``
+    names the option in its messages), so a bad path fails before any work.
     """
 
-    def __init__(self, path: str):
-        from htn.jshop.errors import HtnError
+    def __init__(self, path: str, option: str | None = None):
         self.path = path
-        directory = os.path.dirname(os.path.abspath(path))
-        if os.path.isdir(path):
-            raise HtnError("is a directory, not a file", path)
-        if not os.path.isdir(directory):
-            raise HtnError("directory does not exist", path)
-        if os.path.exists(path) and not os.access(path, os.W_OK):
-            raise HtnError("cannot write: permission denied", path)
+        directory = check_output_file(path, option)
         remove_stale_temporaries(directory)
         try:
             fd, self.tmp = tempfile.mkstemp(prefix=f"{TEMP_PREFIX}{os.getpid()}-", dir=directory)
         except OSError as exc:
-            raise HtnError(f"cannot write here: {exc.strerror}", path) from None
+            raise _refused(path, option, f"cannot write in {directory}: "
+                                         f"{exc.strerror or exc}") from None
         _pending.add(self.tmp)
         umask = os.umask(0)
         os.umask(umask)
@@ -123,10 +176,10 @@ def _alive(pid: int) -> bool:
 
 
 @contextmanager
-def atomic_write(path: str):
+def atomic_write(path: str, option: str | None = None):
     """An :class:`AtomicFile` that replaces ``path`` when the block ends
     normally; an exception or an interrupt leaves any earlier file untouched."""
-    out = AtomicFile(path)
+    out = AtomicFile(path, option)
     try:
         yield out
     except BaseException:

@@ -16,7 +16,7 @@ import click
 from htn.jshop.limits import DEFAULT_MAX_DEPTH
 
 from .output import AtomicFile, console, stdout_is_terminal, warn
-from .signals import SIGTERM_EXIT, DeadlineExceeded, Terminated, deadline, held
+from .signals import DeadlineExceeded, deadline, held, interrupt_exit
 
 FORMATS = ["text", "jshop", "json", "ipc"]
 
@@ -131,9 +131,7 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
     if totals["timed_out"]:
         warn(f"timed out after {timeout:g} s; {found} plan(s) found")
     if isinstance(stop, KeyboardInterrupt):
-        warn(f"{'terminated' if isinstance(stop, Terminated) else 'interrupted'}; "
-             f"{found} plan(s) found")
-        sys.exit(SIGTERM_EXIT if isinstance(stop, Terminated) else 130)
+        interrupt_exit(stop, f"{found} plan(s) found")
     if not found:
         if fmt == "text":
             warn("no plan found")

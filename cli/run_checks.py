@@ -1,60 +1,12 @@
-"""What ``htn run`` checks before any work starts (output paths, the display
-for ``--gui``), and how it takes Ctrl-C and SIGTERM while it runs."""
+"""What ``htn run --gui`` checks before any work starts: a display PyBullet
+can open a window on. (Output paths are checked by :mod:`htn.cli.output`.)"""
 from __future__ import annotations
 
 import os
-import signal
 
 import click
 
 from htn.jshop.errors import HtnError
-
-
-class Signals:
-    """Ctrl-C and SIGTERM: between two ticks of the behaviour tree they halt
-    it (the robot holds its pose, the log gets its summary); at any other
-    time they interrupt at once, without a traceback."""
-
-    def __init__(self):
-        self.terminated = False
-        self.pending = False       # a signal arrived before the tree ran
-        self.dispatcher = None
-        self.saved = {}
-        for sig in (signal.SIGINT, signal.SIGTERM):
-            try:
-                self.saved[sig] = signal.signal(sig, self._handle)
-            except ValueError:     # not the main thread (a library caller)
-                pass
-
-    def _handle(self, signum, frame):
-        self.terminated = self.terminated or signum == signal.SIGTERM
-        why = "stopped by SIGTERM" if signum == signal.SIGTERM else "stopped by the user"
-        d = self.dispatcher
-        if d is not None and d.in_tick:
-            d.halt(why)
-            return
-        # Python drops an exception raised where it cannot propagate (e.g. in
-        # an import lock's callback): the flag makes watch() raise it again
-        self.pending = True
-        raise KeyboardInterrupt
-
-    def watch(self, dispatcher) -> None:
-        """From now on a signal halts ``dispatcher`` between ticks; one that
-        came before (and may have been swallowed) interrupts now."""
-        if self.pending:
-            raise KeyboardInterrupt
-        self.dispatcher = dispatcher
-
-    def ignore(self) -> None:
-        for sig in self.saved:
-            signal.signal(sig, signal.SIG_IGN)
-
-    def restore(self) -> None:
-        for sig, handler in self.saved.items():
-            signal.signal(sig, handler)
-
-    def exit_code(self) -> int:
-        return 143 if self.terminated else 130
 
 
 def check_display() -> None:
@@ -77,41 +29,3 @@ def check_display() -> None:
             socket.create_connection((host, 6000 + int(number)), timeout=2.0).close()
     except OSError:
         raise HtnError(f"--gui: no X server answers on DISPLAY={disp}; run headless without --gui")
-
-
-def check_writable_file(path: str, option: str) -> None:
-    folder = os.path.dirname(os.path.abspath(path))
-    if not os.path.isdir(folder):
-        raise HtnError(f"{option}: no such folder {folder}", path)
-    if os.path.isdir(path):
-        raise HtnError(f"{option}: {path} is a folder")
-    _probe(folder, option)
-
-
-def check_folder(path: str, option: str) -> None:
-    if os.path.exists(path) and not os.path.isdir(path):
-        raise HtnError(f"{option}: {path} is not a folder")
-    existing = os.path.abspath(path)
-    while not os.path.exists(existing):
-        existing = os.path.dirname(existing)
-    if not os.path.isdir(existing):
-        raise HtnError(f"{option}: cannot make a folder under {existing}, which is a file")
-    _probe(existing, option)
-
-
-def _probe(folder: str, option: str) -> None:
-    """Can files be created in ``folder``? (Asked by creating one: permission
-    bits say nothing to root, read-only file systems say it only then.)"""
-    import tempfile
-    try:
-        tempfile.TemporaryFile(dir=folder, prefix=".htn-").close()
-    except OSError as exc:
-        raise HtnError(f"{option}: cannot write in {folder}: {exc.strerror or exc}")
-
-
-def make_folder(path: str, option: str) -> None:
-    try:
-        os.makedirs(path, exist_ok=True)
-    except OSError as exc:
-        raise HtnError(f"{option}: cannot make the folder {path}: {exc.strerror or exc}")
-    _probe(path, option)

@@ -1,6 +1,7 @@
 """``htn run PLAN``: execute a plan with per-action monitoring on a robot back end."""
 from __future__ import annotations
 
+import contextlib
 import os
 import sys
 
@@ -8,9 +9,10 @@ import click
 
 from htn.jshop.errors import HtnError
 
-from .extras import require_extra
-from .output import stdout_is_terminal
-from .run_checks import Signals, check_display, check_folder, check_writable_file, make_folder
+from .extras import require_robot_extra
+from .output import check_output_file, check_output_folder, make_output_folder, stdout_is_terminal
+from .run_checks import check_display
+from .signals import Signals, held, interrupt_exit
 
 RUN_OPTIONS = ("plan_file", "robot_name", "sim", "faults", "seed", "retries", "replan",
                "plan_index", "domain", "problem", "functions")
@@ -88,13 +90,8 @@ def run(ctx, plan_file, robot_name, sim, gui, snapshots, faults, seed, retries, 
     try:
         _run(ctx, signals, plan_file, robot_name, sim, gui, snapshots, faults, seed, retries,
              replan, log_path, from_log, plan_index, domain, problem, functions, bt_dot, quiet)
-    except KeyboardInterrupt:        # before the robot runs: nothing to stop
-        click.echo("terminated" if signals.terminated else "interrupted", err=True)
-        # leave at once: after a Ctrl-C inside PyBullet (building the world),
-        # interpreter shutdown was seen to end by SIGINT instead of the exit code
-        sys.stdout.flush()
-        sys.stderr.flush()
-        os._exit(signals.exit_code())
+    except KeyboardInterrupt as exc:        # before the robot runs: nothing to stop
+        interrupt_exit(exc, now=True)       # now: PyBullet may have been interrupted
     finally:
         signals.restore()
 
@@ -104,7 +101,7 @@ def _run(ctx, signals, plan_file, robot_name, sim, gui, snapshots, faults, seed,
     from htn.executor.actions import machine_for
     from htn.executor.config import load_retries, parse_overrides
     from htn.executor.dispatcher import TaskDispatcher
-    from htn.executor.log import EventLog
+    from htn.executor.log import EventLog, check_plan_digest, read_header, run_header
     from htn.executor.plan_tree import check_runnable, recover_tree
     from htn.jshop.functions import FunctionTable
     from htn.jshop.parser import load_domain, load_problem
@@ -124,7 +121,7 @@ def _run(ctx, signals, plan_file, robot_name, sim, gui, snapshots, faults, seed,
         faults, plan_index = rec["faults"], rec["plan_index"]
         domain, problem, functions = rec["domain"], rec["problem"], rec.get("functions")
         retries = [",".join(f"{k}={v}" for k, v in rec["retries"].items())] if rec["retries"] else []
-        _check_digest(plan_file, rec.get("plan_sha256"), from_log)
+        check_plan_digest(plan_file, rec.get("plan_sha256"), from_log)
     if plan_file is None:
         raise click.UsageError("give a PLAN_FILE (or --from-log FILE.jsonl)")
     if sim and robot_name not in (None, "pybullet"):
@@ -134,16 +131,14 @@ def _run(ctx, signals, plan_file, robot_name, sim, gui, snapshots, faults, seed,
     if robot_name is None:
         raise click.UsageError("choose a robot: --sim (PyBullet) or --robot NAME "
                                f"(known: {', '.join(sorted(known))})")
-    backend = known.get(robot_name)
-    if backend is not None and backend.extra:
-        require_extra(backend.extra, "htn run --sim" if sim else f"htn run --robot {robot_name}")
+    require_robot_extra(robot_name, "htn run --sim" if sim else f"htn run --robot {robot_name}")
     if gui:
         check_display()
     for path, option in ((log_path, "--log"), (bt_dot, "--bt-dot")):
         if path:
-            check_writable_file(path, option)
+            check_output_file(path, option)
     if snapshots:
-        check_folder(snapshots, "--snapshots")
+        check_output_folder(snapshots, "--snapshots")
     pf = read_plan_file(plan_file)
     domain = domain or pf.domain
     problem = problem or pf.problem
@@ -174,6 +169,7 @@ def _run(ctx, signals, plan_file, robot_name, sim, gui, snapshots, faults, seed,
     tree = recover_tree(dom, instance, steps, table, tasks=pf.notes.get("tasks", (None,))[0])
 
     robot = make_robot(robot_name, RobotRequest(dom, instance, faults or "", seed, gui, table))
+    log = dispatcher = None
     try:
         for s in steps:
             if not s.internal and machine_for(s.name, dom.name, robot) is None:
@@ -183,18 +179,16 @@ def _run(ctx, signals, plan_file, robot_name, sim, gui, snapshots, faults, seed,
         if snapshots and type(robot).snapshot is Robot.snapshot:
             raise click.UsageError(f"--snapshots: the {robot_name} robot has no camera")
         if snapshots:   # only once the world could be built from the problem
-            make_folder(snapshots, "--snapshots")
-        log = EventLog(log_path, clock=lambda: robot.sim_time)
-    except BaseException:
-        robot.close()
-        raise
-    dispatcher = None
-    try:
-        log.emit(None, None, "header", None, "", **run_header(
-            plan_file, plan_index, domain, problem, functions, robot_name, seed, faults or "",
-            limits, replan))
-        dispatcher = TaskDispatcher(robot, dom, instance, steps, limits, log,
-                                    replan=replan, functions=table, tree=tree)
+            make_output_folder(snapshots, "--snapshots")
+        # the log begins only together with the dispatcher that will end it
+        # (an interrupt meanwhile arrives right after, see below)
+        with held():
+            log = EventLog(log_path, clock=lambda: robot.sim_time)
+            log.emit(None, None, "header", None, "", **run_header(
+                plan_file, plan_index, domain, problem, functions, robot_name, seed,
+                faults or "", limits, replan, argv=["htn", *sys.argv[1:]]))
+            dispatcher = TaskDispatcher(robot, dom, instance, steps, limits, log,
+                                        replan=replan, functions=table, tree=tree)
         if bt_dot:
             _write_dot(dispatcher.root, bt_dot)
         view = None
@@ -208,34 +202,30 @@ def _run(ctx, signals, plan_file, robot_name, sim, gui, snapshots, faults, seed,
         if snapshots:
             log.listeners.append(_snapshotter(robot, snapshots))
         signals.watch(dispatcher)
-        if hasattr(view, "live"):
-            with view:
-                summary = dispatcher.run()
-        else:
+        with view or contextlib.nullcontext():
             summary = dispatcher.run()
         signals.ignore()       # the robot holds and the log is complete: shut down in order
         if bt_dot and summary.replans:
             _write_dot(dispatcher.root, bt_dot)
-    except KeyboardInterrupt:
-        # interrupted after the log was opened but before the tick loop: the
-        # log still ends with its outcome and a summary
+    except KeyboardInterrupt as exc:
+        if dispatcher is None:     # no log yet: nothing to end
+            raise
+        # outside dispatcher.run() (e.g. while --bt-dot is written): the log
+        # still ends with the outcome and a summary
         signals.ignore()
-        summary = _interrupted_summary(log, dispatcher, steps, robot)
+        summary = dispatcher.interrupted(str(exc))
     except BaseException as exc:
-        log.emit(None, None, "summary", None, f"error: {type(exc).__name__}: {exc}",
-                 result="error")
+        if log is not None:
+            log.emit(None, None, "summary", None, f"error: {type(exc).__name__}: {exc}",
+                     result="error")
         raise
     finally:
-        log.close()
+        if log is not None:
+            log.close()
         robot.close()
     click.echo(summary_line(summary))
-    if summary.result == "interrupted":
-        # Log closed, robot disconnected: leave at once. Interpreter shutdown
-        # after a Ctrl-C inside PyBullet was seen (rarely) to end by SIGINT
-        # instead of exit code 130.
-        sys.stdout.flush()
-        sys.stderr.flush()
-        os._exit(signals.exit_code())
+    if summary.result == "interrupted":     # log closed, robot disconnected
+        interrupt_exit(signals.received, now=True)
     sys.exit(0 if summary.result == "verified" else 1)
 
 
@@ -247,17 +237,6 @@ def summary_line(summary) -> str:
     if summary.failed_step:
         line += f"; {summary.result} at step {summary.failed_at}: {summary.failed_step}"
     return line
-
-
-def _interrupted_summary(log, dispatcher, steps, robot):
-    if dispatcher is not None:
-        return dispatcher._interrupted()
-    from htn.executor.dispatcher import RunSummary
-    robot.hold()
-    log.emit(None, None, "interrupted", None, "stopped by the user before the first step")
-    summary = RunSummary("interrupted", len(steps), 0, 0, 0, round(robot.sim_time, 3))
-    log.emit(None, None, "summary", None, "interrupted", **summary.as_dict())
-    return summary
 
 
 def _write_dot(root, path: str) -> None:
@@ -274,68 +253,8 @@ def _write_dot(root, path: str) -> None:
     finally:
         for b, name in names.items():
             b.name = name
-    with atomic_write(path) as fh:
+    with atomic_write(path, "--bt-dot") as fh:
         fh.write(text)
-
-
-def run_header(plan_file, plan_index, domain, problem, functions, robot, seed, faults,
-               retries, replan) -> dict:
-    """What a log's first event records: enough to run the same thing again."""
-    import hashlib
-    import platform
-    from importlib.metadata import PackageNotFoundError, version
-
-    import htn
-
-    def installed(name):
-        try:
-            return version(name)
-        except PackageNotFoundError:
-            return None
-    with open(plan_file, "rb") as fh:
-        digest = hashlib.sha256(fh.read()).hexdigest()
-    absolute = lambda p: os.path.abspath(p) if p else None  # noqa: E731
-    return {"htn": htn.__version__, "argv": ["htn", *sys.argv[1:]],
-            "plan": absolute(plan_file), "plan_sha256": digest, "plan_index": plan_index,
-            "domain": absolute(domain), "problem": absolute(problem),
-            "functions": absolute(functions), "robot": robot, "seed": seed, "faults": faults,
-            "retries": dict(sorted(retries.items())), "replan": replan,
-            "python": platform.python_version(), "pybullet": installed("pybullet")}
-
-
-HEADER_KEYS = ("plan", "plan_index", "domain", "problem", "robot", "seed", "faults",
-               "retries", "replan")
-
-
-def read_header(path: str) -> dict:
-    """The header event of a log written by ``htn run --log``."""
-    import json
-    if not os.path.isfile(path):
-        raise HtnError("no such log file", path)
-    try:
-        with open(path, encoding="utf-8") as fh:
-            first = fh.readline()
-        rec = json.loads(first)
-    except (OSError, UnicodeDecodeError, ValueError) as exc:
-        raise HtnError(f"not a log of htn run --log: {exc}", path, 1, 1)
-    if not isinstance(rec, dict) or rec.get("event") != "header":
-        raise HtnError("not a log of htn run --log: its first line is no header event",
-                       path, 1, 1)
-    missing = [k for k in HEADER_KEYS if k not in rec]
-    if missing:
-        raise HtnError(f"the header lacks {', '.join(missing)}", path, 1, 1)
-    return rec
-
-
-def _check_digest(plan_file: str, digest, log_path: str) -> None:
-    import hashlib
-    if not os.path.isfile(plan_file):
-        raise HtnError(f"the plan file of this run is missing: {plan_file}", log_path, 1, 1)
-    with open(plan_file, "rb") as fh:
-        now = hashlib.sha256(fh.read()).hexdigest()
-    if digest and now != digest:
-        raise HtnError(f"the plan file {plan_file} has changed since this run (SHA-256 "
-                       f"{now[:12]}..., the log says {digest[:12]}...)", log_path, 1, 1)
 
 
 def _snapshotter(robot, folder):
@@ -348,6 +267,12 @@ def _snapshotter(robot, folder):
 
 class _PlainView:
     """One line per action outcome, fault and repair (when stdout is not a terminal)."""
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc) -> None:
+        pass
 
     SHOWN = ("verified", "failed", "aborted", "retrying", "replanned", "replan_failed",
              "interrupted", "fault")

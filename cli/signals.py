@@ -1,8 +1,13 @@
-"""How a command ends when it is told to: SIGTERM, a deadline, a closed pipe.
+"""How a command ends when it is told to: Ctrl-C, SIGTERM, a deadline, a closed pipe.
 
 * SIGTERM is raised as :class:`Terminated`, a kind of ``KeyboardInterrupt``, so
   every path that cleans up after Ctrl-C (whole plans kept, temporary files
-  removed, logs closed) does the same for a ``kill``; the exit code is 143.
+  removed, logs closed) does the same for a ``kill``. Its message, "stopped
+  by SIGTERM", is the reason the task dispatcher logs.
+* Every command ends an interrupt through :func:`interrupt_exit`: "interrupted"
+  and exit code 130 for Ctrl-C, "terminated" and 143 for SIGTERM.
+* ``htn run`` takes both with :class:`Signals`: during a tick of the behaviour
+  tree they halt the task dispatcher, between ticks they interrupt at once.
 * ``--timeout`` is a wall-clock :func:`deadline`: SIGALRM raises
   :class:`DeadlineExceeded` wherever the program is, also inside a user
   function or comparator that never returns (the planner's own check between
@@ -10,22 +15,71 @@
   wrappers of :mod:`htn.jshop.functions` let it pass.
 * Output units (a plan, a JSON line) are written with these signals held back
   (:func:`held`), so streams and files only ever contain whole units.
+
+This module is imported by the entry point before anything else of ``htn``
+(:mod:`htn.cli.start`): it imports only the standard library.
 """
 from __future__ import annotations
 
+import os
 import signal
+import sys
 import time
 from contextlib import contextmanager
 
+INTERRUPT_EXIT = 128 + signal.SIGINT
 SIGTERM_EXIT = 128 + signal.SIGTERM
 
 
 class Terminated(KeyboardInterrupt):
     """The process received SIGTERM: stop like Ctrl-C, exit code 143."""
 
+    def __init__(self, reason: str = "stopped by SIGTERM"):
+        super().__init__(reason)
+
 
 class DeadlineExceeded(BaseException):
     """``--timeout`` ran out while the program was busy (e.g. in user code)."""
+
+
+def interrupt(signum: int) -> KeyboardInterrupt:
+    """The interrupt a signal stands for: :class:`Terminated` for SIGTERM,
+    else ``KeyboardInterrupt`` (Ctrl-C)."""
+    return Terminated() if signum == signal.SIGTERM else KeyboardInterrupt()
+
+
+def interrupt_exit(exc: BaseException | None, note: str = "", now: bool = False):
+    """End the process after the interrupt ``exc``: "terminated" (SIGTERM) or
+    "interrupted" (anything else), then ``; note`` if given, on stderr; exit
+    code 143 or 130. ``now``: leave at once (``os._exit``) instead of through
+    the interpreter's shutdown, for a handler that runs while modules are
+    being imported, and after PyBullet, whose shutdown after a Ctrl-C was
+    seen (rarely) to end the process by SIGINT instead of the exit code."""
+    terminated = isinstance(exc, Terminated)
+    try:
+        sys.stdout.flush()
+    except (OSError, ValueError):       # the reader is gone (Ctrl-C on htn ... | less)
+        silence_stdout()
+    try:
+        sys.stderr.write(("terminated" if terminated else "interrupted")
+                         + (f"; {note}" if note else "") + "\n")
+        sys.stderr.flush()
+    except (OSError, ValueError):
+        pass
+    code = SIGTERM_EXIT if terminated else INTERRUPT_EXIT
+    if now:
+        os._exit(code)
+    sys.exit(code)
+
+
+def silence_stdout() -> None:
+    """Point stdout at /dev/null: the reader is gone, and Python's final
+    flush must not fail again."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError):   # no real file descriptor (tests capture stdout)
+        pass
 
 
 def _raise_terminated(signum, frame):
@@ -44,6 +98,50 @@ def sigterm_as_interrupt():
         yield
     finally:
         signal.signal(signal.SIGTERM, old)
+
+
+class Signals:
+    """Ctrl-C and SIGTERM while ``htn run`` runs. During a tick of the
+    behaviour tree they halt the task dispatcher (the tick ends, the robot
+    holds its pose, the log gets its summary); at any other time they raise
+    their :func:`interrupt` at once, without a traceback. The task dispatcher
+    turns one raised between its ticks (repair planning) into the same halt,
+    with the same reason."""
+
+    def __init__(self):
+        self.received: KeyboardInterrupt | None = None   # the last interrupt
+        self.dispatcher = None
+        self.saved = {}
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            try:
+                self.saved[sig] = signal.signal(sig, self._handle)
+            except ValueError:     # not the main thread (a library caller)
+                pass
+
+    def _handle(self, signum, frame):
+        self.received = exc = interrupt(signum)
+        d = self.dispatcher
+        if d is not None and d.in_tick:
+            d.halt(str(exc))
+            return
+        raise exc
+
+    def watch(self, dispatcher) -> None:
+        """From now on a signal halts ``dispatcher`` during its ticks. One
+        that came before interrupts now: Python drops an exception raised
+        where it cannot propagate (in an import lock's callback), and the
+        tree must not start after a swallowed Ctrl-C."""
+        if self.received is not None:
+            raise self.received
+        self.dispatcher = dispatcher
+
+    def ignore(self) -> None:
+        for sig in self.saved:
+            signal.signal(sig, signal.SIG_IGN)
+
+    def restore(self) -> None:
+        for sig, handler in self.saved.items():
+            signal.signal(sig, handler)
 
 
 def _raise_deadline(signum, frame):

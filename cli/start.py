@@ -1,15 +1,14 @@
 """The ``htn`` entry point: Ctrl-C and SIGTERM while the command line is still
 being imported end the process quietly (exit 130, 143), without a traceback;
 once imported, each command handles them (``htn run`` halts its robot)."""
-import os
 import signal
-import sys
+
+from htn.cli.signals import interrupt, interrupt_exit
 
 
 def _before_main(signum, frame):
-    sys.stderr.write("interrupted\n" if signum == signal.SIGINT else "terminated\n")
-    sys.stderr.flush()
-    os._exit(130 if signum == signal.SIGINT else 143)
+    # raising here could be swallowed by an import lock's callback: leave at once
+    interrupt_exit(interrupt(signum), now=True)
 
 
 def main(argv=None):

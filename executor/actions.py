@@ -37,7 +37,7 @@ from __future__ import annotations
 from enum import Enum
 from typing import Callable, Optional
 
-from htn.robot.interface import Check, Robot, SkillResult, complete
+from htn.robot.interface import Check, Robot, SkillResult
 
 
 class Outcome(str, Enum):
@@ -71,25 +71,6 @@ class ActionMachine:
     def holds(self, robot: Robot, *args) -> list[HoldMonitor]:
         """Hold-monitors of this action: what must stay true while it executes."""
         return []
-
-    def run(self, robot: Robot, args: tuple, emit: Callable[[str, str], None]) -> Outcome:
-        """One attempt run to its end without ticking (no hold-monitors): for
-        scripts and tests. Returns verified, failed or aborted."""
-        try:
-            result = complete(self.execute(robot, *args))
-        except TypeError as exc:  # wrong number of parameters in the plan step
-            emit(Outcome.FAILED.value, f"bad parameters: {exc}")
-            return Outcome.FAILED
-        if not result.ok:
-            emit(Outcome.FAILED.value, result.detail)
-            return Outcome.FAILED
-        emit(Outcome.FINISHED.value, result.detail)
-        check = self.monitor(robot, *args)
-        if check.ok:
-            emit(Outcome.VERIFIED.value, check.detail)
-            return Outcome.VERIFIED
-        emit(Outcome.ABORTED.value, check.detail)
-        return Outcome.ABORTED
 
 
 REGISTRY: dict[tuple, type] = {}      # (domain or None, operator) -> machine class

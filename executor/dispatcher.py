@@ -35,6 +35,9 @@ from .repair import find_repair, graft, observed_instance
 from .task_bt import actions, build, flat_tree
 
 
+STOPPED_BY_USER = "stopped by the user"     # why a run halted, unless told otherwise
+
+
 @dataclass
 class RunSummary:
     result: str              # verified | failed | aborted | interrupted
@@ -49,11 +52,6 @@ class RunSummary:
 
     def as_dict(self) -> dict:
         return dict(self.__dict__)
-
-
-def dynamic_predicates(domain: S.Domain) -> set[str]:
-    """Predicates some operator adds or deletes: the ones to observe."""
-    return domain.dynamic_predicates()
 
 
 class TaskDispatcher:
@@ -84,7 +82,7 @@ class TaskDispatcher:
         self._halt: Optional[str] = None
         self.in_tick = False
         self._carrying: tuple = (None, [])        # (action, attempt) -> what it carries
-        self.carry_checks = "still_held" in getattr(robot, "check_names", lambda: [])()
+        self.carry_checks = "still_held" in robot.check_names()
         steps = list(steps)
         self.root = build(tree if tree is not None else flat_tree(steps), steps, self._action)
 
@@ -149,28 +147,24 @@ class TaskDispatcher:
         return all_of(*(self.robot.check("still_held", o) for o in objs))
 
     def _flush_faults(self) -> None:
-        if len(getattr(self.robot, "injected", ())) <= self._faults_seen and \
-                hasattr(self.robot, "injected"):
-            return           # nothing new (the common case, on every event)
-        faults = self.robot.injected_faults()
-        while self._faults_seen < len(faults):
-            f = faults[self._faults_seen]
+        """A ``fault`` event for each fault the robot injected since the last call."""
+        for f in self.robot.injected_faults()[self._faults_seen:]:
             self._faults_seen += 1
             ctx = self.running
             self.log.emit(self.number(ctx) if ctx else None, ctx.text if ctx else None, "fault",
-                          None, f.get("detail", ""), kind=f.get("kind", f.get("fault")),
-                          sim_t=f.get("sim_t", f.get("t")))
+                          None, f["detail"], kind=f["kind"], sim_t=f["sim_t"])
 
     # ------------------------------------------------------------ the tick loop
-    def halt(self, why: str = "stopped by the user") -> None:
-        """Stop the tree before its next tick (safe from a signal handler)."""
-        self._halt = why
+    def halt(self, why: str = "") -> None:
+        """Stop the tree before its next tick (safe from a signal handler);
+        ``why`` is logged with the ``interrupted`` event."""
+        self._halt = why or STOPPED_BY_USER
 
     def run(self) -> RunSummary:
         try:
             while True:
                 if self._halt:
-                    return self._interrupted()
+                    return self.interrupted()
                 # the root alone: py_trees' BehaviourTree.tick would also visit
                 # every node of the whole tree on each tick
                 self.in_tick = True
@@ -188,16 +182,27 @@ class TaskDispatcher:
                         continue
                     self.robot.hold()
                     return self._summary(ctx.outcome.value, ctx)
-        except KeyboardInterrupt:
-            return self._interrupted()
+        except KeyboardInterrupt as exc:
+            # an interrupt between two ticks (e.g. while repair plans) halts
+            # the same way; its message, if any, says why (SIGTERM's does:
+            # htn.cli.signals.Terminated)
+            return self.interrupted(str(exc))
 
-    def _interrupted(self) -> RunSummary:
-        self.root.stop(Status.INVALID)   # running behaviours terminate: the skill is preempted
+    def interrupted(self, why: str = "") -> RunSummary:
+        """End the run as interrupted, now (the tree halted, or an interrupt
+        came between ticks or before the first one): running behaviours
+        terminate, so the skill is preempted; the robot holds its pose; the
+        log gets the ``interrupted`` event (``why``, or the halt's reason)
+        and the summary."""
+        if why:
+            self.halt(why)
+        self.root.stop(Status.INVALID)
         self.robot.hold()
         ctx = self.running if self.running is not None and not self.running.done else None
         self.failed = ctx              # the action the run ended in
-        self.emit(ctx, "interrupted", f"{self._halt or 'stopped by the user'}; the robot holds "
-                                      "its pose")
+        why = self._halt or STOPPED_BY_USER
+        self.emit(ctx, "interrupted", f"{why}; the robot holds its pose" if self.started
+                  else f"{why} before the first step")
         return self._summary("interrupted", ctx)
 
     def plan_lines(self) -> list[str]:

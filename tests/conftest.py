@@ -1,9 +1,11 @@
 """Shared fixtures: where the JSHOP2 corpus is, and how to run ``htn``."""
 from __future__ import annotations
 
+import json
 import os
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -23,11 +25,55 @@ needs_corpus = pytest.mark.skipif(
     reason=f"JSHOP2 corpus not found at {CORPUS} (set HTN_SHARED to the shared/ folder)")
 
 
-def run_htn(*args, timeout=600, input=None):
-    """Run the real command line in a subprocess; returns CompletedProcess."""
-    return subprocess.run([sys.executable, "-m", "htn", *map(str, args)],
-                          cwd=ROOT, capture_output=True, text=True, timeout=timeout,
-                          input=input)
+def htn_command(*args) -> list[str]:
+    return [sys.executable, "-m", "htn", *map(str, args)]
+
+
+def run_htn(*args, timeout=600, input=None, env=None):
+    """Run the real command line in a subprocess; returns CompletedProcess.
+    ``env``: the environment (default: this process's)."""
+    return subprocess.run(htn_command(*args), cwd=ROOT, capture_output=True, text=True,
+                          timeout=timeout, input=input, env=env)
+
+
+def start_htn(*args, **popen):
+    """Start the real command line in a subprocess, stdout and stderr piped
+    (text), without waiting for it; returns the Popen (to signal, read, kill)."""
+    return subprocess.Popen(htn_command(*args), cwd=ROOT, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, **popen)
+
+
+def wait_until(condition, what: str, proc=None, timeout: float = 60.0, every: float = 0.01):
+    """Poll ``condition()`` until it is true. The test fails, naming ``what``,
+    after ``timeout`` seconds or as soon as ``proc`` (if given) has ended;
+    ``proc`` is killed then."""
+    deadline = time.monotonic() + timeout
+    while not condition():
+        ended = proc is not None and proc.poll() is not None
+        if ended or time.monotonic() > deadline:
+            message = f"{what}: " + ("the process ended first" if ended
+                                     else f"not within {timeout:g} s")
+            if proc is not None:
+                proc.kill()
+                _, err = proc.communicate()
+                message += f" (exit code {proc.returncode}) {err or ''}"
+            pytest.fail(message)
+        time.sleep(every)
+
+
+def interrupt_run(proc, sig: int, log: Path):
+    """Send ``sig`` (SIGINT, SIGTERM) to a running ``htn run --log LOG``; it
+    must end with exit code 128 + sig, without a traceback, and its log with
+    the ``interrupted`` event and the summary. Returns stdout, stderr and the
+    log's events."""
+    proc.send_signal(sig)
+    out, err = proc.communicate(timeout=60)
+    assert proc.returncode == 128 + sig, out + err
+    assert "Traceback" not in err
+    events = [json.loads(line) for line in log.read_text().splitlines()]   # all lines parse
+    assert events[-2]["event"] == "interrupted"
+    assert events[-1]["event"] == "summary" and events[-1]["result"] == "interrupted"
+    return out, err, events
 
 GOLDEN = Path(__file__).resolve().parent / "golden"
 

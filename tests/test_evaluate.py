@@ -8,14 +8,13 @@ import json
 import os
 import subprocess
 import sys
-import time
 import warnings
 from contextlib import contextmanager
 from pathlib import Path
 
 import pytest
 
-from conftest import ROOT, run_htn
+from conftest import run_htn, start_htn, wait_until
 
 PROBLEM = "problems/transport_four.jshop"
 RUNS, SEED = "600", "5"          # about a second of projected runs on two workers
@@ -48,9 +47,7 @@ def dask_cluster(folder: Path, workers: int = 2):
     try:
         start("scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
               "--scheduler-file", info, log="scheduler.log")
-        deadline = time.monotonic() + 60
-        while not info.is_file() and time.monotonic() < deadline:
-            time.sleep(0.05)
+        wait_until(info.is_file, "the scheduler's address file", procs[0])
         address = json.loads(info.read_text())["address"]
         nodes = [start("worker", address, "--host", "127.0.0.1", "--nthreads", "1",
                        "--no-nanny", "--no-dashboard", "--name", f"w{i}", log=f"w{i}.log")
@@ -89,17 +86,11 @@ def test_a_dask_scheduler_gives_the_numbers_of_one_process(reference, tmp_path):
 def test_a_worker_killed_mid_evaluation_is_survived(reference, tmp_path):
     records = tmp_path / "runs.jsonl"
     with dask_cluster(tmp_path) as (address, workers):
-        proc = subprocess.Popen(
-            [sys.executable, "-m", "htn", "evaluate", PROBLEM, "--runs", RUNS, "--seed", SEED,
-             "--json", "--records", str(records), "--scheduler", address],
-            cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        proc = start_htn("evaluate", PROBLEM, "--runs", RUNS, "--seed", SEED, "--json",
+                         "--records", records, "--scheduler", address)
         # records stream in as batches finish: kill a worker once the first are in
-        deadline = time.monotonic() + 120
-        while not (records.is_file() and records.read_text().count("\n")):
-            if proc.poll() is not None or time.monotonic() > deadline:
-                proc.kill()
-                pytest.fail(f"no records streamed before the end: {proc.communicate()[1]}")
-            time.sleep(0.005)
+        wait_until(lambda: records.is_file() and records.read_text().count("\n"),
+                   "records streamed before the end", proc, timeout=120, every=0.005)
         workers[1].kill()
         done_when_killed = records.read_text().count("\n")
         still_running = proc.poll() is None
@@ -164,13 +155,11 @@ def test_physics_backed_evaluation(tmp_path):
 
 
 def test_few_runs_print_na_and_leak_no_warning():
-    r = subprocess.run([sys.executable, "-W", "always", "-m", "htn", "evaluate", PROBLEM,
-                        "--runs", "1"], cwd=ROOT, capture_output=True, text=True, timeout=120)
+    warn_all = {**os.environ, "PYTHONWARNINGS": "always"}
+    r = run_htn("evaluate", PROBLEM, "--runs", "1", env=warn_all, timeout=120)
     assert r.returncode == 0 and r.stderr == "", r.stderr
     assert "n/a" in r.stdout and "nan" not in r.stdout
-    r = subprocess.run([sys.executable, "-W", "always", "-m", "htn", "evaluate", PROBLEM,
-                        "--runs", "3", "--json"], cwd=ROOT, capture_output=True, text=True,
-                       timeout=120)
+    r = run_htn("evaluate", PROBLEM, "--runs", "3", "--json", env=warn_all, timeout=120)
     assert r.returncode == 0 and r.stderr == "", r.stderr
     assert "NaN" not in r.stdout and json.loads(r.stdout)["runs"] == 3
 
@@ -214,18 +203,17 @@ def test_figures_of_runs_that_differ_by_rounding_only(tmp_path):
 def test_output_options_are_checked_before_any_work(tmp_path):
     blocker = tmp_path / "a-file"
     blocker.write_text("not a folder\n")
-    records = tmp_path / "runs.jsonl"
+    records, plots = tmp_path / "runs.jsonl", tmp_path / "plots"
 
     def evaluate(*args, env=None):
-        return subprocess.run([sys.executable, "-m", "htn", "evaluate", PROBLEM, *map(str, args)],
-                              cwd=ROOT, capture_output=True, text=True, timeout=120,
-                              env={**os.environ, **(env or {})})
+        return run_htn("evaluate", PROBLEM, *args, env={**os.environ, **(env or {})},
+                       timeout=120)
 
     cases = [
         (("--plot", blocker / "plots", "--records", records), f"{blocker}/plots: --plot"),
-        (("--records", tmp_path / "missing" / "runs.jsonl"), "--records: cannot write"),
-        (("--records", tmp_path), "--records: this is a folder"),
-        (("--scheduler", "127.0.0.1:8786"), "not a Dask scheduler address"),
+        (("--records", tmp_path / "missing" / "runs.jsonl"), "--records: no such folder"),
+        (("--plot", plots, "--records", tmp_path), f"{tmp_path}: --records: is a folder, not a file"),
+        (("--plot", plots, "--scheduler", "127.0.0.1:8786"), "not a Dask scheduler address"),
         (("--scheduler", "tcp://127.0.0.1:99999"), "not a Dask scheduler address"),
         (("--workers", "2", "--scheduler", "tcp://127.0.0.1:8786"), "give one of them"),
         (("--robot", "symbolic"), "cannot be evaluated"),
@@ -237,8 +225,10 @@ def test_output_options_are_checked_before_any_work(tmp_path):
         assert message in r.stderr and "Traceback" not in r.stderr, (args, r.stderr)
         assert len(r.stderr.strip().splitlines()) == 1, r.stderr
     assert not records.exists()
+    assert not plots.exists()          # --plot is made only once every option is checked
     # a scheduler nobody listens on is found before planning, within the connect timeout
-    r = evaluate("--scheduler", "tcp://127.0.0.1:9", "--records", records,
+    r = evaluate("--scheduler", "tcp://127.0.0.1:9", "--records", records, "--plot", plots,
                  env={"DASK_DISTRIBUTED__COMM__TIMEOUTS__CONNECT": "1s"})
     assert r.returncode == 2 and "cannot reach the Dask scheduler" in r.stderr, r.stderr
-    assert len(r.stderr.strip().splitlines()) == 1 and not records.exists()
+    assert len(r.stderr.strip().splitlines()) == 1
+    assert sorted(os.listdir(tmp_path)) == ["a-file"]      # nothing written

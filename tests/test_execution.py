@@ -4,13 +4,10 @@ from __future__ import annotations
 import json
 import os
 import signal
-import subprocess
-import sys
-import time
 
 import pytest
 
-from conftest import ROOT, run_htn
+from conftest import ROOT, interrupt_run, run_htn, start_htn, wait_until
 from htn.executor.config import load_retries
 from htn.executor.dispatcher import TaskDispatcher
 from htn.executor.log import EventLog
@@ -141,21 +138,10 @@ def test_replan_recovers_a_moved_object():
 def test_interrupted_run_leaves_a_complete_log(tmp_path):
     plan, log = tmp_path / "plan.txt", tmp_path / "run.jsonl"
     assert run_htn("plan", DOMAIN, ROOT / "problems" / "bring_two.jshop", "-o", plan).returncode == 0
-    proc = subprocess.Popen([sys.executable, "-m", "htn", "run", str(plan), "--sim",
-                             "--log", str(log), "-q"], cwd=ROOT, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
-    deadline = time.time() + 60
-    while time.time() < deadline:
-        if log.exists() and len(log.read_text().splitlines()) >= 6:
-            break
-        time.sleep(0.01)
-    proc.send_signal(signal.SIGINT)
-    out, err = proc.communicate(timeout=60)
-    assert proc.returncode == 130, out + err
-    assert "Traceback" not in err
-    events = [json.loads(line) for line in log.read_text().splitlines()]   # all lines parse
-    assert events[-2]["event"] == "interrupted"
-    assert events[-1]["event"] == "summary" and events[-1]["result"] == "interrupted"
+    proc = start_htn("run", plan, "--sim", "--log", log, "-q")
+    wait_until(lambda: log.exists() and len(log.read_text().splitlines()) >= 6,
+               "six events in the log", proc)
+    interrupt_run(proc, signal.SIGINT, log)
 
 
 def test_snapshots_and_quiet_stdout(tmp_path):

@@ -13,15 +13,16 @@ import math
 import pytest
 
 from conftest import ROOT, run_htn
-from htn.executor.actions import Outcome, machine_for
+from htn.executor.actions import Outcome
 from htn.executor.config import load_retries
-from htn.executor.dispatcher import TaskDispatcher, dynamic_predicates
+from htn.executor.dispatcher import TaskDispatcher
 from htn.executor.repair import observed_instance
 from htn.executor.log import EventLog
 from htn.jshop import Planner, load_domain, load_problem
 from htn.jshop import syntax as S
 from htn.jshop.errors import HtnError
-from htn.jshop.parser import parse_text
+from htn.jshop.parser import parse_step, parse_text
+from htn.jshop.plan import Step
 from htn.robot.kitchen_sim import KitchenRobot
 from htn.robot.pybullet_sim import Faults
 from htn.robot.world import (ROBOT_HALF_WIDTH, _rect_seg_dist, _table_rect,
@@ -59,7 +60,7 @@ def predicted_facts(problem: str, steps) -> set:
     checker = Planner(dom, S.ProblemInstance(instance(problem).state, S.TaskList([])))
     for s in steps:
         assert checker.apply_step(s.name, s.args), s
-    dynamic = dynamic_predicates(dom) - {"found"}   # what was seen is not observable later
+    dynamic = dom.dynamic_predicates() - {"found"}   # what was seen is not observable later
     return {(p, tuple(a)) for p, a in checker.state.facts() if p in dynamic}
 
 
@@ -115,26 +116,31 @@ def test_other_kitchen_problems_run_verified_with_and_without_transformation(pro
             robot.close()
 
 
-def run_steps(robot, lines):
-    """Execute plan steps one attempt each; return their outcomes."""
-    out = []
-    for line in lines:
-        name, *args = line.strip("()").split()
-        out.append(machine_for(name, "kitchen").run(robot, tuple(args), lambda *_: None))
-    return out
+def run_steps(robot, problem, lines):
+    """Execute plan steps with the task dispatcher, one attempt each, from the
+    world as ``robot`` observes it now; their outcomes (up to the first one
+    not verified, where the dispatcher stops)."""
+    dom = load_domain(DOMAIN)
+    steps = [Step(a.name, a.args) for a in (parse_step(line, "<test>", 1) for line in lines)]
+    log = EventLog(None, clock=lambda: robot.sim_time)
+    TaskDispatcher(robot, dom, observed_instance(dom, instance(problem), robot), steps, {},
+                   log).run()
+    return [Outcome(e["event"]) for e in log.events
+            if e["event"] in ("verified", "failed", "aborted")]
 
 
 def test_a_closed_drawer_hides_its_spoons_and_the_grasp_is_aborted():
     inst = instance("set_table_and_clean_up")
     robot = KitchenRobot(kitchen_world_from_state(inst.state))
     try:
-        got = run_steps(robot, ["(!navigate start sink_area)", "(!look-for spoon1 sink_area)",
-                                "(!grasp-from spoon1 drawer left)"])
+        got = run_steps(robot, "set_table_and_clean_up",
+                        ["(!navigate start sink_area)", "(!look-for spoon1 sink_area)",
+                         "(!grasp-from spoon1 drawer left)"])
         # seen to be in the drawer, but not graspable through its housing
         assert got == [Outcome.VERIFIED, Outcome.VERIFIED, Outcome.ABORTED]
         assert robot.check_opened("drawer", False).ok
-        got = run_steps(robot, ["(!open drawer)", "(!grasp-from spoon1 drawer left)",
-                                "(!close drawer)"])
+        got = run_steps(robot, "set_table_and_clean_up",
+                        ["(!open drawer)", "(!grasp-from spoon1 drawer left)", "(!close drawer)"])
         assert got == [Outcome.VERIFIED] * 3
         assert robot.arm_held == {"left": "spoon1", "right": None}
         # the other spoon moved with the drawer and back
@@ -147,15 +153,16 @@ def test_tray_needs_both_hands_and_carries_what_stands_on_it():
     inst = instance("tray_three")
     robot = KitchenRobot(kitchen_world_from_state(inst.state))
     try:
-        got = run_steps(robot, ["(!navigate start kitchen_island)",
-                                "(!look-for cup kitchen_island)",
-                                "(!grasp cup kitchen_island left)"])
+        got = run_steps(robot, "tray_three", ["(!navigate start kitchen_island)",
+                                              "(!look-for cup kitchen_island)",
+                                              "(!grasp cup kitchen_island left)"])
         assert got == [Outcome.VERIFIED] * 3
         # one hand holds the cup: lifting the tray fails, nothing moves
-        assert run_steps(robot, ["(!lift-tray tray1)"]) == [Outcome.FAILED]
-        got = run_steps(robot, ["(!put-on-tray cup tray1 left)", "(!lift-tray tray1)",
-                                "(!navigate kitchen_island sink_area)",
-                                "(!lower-tray tray1 sink_area)"])
+        assert run_steps(robot, "tray_three", ["(!lift-tray tray1)"]) == [Outcome.FAILED]
+        got = run_steps(robot, "tray_three", ["(!put-on-tray cup tray1 left)",
+                                              "(!lift-tray tray1)",
+                                              "(!navigate kitchen_island sink_area)",
+                                              "(!lower-tray tray1 sink_area)"])
         assert got == [Outcome.VERIFIED] * 4
         assert robot.check_on_tray("cup", "tray1").ok
         assert robot.check_tray_carried("tray1", False, "sink_area").ok
@@ -181,7 +188,8 @@ def test_replanning_from_where_a_navigation_stopped():
     inst = instance("transport_four")
     robot = KitchenRobot(kitchen_world_from_state(inst.state), faults=Faults.parse("nav=1"))
     try:
-        assert run_steps(robot, ["(!navigate start kitchen_island)"]) == [Outcome.ABORTED]
+        assert run_steps(robot, "transport_four",
+                         ["(!navigate start kitchen_island)"]) == [Outcome.ABORTED]
         observed = observed_instance(dom, inst, robot)
         here = [a for a in observed.state if a.pred == "area" and a.args[0] == "here"]
         assert len(here) == 1 and ("robot-at", ("here",)) in robot.observe()

@@ -4,13 +4,11 @@ from __future__ import annotations
 
 import json
 import signal
-import subprocess
-import sys
 import time
 
 import pytest
 
-from conftest import ROOT, run_htn
+from conftest import ROOT, run_htn, start_htn, wait_until
 
 # (m) has one plan per length: an endless stream of plans
 ENDLESS = """(defdomain d ((:operator (!a) () () ())
@@ -19,7 +17,9 @@ ENDLESS = """(defdomain d ((:operator (!a) () () ())
 COUNT = """(defdomain d ((:operator (!tick ?n) () () ())
   (:method (count ?n) ((call > ?n 0) (assign ?m (call - ?n 1))) ((!tick ?n) (count ?m))
                       () ())))"""
-SLOW = "import time\ndef slow(x):\n    time.sleep(30)\n    return 1\n"
+# a user function that never returns in time; it leaves slow.py.called when it starts
+SLOW = ("import time\ndef slow(x):\n    open(__file__ + '.called', 'w').close()\n"
+        "    time.sleep(30)\n    return 1\n")
 
 
 def files(tmp_path, domain=ENDLESS, problem="(defproblem p d () ((m)))"):
@@ -31,11 +31,6 @@ def files(tmp_path, domain=ENDLESS, problem="(defproblem p d () ((m)))"):
 
 def temporaries(folder) -> list:
     return [f.name for f in folder.iterdir() if f.name.startswith(".htn-")]
-
-
-def start(*args):
-    return subprocess.Popen([sys.executable, "-m", "htn", *map(str, args)], cwd=ROOT,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
 
 
 # ------------------------------------------------------------------ JSON Lines
@@ -74,7 +69,7 @@ def test_a_deep_task_tree_is_flat_json(tmp_path):
 def test_all_json_streams_and_keeps_to_the_timeout(tmp_path):
     d, p = files(tmp_path)
     t0 = time.monotonic()
-    proc = start("plan", d, p, "--all", "-f", "json", "--timeout", "3")
+    proc = start_htn("plan", d, p, "--all", "-f", "json", "--timeout", "3")
     first = json.loads(proc.stdout.readline())
     assert first["type"] == "plan" and proc.poll() is None     # printed while still searching
     rest, err = proc.stdout.read(), proc.stderr.read()   # not communicate(): it skips the
@@ -119,11 +114,9 @@ def test_ctrl_c_before_the_first_plan_keeps_the_earlier_file(tmp_path):
     (tmp_path / "slow.py").write_text(SLOW)
     out = tmp_path / "plan.txt"
     out.write_text("previous plan\n")
-    proc = start("plan", d, p, "--functions", tmp_path / "slow.py", "-o", out)
-    deadline = time.monotonic() + 30
-    while not temporaries(tmp_path) and time.monotonic() < deadline:   # -o is open: planning
-        time.sleep(0.05)
-    time.sleep(0.3)
+    proc = start_htn("plan", d, p, "--functions", tmp_path / "slow.py", "-o", out)
+    wait_until((tmp_path / "slow.py.called").exists, "the search in the user function", proc)
+    assert len(temporaries(tmp_path)) == 1          # -o is open, no plan yet
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 130 and "Traceback" not in err, err
@@ -134,7 +127,7 @@ def test_ctrl_c_before_the_first_plan_keeps_the_earlier_file(tmp_path):
 def test_sigterm_is_handled_like_ctrl_c(tmp_path):
     d, p = files(tmp_path)
     out = tmp_path / "plans.txt"
-    proc = start("plan", d, p, "--all", "-f", "jshop", "-o", out)
+    proc = start_htn("plan", d, p, "--all", "-f", "jshop", "-o", out)
     proc.stdout.readline()
     time.sleep(0.5)
     proc.send_signal(signal.SIGTERM)
@@ -149,7 +142,7 @@ def test_sigterm_is_handled_like_ctrl_c(tmp_path):
 
 def test_the_temporary_file_of_a_killed_run_is_removed_by_the_next(tmp_path):
     d, p = files(tmp_path)
-    proc = start("plan", d, p, "--all", "-f", "jshop", "-o", tmp_path / "plans.txt")
+    proc = start_htn("plan", d, p, "--all", "-f", "jshop", "-o", tmp_path / "plans.txt")
     proc.stdout.readline()
     proc.send_signal(signal.SIGKILL)
     proc.communicate(timeout=60)
@@ -163,7 +156,7 @@ def test_the_temporary_file_of_a_killed_run_is_removed_by_the_next(tmp_path):
 
 def first_line_then_close(*args):
     """Run htn, read one line of its output and close the pipe, as ``| head -1``."""
-    proc = start(*args)
+    proc = start_htn(*args)
     line = proc.stdout.readline()
     proc.stdout.close()
     err = proc.stderr.read()

@@ -5,13 +5,11 @@ from __future__ import annotations
 import json
 import os
 import signal
-import subprocess
-import sys
 import time
 
 import pytest
 
-from conftest import ROOT, run_htn
+from conftest import ROOT, interrupt_run, run_htn, start_htn, wait_until
 
 DOMAIN = ROOT / "domains" / "domestic.jshop"
 BRING = ROOT / "problems" / "bring_object.jshop"
@@ -77,9 +75,10 @@ def test_output_folders_are_checked_before_work_starts(plan, tmp_path):
     blocker = tmp_path / "a-file"
     blocker.write_text("")
     r = run_htn("run", plan, "--sim", "--snapshots", blocker / "shots")
-    assert one_error_line(r) == f"--snapshots: cannot make a folder under {blocker}, which is a file"
+    assert one_error_line(r) == (f"{blocker / 'shots'}: --snapshots: cannot make a folder "
+                                 f"under {blocker}, which is a file")
     r = run_htn("run", plan, "--sim", "--snapshots", "/proc/htn-shots")   # read-only, even for root
-    assert one_error_line(r).startswith("--snapshots: cannot write in /proc")
+    assert one_error_line(r).startswith("/proc/htn-shots: --snapshots: cannot write in /proc: ")
     r = run_htn("run", plan, "--sim", "--bt-dot", tmp_path / "missing" / "bt.dot")
     assert "--bt-dot: no such folder" in one_error_line(r)
     assert sorted(os.listdir(tmp_path)) == ["a-file", "plan.txt"]     # nothing written
@@ -90,8 +89,7 @@ def test_gui_without_a_display_says_so(plan):
     for env, message in ((env_none, "--gui needs a display (DISPLAY is not set)"),
                          ({**env_none, "DISPLAY": ":93"},
                           "--gui: no X server answers on DISPLAY=:93")):
-        r = subprocess.run([sys.executable, "-m", "htn", "run", str(plan), "--sim", "--gui"],
-                           cwd=ROOT, capture_output=True, text=True, env=env, timeout=120)
+        r = run_htn("run", plan, "--sim", "--gui", env=env, timeout=120)
         assert r.returncode == 2 and message in r.stderr and "Traceback" not in r.stderr
 
 
@@ -99,35 +97,64 @@ def events(path):
     return [json.loads(line) for line in path.read_text().splitlines()]
 
 
-def start(args):
-    return subprocess.Popen([sys.executable, "-m", "htn", *map(str, args)], cwd=ROOT,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+def catches(pid: int, sig: int) -> bool:
+    """Has process ``pid`` a handler of its own for ``sig`` (Linux: SigCgt)?"""
+    with open(f"/proc/{pid}/status") as fh:
+        mask = next(line.split()[1] for line in fh if line.startswith("SigCgt:"))
+    return bool(int(mask, 16) >> (sig - 1) & 1)
 
 
 def test_sigterm_halts_the_tree_like_ctrl_c(plan, tmp_path):
     log = tmp_path / "run.jsonl"
-    proc = start(["run", plan, "--sim", "--log", log, "-q"])
-    deadline = time.time() + 60
-    while time.time() < deadline:
-        if log.exists() and any('"event": "verified"' in line
-                                for line in log.read_text().splitlines()[1:]):
-            break
-        time.sleep(0.01)
-    proc.send_signal(signal.SIGTERM)
-    out, err = proc.communicate(timeout=60)
-    assert proc.returncode == 143, out + err
-    assert "Traceback" not in err
-    evs = events(log)
-    assert evs[-2]["event"] == "interrupted" and "SIGTERM" in evs[-2]["detail"]
-    assert evs[-1]["event"] == "summary" and evs[-1]["result"] == "interrupted"
+    proc = start_htn("run", plan, "--sim", "--log", log, "-q")
+    wait_until(lambda: log.exists() and '"event": "verified"' in log.read_text(),
+               "a verified action in the log", proc)
+    out, _, evs = interrupt_run(proc, signal.SIGTERM, log)
+    assert "SIGTERM" in evs[-2]["detail"]
     assert out.startswith("interrupted: ")
 
 
-# from 0.1 s on our code runs (before, the interpreter itself is starting up)
-@pytest.mark.parametrize("delay", [0.1, 0.2, 0.4, 0.8])
+# (push-it ?x) calls a user function. In one process its first call is quick
+# (planning, or recovering the task tree before the run); the second one is
+# repair planning, between two ticks: it leaves a marker and takes long.
+PUSHING = """(defdomain pushing ((:operator (!push ?x) () () ((pushed ?x)))
+  (:method (push-it ?x) ((call slow ?x)) ((!push ?x)))))"""
+SLOW_SECOND = """import time
+calls = 0
+def slow(x):
+    global calls
+    calls += 1
+    if calls > 1:
+        open(__file__ + ".repairing", "w").close()
+        time.sleep(30)
+    return 1
+"""
+
+
+def test_sigterm_while_repair_plans_between_ticks_is_logged_as_sigterm(tmp_path):
+    domain, problem, fns = tmp_path / "d.jshop", tmp_path / "p.jshop", tmp_path / "slow.py"
+    domain.write_text(PUSHING)
+    problem.write_text("(defproblem one pushing () ((push-it box)))")
+    fns.write_text(SLOW_SECOND)
+    plan, log = tmp_path / "plan.txt", tmp_path / "run.jsonl"
+    assert run_htn("plan", domain, problem, "--functions", fns, "-o", plan).returncode == 0
+    # the push never has its effect: aborted, and repair re-plans (push-it box)
+    proc = start_htn("run", plan, "--robot", "symbolic", "--faults", "effect=1", "--replan",
+                     "--log", log, "-q")
+    wait_until((tmp_path / "slow.py.repairing").exists, "repair planning", proc)
+    out, err, evs = interrupt_run(proc, signal.SIGTERM, log)
+    assert [e["event"] for e in evs if e["event"] in ("aborted", "replanned")] == ["aborted"]
+    assert evs[-2]["detail"] == "stopped by SIGTERM; the robot holds its pose"
+    assert out.startswith("interrupted: 0 of 1 steps verified") and err == "terminated\n"
+
+
+# counted from the moment htn's entry point has its handlers (before that,
+# the interpreter itself is starting up and a Ctrl-C is Python's to report)
+@pytest.mark.parametrize("delay", [0.0, 0.1, 0.3, 0.7])
 def test_ctrl_c_during_start_up_exits_130_without_a_traceback(plan, tmp_path, delay):
     log = tmp_path / "run.jsonl"
-    proc = start(["run", plan, "--sim", "--log", log, "-q"])
+    proc = start_htn("run", plan, "--sim", "--log", log, "-q")
+    wait_until(lambda: catches(proc.pid, signal.SIGTERM), "htn's signal handlers", proc)
     time.sleep(delay)
     proc.send_signal(signal.SIGINT)
     out, err = proc.communicate(timeout=60)
