@@ -163,7 +163,7 @@ def _depth(args: tuple) -> int:
 
 def _fast_path(args: tuple, ns: dict) -> list:
     """Source lines returning at once when every variable of ``args`` (call
-    arguments and nested lists included) is bound to a symbol or a number:
+    arguments and nested lists included) is bound to a symbol, a number or nil:
     then every call can be evaluated inline and the result is ground.
 
     If a call fails, the generated code falls through to the general code,
@@ -199,7 +199,8 @@ def _fast_path(args: tuple, ns: dict) -> list:
     except _NoFastPath:
         return []
     lines = [f"    f{i} = env[{i}]" for i in seen]
-    test = " and ".join(f"(type(f{i}) is str or type(f{i}) is float)" for i in seen) or "True"
+    test = " and ".join(f"(type(f{i}) is str or type(f{i}) is float or f{i} == ())"
+                        for i in seen) or "True"
     ns["HtnError"] = HtnError
     return lines + [f"    if {test}:",
                     "        try:",

@@ -19,7 +19,8 @@ from typing import Callable, Iterator
 
 from . import syntax as S
 from .errors import HtnError, PlanningError
-from .compile import GENERIC, binder, conjunction, head_unifier, scanner, term_binder
+from .compile import GENERIC, binder, head_unifier, scanner, term_binder
+from .modes import compile_conjunction
 from .terms import Var, is_ground, subst, term_str, unify
 
 Sat = Callable[[list], Iterator[list]]
@@ -65,13 +66,14 @@ class Logic:
         for ax in axs:
             if is_ground(ax.head.args) and _always(ax.branches[0].pre):
                 if not segments or segments[-1][0] is not _FACTS:
-                    segments.append((_FACTS, [], {}, None))
-                _, heads, counts, _ = segments[-1]
+                    segments.append((_FACTS, [], {}, None, None))
+                _, heads, counts, _, _ = segments[-1]
                 heads.append(ax.head.args)
                 counts[ax.head.args] = counts.get(ax.head.args, 0) + 1
             else:
+                flat = all(type(a) in (str, float, Var) for a in ax.head.args)
                 segments.append((ax, head_unifier(ax.head.args), binder(ax.head.args),
-                                 [self.precondition(b.pre) for b in ax.branches]))
+                                 [self.precondition(b.pre) for b in ax.branches], flat))
         return segments
 
     # ------------------------------------------------------------ preconditions
@@ -121,12 +123,9 @@ class Logic:
         return method(e)
 
     def _and(self, e: S.And) -> Sat:
-        sats = [self.expr(x) for x in e.items]
-        if not sats:
+        if not e.items:
             return _true
-        if len(sats) == 1:
-            return sats[0]
-        return conjunction(sats)
+        return compile_conjunction(self, e)
 
     def _or(self, e: S.Or) -> Sat:
         sats = [self.expr(x) for x in e.items]
@@ -237,7 +236,7 @@ class Logic:
                     scan = scanners[key] = scanner(args, key)
                 yield from scan(lst, bound, env)
             if axioms:
-                yield from prove(axioms, bound, env)
+                yield from prove(axioms, bound, env, key is None)
         return atom
 
     def _not_atom(self, e: S.Atom) -> Sat:
@@ -266,7 +265,7 @@ class Logic:
                     scan = scanners[key] = scanner(args, key)
                 if next(scan(lst, bound, env), None) is not None:
                     return
-            if axioms and next(prove(axioms, bound, env), None) is not None:
+            if axioms and next(prove(axioms, bound, env, key is None), None) is not None:
                 return
             yield env
         return neg
@@ -284,10 +283,17 @@ class Logic:
         if axioms:
             yield from self._prove(axioms, bound, env)
 
-    def _prove(self, axioms, bound: tuple, env: list) -> Iterator[list]:
-        for ax, unify_head, bind_head, branches in axioms:
+    def _prove(self, axioms, bound: tuple, env: list, ground=None) -> Iterator[list]:
+        """Satisfiers of ``(pred . bound)`` by the predicate's axioms (3.6).
+
+        When ``bound`` is ground and an axiom's head is flat, the head under
+        any satisfier of a branch is ``bound`` itself (every head variable
+        was bound by unifying the head), so ``env`` is yielded unchanged."""
+        if ground is None:
+            ground = is_ground(bound)
+        for ax, unify_head, bind_head, branches, flat in axioms:
             if ax is _FACTS:     # (unify_head, bind_head) are (heads, counts) here
-                if is_ground(bound):
+                if ground:
                     for _ in range(bind_head.get(bound, 0)):
                         yield env
                 else:
@@ -299,6 +305,13 @@ class Logic:
             for sat in branches:
                 found = False
                 try:
+                    if ground and flat:
+                        for _ in sat(aenv):
+                            found = True
+                            yield env
+                        if found:
+                            break
+                        continue
                     for nb in sat(aenv):
                         head = bind_head(nb)[1]
                         new = env[:]

@@ -88,6 +88,7 @@ class Operators:
         additions = self.atoms(prog[3], env, op)
         if op.effects_in_prestate:
             deletions, additions = list(deletions), list(additions)
+        protections, deleted = state.protections, change.deleted
         for pred, args in deletions:
             if pred is None:  # a protection condition to cancel
                 p, a = args
@@ -96,11 +97,11 @@ class Operators:
                         change.unprotected = []
                     change.unprotected.append((p, a))
                 continue
-            if state.is_protected(pred, args):
+            if protections and (pred, args) in protections:
                 return change, False
             i = state.delete(pred, args)
             if i != -1:
-                change.deleted.append((pred, args, i))
+                deleted.append((pred, args, i))
         for pred, args in additions:
             if pred is None:
                 p, a = args
