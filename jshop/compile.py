@@ -339,7 +339,7 @@ def make_head_unifier(head: tuple) -> Callable[[tuple, list], bool]:
     src = ["def unify_head(args, env):", f"    if len(args) != {n}:", "        return False"]
     seen = set()
     # a task argument binds a head variable only if it is ground (see terms.unify)
-    known = "(type(t) is str or type(t) is float or is_ground(t))"
+    known = "(type(t) is str or type(t) is float or t == () or is_ground(t))"
     for i, a in enumerate(head):
         src.append(f"    t = args[{i}]")
         if type(a) is Var:

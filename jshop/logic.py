@@ -15,7 +15,7 @@ with Java's sort algorithm (see :func:`java_sort`).
 from __future__ import annotations
 
 from functools import cmp_to_key
-from typing import Callable, Iterator
+from typing import Callable, Iterator, Optional
 
 from . import syntax as S
 from .errors import HtnError, PlanningError
@@ -50,6 +50,7 @@ class Logic:
         self.domain = domain
         self.state = state
         self.functions = functions
+        self.arities = arities(domain, state)
         # axiom bodies refer to axioms (their own predicate too): every list
         # exists before any body is compiled, and is filled in place
         self._axioms: dict[str, list] = {pred: [] for pred in domain.axioms}
@@ -324,6 +325,25 @@ class Logic:
                         from None
                 if found:
                     break
+
+
+def arities(domain: S.Domain, state) -> Optional[dict]:
+    """``pred -> {arity}``: the lengths the atoms of each predicate can have
+    in ``state`` from now on (those already there and those of add lists);
+    None when an add list has a variable atom (3.14), which can be anything."""
+    out = {pred: {len(a) for a in lst} for pred, lst in state.atoms.items()}
+    for ops in domain.operators.values():
+        for op in ops:
+            if op.add.var is not None:
+                return None
+            for item in op.add.items:
+                if isinstance(item, S.Protection):
+                    continue         # protects an atom, adds none
+                for a in item.atoms if isinstance(item, S.EffectForAll) else [item]:
+                    if not isinstance(a, S.Atom):
+                        return None
+                    out.setdefault(a.pred, set()).add(len(a.args))
+    return out
 
 
 def _true(env):

@@ -109,9 +109,9 @@ def _evaluable(t) -> bool:
 
 class _Literal:
     """What one conjunct is, independently of the mode."""
-    __slots__ = ("kind", "expr", "pred", "args", "vars", "binds", "facts")
+    __slots__ = ("kind", "expr", "pred", "args", "vars", "binds", "facts", "sized")
 
-    def __init__(self, expr, axioms: dict):
+    def __init__(self, expr, axioms: dict, arities: dict):
         self.expr = expr
         self.vars = _vars(expr, set())
         # variables a satisfier may bind (a negation, forall or call binds none)
@@ -131,6 +131,9 @@ class _Literal:
             self.kind = _CALL
         elif isinstance(expr, S.Assign) and _evaluable(expr.term):
             self.kind = _ASSIGN
+        # can an atom of another length be met (and must the length be tested)?
+        self.sized = self.kind in (_ATOM, _NOT_ATOM) and (
+            self.facts or arities is None or arities.get(self.pred, set()) - {len(self.args)})
 
 
 def _facts_only(axioms: list) -> bool:
@@ -150,7 +153,7 @@ def _flatten(items: list) -> list:
     return out
 
 
-_CODE: dict = {}    # (id(items), mode) -> (items, factory or None)
+_CODE: dict = {}    # (id(conjunction), mode, sized) -> (conjunction, factory or None)
 
 
 def clear_cache() -> None:
@@ -162,7 +165,8 @@ def compile_conjunction(logic, e: S.And) -> Callable:
     items = _flatten(e.items)
     general = [logic.expr(x) for x in items]
     gen = conjunction(general) if len(general) > 1 else general[0]
-    lits = [_Literal(x, logic.domain.axioms) for x in items]
+    lits = [_Literal(x, logic.domain.axioms, logic.arities) for x in items]
+    sized = tuple(bool(lit.sized) for lit in lits)
     if all(lit.kind == _GENERAL for lit in lits) or len(lits) > MAX_LITERALS:
         return gen
     names = sorted(set().union(*(lit.vars for lit in lits)))
@@ -170,14 +174,15 @@ def compile_conjunction(logic, e: S.And) -> Callable:
         return gen
     state = logic.state
     modes: dict = {}
+    constants = _constants(logic, lits, general)
 
     def build(mode: int):
-        hit = _CODE.get((id(e), mode))
+        hit = _CODE.get((id(e), mode, sized))
         if hit is None or hit[0] is not e:
             known = {v for j, v in enumerate(names) if mode >> j & 1}
-            hit = _CODE[(id(e), mode)] = (e, _Writer(lits, known).factory())
+            hit = _CODE[(id(e), mode, sized)] = (e, _Writer(lits, known).factory())
         factory = hit[1]
-        f = gen if factory is None else factory(*_constants(logic, lits, general))
+        f = gen if factory is None else factory(*constants)
         modes[mode] = f
         return f
 
@@ -279,8 +284,7 @@ class _Writer:
         """The code's factory ``make(*constants) -> run``, or None when this
         mode gains nothing (every conjunct would take the general path)."""
         lits = self.lits
-        if all(lit.kind == _GENERAL or (lit.kind == _CALL and not lit.vars <= self.known)
-               or (lit.kind == _ASSIGN and not _vars(lit.expr.term, set()) <= self.known)
+        if all(lit.kind == _GENERAL or (lit.kind == _ASSIGN and not _vars(lit.expr.term, set()) <= self.known)
                for lit in lits):
             return None
         for v in sorted(self.entry & set().union(*(lit.vars for lit in lits))):
@@ -314,13 +318,16 @@ class _Writer:
         conjunction was handed to the general path)."""
         lit = self.lits[k]
         kind = lit.kind
-        if kind == _CALL and not lit.vars <= self.known:
-            kind = _GENERAL
         if kind == _ASSIGN and lit.expr.var.index not in self.known \
                 and not _vars(lit.expr.term, set()) <= self.known:
             kind = _GENERAL
         if kind == _ATOM or kind == _NOT_ATOM:
             self.atom(k, lit, kind == _NOT_ATOM)
+        elif kind == _CALL and not lit.vars <= self.known:
+            # a call with a free variable stays a term, which is not nil: the
+            # conjunct holds, once the calls inside it that can be evaluated
+            # have been (they may fail), as ``subst`` evaluates them
+            self.inner_calls(lit.expr.call)
         elif kind == _CALL:
             self.emit(f"v{k} = {self.term(lit.expr.call)}")
             self.emit(f"if not (type(v{k}) is tuple and not v{k}):")
@@ -334,6 +341,16 @@ class _Writer:
         else:
             return self.general(k, lit)
         return True
+
+    def inner_calls(self, t) -> None:
+        """Evaluate, for their errors only, the calls in ``t`` whose variables
+        are all bound, in ``subst``'s order (arguments left to right)."""
+        tt = type(t)
+        if tt is CallTerm and _vars(t, set()) <= self.known:
+            self.emit(self.term(t))
+        elif tt is CallTerm or tt is tuple:
+            for x in (t.args if tt is CallTerm else t):
+                self.inner_calls(x)
 
     def atom(self, k: int, lit: _Literal, negated: bool) -> None:
         args = lit.args
@@ -352,7 +369,7 @@ class _Writer:
                 self.emit(f"if {tup} in M{k}:")
             self.depth += 1
             return
-        conds = [f"len(t) == {len(args)}"]
+        conds = [f"len(t) == {len(args)}"] if lit.sized else []
         binds = []
         first: dict = {}
         for i, a in enumerate(args):
@@ -365,7 +382,7 @@ class _Writer:
             else:
                 conds.append(f"t[{i}] == {self.term(a)}")
         source = f"chain(L{k}, H{k}[0])" if lit.facts else f"L{k}"
-        cond = " and ".join(conds)
+        cond = " and ".join(conds) or "True"
         if negated:
             self.emit(f"ok{k} = True")
             self.emit(f"for t in {source}:")

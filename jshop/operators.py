@@ -10,7 +10,7 @@ and the add list after every deletion, as in JSHOP2; an HDDL action
 before the action, as PDDL does.
 
 Each operator's delete and add lists are compiled into small programs when
-first applied: plain atoms become ``(pred, binder)`` pairs, the common case
+the planner starts: plain atoms become ``(pred, binder)`` pairs, the common case
 that needs no condition at all.
 """
 from __future__ import annotations
@@ -35,6 +35,9 @@ class Operators:
         self.logic = logic
         self._programs: dict = {}     # id(op) -> (plain dels, plain adds, dels, adds, op)
         self._general: dict = {}      # id(op) -> (dels, adds) compiled in general form
+        for ops in logic.domain.operators.values():    # compiled before searching
+            for op in ops:
+                self.program(op)
 
     def program(self, op: S.Operator) -> tuple:
         prog = self._programs.get(id(op))

@@ -180,37 +180,42 @@ def _first_in_order(root: Node, trail: list, path: Optional[list] = None,
 
 def _first_tasks(root: Node, trail: Optional[list]) -> list:
     res: list = []
-    stack = [[root, root.start, -1]]      # node, next member, len(res) on entry
-    while stack:
-        frame = stack[-1]
-        node, i, n0 = frame
-        if n0 < 0:
-            frame[2] = n0 = len(res)
-        elif node.ordered and len(res) != n0:
-            stack.pop()
-            continue
+    stack: list = []       # (list, next member, len(res) on entry) of each ancestor
+    node, i, n0 = root, root.start, 0
+    while True:
         subs = node.subtasks
-        if i == len(subs):
-            stack.pop()
+        n = len(subs)
+        down = False
+        while i < n:
+            child = subs[i]
+            i += 1
+            cs = child.subtasks
+            if cs is None:
+                if child.task.immediate:
+                    return [child]
+                res.append(child)
+                if node.ordered:
+                    break
+            elif cs and not child.done:
+                stack.append((node, i, n0))
+                node, i, n0 = child, child.start, len(res)
+                down = True
+                break
+            elif trail is not None and i - 1 == node.start:
+                trail.append((node, i - 1))
+                node.start = i
+        if down:
+            continue
+        # ``node`` is finished: exhausted, or ordered and it gave a task
+        while True:
             if trail is not None and len(res) == n0 and stack:
                 node.done = True
                 trail.append(node)
-            continue
-        child = subs[i]
-        frame[1] = i + 1
-        cs = child.subtasks
-        if cs is None:
-            if child.task.immediate:
-                return [child]
-            res.append(child)
-            if node.ordered:
-                stack.pop()
-        elif cs and not child.done:
-            stack.append([child, child.start, -1])
-        elif trail is not None and i == node.start:
-            trail.append((node, i))
-            node.start = i + 1
-    return res
+            if not stack:
+                return res
+            node, i, n0 = stack.pop()
+            if not (node.ordered and len(res) != n0):
+                break
 
 
 def _undo_marks(trail: list, mark: int, loops=None) -> None:
