@@ -26,12 +26,13 @@ A method body written ``(:unordered ...)`` is unordered, as the manual says
 flag, so such a body runs in order. ``jshop2_compat=True`` reproduces that
 (nested ``:unordered`` lists keep their meaning in both modes).
 
-The search depth (the number of nested ``findPlanHelper`` calls, i.e. frames
-on the stack) is bounded by ``max_depth``: a method that decomposes into
-itself without end would otherwise grow the stack until memory runs out
-(JSHOP2 ends such a search with a ``StackOverflowError``). Reaching the bound
-ends the search like a timeout; ``stats.depth_limit`` then names the task
-that was being reduced deepest.
+The reduction depth (nested reductions since the last operator applied on
+the current path) is bounded by ``max_depth``, and the search's memory by a
+:class:`htn.jshop.limits.MemoryGuard` (see :mod:`htn.jshop.limits`): a method
+that decomposes into itself without end would otherwise grow the stack until
+memory runs out (JSHOP2 ends such a search with a ``StackOverflowError``).
+Reaching a bound ends the search like a timeout; ``stats.depth_limit`` then
+says which bound, and names the task that was being reduced deepest.
 """
 from __future__ import annotations
 
@@ -41,7 +42,7 @@ from typing import Iterator, Optional
 
 from . import syntax as S
 from .errors import PlanningError
-from .limits import DEFAULT_MAX_DEPTH
+from .limits import DEFAULT_MAX_DEPTH, MemoryGuard
 from .logic import Logic
 from .plan import Plan, Step
 from .goals import GoalGuard
@@ -288,6 +289,7 @@ class Stats:
             "timed_out": self.timed_out,
             "interrupted": self.interrupted,
             "depth_limit_reached": self.depth_limit is not None,
+            "memory_limit_reached": isinstance(self.depth_limit, MemoryLimit),
         }
 
 
@@ -307,8 +309,24 @@ class DepthLimit:
             what = f"task {self.task} recurses past the search depth limit"
         else:
             what = "the search reached its depth limit"
-        return (f"{where}{what} ({self.limit:,} nested reductions and steps); "
+        return (f"{where}{what} ({self.limit:,} nested reductions without a step); "
                 "search stopped (raise it with --max-depth N)")
+
+
+class MemoryLimit(DepthLimit):
+    """Why the search stopped at its memory budget: the plan on the current
+    path needs more memory than the budget, or the search never ends."""
+    __slots__ = ()
+
+    def __str__(self) -> str:
+        where = ""
+        if self.task is not None:
+            pos = getattr(self.task.src, "pos", None)
+            where = f"{pos}: " if pos else ""
+            what = f"the search used its memory budget ({self.limit >> 20:,} MB) at task {self.task}"
+        else:
+            what = f"the search used its memory budget ({self.limit >> 20:,} MB)"
+        return f"{where}{what}; search stopped (raise it with --max-memory MB)"
 
 
 class Planner:
@@ -317,12 +335,14 @@ class Planner:
     def __init__(self, domain: S.Domain, instance: S.ProblemInstance,
                  functions=None, record_trees: bool = False,
                  jshop2_compat: bool = False, max_depth: int = DEFAULT_MAX_DEPTH,
-                 loop_check: Optional[bool] = None, explain=None):
+                 loop_check: Optional[bool] = None, explain=None,
+                 max_memory: Optional[int] = None):
         self.domain = domain
         self.explain = explain      # an explain.Explainer collecting dead ends, or None
         self.instance = instance
         self.record_trees = record_trees
         self.max_depth = max_depth
+        self.max_memory = max_memory     # bytes, or None for the default budget
         if loop_check is None:           # on for HDDL, off for JSHOP2 (its own semantics)
             loop_check = domain.language == "hddl"
         self.state = HashedState() if loop_check else State()
@@ -389,9 +409,13 @@ class Planner:
         t0 = stats.started = clock()
         spent = 0.0
         frame = self._frame
-        stack = [frame(self.root)]
+        root = self.root
+        stack = [frame(root)]
+        depths = [0]       # per frame: reductions since the last step on its path
         push, pop, nxt = stack.append, stack.pop, next
+        dpush, dpop = depths.append, depths.pop
         max_depth = self.max_depth
+        guard = None       # made at the first check: tiny searches never pay for it
         ticks = stats.expansions
         stats.expansions += 1
         try:
@@ -399,6 +423,7 @@ class Planner:
                 req = nxt(stack[-1], None)     # frames never yield None
                 if req is None:
                     pop()
+                    dpop()
                     continue
                 if req is _PLAN:
                     stats.plans_found += 1
@@ -416,15 +441,27 @@ class Planner:
                     gc.disable()
                     t0 = clock()
                     continue
-                if len(stack) >= max_depth:
-                    stats.depth_limit = DepthLimit(max_depth, _deepest_task(self.root, req))
-                    return
-                push(frame(req))
-                ticks += 1
-                if timeout is not None and not ticks & 255:
-                    if clock() - stats.started > timeout:   # wall clock, output included
-                        stats.timed_out = True
+                if req is root:         # an operator was applied (or a task list ended)
+                    depth = 0
+                else:
+                    depth = depths[-1] + 1
+                    if depth >= max_depth:
+                        stats.depth_limit = DepthLimit(max_depth, _deepest_task(root, req))
                         return
+                push(frame(req))
+                dpush(depth)
+                ticks += 1
+                if not ticks & 255:
+                    if timeout is not None and clock() - stats.started > timeout:
+                        stats.timed_out = True       # wall clock, output included
+                        return
+                    if not ticks & 4095:
+                        if guard is None:
+                            guard = MemoryGuard(self.max_memory)
+                        if guard.exceeded():
+                            stats.depth_limit = MemoryLimit(guard.limit_bytes,
+                                                            _deepest_task(root, req))
+                            return
         except KeyboardInterrupt:
             stats.interrupted = True
             raise
