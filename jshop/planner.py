@@ -87,7 +87,7 @@ class Node:
         self.how = None
         self.done = False   # cached: every task below is achieved
         self.start = 0      # cached: members before this index are achieved
-        self.loop_key = None   # the active method instance it is, see loops.py
+        self.loop_key = None   # the active task instance it is, see loops.py
 
 
 def compile_tasks(tl):
@@ -538,24 +538,24 @@ class Planner:
                 node.subtasks = None
                 node.how = None
             else:
-                for index, (m, unify_head, branches) in enumerate(
-                        self._methods.get(task.name, ())):
+                methods = self._methods.get(task.name, ())
+                key = None
+                if loops is not None:
+                    key = loops.key(task)
+                    if key in loops.active:     # see loops.py
+                        loops.cut += 1
+                        methods = ()
+                for index, (m, unify_head, branches) in enumerate(methods):
                     env = [None] * m.nvars
                     if not unify_head(task.args, env):
                         continue
                     for k, (sat, reduce, ordered) in enumerate(branches):
                         found = False
                         for nb in sat(env):
-                            if loops is not None:
-                                key = loops.key(m, k, nb)
-                                if key in loops.active:
-                                    loops.cut += 1
-                                    found = True
-                                    continue
                             node.subtasks = reduce(nb)
                             node.ordered = ordered
                             node.how = (m, k, index)
-                            if loops is not None and node.subtasks:
+                            if key is not None and node.subtasks:
                                 loops.enter(node, key)
                             tried = True
                             yield node
