@@ -167,8 +167,8 @@ def compile_conjunction(logic, e: S.And) -> Callable:
     gen = conjunction(general) if len(general) > 1 else general[0]
     lits = [_Literal(x, logic.domain.axioms, logic.arities) for x in items]
     sized = tuple(bool(lit.sized) for lit in lits)
-    if all(lit.kind == _GENERAL for lit in lits) or len(lits) > MAX_LITERALS:
-        return gen
+    if len(lits) == 1 or len(lits) > MAX_LITERALS or all(lit.kind == _GENERAL for lit in lits):
+        return gen     # one conjunct: its own compiled satisfier is as good
     names = sorted(set().union(*(lit.vars for lit in lits)))
     if len(names) > MAX_VARS:
         return gen
@@ -219,9 +219,14 @@ def _entry(names: list):
     make = _ENTRIES.get(key)
     if make is not None:
         return make
+    # the first call takes the general path: a conjunction met once (a tiny
+    # search) is not worth compiling
     lines = ["def make(state, gen, modes, build):",
+             "    warm = False",
              "    def sat(env):",
-             "        if state.nonground:",
+             "        nonlocal warm",
+             "        if not warm or state.nonground:",
+             "            warm = True",
              "            return gen(env)",
              "        m = 0"]
     for j, v in enumerate(names):
