@@ -21,7 +21,11 @@ from . import syntax as S
 from .errors import HtnError, PlanningError
 from .compile import GENERIC, binder, head_unifier, scanner, term_binder
 from .modes import compile_conjunction
-from .terms import Var, is_ground, subst, term_str, unify
+from .terms import Var, is_ground, subst, term_str, unify, variables
+
+
+def variable_indices(args: tuple) -> list:
+    return [v.index for v in variables(args, [])]
 
 Sat = Callable[[list], Iterator[list]]
 
@@ -74,12 +78,22 @@ class Logic:
             else:
                 flat = all(type(a) in (str, float, Var) for a in ax.head.args)
                 segments.append((ax, head_unifier(ax.head.args), binder(ax.head.args),
-                                 [self.precondition(b.pre) for b in ax.branches], flat))
+                                 [self.precondition(b.pre, ax.head.args) for b in ax.branches],
+                                 flat))
         return segments
 
     # ------------------------------------------------------------ preconditions
-    def precondition(self, pre: S.Precondition) -> Sat:
-        sat = self.expr(pre.expr)
+    def precondition(self, pre: S.Precondition, head: tuple = None) -> Sat:
+        """``head``: the arguments of the method's, operator's or axiom's head,
+        whose variables are the only ones bound when the precondition is
+        asked (the binding is fresh), so only they decide its binding mode."""
+        e = pre.expr
+        if isinstance(e, (S.Atom, S.Not)):   # one literal: compiled as a conjunction of one
+            e = _single(e)
+        if head is not None and isinstance(e, S.And) and e.items:
+            sat = compile_conjunction(self, e, frozenset(variable_indices(head)))
+        else:
+            sat = self.expr(e)
         if pre.first:
             def first(env, sat=sat):
                 for e in sat(env):
@@ -272,6 +286,25 @@ class Logic:
         return neg
 
     # ------------------------------------------------------------ atoms
+    def solver(self, pred: str) -> Callable:
+        """``solve(bound, env, ground)``: the satisfiers of ``(pred . bound)``
+        as :meth:`_atom` finds them (state atoms, then axioms), for a caller
+        that knows already whether ``bound`` is ground (htn.jshop.modes)."""
+        lst = self.state.bucket(pred)
+        members = self.state.members[pred]
+        axioms = self._axioms.get(pred)
+        prove = self._prove
+
+        def solve(bound, env, ground):
+            if ground:
+                if bound in members:
+                    yield env
+            elif lst:
+                yield from _scan(lst, bound, env)
+            if axioms:
+                yield from prove(axioms, bound, env, ground)
+        return solve
+
     def match(self, pred: str, bound: tuple, env: list) -> Iterator[list]:
         """Satisfiers of the atom ``(pred . bound)``: state atoms, then axioms."""
         state = self.state
@@ -344,6 +377,18 @@ def arities(domain: S.Domain, state) -> Optional[dict]:
                         return None
                     out.setdefault(a.pred, set()).add(len(a.args))
     return out
+
+
+_SINGLES: dict = {}
+
+
+def _single(e) -> S.And:
+    """The conjunction of ``e`` alone, one object per ``e`` (the compiled
+    code is cached by conjunction object)."""
+    hit = _SINGLES.get(id(e))
+    if hit is None or hit[0] is not e:
+        hit = _SINGLES[id(e)] = (e, S.And([e], getattr(e, "pos", None)))
+    return hit[1]
 
 
 def _true(env):

@@ -40,7 +40,7 @@ from .terms import CallTerm, Dotted, Var, at_call, is_ground
 MAX_LITERALS = 40     # longer conjunctions stay on the general path (indentation)
 MAX_VARS = 60         # a mode is a bit mask over the conjunction's variables
 
-_ATOM, _NOT_ATOM, _CALL, _ASSIGN, _GENERAL = range(5)
+_ATOM, _NOT_ATOM, _CALL, _ASSIGN, _GENERAL, _AXIOM, _NOT_AXIOM = range(7)
 
 
 def _call(func, args, term):
@@ -127,6 +127,9 @@ class _Literal:
             if plain and (not axs or _facts_only(axs)):
                 self.kind, self.pred, self.args = kind, atom.pred, atom.args
                 self.facts = bool(axs)
+            elif plain:       # proved by its axioms, asked directly (Logic.solver)
+                self.kind = _AXIOM if kind == _ATOM else _NOT_AXIOM
+                self.pred, self.args = atom.pred, atom.args
         elif isinstance(expr, S.CallExpr) and _evaluable(expr.call):
             self.kind = _CALL
         elif isinstance(expr, S.Assign) and _evaluable(expr.term):
@@ -153,23 +156,27 @@ def _flatten(items: list) -> list:
     return out
 
 
-_CODE: dict = {}    # (id(conjunction), mode, sized) -> (conjunction, factory or None)
+_CODE: dict = {}    # (id(conjunction), mode, sized, entry) -> (conjunction, factory or None)
 
 
 def clear_cache() -> None:
     _CODE.clear()
 
 
-def compile_conjunction(logic, e: S.And) -> Callable:
-    """``sat(env)`` for the conjunction ``e`` (see the module docstring)."""
+def compile_conjunction(logic, e: S.And, entry: frozenset = None) -> Callable:
+    """``sat(env)`` for the conjunction ``e`` (see the module docstring).
+    ``entry``: the only variables that can be bound when it is asked (a
+    precondition's head variables), or None for any."""
     items = _flatten(e.items)
     general = [logic.expr(x) for x in items]
     gen = conjunction(general) if len(general) > 1 else general[0]
     lits = [_Literal(x, logic.domain.axioms, logic.arities) for x in items]
     sized = tuple(bool(lit.sized) for lit in lits)
-    if len(lits) == 1 or len(lits) > MAX_LITERALS or all(lit.kind == _GENERAL for lit in lits):
-        return gen     # one conjunct: its own compiled satisfier is as good
+    if len(lits) > MAX_LITERALS or all(lit.kind == _GENERAL for lit in lits):
+        return gen
     names = sorted(set().union(*(lit.vars for lit in lits)))
+    if entry is not None:
+        names = [v for v in names if v in entry]
     if len(names) > MAX_VARS:
         return gen
     state = logic.state
@@ -177,10 +184,11 @@ def compile_conjunction(logic, e: S.And) -> Callable:
     constants = _constants(logic, lits, general)
 
     def build(mode: int):
-        hit = _CODE.get((id(e), mode, sized))
+        key = (id(e), mode, sized, entry)
+        hit = _CODE.get(key)
         if hit is None or hit[0] is not e:
             known = {v for j, v in enumerate(names) if mode >> j & 1}
-            hit = _CODE[(id(e), mode, sized)] = (e, _Writer(lits, known).factory())
+            hit = _CODE[key] = (e, _Writer(lits, known).factory())
         factory = hit[1]
         f = gen if factory is None else factory(*constants)
         modes[mode] = f
@@ -202,6 +210,8 @@ def _constants(logic, lits: list, general: list) -> list:
             out.append(state.members[lit.pred])
             facts = logic._axioms.get(lit.pred) if lit.facts else None
             out.append(facts[0][1:3] if facts else None)
+        elif lit.kind in (_AXIOM, _NOT_AXIOM):
+            out += [logic.solver(lit.pred), None, None]
         else:
             out += [None, None, None]
         out.append(general[k])
@@ -328,6 +338,13 @@ class _Writer:
             kind = _GENERAL
         if kind == _ATOM or kind == _NOT_ATOM:
             self.atom(k, lit, kind == _NOT_ATOM)
+        elif kind == _NOT_AXIOM:
+            ground = all(type(a) is not Var or a.index in self.known for a in lit.args)
+            self.emit(f"if next(L{k}({self.bound(lit.args)}, env, {ground}), None) is None:")
+            self.depth += 1
+        elif kind == _AXIOM:
+            ground = all(type(a) is not Var or a.index in self.known for a in lit.args)
+            return self.general(k, lit, f"L{k}({self.bound(lit.args)}, {{}}, {ground})")
         elif kind == _CALL and not lit.vars <= self.known:
             # a call with a free variable stays a term, which is not nil: the
             # conjunct holds, once the calls inside it that can be evaluated
@@ -409,7 +426,16 @@ class _Writer:
         self.known |= set(first)
         self.local |= set(first)
 
-    def general(self, k: int, lit: _Literal) -> bool:
+    def bound(self, args: tuple) -> str:
+        """The atom's arguments as the general engine's binder gives them:
+        bound variables by their values, unbound ones as themselves."""
+        return "(" + "".join((f"x{a.index}" if type(a) is Var and a.index in self.known
+                              else self.const(a)) + ", " for a in args) + ")"
+
+    def general(self, k: int, lit: _Literal, call: str = "G{k}({})") -> bool:
+        """Conjunct ``k`` asked of the general engine (``call`` names the
+        satisfier, ``{}`` standing for the binding list)."""
+        call = call.replace("{k}", str(k))
         if self.local:
             self.emit(f"e{k} = {self.base}[:]")
             for v in sorted(self.local):
@@ -419,9 +445,9 @@ class _Writer:
             arg = self.base
         last = k == len(self.lits) - 1
         if last:
-            self.emit(f"yield from G{k}({arg})")
+            self.emit(f"yield from {call.format(arg)}")
             return False
-        self.emit(f"for b{k} in G{k}({arg}):")
+        self.emit(f"for b{k} in {call.format(arg)}:")
         self.depth += 1
         self.loops += 1
         self.base, self.local = f"b{k}", set()

@@ -10,7 +10,7 @@ and the add list after every deletion, as in JSHOP2; an HDDL action
 before the action, as PDDL does.
 
 Each operator's delete and add lists are compiled into small programs when
-the planner starts: plain atoms become ``(pred, binder)`` pairs, the common case
+the planner starts: plain atoms become ``(pred, substituter)`` pairs, the common case
 that needs no condition at all.
 """
 from __future__ import annotations
@@ -18,7 +18,7 @@ from __future__ import annotations
 from typing import Optional
 
 from . import syntax as S
-from .compile import binder
+from .compile import substituter
 from .errors import PlanningError
 from .logic import atom_from_term
 from .state import Change
@@ -76,14 +76,14 @@ class Operators:
             protections = state.protections
             deleted, added = change.deleted, change.added
             for pred, bind in dels:
-                args = bind(env)[1]
+                args = bind(env)
                 if (pred, args) in protections:
                     return change, False
                 i = state.delete(pred, args)
                 if i != -1:
                     deleted.append((pred, args, i))
             for pred, bind in adds:
-                args = bind(env)[1]
+                args = bind(env)
                 if state.add(pred, args):
                     added.append((pred, args))
             return change, True
@@ -130,7 +130,7 @@ class Operators:
             return
         for kind, a, b in program:
             if kind == _ATOM:
-                yield a, b(env)[1]
+                yield a, b(env)
             elif kind == _FORALL:
                 for nb in a(env):
                     for atom in b:
@@ -162,22 +162,22 @@ def _plain_lists(op: S.Operator) -> tuple:
 
 
 def _plain(eff: S.Effects) -> Optional[list]:
-    """``[(pred, binder)]`` for a list of plain atoms, else None (general case)."""
+    """``[(pred, substituter)]`` for a list of plain atoms, else None (general case)."""
     if eff.var is not None or not all(isinstance(i, S.Atom) for i in eff.items):
         return None
-    return [(i.pred, binder(i.args)) for i in eff.items]
+    return [(i.pred, substituter(i.args)) for i in eff.items]
 
 
 def _atom_program(a) -> tuple:
     if isinstance(a, S.VarAtom):
         return (_VAR_ATOM, a, None)
-    return (_ATOM, a.pred, binder(a.args))
+    return (_ATOM, a.pred, substituter(a.args))
 
 
 def _ground(atom: tuple, env: list) -> tuple:
     kind, a, b = atom
     if kind == _ATOM:
-        return a, b(env)[1]
+        return a, b(env)
     return _var_atom(a, env)
 
 

@@ -49,7 +49,7 @@ from .goals import GoalGuard
 from .loops import LoopCheck
 from .operators import Operators
 from .state import Change, HashedState, State
-from .compile import binder, head_unifier
+from .compile import head_unifier, substituter
 from .terms import subst, term_str, variables
 from .tree import snapshot
 
@@ -102,8 +102,8 @@ def compile_tasks(tl):
 
 
 def _atom_maker(t: S.TaskAtom):
-    bind, name, immediate = binder(t.args), t.name, t.immediate
-    return lambda env: Node(Task(name, bind(env)[1], immediate, t))
+    bind, name, immediate = substituter(t.args), t.name, t.immediate
+    return lambda env: Node(Task(name, bind(env), immediate, t))
 
 
 def _list_maker(tl: S.TaskList):
@@ -360,14 +360,15 @@ class Planner:
             self._goal = (self.logic.precondition(instance.goal), instance.goal_nvars)
             self.guard = GoalGuard(domain, instance.goal) or None
         pre = self.logic.precondition
-        # (operator, head unifier, precondition, head binder, constant cost or None)
-        self._ops = {name: [(op, head_unifier(op.head.args), pre(op.pre), binder(op.head.args),
+        # (operator, head unifier, precondition, head substituter, constant cost or None)
+        self._ops = {name: [(op, head_unifier(op.head.args), pre(op.pre, op.head.args),
+                             substituter(op.head.args),
                              op.cost if type(op.cost) is float else None)
                             for op in ops]
                      for name, ops in domain.operators.items()}
         # (precondition, body, body is ordered) per branch; see the module docstring
         self._methods = {name: [(m, head_unifier(m.head.args),
-                                 [(pre(b.pre), compile_tasks(b.tasks),
+                                 [(pre(b.pre, m.head.args), compile_tasks(b.tasks),
                                    jshop2_compat or b.tasks.ordered) for b in m.branches])
                                 for m in ms]
                          for name, ms in domain.methods.items()}
@@ -379,7 +380,7 @@ class Planner:
             from .hddl_domain import top_method
             m = top_method(domain, instance.top)
             self._methods[m.name] = [(m, head_unifier(m.head.args),
-                                      [(pre(b.pre), compile_tasks(b.tasks), True)
+                                      [(pre(b.pre, m.head.args), compile_tasks(b.tasks), True)
                                        for b in m.branches])]
             self.root = _list_maker(S.TaskList([m.head]))([])
         else:
@@ -523,7 +524,7 @@ class Planner:
                                     raise PlanningError.at(op.pos, f"cost of {op.name} is "
                                                            f"{term_str(cost)}, not a number")
                             node.how = len(steps)
-                            steps.append((op.name, bind_head(nb)[1], cost))
+                            steps.append((op.name, bind_head(nb), cost))
                             self._cost += cost
                             tried = True
                             yield root
