@@ -35,7 +35,8 @@ from typing import Callable
 from . import syntax as S
 from .compile import NESTED_CONJUNCTS, conjunction
 from .errors import HtnError
-from .terms import CallTerm, Dotted, Var, at_call, is_ground
+from .parser import _walk_expr
+from .terms import CallTerm, Var, at_call, is_ground, variables
 
 MAX_LITERALS = 40     # longer conjunctions stay on the general path (indentation)
 MAX_VARS = 60         # a mode is a bit mask over the conjunction's variables
@@ -60,38 +61,12 @@ def _call_nested(func, args, term):
 
 
 def _vars(t, out: set) -> set:
-    tt = type(t)
-    if tt is Var:
-        out.add(t.index)
-    elif tt is tuple:
-        for x in t:
-            _vars(x, out)
-    elif tt is CallTerm:
-        for x in t.args:
-            _vars(x, out)
-    elif isinstance(t, (S.Atom, S.TaskAtom)):
-        _vars(t.args, out)
-    elif isinstance(t, S.VarAtom):
-        out.add(t.var.index)
-    elif isinstance(t, (S.And, S.Or)):
-        for x in t.items:
-            _vars(x, out)
-    elif isinstance(t, S.Not):
-        _vars(t.expr, out)
-    elif isinstance(t, S.ForAll):
-        _vars(t.cond, out)
-        _vars(t.then, out)
-    elif isinstance(t, S.Equal):
-        _vars(t.left, out)
-        _vars(t.right, out)
-    elif isinstance(t, S.Assign):
-        out.add(t.var.index)
-        _vars(t.term, out)
-    elif isinstance(t, S.CallExpr):
-        _vars(t.call, out)
-    elif tt is Dotted:
-        _vars(t.items, out)
-        _vars(t.tail, out)
+    """Add the indices of the variables of a term or expression to ``out``."""
+    if isinstance(t, (S.Atom, S.VarAtom, S.And, S.Or, S.Not, S.ForAll, S.Equal, S.Assign,
+                      S.CallExpr)):
+        _walk_expr(t, lambda v: out.add(v.index))
+    else:
+        out.update(v.index for v in variables(t, []))
     return out
 
 

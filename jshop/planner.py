@@ -302,14 +302,15 @@ class DepthLimit:
         self.task = task
 
     def __str__(self) -> str:
-        where = ""
-        if self.task is not None:
-            pos = getattr(self.task.src, "pos", None)
-            where = f"{pos}: " if pos else ""
-            what = f"task {self.task} recurses past the search depth limit"
-        else:
-            what = "the search reached its depth limit"
-        return (f"{where}{what} ({self.limit:,} nested reductions without a step); "
+        if self.task is None:
+            return self.message(None)
+        pos = getattr(self.task.src, "pos", None)
+        return (f"{pos}: " if pos else "") + self.message(self.task)
+
+    def message(self, task) -> str:
+        what = (f"task {task} recurses past the search depth limit" if task is not None
+                else "the search reached its depth limit")
+        return (f"{what} ({self.limit:,} nested reductions without a step); "
                 "search stopped (raise it with --max-depth N)")
 
 
@@ -318,15 +319,10 @@ class MemoryLimit(DepthLimit):
     path needs more memory than the budget, or the search never ends."""
     __slots__ = ()
 
-    def __str__(self) -> str:
-        where = ""
-        if self.task is not None:
-            pos = getattr(self.task.src, "pos", None)
-            where = f"{pos}: " if pos else ""
-            what = f"the search used its memory budget ({self.limit >> 20:,} MB) at task {self.task}"
-        else:
-            what = f"the search used its memory budget ({self.limit >> 20:,} MB)"
-        return f"{where}{what}; search stopped (raise it with --max-memory MB)"
+    def message(self, task) -> str:
+        at = f" at task {task}" if task is not None else ""
+        return (f"the search used its memory budget ({self.limit >> 20:,} MB){at}; "
+                "search stopped (raise it with --max-memory MB)")
 
 
 class Planner:
