@@ -289,6 +289,8 @@ def clear_caches() -> None:
     line) but not for a long-lived process that parses many domains."""
     for cache in (_BINDERS, _UNIFIERS, _SCANNERS, _TERMS, _SUBSTITUTERS):
         cache.clear()
+    from .logic import clear_caches as clear_logic    # its caches sit on these
+    clear_logic()
 
 
 def term_binder(term) -> Callable[[list], tuple]:

@@ -24,8 +24,15 @@ from .modes import compile_conjunction
 from .terms import Var, is_ground, subst, term_str, unify, variables
 
 
-def variable_indices(args: tuple) -> list:
-    return [v.index for v in variables(args, [])]
+_HEADS: dict = {}
+
+
+def head_variables(args: tuple) -> frozenset:
+    """The indices of the variables of a head (cached by the head's tuple)."""
+    hit = _HEADS.get(id(args))
+    if hit is None or hit[0] is not args:
+        hit = _HEADS[id(args)] = (args, frozenset(v.index for v in variables(args, [])))
+    return hit[1]
 
 Sat = Callable[[list], Iterator[list]]
 
@@ -91,7 +98,7 @@ class Logic:
         if isinstance(e, (S.Atom, S.Not)):   # one literal: compiled as a conjunction of one
             e = _single(e)
         if head is not None and isinstance(e, S.And) and e.items:
-            sat = compile_conjunction(self, e, frozenset(variable_indices(head)))
+            sat = compile_conjunction(self, e, head_variables(head))
         else:
             sat = self.expr(e)
         if pre.first:
@@ -380,6 +387,14 @@ def arities(domain: S.Domain, state) -> Optional[dict]:
 
 
 _SINGLES: dict = {}
+
+
+def clear_caches() -> None:
+    """Forget the compiled conjunctions (see htn.jshop.compile.clear_caches)."""
+    from .modes import clear_cache
+    for cache in (_SINGLES, _HEADS):
+        cache.clear()
+    clear_cache()
 
 
 def _single(e) -> S.And:

@@ -84,9 +84,9 @@ def _evaluable(t) -> bool:
 
 class _Literal:
     """What one conjunct is, independently of the mode."""
-    __slots__ = ("kind", "expr", "pred", "args", "vars", "binds", "facts", "sized")
+    __slots__ = ("kind", "expr", "pred", "args", "vars", "binds", "facts")
 
-    def __init__(self, expr, axioms: dict, arities: dict):
+    def __init__(self, expr, axioms: dict):
         self.expr = expr
         self.vars = _vars(expr, set())
         # variables a satisfier may bind (a negation, forall or call binds none)
@@ -109,8 +109,10 @@ class _Literal:
             self.kind = _CALL
         elif isinstance(expr, S.Assign) and _evaluable(expr.term):
             self.kind = _ASSIGN
-        # can an atom of another length be met (and must the length be tested)?
-        self.sized = self.kind in (_ATOM, _NOT_ATOM) and (
+
+    def sized(self, arities) -> bool:
+        """Can an atom of another length be met (must the length be tested)?"""
+        return self.kind in (_ATOM, _NOT_ATOM) and bool(
             self.facts or arities is None or arities.get(self.pred, set()) - {len(self.args)})
 
 
@@ -132,24 +134,29 @@ def _flatten(items: list) -> list:
 
 
 _CODE: dict = {}    # (id(conjunction), mode, sized, entry) -> (conjunction, factory or None)
+_LITERALS: dict = {}  # id(conjunction) -> (conjunction, conjuncts, _Literals, variables)
 
 
 def clear_cache() -> None:
     _CODE.clear()
+    _LITERALS.clear()
 
 
 def compile_conjunction(logic, e: S.And, entry: frozenset = None) -> Callable:
     """``sat(env)`` for the conjunction ``e`` (see the module docstring).
     ``entry``: the only variables that can be bound when it is asked (a
     precondition's head variables), or None for any."""
-    items = _flatten(e.items)
+    hit = _LITERALS.get(id(e))
+    if hit is None or hit[0] is not e:     # the same for every planner of the domain
+        items = _flatten(e.items)
+        lits = [_Literal(x, logic.domain.axioms) for x in items]
+        hit = _LITERALS[id(e)] = (e, items, lits, sorted(set().union(*(l.vars for l in lits))))
+    _, items, lits, names = hit
     general = [logic.expr(x) for x in items]
     gen = conjunction(general) if len(general) > 1 else general[0]
-    lits = [_Literal(x, logic.domain.axioms, logic.arities) for x in items]
-    sized = tuple(bool(lit.sized) for lit in lits)
+    sized = tuple(lit.sized(logic.arities) for lit in lits)
     if len(lits) > MAX_LITERALS or all(lit.kind == _GENERAL for lit in lits):
         return gen
-    names = sorted(set().union(*(lit.vars for lit in lits)))
     if entry is not None:
         names = [v for v in names if v in entry]
     if len(names) > MAX_VARS:
@@ -163,7 +170,7 @@ def compile_conjunction(logic, e: S.And, entry: frozenset = None) -> Callable:
         hit = _CODE.get(key)
         if hit is None or hit[0] is not e:
             known = {v for j, v in enumerate(names) if mode >> j & 1}
-            hit = _CODE[key] = (e, _Writer(lits, known).factory())
+            hit = _CODE[key] = (e, _Writer(lits, known, sized).factory())
         factory = hit[1]
         f = gen if factory is None else factory(*constants)
         modes[mode] = f
@@ -190,9 +197,22 @@ def _constants(logic, lits: list, general: list) -> list:
         else:
             out += [None, None, None]
         out.append(general[k])
-        rest = general[k + 1:]
-        out.append(conjunction(rest) if len(rest) > 1 else rest[0] if rest else None)
+        out.append(_rest(general, k + 1))
     return out
+
+
+def _rest(general: list, k: int) -> Callable:
+    """The general conjunction of ``general[k:]``, made on first use (the
+    compiled code needs it only when a conjunct binds a variable to a term
+    with variables in it)."""
+    made: list = []
+
+    def rest(env):
+        if not made:
+            tail = general[k:]
+            made.append(conjunction(tail) if len(tail) > 1 else tail[0])
+        return made[0](env)
+    return rest
 
 
 _ENTRIES: dict = {}
@@ -235,8 +255,9 @@ def _entry(names: list):
 class _Writer:
     """Writes the generator of one conjunction under one mode."""
 
-    def __init__(self, lits: list, known: set):
+    def __init__(self, lits: list, known: set, sized: tuple):
         self.lits = lits
+        self.sized = sized
         self.entry = set(known)
         self.known = set(known)
         self.ns: dict = {"_call": _call, "_call_nested": _call_nested, "chain": chain,
@@ -366,7 +387,7 @@ class _Writer:
                 self.emit(f"if {tup} in M{k}:")
             self.depth += 1
             return
-        conds = [f"len(t) == {len(args)}"] if lit.sized else []
+        conds = [f"len(t) == {len(args)}"] if self.sized[k] else []
         binds = []
         first: dict = {}
         for i, a in enumerate(args):
