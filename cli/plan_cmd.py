@@ -110,7 +110,8 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
         search = _Search(dom, prob, table, jshop2_compat=jshop2_compat, max_depth=max_depth,
                          max_memory=max_memory << 20 if max_memory else None,
                          explain=explain or explain_all, explain_all=explain_all,
-                         record_trees=show_tree or bool(dot) or fmt in ("json", "ipc"))
+                         record_trees=show_tree or bool(dot) or fmt in ("json", "ipc"),
+                         tree_paths=show_tree or bool(dot) or fmt == "json")
         totals, stop = search.run(render, out, dot_out, started, timeout,
                                   None if all_plans else n_plans)
         found = totals["plans_found"]
@@ -152,12 +153,13 @@ class _Search:
     files, with the planner options of the command line."""
 
     def __init__(self, dom, prob, table, jshop2_compat, max_depth, max_memory, explain,
-                 explain_all, record_trees):
+                 explain_all, record_trees, tree_paths):
         self.dom, self.prob, self.table = dom, prob, table
         self.options = dict(jshop2_compat=jshop2_compat, max_depth=max_depth,
                             max_memory=max_memory)
         self.explain, self.explain_all = explain, explain_all
         self.record_trees = record_trees
+        self.tree_paths = tree_paths      # the IPC format needs no node paths
         self.explainers: list = []     # one per problem instance, see --explain
 
     def run(self, render, out, dot_out, started, timeout, limit):
@@ -185,7 +187,8 @@ class _Search:
                         explainer = Explainer(keep_all=self.explain_all)
                         self.explainers.append(explainer)
                     planner = Planner(self.dom, inst, self.table, record_trees=self.record_trees,
-                                      explain=explainer, **self.options)
+                                      tree_paths=self.tree_paths, explain=explainer,
+                                      **self.options)
                     try:
                         for p in planner.plans(remaining):
                             p.instance = k

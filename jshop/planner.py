@@ -332,11 +332,12 @@ class Planner:
                  functions=None, record_trees: bool = False,
                  jshop2_compat: bool = False, max_depth: int = DEFAULT_MAX_DEPTH,
                  loop_check: Optional[bool] = None, explain=None,
-                 max_memory: Optional[int] = None):
+                 max_memory: Optional[int] = None, tree_paths: bool = True):
         self.domain = domain
         self.explain = explain      # an explain.Explainer collecting dead ends, or None
         self.instance = instance
         self.record_trees = record_trees
+        self.tree_paths = tree_paths     # node paths in recorded trees (see tree.snapshot)
         self.max_depth = max_depth
         self.max_memory = max_memory     # bytes, or None for the default budget
         if loop_check is None:           # on for HDDL, off for JSHOP2 (its own semantics)
@@ -427,7 +428,7 @@ class Planner:
                     plan = Plan([Step(*s) for s in self._steps], self._cost,
                                 index=stats.plans_found - 1)
                     if self.record_trees:
-                        plan.tree = snapshot(self.root, plan.steps)
+                        plan.tree = snapshot(self.root, plan.steps, self.tree_paths)
                     spent += clock() - t0
                     stats.elapsed = spent
                     stats.expansions = ticks + 1
