@@ -54,15 +54,18 @@ FORMATS = ["text", "jshop", "json", "ipc"]
                    "runs in order [default: unordered, as the JSHOP2 manual says].")
 @click.option("--max-depth", type=click.IntRange(min=1), default=DEFAULT_MAX_DEPTH,
               show_default=True, metavar="N",
-              help="Stop a search that nests deeper than N reductions and steps "
-                   "(a method that decomposes into itself without end).")
+              help="Stop a search that nests more than N method reductions without an "
+                   "operator in between (a method that decomposes into itself without end).")
+@click.option("--max-memory", type=click.IntRange(min=1), metavar="MB",
+              help="Stop a search whose process reaches this much resident memory "
+                   "[default: 80% of the memory available, and of ulimit -v if set].")
 @click.option("--explain", is_flag=True,
               help="Say why there is no plan (also printed when there is none): the deepest "
                    "dead end of the search, each operator or method tried and the precondition "
                    "literal that failed, with file:line:col.")
 @click.option("--explain-all", is_flag=True, help="Like --explain, listing every dead end.")
 def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
-         show_tree, dot, quiet, jshop2_compat, max_depth, explain, explain_all):
+         show_tree, dot, quiet, jshop2_compat, max_depth, max_memory, explain, explain_all):
     """Find plans for PROBLEM in DOMAIN (JSHOP2 files).
 
     \b
@@ -105,8 +108,10 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
         render = _Renderer(fmt, show_tree, domain, problem)
         render.spelling = {**prob.spelling, **dom.spelling}
         search = _Search(dom, prob, table, jshop2_compat=jshop2_compat, max_depth=max_depth,
+                         max_memory=max_memory << 20 if max_memory else None,
                          explain=explain or explain_all, explain_all=explain_all,
-                         record_trees=show_tree or bool(dot) or fmt in ("json", "ipc"))
+                         record_trees=show_tree or bool(dot) or fmt in ("json", "ipc"),
+                         tree_paths=show_tree or bool(dot) or fmt == "json")
         totals, stop = search.run(render, out, dot_out, started, timeout,
                                   None if all_plans else n_plans)
         found = totals["plans_found"]
@@ -145,12 +150,14 @@ class _Search:
     """The plans of every problem instance, streamed to the renderer and the
     files, with the planner options of the command line."""
 
-    def __init__(self, dom, prob, table, jshop2_compat, max_depth, explain, explain_all,
-                 record_trees):
+    def __init__(self, dom, prob, table, jshop2_compat, max_depth, max_memory, explain,
+                 explain_all, record_trees, tree_paths):
         self.dom, self.prob, self.table = dom, prob, table
-        self.options = dict(jshop2_compat=jshop2_compat, max_depth=max_depth)
+        self.options = dict(jshop2_compat=jshop2_compat, max_depth=max_depth,
+                            max_memory=max_memory)
         self.explain, self.explain_all = explain, explain_all
         self.record_trees = record_trees
+        self.tree_paths = tree_paths      # the IPC format needs no node paths
         self.explainers: list = []     # one per problem instance, see --explain
 
     def run(self, render, out, dot_out, started, timeout, limit):
@@ -160,7 +167,8 @@ class _Search:
 
         totals = {"plans_found": 0, "search_ms": 0.0, "expansions": 0,
                   "operator_applications": 0, "backtracks": 0, "timed_out": False,
-                  "interrupted": False, "depth_limit_reached": False, "shortest_plan": None}
+                  "interrupted": False, "depth_limit_reached": False,
+                  "memory_limit_reached": False, "shortest_plan": None}
         stop = None
         try:
             with deadline(timeout, started):
@@ -177,7 +185,8 @@ class _Search:
                         explainer = Explainer(keep_all=self.explain_all)
                         self.explainers.append(explainer)
                     planner = Planner(self.dom, inst, self.table, record_trees=self.record_trees,
-                                      explain=explainer, **self.options)
+                                      tree_paths=self.tree_paths, explain=explainer,
+                                      **self.options)
                     try:
                         for p in planner.plans(remaining):
                             p.instance = k
@@ -198,6 +207,8 @@ class _Search:
                         break
                     if planner.stats.depth_limit is not None:
                         totals["depth_limit_reached"] = True
+                        totals["memory_limit_reached"] = \
+                            planner.stats.as_dict()["memory_limit_reached"]
                         warn(planner.stats.depth_limit)
                         break
         except DeadlineExceeded:

@@ -50,6 +50,10 @@ def check_problem(domain: S.Domain, problem: S.Problem) -> list[Warning_]:
     """Raise :class:`HtnError` for tasks the problem asks that cannot exist."""
     warnings: list[Warning_] = []
     check_domain_name(domain, problem)
+    if problem.domain_name != domain.name:      # HDDL: see check_domain_name
+        warnings.append(Warning_(problem.domain_pos or problem.pos,
+                                 f"problem '{problem.name}' names domain "
+                                 f"'{problem.domain_name}', not '{domain.name}'"))
     arities = _arities(domain)
     for inst in problem.instances:
         for t in S.task_atoms(inst.tasks):
@@ -69,8 +73,11 @@ def check_problem(domain: S.Domain, problem: S.Problem) -> list[Warning_]:
 
 def check_domain_name(domain: S.Domain, problem: S.Problem) -> None:
     """A problem names its domain (manual 3.12) and JSHOP2 compiles it against
-    that domain only: another domain's problem is an error at the name."""
-    if problem.domain_name != domain.name:
+    that domain only: another domain's problem is an error at the name. An
+    HDDL problem may name another domain (a warning): the IPC 2020 planners
+    do not compare the names, and Barman-BDI's problems name ``barman_htn``
+    while its domain is ``barman_agent``."""
+    if problem.domain_name != domain.name and domain.language != "hddl":
         raise HtnError.at(problem.domain_pos or problem.pos,
                           f"problem '{problem.name}' is for domain '{problem.domain_name}', "
                           f"but {domain.file or 'the domain'} defines '{domain.name}'")

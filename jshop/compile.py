@@ -41,6 +41,36 @@ def binder(args: tuple) -> Callable[[list], tuple]:
     return hit[1]
 
 
+_SUBSTITUTERS: dict = {}
+
+
+def substituter(args: tuple) -> Callable[[list], tuple]:
+    """``env -> subst(args, env)`` (the binder's tuple without its key), for
+    the places that only build a term: effects, task atoms, plan steps. A
+    tuple of symbols, numbers and variables needs no groundness test."""
+    hit = _SUBSTITUTERS.get(id(args))
+    if hit is None or hit[0] is not args:
+        if _flat(args):
+            ns: dict = {}
+            parts = []
+            for i, a in enumerate(args):
+                if type(a) is Var:
+                    ns[f"v{i}"] = a
+                    parts.append(f"(env[{a.index}] if env[{a.index}] is not None else v{i})")
+                else:
+                    ns[f"c{i}"] = a
+                    parts.append(f"c{i}")
+            exec(f"def sub(env):\n    return ({''.join(p + ', ' for p in parts)})", ns)
+            fn = ns["sub"]
+        else:
+            bind = binder(args)
+
+            def fn(env, bind=bind):
+                return bind(env)[1]
+        hit = _SUBSTITUTERS[id(args)] = (args, fn)
+    return hit[1]
+
+
 def head_unifier(head: tuple) -> Callable[[tuple, list], bool]:
     """Cached :func:`make_head_unifier`."""
     hit = _UNIFIERS.get(id(head))
@@ -163,7 +193,7 @@ def _depth(args: tuple) -> int:
 
 def _fast_path(args: tuple, ns: dict) -> list:
     """Source lines returning at once when every variable of ``args`` (call
-    arguments and nested lists included) is bound to a symbol or a number:
+    arguments and nested lists included) is bound to a symbol, a number or nil:
     then every call can be evaluated inline and the result is ground.
 
     If a call fails, the generated code falls through to the general code,
@@ -199,7 +229,8 @@ def _fast_path(args: tuple, ns: dict) -> list:
     except _NoFastPath:
         return []
     lines = [f"    f{i} = env[{i}]" for i in seen]
-    test = " and ".join(f"(type(f{i}) is str or type(f{i}) is float)" for i in seen) or "True"
+    test = " and ".join(f"(type(f{i}) is str or type(f{i}) is float or f{i} == ())"
+                        for i in seen) or "True"
     ns["HtnError"] = HtnError
     return lines + [f"    if {test}:",
                     "        try:",
@@ -256,8 +287,10 @@ def clear_caches() -> None:
     """Forget every compiled function. The caches keep the domain's tuples
     alive, which is right for one planning run per process (the command
     line) but not for a long-lived process that parses many domains."""
-    for cache in (_BINDERS, _UNIFIERS, _SCANNERS, _TERMS):
+    for cache in (_BINDERS, _UNIFIERS, _SCANNERS, _TERMS, _SUBSTITUTERS):
         cache.clear()
+    from .logic import clear_caches as clear_logic    # its caches sit on these
+    clear_logic()
 
 
 def term_binder(term) -> Callable[[list], tuple]:
@@ -338,7 +371,7 @@ def make_head_unifier(head: tuple) -> Callable[[tuple, list], bool]:
     src = ["def unify_head(args, env):", f"    if len(args) != {n}:", "        return False"]
     seen = set()
     # a task argument binds a head variable only if it is ground (see terms.unify)
-    known = "(type(t) is str or type(t) is float or is_ground(t))"
+    known = "(type(t) is str or type(t) is float or (type(t) is not Var and is_ground(t)))"
     for i, a in enumerate(head):
         src.append(f"    t = args[{i}]")
         if type(a) is Var:

@@ -20,6 +20,7 @@ import importlib.machinery
 import importlib.util
 import inspect
 import math
+import operator
 from typing import Any, Callable
 
 from .errors import HtnError
@@ -37,7 +38,7 @@ def _num(x: Any, fn: str) -> float:
 def _plus(args):
     s = 0.0
     for a in args:
-        s += _num(a, "+")
+        s += a if type(a) is float else _num(a, "+")
     return s
 
 
@@ -50,6 +51,10 @@ def _mult(args):
 
 def _fold(op, name):
     def f(args):
+        if len(args) == 2:     # the common case
+            a, b = args
+            if type(a) is float and type(b) is float:
+                return op(a, b)
         res = _num(args[0], name)
         for a in args[1:]:
             res = op(res, _num(a, name))
@@ -75,6 +80,11 @@ def _pow(a, b):
 
 def _chain(test, name):
     def f(args):
+        if len(args) == 2:     # the common case, without zip and slicing
+            a, b = args
+            if type(a) is not float or type(b) is not float:
+                _num(a, name), _num(b, name)
+            return TRUE if test(a, b) else NIL
         for a, b in zip(args, args[1:]):
             if not test(_num(a, name), _num(b, name)):
                 return NIL
@@ -108,14 +118,14 @@ def _member(args):
 
 STDLIB: dict[str, Callable] = {
     "+": _plus,
-    "-": _fold(lambda a, b: a - b, "-"),
+    "-": _fold(operator.sub, "-"),
     "*": _mult,
     "/": _fold(_div, "/"),
     "^": _fold(_pow, "^"),
-    "<": _chain(lambda a, b: a < b, "<"),
-    "<=": _chain(lambda a, b: a <= b, "<="),
-    ">": _chain(lambda a, b: a > b, ">"),
-    ">=": _chain(lambda a, b: a >= b, ">="),
+    "<": _chain(operator.lt, "<"),
+    "<=": _chain(operator.le, "<="),
+    ">": _chain(operator.gt, ">"),
+    ">=": _chain(operator.ge, ">="),
     "=": _equal,
     "!=": _not_equal,
     "member": _member,
@@ -157,6 +167,11 @@ def to_python(t: Any) -> Any:
 
 def from_python(v: Any) -> Any:
     """Convert a user function's return value back to a term."""
+    tv = type(v)
+    if tv is float:
+        return v
+    if tv is int:
+        return float(v)
     if v is None or v is False:
         return NIL
     if v is True:
@@ -199,8 +214,11 @@ def run_user_code(what: str, fn: Callable, *args) -> Any:
 
 
 def wrap_user_function(name: str, fn: Callable) -> Callable:
+    what = f"function {name}"
+
     def call(args):
-        result = run_user_code(f"function {name}", fn, *[to_python(a) for a in args])
+        result = run_user_code(what, fn, *[a if type(a) is str or type(a) is float
+                                           else to_python(a) for a in args])
         try:
             return from_python(result)
         except (OverflowError, RecursionError):   # a huge int, a list nested in itself

@@ -318,6 +318,10 @@ class Builder(Transformer):
             a, b = b, a
         return (str(a), str(b), self.tpos(op))
 
+    def infix_order(self, items):
+        a, op, b = items
+        return self.order([op, a, b])
+
     def order_list(self, items):
         return list(items)
 

@@ -24,8 +24,11 @@ How HDDL's semantics (Höller et al., AAAI 2020) map onto JSHOP2's:
   needs its variables bound to mean what PDDL says). JSHOP2's if-then-else
   between branches does not arise: HDDL methods are independent alternatives.
 * Subtasks come in their total order: ``:ordered-subtasks`` as written, or
-  ``:subtasks`` sorted by ``:ordering``; an order that leaves two subtasks
-  unordered is an error (the planner is a total-order planner).
+  ``:subtasks`` sorted by ``:ordering``; an ``:ordering`` that leaves two
+  subtasks unordered is an error (the planner is a total-order planner).
+  ``:subtasks`` with no ``:ordering`` at all are taken in the written order,
+  as the IPC 2020 total-order planners do (some of the track's domains write
+  a sequence so); this is one of its linearisations, not all of them.
 * The **problem**'s objects become type atoms, its initial task network the
   task list, its goal ``ProblemInstance.goal`` (checked on the final state).
 
@@ -253,7 +256,10 @@ def linearise(net: Optional[Network], owner: str, pos) -> list:
     if net is None:
         return []
     subs = net.subtasks
-    if net.ordered or len(subs) <= 1:
+    if net.ordered or len(subs) <= 1 or not net.ordering:
+        # no ordering constraint at all: the written order, one linearisation
+        # of the (empty) partial order, as HyperTensioN and the other IPC 2020
+        # total-order planners take it (Minecraft's place-block-abstract-3)
         return list(subs)
     labels = {}
     for s in subs:

@@ -15,12 +15,24 @@ with Java's sort algorithm (see :func:`java_sort`).
 from __future__ import annotations
 
 from functools import cmp_to_key
-from typing import Callable, Iterator
+from typing import Callable, Iterator, Optional
 
 from . import syntax as S
 from .errors import HtnError, PlanningError
-from .compile import GENERIC, binder, conjunction, head_unifier, scanner, term_binder
-from .terms import Var, is_ground, subst, term_str, unify
+from .compile import GENERIC, binder, head_unifier, scanner, term_binder
+from .modes import compile_conjunction
+from .terms import Var, is_ground, subst, term_str, unify, variables
+
+
+_HEADS: dict = {}
+
+
+def head_variables(args: tuple) -> frozenset:
+    """The indices of the variables of a head (cached by the head's tuple)."""
+    hit = _HEADS.get(id(args))
+    if hit is None or hit[0] is not args:
+        hit = _HEADS[id(args)] = (args, frozenset(v.index for v in variables(args, [])))
+    return hit[1]
 
 Sat = Callable[[list], Iterator[list]]
 
@@ -49,6 +61,7 @@ class Logic:
         self.domain = domain
         self.state = state
         self.functions = functions
+        self.arities = arities(domain, state)
         # axiom bodies refer to axioms (their own predicate too): every list
         # exists before any body is compiled, and is filled in place
         self._axioms: dict[str, list] = {pred: [] for pred in domain.axioms}
@@ -65,18 +78,29 @@ class Logic:
         for ax in axs:
             if is_ground(ax.head.args) and _always(ax.branches[0].pre):
                 if not segments or segments[-1][0] is not _FACTS:
-                    segments.append((_FACTS, [], {}, None))
-                _, heads, counts, _ = segments[-1]
+                    segments.append((_FACTS, [], {}, None, None))
+                _, heads, counts, _, _ = segments[-1]
                 heads.append(ax.head.args)
                 counts[ax.head.args] = counts.get(ax.head.args, 0) + 1
             else:
+                flat = all(type(a) in (str, float, Var) for a in ax.head.args)
                 segments.append((ax, head_unifier(ax.head.args), binder(ax.head.args),
-                                 [self.precondition(b.pre) for b in ax.branches]))
+                                 [self.precondition(b.pre, ax.head.args) for b in ax.branches],
+                                 flat))
         return segments
 
     # ------------------------------------------------------------ preconditions
-    def precondition(self, pre: S.Precondition) -> Sat:
-        sat = self.expr(pre.expr)
+    def precondition(self, pre: S.Precondition, head: tuple = None) -> Sat:
+        """``head``: the arguments of the method's, operator's or axiom's head,
+        whose variables are the only ones bound when the precondition is
+        asked (the binding is fresh), so only they decide its binding mode."""
+        e = pre.expr
+        if isinstance(e, (S.Atom, S.Not)):   # one literal: compiled as a conjunction of one
+            e = _single(e)
+        if head is not None and isinstance(e, S.And) and e.items:
+            sat = compile_conjunction(self, e, head_variables(head))
+        else:
+            sat = self.expr(e)
         if pre.first:
             def first(env, sat=sat):
                 for e in sat(env):
@@ -121,12 +145,9 @@ class Logic:
         return method(e)
 
     def _and(self, e: S.And) -> Sat:
-        sats = [self.expr(x) for x in e.items]
-        if not sats:
+        if not e.items:
             return _true
-        if len(sats) == 1:
-            return sats[0]
-        return conjunction(sats)
+        return compile_conjunction(self, e)
 
     def _or(self, e: S.Or) -> Sat:
         sats = [self.expr(x) for x in e.items]
@@ -237,7 +258,7 @@ class Logic:
                     scan = scanners[key] = scanner(args, key)
                 yield from scan(lst, bound, env)
             if axioms:
-                yield from prove(axioms, bound, env)
+                yield from prove(axioms, bound, env, key is None)
         return atom
 
     def _not_atom(self, e: S.Atom) -> Sat:
@@ -266,12 +287,31 @@ class Logic:
                     scan = scanners[key] = scanner(args, key)
                 if next(scan(lst, bound, env), None) is not None:
                     return
-            if axioms and next(prove(axioms, bound, env), None) is not None:
+            if axioms and next(prove(axioms, bound, env, key is None), None) is not None:
                 return
             yield env
         return neg
 
     # ------------------------------------------------------------ atoms
+    def solver(self, pred: str) -> Callable:
+        """``solve(bound, env, ground)``: the satisfiers of ``(pred . bound)``
+        as :meth:`_atom` finds them (state atoms, then axioms), for a caller
+        that knows already whether ``bound`` is ground (htn.jshop.modes)."""
+        lst = self.state.bucket(pred)
+        members = self.state.members[pred]
+        axioms = self._axioms.get(pred)
+        prove = self._prove
+
+        def solve(bound, env, ground):
+            if ground:
+                if bound in members:
+                    yield env
+            elif lst:
+                yield from _scan(lst, bound, env)
+            if axioms:
+                yield from prove(axioms, bound, env, ground)
+        return solve
+
     def match(self, pred: str, bound: tuple, env: list) -> Iterator[list]:
         """Satisfiers of the atom ``(pred . bound)``: state atoms, then axioms."""
         state = self.state
@@ -284,10 +324,17 @@ class Logic:
         if axioms:
             yield from self._prove(axioms, bound, env)
 
-    def _prove(self, axioms, bound: tuple, env: list) -> Iterator[list]:
-        for ax, unify_head, bind_head, branches in axioms:
+    def _prove(self, axioms, bound: tuple, env: list, ground=None) -> Iterator[list]:
+        """Satisfiers of ``(pred . bound)`` by the predicate's axioms (3.6).
+
+        When ``bound`` is ground and an axiom's head is flat, the head under
+        any satisfier of a branch is ``bound`` itself (every head variable
+        was bound by unifying the head), so ``env`` is yielded unchanged."""
+        if ground is None:
+            ground = is_ground(bound)
+        for ax, unify_head, bind_head, branches, flat in axioms:
             if ax is _FACTS:     # (unify_head, bind_head) are (heads, counts) here
-                if is_ground(bound):
+                if ground:
                     for _ in range(bind_head.get(bound, 0)):
                         yield env
                 else:
@@ -299,6 +346,13 @@ class Logic:
             for sat in branches:
                 found = False
                 try:
+                    if ground and flat:
+                        for _ in sat(aenv):
+                            found = True
+                            yield env
+                        if found:
+                            break
+                        continue
                     for nb in sat(aenv):
                         head = bind_head(nb)[1]
                         new = env[:]
@@ -311,6 +365,45 @@ class Logic:
                         from None
                 if found:
                     break
+
+
+def arities(domain: S.Domain, state) -> Optional[dict]:
+    """``pred -> {arity}``: the lengths the atoms of each predicate can have
+    in ``state`` from now on (those already there and those of add lists);
+    None when an add list has a variable atom (3.14), which can be anything."""
+    out = {pred: {len(a) for a in lst} for pred, lst in state.atoms.items()}
+    for ops in domain.operators.values():
+        for op in ops:
+            if op.add.var is not None:
+                return None
+            for item in op.add.items:
+                if isinstance(item, S.Protection):
+                    continue         # protects an atom, adds none
+                for a in item.atoms if isinstance(item, S.EffectForAll) else [item]:
+                    if not isinstance(a, S.Atom):
+                        return None
+                    out.setdefault(a.pred, set()).add(len(a.args))
+    return out
+
+
+_SINGLES: dict = {}
+
+
+def clear_caches() -> None:
+    """Forget the compiled conjunctions (see htn.jshop.compile.clear_caches)."""
+    from .modes import clear_cache
+    for cache in (_SINGLES, _HEADS):
+        cache.clear()
+    clear_cache()
+
+
+def _single(e) -> S.And:
+    """The conjunction of ``e`` alone, one object per ``e`` (the compiled
+    code is cached by conjunction object)."""
+    hit = _SINGLES.get(id(e))
+    if hit is None or hit[0] is not e:
+        hit = _SINGLES[id(e)] = (e, S.And([e], getattr(e, "pos", None)))
+    return hit[1]
 
 
 def _true(env):

@@ -2,23 +2,28 @@
 
 IPC domains are recursive, and plain depth-first decomposition can recurse
 without end: Transport's ``get_to`` reduces to ``get_to`` of a neighbour
-first, Hiking's ``trip_to2`` to itself. HyperTensioN ("dejavu", Magnaguagno
-et al., IPC 2020) marks the method instances that recursion can reach and
-refuses one while an identical one is still being decomposed; this planner
-does the same with the state added, so that recursion that makes progress
-(Towers' moves, a snake's walk) is never cut:
+first, Hiking's ``trip_to2`` to itself, Entertainment's ``a_connect ?e1 ?e3``
+to ``a_connect ?e1 ?e2`` for any ``?e2``. HyperTensioN ("dejavu", Magnaguagno
+et al., IPC 2020) refuses to decompose a recursive task again while an
+identical one is still being decomposed; this planner does the same with the
+state added, so that recursion that makes progress (Towers' moves, a snake's
+walk) is never cut:
 
-    a method instance (method, branch, binding of all its variables) is not
-    applied in a state while the same instance, applied in the same state, is
-    an ancestor in the decomposition (it is still "active": reduced, its
-    subtasks not all achieved).
+    a task instance (name and arguments) is not reduced in a state while the
+    same task, reduced in the same state, is an ancestor in the decomposition
+    (it is still "active": reduced, its subtasks not all achieved).
 
-A loop cut this way would only repeat, below itself, a decomposition already
-under way from the same state. The search then terminates on every problem
-with finitely many objects: an infinite branch would repeat some method
-instance and state on one ancestor chain. It is not complete for every HTN
-problem (a plan that needs a method instance to re-enter itself in an
-unchanged state is lost), which is the trade-off total-order planners make.
+A loop cut this way would only repeat, below itself, a decomposition of the
+same task from the same state, which the ancestor can choose itself. The
+search then terminates on every problem with finitely many objects: an
+infinite branch would repeat some task and state on one ancestor chain. It
+is not complete for every HTN problem (a plan that needs a task to re-enter
+itself in an unchanged state is lost), which is the trade-off total-order
+planners make. Keying on the task rather than on the method instance (the
+method and the binding of all its variables) matters for left recursion with
+a free variable: Entertainment's ``a_connect`` chains are bounded by the
+number of equipment objects, not by the number of (intermediate, target)
+pairs.
 
 States are compared by an incremental hash (:class:`~htn.jshop.state.HashedState`).
 "Active" is tracked with the planner's own bookkeeping: a reduced node is
@@ -29,7 +34,7 @@ from __future__ import annotations
 
 
 class LoopCheck:
-    """The active method instances of the current search path."""
+    """The active task instances of the current search path."""
     __slots__ = ("state", "active", "cut")
 
     def __init__(self, state):
@@ -37,8 +42,8 @@ class LoopCheck:
         self.active: dict = {}      # key -> count
         self.cut = 0                # reductions refused
 
-    def key(self, method, branch: int, env: list) -> tuple:
-        return (id(method), branch, tuple(env), self.state.key)
+    def key(self, task) -> tuple:
+        return (task.name, task.args, self.state.key)
 
     def enter(self, node, key) -> None:
         node.loop_key = key

@@ -10,7 +10,7 @@ and the add list after every deletion, as in JSHOP2; an HDDL action
 before the action, as PDDL does.
 
 Each operator's delete and add lists are compiled into small programs when
-first applied: plain atoms become ``(pred, binder)`` pairs, the common case
+the planner starts: plain atoms become ``(pred, substituter)`` pairs, the common case
 that needs no condition at all.
 """
 from __future__ import annotations
@@ -18,7 +18,7 @@ from __future__ import annotations
 from typing import Optional
 
 from . import syntax as S
-from .compile import binder
+from .compile import substituter
 from .errors import PlanningError
 from .logic import atom_from_term
 from .state import Change
@@ -35,6 +35,9 @@ class Operators:
         self.logic = logic
         self._programs: dict = {}     # id(op) -> (plain dels, plain adds, dels, adds, op)
         self._general: dict = {}      # id(op) -> (dels, adds) compiled in general form
+        for ops in logic.domain.operators.values():    # compiled before searching
+            for op in ops:
+                self.program(op)
 
     def program(self, op: S.Operator) -> tuple:
         prog = self._programs.get(id(op))
@@ -73,14 +76,14 @@ class Operators:
             protections = state.protections
             deleted, added = change.deleted, change.added
             for pred, bind in dels:
-                args = bind(env)[1]
+                args = bind(env)
                 if (pred, args) in protections:
                     return change, False
                 i = state.delete(pred, args)
                 if i != -1:
                     deleted.append((pred, args, i))
             for pred, bind in adds:
-                args = bind(env)[1]
+                args = bind(env)
                 if state.add(pred, args):
                     added.append((pred, args))
             return change, True
@@ -88,6 +91,7 @@ class Operators:
         additions = self.atoms(prog[3], env, op)
         if op.effects_in_prestate:
             deletions, additions = list(deletions), list(additions)
+        protections, deleted = state.protections, change.deleted
         for pred, args in deletions:
             if pred is None:  # a protection condition to cancel
                 p, a = args
@@ -96,11 +100,11 @@ class Operators:
                         change.unprotected = []
                     change.unprotected.append((p, a))
                 continue
-            if state.is_protected(pred, args):
+            if protections and (pred, args) in protections:
                 return change, False
             i = state.delete(pred, args)
             if i != -1:
-                change.deleted.append((pred, args, i))
+                deleted.append((pred, args, i))
         for pred, args in additions:
             if pred is None:
                 p, a = args
@@ -126,7 +130,7 @@ class Operators:
             return
         for kind, a, b in program:
             if kind == _ATOM:
-                yield a, b(env)[1]
+                yield a, b(env)
             elif kind == _FORALL:
                 for nb in a(env):
                     for atom in b:
@@ -158,22 +162,22 @@ def _plain_lists(op: S.Operator) -> tuple:
 
 
 def _plain(eff: S.Effects) -> Optional[list]:
-    """``[(pred, binder)]`` for a list of plain atoms, else None (general case)."""
+    """``[(pred, substituter)]`` for a list of plain atoms, else None (general case)."""
     if eff.var is not None or not all(isinstance(i, S.Atom) for i in eff.items):
         return None
-    return [(i.pred, binder(i.args)) for i in eff.items]
+    return [(i.pred, substituter(i.args)) for i in eff.items]
 
 
 def _atom_program(a) -> tuple:
     if isinstance(a, S.VarAtom):
         return (_VAR_ATOM, a, None)
-    return (_ATOM, a.pred, binder(a.args))
+    return (_ATOM, a.pred, substituter(a.args))
 
 
 def _ground(atom: tuple, env: list) -> tuple:
     kind, a, b = atom
     if kind == _ATOM:
-        return a, b(env)[1]
+        return a, b(env)
     return _var_atom(a, env)
 
 

@@ -328,6 +328,8 @@ def _walk_expr(e, cb) -> None:
         cb(e.var)
     elif isinstance(e, S.CallExpr):
         _walk_term(e.call, cb)
+    elif isinstance(e, S.Equal):        # HDDL's (= a b)
+        _walk_term((e.left, e.right), cb)
 
 
 def _walk_pre(p: S.Precondition, cb) -> None:

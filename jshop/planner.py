@@ -26,12 +26,13 @@ A method body written ``(:unordered ...)`` is unordered, as the manual says
 flag, so such a body runs in order. ``jshop2_compat=True`` reproduces that
 (nested ``:unordered`` lists keep their meaning in both modes).
 
-The search depth (the number of nested ``findPlanHelper`` calls, i.e. frames
-on the stack) is bounded by ``max_depth``: a method that decomposes into
-itself without end would otherwise grow the stack until memory runs out
-(JSHOP2 ends such a search with a ``StackOverflowError``). Reaching the bound
-ends the search like a timeout; ``stats.depth_limit`` then names the task
-that was being reduced deepest.
+The reduction depth (nested reductions since the last operator applied on
+the current path) is bounded by ``max_depth``, and the search's memory by a
+:class:`htn.jshop.limits.MemoryGuard` (see :mod:`htn.jshop.limits`): a method
+that decomposes into itself without end would otherwise grow the stack until
+memory runs out (JSHOP2 ends such a search with a ``StackOverflowError``).
+Reaching a bound ends the search like a timeout; ``stats.depth_limit`` then
+says which bound, and names the task that was being reduced deepest.
 """
 from __future__ import annotations
 
@@ -41,14 +42,14 @@ from typing import Iterator, Optional
 
 from . import syntax as S
 from .errors import PlanningError
-from .limits import DEFAULT_MAX_DEPTH
+from .limits import DEFAULT_MAX_DEPTH, MemoryGuard
 from .logic import Logic
 from .plan import Plan, Step
 from .goals import GoalGuard
 from .loops import LoopCheck
 from .operators import Operators
 from .state import Change, HashedState, State
-from .compile import binder, head_unifier
+from .compile import head_unifier, substituter
 from .terms import subst, term_str, variables
 from .tree import snapshot
 
@@ -86,7 +87,7 @@ class Node:
         self.how = None
         self.done = False   # cached: every task below is achieved
         self.start = 0      # cached: members before this index are achieved
-        self.loop_key = None   # the active method instance it is, see loops.py
+        self.loop_key = None   # the active task instance it is, see loops.py
 
 
 def compile_tasks(tl):
@@ -101,8 +102,8 @@ def compile_tasks(tl):
 
 
 def _atom_maker(t: S.TaskAtom):
-    bind, name, immediate = binder(t.args), t.name, t.immediate
-    return lambda env: Node(Task(name, bind(env)[1], immediate, t))
+    bind, name, immediate = substituter(t.args), t.name, t.immediate
+    return lambda env: Node(Task(name, bind(env), immediate, t))
 
 
 def _list_maker(tl: S.TaskList):
@@ -180,37 +181,42 @@ def _first_in_order(root: Node, trail: list, path: Optional[list] = None,
 
 def _first_tasks(root: Node, trail: Optional[list]) -> list:
     res: list = []
-    stack = [[root, root.start, -1]]      # node, next member, len(res) on entry
-    while stack:
-        frame = stack[-1]
-        node, i, n0 = frame
-        if n0 < 0:
-            frame[2] = n0 = len(res)
-        elif node.ordered and len(res) != n0:
-            stack.pop()
-            continue
+    stack: list = []       # (list, next member, len(res) on entry) of each ancestor
+    node, i, n0 = root, root.start, 0
+    while True:
         subs = node.subtasks
-        if i == len(subs):
-            stack.pop()
+        n = len(subs)
+        down = False
+        while i < n:
+            child = subs[i]
+            i += 1
+            cs = child.subtasks
+            if cs is None:
+                if child.task.immediate:
+                    return [child]
+                res.append(child)
+                if node.ordered:
+                    break
+            elif cs and not child.done:
+                stack.append((node, i, n0))
+                node, i, n0 = child, child.start, len(res)
+                down = True
+                break
+            elif trail is not None and i - 1 == node.start:
+                trail.append((node, i - 1))
+                node.start = i
+        if down:
+            continue
+        # ``node`` is finished: exhausted, or ordered and it gave a task
+        while True:
             if trail is not None and len(res) == n0 and stack:
                 node.done = True
                 trail.append(node)
-            continue
-        child = subs[i]
-        frame[1] = i + 1
-        cs = child.subtasks
-        if cs is None:
-            if child.task.immediate:
-                return [child]
-            res.append(child)
-            if node.ordered:
-                stack.pop()
-        elif cs and not child.done:
-            stack.append([child, child.start, -1])
-        elif trail is not None and i == node.start:
-            trail.append((node, i))
-            node.start = i + 1
-    return res
+            if not stack:
+                return res
+            node, i, n0 = stack.pop()
+            if not (node.ordered and len(res) != n0):
+                break
 
 
 def _undo_marks(trail: list, mark: int, loops=None) -> None:
@@ -283,6 +289,7 @@ class Stats:
             "timed_out": self.timed_out,
             "interrupted": self.interrupted,
             "depth_limit_reached": self.depth_limit is not None,
+            "memory_limit_reached": isinstance(self.depth_limit, MemoryLimit),
         }
 
 
@@ -295,15 +302,27 @@ class DepthLimit:
         self.task = task
 
     def __str__(self) -> str:
-        where = ""
-        if self.task is not None:
-            pos = getattr(self.task.src, "pos", None)
-            where = f"{pos}: " if pos else ""
-            what = f"task {self.task} recurses past the search depth limit"
-        else:
-            what = "the search reached its depth limit"
-        return (f"{where}{what} ({self.limit:,} nested reductions and steps); "
+        if self.task is None:
+            return self.message(None)
+        pos = getattr(self.task.src, "pos", None)
+        return (f"{pos}: " if pos else "") + self.message(self.task)
+
+    def message(self, task) -> str:
+        what = (f"task {task} recurses past the search depth limit" if task is not None
+                else "the search reached its depth limit")
+        return (f"{what} ({self.limit:,} nested reductions without a step); "
                 "search stopped (raise it with --max-depth N)")
+
+
+class MemoryLimit(DepthLimit):
+    """Why the search stopped at its memory budget: the plan on the current
+    path needs more memory than the budget, or the search never ends."""
+    __slots__ = ()
+
+    def message(self, task) -> str:
+        at = f" at task {task}" if task is not None else ""
+        return (f"the search used its memory budget ({self.limit >> 20:,} MB){at}; "
+                "search stopped (raise it with --max-memory MB)")
 
 
 class Planner:
@@ -312,12 +331,15 @@ class Planner:
     def __init__(self, domain: S.Domain, instance: S.ProblemInstance,
                  functions=None, record_trees: bool = False,
                  jshop2_compat: bool = False, max_depth: int = DEFAULT_MAX_DEPTH,
-                 loop_check: Optional[bool] = None, explain=None):
+                 loop_check: Optional[bool] = None, explain=None,
+                 max_memory: Optional[int] = None, tree_paths: bool = True):
         self.domain = domain
         self.explain = explain      # an explain.Explainer collecting dead ends, or None
         self.instance = instance
         self.record_trees = record_trees
+        self.tree_paths = tree_paths     # node paths in recorded trees (see tree.snapshot)
         self.max_depth = max_depth
+        self.max_memory = max_memory     # bytes, or None for the default budget
         if loop_check is None:           # on for HDDL, off for JSHOP2 (its own semantics)
             loop_check = domain.language == "hddl"
         self.state = HashedState() if loop_check else State()
@@ -335,14 +357,15 @@ class Planner:
             self._goal = (self.logic.precondition(instance.goal), instance.goal_nvars)
             self.guard = GoalGuard(domain, instance.goal) or None
         pre = self.logic.precondition
-        # (operator, head unifier, precondition, head binder, constant cost or None)
-        self._ops = {name: [(op, head_unifier(op.head.args), pre(op.pre), binder(op.head.args),
+        # (operator, head unifier, precondition, head substituter, constant cost or None)
+        self._ops = {name: [(op, head_unifier(op.head.args), pre(op.pre, op.head.args),
+                             substituter(op.head.args),
                              op.cost if type(op.cost) is float else None)
                             for op in ops]
                      for name, ops in domain.operators.items()}
         # (precondition, body, body is ordered) per branch; see the module docstring
         self._methods = {name: [(m, head_unifier(m.head.args),
-                                 [(pre(b.pre), compile_tasks(b.tasks),
+                                 [(pre(b.pre, m.head.args), compile_tasks(b.tasks),
                                    jshop2_compat or b.tasks.ordered) for b in m.branches])
                                 for m in ms]
                          for name, ms in domain.methods.items()}
@@ -354,7 +377,7 @@ class Planner:
             from .hddl_domain import top_method
             m = top_method(domain, instance.top)
             self._methods[m.name] = [(m, head_unifier(m.head.args),
-                                      [(pre(b.pre), compile_tasks(b.tasks), True)
+                                      [(pre(b.pre, m.head.args), compile_tasks(b.tasks), True)
                                        for b in m.branches])]
             self.root = _list_maker(S.TaskList([m.head]))([])
         else:
@@ -384,9 +407,13 @@ class Planner:
         t0 = stats.started = clock()
         spent = 0.0
         frame = self._frame
-        stack = [frame(self.root)]
+        root = self.root
+        stack = [frame(root)]
+        depths = [0]       # per frame: reductions since the last step on its path
         push, pop, nxt = stack.append, stack.pop, next
+        dpush, dpop = depths.append, depths.pop
         max_depth = self.max_depth
+        guard = None       # made at the first check: tiny searches never pay for it
         ticks = stats.expansions
         stats.expansions += 1
         try:
@@ -394,13 +421,14 @@ class Planner:
                 req = nxt(stack[-1], None)     # frames never yield None
                 if req is None:
                     pop()
+                    dpop()
                     continue
                 if req is _PLAN:
                     stats.plans_found += 1
                     plan = Plan([Step(*s) for s in self._steps], self._cost,
                                 index=stats.plans_found - 1)
                     if self.record_trees:
-                        plan.tree = snapshot(self.root, plan.steps)
+                        plan.tree = snapshot(self.root, plan.steps, self.tree_paths)
                     spent += clock() - t0
                     stats.elapsed = spent
                     stats.expansions = ticks + 1
@@ -411,15 +439,27 @@ class Planner:
                     gc.disable()
                     t0 = clock()
                     continue
-                if len(stack) >= max_depth:
-                    stats.depth_limit = DepthLimit(max_depth, _deepest_task(self.root, req))
-                    return
-                push(frame(req))
-                ticks += 1
-                if timeout is not None and not ticks & 255:
-                    if clock() - stats.started > timeout:   # wall clock, output included
-                        stats.timed_out = True
+                if req is root:         # an operator was applied (or a task list ended)
+                    depth = 0
+                else:
+                    depth = depths[-1] + 1
+                    if depth >= max_depth:
+                        stats.depth_limit = DepthLimit(max_depth, _deepest_task(root, req))
                         return
+                push(frame(req))
+                dpush(depth)
+                ticks += 1
+                if not ticks & 255:
+                    if timeout is not None and clock() - stats.started > timeout:
+                        stats.timed_out = True       # wall clock, output included
+                        return
+                    if not ticks & 4095:
+                        if guard is None:
+                            guard = MemoryGuard(self.max_memory)
+                        if guard.exceeded():
+                            stats.depth_limit = MemoryLimit(guard.limit_bytes,
+                                                            _deepest_task(root, req))
+                            return
         except KeyboardInterrupt:
             stats.interrupted = True
             raise
@@ -481,7 +521,7 @@ class Planner:
                                     raise PlanningError.at(op.pos, f"cost of {op.name} is "
                                                            f"{term_str(cost)}, not a number")
                             node.how = len(steps)
-                            steps.append((op.name, bind_head(nb)[1], cost))
+                            steps.append((op.name, bind_head(nb), cost))
                             self._cost += cost
                             tried = True
                             yield root
@@ -496,24 +536,24 @@ class Planner:
                 node.subtasks = None
                 node.how = None
             else:
-                for index, (m, unify_head, branches) in enumerate(
-                        self._methods.get(task.name, ())):
+                methods = self._methods.get(task.name, ())
+                key = None
+                if loops is not None:
+                    key = loops.key(task)
+                    if key in loops.active:     # see loops.py
+                        loops.cut += 1
+                        methods = ()
+                for index, (m, unify_head, branches) in enumerate(methods):
                     env = [None] * m.nvars
                     if not unify_head(task.args, env):
                         continue
                     for k, (sat, reduce, ordered) in enumerate(branches):
                         found = False
                         for nb in sat(env):
-                            if loops is not None:
-                                key = loops.key(m, k, nb)
-                                if key in loops.active:
-                                    loops.cut += 1
-                                    found = True
-                                    continue
                             node.subtasks = reduce(nb)
                             node.ordered = ordered
                             node.how = (m, k, index)
-                            if loops is not None and node.subtasks:
+                            if key is not None and node.subtasks:
                                 loops.enter(node, key)
                             tried = True
                             yield node

@@ -11,12 +11,13 @@ from .terms import is_ground
 
 
 class State:
-    __slots__ = ("atoms", "members", "protections")
+    __slots__ = ("atoms", "members", "protections", "nonground")
 
     def __init__(self):
         self.atoms: dict[str, list] = {}      # pred -> [args tuple], in order
         self.members: dict[str, set] = {}     # pred -> {ground args tuple}
         self.protections: dict[tuple, int] = {}  # (pred, args) -> counter
+        self.nonground = 0    # atoms with variables in them (see htn.jshop.modes)
 
     def bucket(self, pred: str) -> list:
         """The live list of ``pred``'s atoms (created empty on first use)."""
@@ -38,6 +39,8 @@ class State:
             if args in m:
                 return False
             m.add(args)
+        else:
+            self.nonground += 1
         lst.append(args)
         return True
 
@@ -60,6 +63,8 @@ class State:
         self.atoms[pred].insert(index, args)
         if is_ground(args):
             self.members[pred].add(args)
+        else:
+            self.nonground += 1
 
     def retract(self, pred: str, args: tuple) -> None:
         """Undo an :meth:`add` (the atom was appended, so look from the end)."""
@@ -68,7 +73,11 @@ class State:
             if lst[i] == args:
                 del lst[i]
                 break
-        self.members[pred].discard(args)
+        m = self.members[pred]
+        if args in m:
+            m.remove(args)
+        else:                  # only ground atoms are members
+            self.nonground -= 1
 
     def is_protected(self, pred: str, args: tuple) -> bool:
         return (pred, args) in self.protections
@@ -93,6 +102,7 @@ class State:
         s.atoms = {p: list(v) for p, v in self.atoms.items()}
         s.members = {p: set(v) for p, v in self.members.items()}
         s.protections = dict(self.protections)
+        s.nonground = self.nonground
         return s
 
     def facts(self):

@@ -107,7 +107,8 @@ def is_ground(t: Any) -> bool:
         return True
     if tt is tuple:
         for x in t:
-            if not is_ground(x):
+            tx = type(x)     # symbols and numbers without a call: most atoms
+            if tx is not str and tx is not float and not is_ground(x):
                 return False
         return True
     if tt is Dotted:

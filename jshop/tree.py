@@ -142,10 +142,14 @@ def _dot_escape(s: str) -> str:
     return s.replace("\\", "\\\\").replace('"', '\\"').replace("\\\\n", "\\n")
 
 
-def snapshot(root, steps) -> TaskTree:
-    """Build the tree of the current task network (a planner ``Node``)."""
+def snapshot(root, steps, paths: bool = True) -> TaskTree:
+    """Build the tree of the current task network (a planner ``Node``).
+
+    Without ``paths`` every node's path is left empty: a path spells all its
+    ancestors, so a tail recursion thousands deep (Towers) makes the paths
+    quadratic in the plan's length, and the IPC output does not need them."""
     tree = TaskTree(name="", path="")
-    tree.children = _children(root, "")
+    tree.children = _children(root, "", paths)
     return tree
 
 
@@ -165,20 +169,22 @@ def _flatten(node) -> list:
     return out
 
 
-def _children(node, prefix: str) -> list:
+def _children(node, prefix: str, paths: bool = True) -> list:
     """The subtrees below a network node, built without recursion."""
     out: list = []
     work = [(node, prefix, out)]
     while work:
         parent, path, sink = work.pop()
         kids = _flatten(parent)
-        counts = Counter(k.task.name for k in kids)
+        counts = Counter(k.task.name for k in kids) if paths else None
         seen: Counter = Counter()
         for k in kids:
             name = k.task.name
-            seen[name] += 1
-            label = name if counts[name] == 1 else f"{name} :call {seen[name]}"
-            kpath = f"{path}/{label}" if path else label
+            kpath = ""
+            if paths:
+                seen[name] += 1
+                label = name if counts[name] == 1 else f"{name} :call {seen[name]}"
+                kpath = f"{path}/{label}" if path else label
             t = TaskTree(name=name, args=k.task.args, path=kpath)
             how = k.how
             if isinstance(how, int):
