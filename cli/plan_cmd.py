@@ -76,7 +76,7 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
     """
     from htn.jshop.checks import check_domain, check_problem
     from htn.jshop.functions import FunctionTable
-    from htn.jshop.parser import load_domain, load_problem
+    from htn.jshop.parser import load_inputs
     from htn.jshop.planfile import header
     from htn.jshop.planner import compat_warning
 
@@ -95,11 +95,10 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
         table = FunctionTable()
         if functions:
             table.load_file(functions)
-        dom = load_domain(domain, table)
-        prob = load_problem(problem, table)
+        dom, prob = load_inputs(domain, problem, table)
         warnings = check_domain(dom) + check_problem(dom, prob)
-        if jshop2_compat and compat_warning(dom):
-            warnings.append(compat_warning(dom))
+        if jshop2_compat:
+            warnings += filter(None, [compat_warning(dom)])
         if not quiet:
             for w in warnings:
                 warn(w)

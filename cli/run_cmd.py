@@ -104,7 +104,7 @@ def _run(ctx, signals, plan_file, robot_name, sim, gui, snapshots, faults, seed,
     from htn.executor.log import EventLog, check_plan_digest, read_header, run_header
     from htn.executor.plan_tree import check_runnable, recover_tree
     from htn.jshop.functions import FunctionTable
-    from htn.jshop.parser import load_domain, load_problem
+    from htn.jshop.parser import load_inputs
     from htn.jshop.planfile import read_plan_file
     from htn.jshop.validate import check_steps
     from htn.robot.backends import RobotRequest, backends, make_robot
@@ -152,8 +152,7 @@ def _run(ctx, signals, plan_file, robot_name, sim, gui, snapshots, faults, seed,
     table = FunctionTable()
     if functions:
         table.load_file(functions)
-    dom = load_domain(domain, table)
-    prob = load_problem(problem, table)
+    dom, prob = load_inputs(domain, problem, table)
     instance = prob.instances[0]
     plan = pf.plans[plan_index - 1]
     steps = plan.steps

@@ -64,8 +64,7 @@ def transform(domain, problem, rules, metric, output, as_json):
 
 def _transform(domain: str, problem: str, rules, metric: str):
     """Plan, transform and check; the result document and the workspace."""
-    from htn.jshop.checks import check_domain_name
-    from htn.jshop.parser import load_domain, load_problem
+    from htn.jshop.parser import load_inputs
     from htn.transform.framework import METRICS, Workspace, default_framework
 
     fw = default_framework()
@@ -78,9 +77,7 @@ def _transform(domain: str, problem: str, rules, metric: str):
                                      f"known: {', '.join(names)}", param_hint="--rules")
         for t in fw.transformations:
             t.enabled = t.name in wanted
-    dom = load_domain(domain)
-    prob = load_problem(problem)
-    check_domain_name(dom, prob)
+    dom, prob = load_inputs(domain, problem)
     ws = Workspace.from_problem(dom, prob.instances[0])
     original = ws.plan
     fw.apply_all_transformations(ws, metric)
@@ -102,5 +99,5 @@ def _transform(domain: str, problem: str, rules, metric: str):
 
 
 def _task_text(t) -> str:
-    from htn.jshop.terms import source_str
-    return "(" + " ".join([t.name] + [source_str(a) for a in t.args]) + ")"
+    from htn.jshop.terms import source_atom
+    return source_atom(t.name, t.args)

@@ -29,19 +29,16 @@ def validate(domain, problem, plan_file, plan_index, functions, quiet):
       htn plan DOMAIN PROBLEM -o plan.txt && htn validate DOMAIN PROBLEM plan.txt
       htn validate basic problem plans-all.txt
     """
-    from htn.jshop.checks import check_domain_name
     from htn.jshop.errors import HtnError
     from htn.jshop.functions import FunctionTable
-    from htn.jshop.parser import load_domain, load_problem
+    from htn.jshop.parser import load_inputs
     from htn.jshop.planfile import read_plan_file
     from htn.jshop.validate import check_steps, validate_plan
 
     table = FunctionTable()
     if functions:
         table.load_file(functions)
-    dom = load_domain(domain, table)
-    prob = load_problem(problem, table)
-    check_domain_name(dom, prob)
+    dom, prob = load_inputs(domain, problem, table)
     pf = read_plan_file(plan_file)
     plans = pf.plans
     if plan_index is not None:

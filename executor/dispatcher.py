@@ -73,7 +73,7 @@ class TaskDispatcher:
         self.functions = functions
         self.max_replans = max_replans
         self.tree_known = tree is not None
-        self.belief = Planner(domain, S.ProblemInstance(instance.state, S.TaskList([])), functions)
+        self.belief = Planner.for_state(domain, instance.state, functions)
         self.done: list[ActionContext] = []       # verified steps, in order
         self.failed: Optional[ActionContext] = None
         self.running: Optional[ActionContext] = None
@@ -232,8 +232,7 @@ class TaskDispatcher:
         self.tree_known = True
         paths = repair.paths
         graft(repair, self.root, self._action)
-        self.belief = Planner(self.domain, S.ProblemInstance(observed.state, S.TaskList([])),
-                              self.functions)
+        self.belief = Planner.for_state(self.domain, observed.state, self.functions)
         self.failed = None
         self.emit(ctx, "replanned", f"re-planned {tried[-1]} from the observed state: "
                   f"{len(repair.plan.steps)} new steps", path=repair.path, paths=paths,

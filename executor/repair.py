@@ -111,7 +111,7 @@ def _atoms(tasks: S.TaskList) -> list:
 
 def _applies(domain, observed: S.ProblemInstance, functions, steps) -> bool:
     """Do ``steps`` apply in sequence from the observed state?"""
-    checker = Planner(domain, S.ProblemInstance(observed.state, S.TaskList([])), functions)
+    checker = Planner.for_state(domain, observed.state, functions)
     return all(checker.apply_step(s.name, tuple(s.args)) for s in steps)
 
 

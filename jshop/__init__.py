@@ -15,7 +15,7 @@ from importlib import import_module
 
 _EXPORTS = {
     "HtnError": "errors", "PlanningError": "errors", "FunctionTable": "functions",
-    "load_domain": "parser", "load_problem": "parser", "parse_text": "parser",
+    "load_domain": "parser", "load_problem": "parser", "load_inputs": "parser", "parse_text": "parser",
     "Plan": "plan", "Step": "plan", "Planner": "planner", "TaskTree": "tree",
 }
 

@@ -20,8 +20,8 @@ from dataclasses import dataclass
 
 from . import syntax as S
 from .errors import HtnError
-from .parser import _walk_expr, _walk_term
-from .terms import source_str, variables
+from .parser import _walk_expr, _walk_term, check_domain_name
+from .terms import source_atom, variables
 
 
 @dataclass
@@ -69,18 +69,6 @@ def check_problem(domain: S.Domain, problem: S.Problem) -> list[Warning_]:
         for op in domain.operators.get(name, ()):
             _unbound_effect_vars(op, open_)
     return warnings
-
-
-def check_domain_name(domain: S.Domain, problem: S.Problem) -> None:
-    """A problem names its domain (manual 3.12) and JSHOP2 compiles it against
-    that domain only: another domain's problem is an error at the name. An
-    HDDL problem may name another domain (a warning): the IPC 2020 planners
-    do not compare the names, and Barman-BDI's problems name ``barman_htn``
-    while its domain is ``barman_agent``."""
-    if problem.domain_name != domain.name and domain.language != "hddl":
-        raise HtnError.at(problem.domain_pos or problem.pos,
-                          f"problem '{problem.name}' is for domain '{problem.domain_name}', "
-                          f"but {domain.file or 'the domain'} defines '{domain.name}'")
 
 
 def _plural(arities: set[int]) -> str:
@@ -192,7 +180,7 @@ class _Source:
 
     @property
     def message(self) -> str:
-        text = "(" + " ".join([self.task.name, *map(source_str, self.task.args)]) + ")"
+        text = source_atom(self.task.name, self.task.args)
         return f"{text} at {self.task.pos}" if self.task.pos else text
 
 

@@ -25,7 +25,8 @@ from dataclasses import dataclass, field
 from typing import Optional
 
 from . import syntax as S
-from .terms import atom_str
+from .terms import atom_str, source_atom
+from .unsatisfied import failing_literal, show as _show
 
 
 @dataclass
@@ -102,7 +103,7 @@ class Explainer:
         inst = planner.instance
         expr = inst.goal.expr
         env = [None] * inst.goal_nvars
-        item, bound = self.failing_literal(planner, expr, env)
+        item, bound = failing_literal(planner.logic, expr, env, self._prefixes)
         d = DeadEnd("the goal", inst.goal.pos, len(planner._steps))
         d.attempts = [Attempt("goal", inst.goal.pos,
                               f"{_show(item, bound)} does not hold in the final state",
@@ -119,14 +120,14 @@ class Explainer:
     def _operators(self, planner, task) -> list:
         out = []
         for op, unify_head, pre, _bind, _cost in planner._ops.get(task.name, ()):
-            what = f"operator {_head(op.head)}"
+            what = f"operator {source_atom(op.head.name, op.head.args)}"
             env = [None] * op.nvars
             if not unify_head(task.args, env):
                 out.append(Attempt(what, op.pos, _mismatch(op.head, task)))
                 continue
             satisfiers = list(_first(pre(env), 50))
             if not satisfiers:
-                item, bound = self.failing_literal(planner, op.pre.expr, env)
+                item, bound = failing_literal(planner.logic, op.pre.expr, env, self._prefixes)
                 out.append(Attempt(what, op.pos, f"precondition {_show(item, bound)} has no "
                                    "satisfier", getattr(item, "pos", None)))
                 continue
@@ -146,7 +147,6 @@ class Explainer:
                 atom = f" {protected[0]}" if protected else ""
                 return f"it would delete the protected atom{atom} (manual 3.9)"
             if broken:
-                planner.guard.cuts -= 1
                 return "it breaks a goal atom that no task left can make true again"
         return "it applies, but no plan continues from it"    # pragma: no cover
 
@@ -156,38 +156,23 @@ class Explainer:
         for index, (m, unify_head, branches) in enumerate(methods):
             env = [None] * m.nvars
             if not unify_head(task.args, env):
-                out.append(Attempt(f"method {_head(m.head)}", m.pos, _mismatch(m.head, task)))
+                out.append(Attempt(f"method {source_atom(m.head.name, m.head.args)}", m.pos, _mismatch(m.head, task)))
                 continue
             for k, (sat, _reduce, _ordered) in enumerate(branches):
                 branch = m.branches[k]
-                what = f"method {_head(m.head)}, branch {branch.label}"
+                what = f"method {source_atom(m.head.name, m.head.args)}, branch {branch.label}"
                 satisfiers = list(_first(sat(env), 1))
                 if satisfiers:
                     out.append(Attempt(what, branch.pos or m.pos, "every binding of its "
                                        "precondition is already being decomposed in this "
                                        "state (a loop)"))
                     break         # JSHOP2: later branches are not considered
-                item, bound = self.failing_literal(planner, branch.pre.expr, env)
+                item, bound = failing_literal(planner.logic, branch.pre.expr, env,
+                                              self._prefixes)
                 out.append(Attempt(what, branch.pos or m.pos, f"precondition "
                                    f"{_show(item, bound)} has no satisfier",
                                    getattr(item, "pos", None)))
         return out
-
-    def failing_literal(self, planner, expr, env: list):
-        """The first conjunct of ``expr`` with no satisfier after those before
-        it, and the bindings under which it failed."""
-        items = expr.items if isinstance(expr, S.And) else [expr]
-        bound = env
-        for j in range(len(items)):
-            key = (id(expr), j)
-            sat = self._prefixes.get(key)
-            if sat is None:
-                sat = self._prefixes[key] = planner.logic.expr(S.And(list(items[:j + 1])))
-            found = next(iter(sat(env)), None)
-            if found is None:
-                return items[j], bound
-            bound = found
-        return expr, env
 
     # ------------------------------------------------------------ output
     def lines(self, full: bool = False) -> list:
@@ -227,18 +212,8 @@ def _first(it, n: int):
         yield x
 
 
-def _head(head: S.TaskAtom) -> str:
-    from .terms import source_str
-    return "(" + " ".join([head.name, *(source_str(a) for a in head.args)]) + ")"
-
-
 def _mismatch(head: S.TaskAtom, task) -> str:
     if len(head.args) != len(task.args):
         return (f"its head takes {len(head.args)} argument(s), the task has "
                 f"{len(task.args)}")
     return "its head does not match the task's arguments"
-
-
-def _show(e, env) -> str:
-    from .validate import _show as show
-    return show(e, env)

@@ -36,7 +36,6 @@ class GoalGuard:
                     not any(type(a) is Var for a in item.expr.args):
                 self.forbidden.add((item.expr.pred, item.expr.args))
         self.adds, self.dels = _summaries(domain)
-        self.cuts = 0
 
     def __bool__(self) -> bool:
         return bool(self.needed or self.forbidden)
@@ -49,12 +48,10 @@ class GoalGuard:
         for pred, args, _i in change.deleted:
             if (pred, args) in self.needed and not state.has(pred, args) and \
                     not self._mendable(root, cursor, self.adds, pred, args):
-                self.cuts += 1
                 return True
         for pred, args in change.added:
             if (pred, args) in self.forbidden and state.has(pred, args) and \
                     not self._mendable(root, cursor, self.dels, pred, args):
-                self.cuts += 1
                 return True
         return False
 

@@ -15,13 +15,13 @@ competition's verifier compares.
 """
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass, field
 from functools import lru_cache
 from pathlib import Path
 from typing import Optional
 
-from lark import Lark, Token, Transformer, v_args
+from lark import Lark, Token, v_args
+from lark.visitors import Transformer_NonRecursive
 from lark.exceptions import VisitError
 
 from . import lark_errors, syntax as S
@@ -29,15 +29,6 @@ from .errors import HtnError
 from .terms import Var
 
 GRAMMAR = Path(__file__).with_name("hddl.lark")
-
-_HEAD = re.compile(r"\A(?:\s|;[^\n]*\n)*\(\s*define\s*\(\s*(domain|problem)\b", re.I)
-
-
-def is_hddl(text: str) -> bool:
-    """True if the text starts like an HDDL (PDDL) file: ``(define (domain``
-    or ``(define (problem``, after comments."""
-    return _HEAD.match(text) is not None
-
 
 @lru_cache(maxsize=1)
 def _lark() -> Lark:
@@ -161,8 +152,9 @@ class HProblem:
 
 # ------------------------------------------------------------------ builder
 
-class Builder(Transformer):
-    """Turns the Lark tree into the HDDL model (method names = rule names)."""
+class Builder(Transformer_NonRecursive):
+    """Turns the Lark tree into the HDDL model (method names = rule names),
+    without recursion: the parser bounds nesting, not Python's stack."""
 
     def __init__(self, file: str):
         super().__init__()

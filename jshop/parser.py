@@ -394,14 +394,23 @@ def _number_axiom(ax: S.Axiom) -> int:
 
 # ------------------------------------------------------------ entry points
 
+_HDDL_HEAD = re.compile(r"\A(?:\s|;[^\n]*\n)*\(\s*define\s*\(\s*(domain|problem)\b", re.I)
+
+
+def is_hddl(text: str) -> bool:
+    """True if the text starts like an HDDL (PDDL) file: ``(define (domain``
+    or ``(define (problem``, after comments."""
+    return _HDDL_HEAD.match(text) is not None
+
+
 def parse_text(text: str, file: str = "<string>", functions: FunctionTable | None = None):
     """Parse a domain or problem from text; raise :class:`HtnError` on bad input.
 
     HDDL text (``(define (domain ...`` or ``(define (problem ...``) is read by
     :mod:`htn.jshop.hddl` into the same syntax objects."""
-    from . import hddl
     _check_nesting(text, file)
-    if hddl.is_hddl(text):
+    if is_hddl(text):
+        from . import hddl      # its grammar is loaded only for HDDL input
         return hddl.parse_text(text, file)
     functions = functions or FunctionTable()
     tree = lark_errors.parse(_lark(), text, file, _TOKEN_NAMES, start="start")
@@ -499,3 +508,26 @@ def load_problem(path: str, functions: FunctionTable | None = None) -> S.Problem
         wanted = "(define (problem ...))" if p.language == "hddl" else "(defproblem ...)"
         raise HtnError.at(p.pos, f"expected a {wanted} here, found a domain")
     return p
+
+
+def load_inputs(domain_path: str, problem_path: str,
+                functions: FunctionTable | None = None) -> tuple[S.Domain, S.Problem]:
+    """Load a domain and a problem for it: every command that reads the pair
+    (``plan``, ``run``, ``validate``, ``transform``, ``evaluate``) goes
+    through here, so each refuses another domain's problem the same way."""
+    dom = load_domain(domain_path, functions)
+    prob = load_problem(problem_path, functions)
+    check_domain_name(dom, prob)
+    return dom, prob
+
+
+def check_domain_name(domain: S.Domain, problem: S.Problem) -> None:
+    """A problem names its domain (manual 3.12) and JSHOP2 compiles it against
+    that domain only: another domain's problem is an error at the name. An
+    HDDL problem may name another domain (a warning): the IPC 2020 planners
+    do not compare the names, and Barman-BDI's problems name ``barman_htn``
+    while its domain is ``barman_agent``."""
+    if problem.domain_name != domain.name and domain.language != "hddl":
+        raise HtnError.at(problem.domain_pos or problem.pos,
+                          f"problem '{problem.name}' is for domain '{problem.domain_name}', "
+                          f"but {domain.file or 'the domain'} defines '{domain.name}'")

@@ -608,6 +608,19 @@ class Planner:
         return next(iter(sat([None] * nvars)), None) is not None
 
     # ------------------------------------------------------------ operators
+    @classmethod
+    def for_state(cls, domain: S.Domain, state, functions=None, goal=None,
+                  goal_nvars: int = 0) -> "Planner":
+        """A planner with no tasks, used as the operator model of a world:
+        its state is a copy of ``state`` (the atoms of an initial or an
+        observed state), changed by :meth:`apply_step`. The executor's
+        belief, the symbolic robot's world, plan repair's check and plan
+        validation are such models; ``goal`` is an HDDL goal to test with
+        :meth:`goal_holds`. No loop check: nothing is decomposed."""
+        return cls(domain, S.ProblemInstance(state, S.TaskList([]), goal=goal,
+                                             goal_nvars=goal_nvars),
+                   functions, loop_check=False)
+
     def step_options(self, name: str, args: tuple):
         """``(operator, binding)`` for each way the ground step ``(name . args)``
         is applicable in the current state: operators in definition order,

@@ -294,6 +294,11 @@ def source_str(t: Any) -> str:
     return term_str(t)
 
 
+def source_atom(name: str, args: Sequence) -> str:
+    """Print a predicate or task as JSHOP2 source text: ``(name ?x a)``."""
+    return "(" + " ".join([name, *[source_str(a) for a in args]]) + ")"
+
+
 def variables(t: Any, out: list) -> list:
     """Append the variable occurrences of ``t`` to ``out`` in textual order."""
     tt = type(t)

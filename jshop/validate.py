@@ -22,7 +22,8 @@ from typing import Optional
 
 from . import syntax as S
 from .errors import HtnError
-from .terms import Var, atom_str, subst, term_str
+from .terms import atom_str, subst, term_str
+from .unsatisfied import failing_literal, show as _show
 
 
 @dataclass
@@ -53,10 +54,8 @@ def validate_plan(domain: S.Domain, instance: S.ProblemInstance, plan,
     """Replay ``plan`` (a :class:`~htn.jshop.plan.Plan`) from ``instance``'s
     initial state; see the module docstring for what valid means."""
     from .planner import Planner
-    planner = Planner(domain, S.ProblemInstance(instance.state, S.TaskList([]),
-                                                goal=instance.goal,
-                                                goal_nvars=instance.goal_nvars),
-                      functions, loop_check=False)
+    planner = Planner.for_state(domain, instance.state, functions, goal=instance.goal,
+                                goal_nvars=instance.goal_nvars)
     steps = plan.steps
     n = len(steps)
     changes: list = []            # applied change of each step so far
@@ -138,61 +137,19 @@ def _why(planner, step) -> str:
         if not head_unifier(op.head.args)(tuple(step.args), env):
             reasons.append(f"{step} does not match {atom_str(op.name, op.head.args)}")
             continue
-        expr = op.pre.expr
-        items = expr.items if isinstance(expr, S.And) else [expr]
-        for j in range(1, len(items) + 1):
-            sat = planner.logic.expr(S.And(items[:j]) if j > 1 else items[0])
-            if next(iter(sat(env)), None) is None:
-                reasons.append(f"precondition of {step} does not hold: "
-                               f"{_show(items[j - 1], env)} has no satisfier")
-                break
-        else:
+        item, bound = failing_literal(planner.logic, op.pre.expr, env)
+        if item is None:
             reasons.append(f"precondition of {step} does not hold")
+        else:
+            reasons.append(f"precondition of {step} does not hold: "
+                           f"{_show(item, bound)} has no satisfier")
     return "; ".join(reasons) or f"no operator applies to {step}"
 
 
 def _why_goal(planner, instance) -> str:
     """The first conjunct of the goal that does not hold in the final state."""
-    expr = instance.goal.expr
-    items = expr.items if isinstance(expr, S.And) else [expr]
     env = [None] * instance.goal_nvars
-    for item in items:
-        if next(iter(planner.logic.expr(item)(env)), None) is None:
-            return f"the goal does not hold in the final state: {_show(item, env)} is false"
+    item, bound = failing_literal(planner.logic, instance.goal.expr, env)
+    if item is not None:
+        return f"the goal does not hold in the final state: {_show(item, bound)} is false"
     return "the goal does not hold in the final state"
-
-
-def _show(e, env) -> str:
-    """An expression in source form, variables replaced by their bindings."""
-    from .functions import STDLIB_JAVA_NAMES
-    from .terms import CallTerm
-    written = {java: name for name, java in STDLIB_JAVA_NAMES.items()}
-
-    def term(t):
-        if type(t) is CallTerm:
-            name = written.get(t.name, t.name)
-            return "(call " + " ".join([name, *[term(a) for a in t.args]]) + ")"
-        t = subst(t, env) if type(t) is not CallTerm else t
-        if type(t) is Var:
-            return t.name
-        if type(t) is tuple:
-            return "(" + " ".join(term(x) for x in t) + ")" if t else "nil"
-        return term_str(t)
-    if isinstance(e, S.Atom):
-        return "(" + " ".join([e.pred, *[term(a) for a in e.args]]) + ")"
-    if isinstance(e, S.Not):
-        return f"(not {_show(e.expr, env)})"
-    if isinstance(e, (S.And, S.Or)):
-        word = "and" if isinstance(e, S.And) else "or"
-        return f"({word} " + " ".join(_show(x, env) for x in e.items) + ")"
-    if isinstance(e, S.CallExpr):
-        return term(e.call)
-    if isinstance(e, S.Equal):
-        return f"(= {term(e.left)} {term(e.right)})"
-    if isinstance(e, S.ForAll):
-        names = " ".join(v.name for v in e.vars)
-        return f"(forall ({names}) {_show(e.cond, env)} {_show(e.then, env)})"
-    if isinstance(e, S.Assign):
-        return f"(assign {e.var.name} {term(e.term)})"
-    pos = getattr(e, "pos", None)
-    return f"the {type(e).__name__.lower()} expression" + (f" at {pos}" if pos else "")

@@ -36,8 +36,7 @@ class SymbolicRobot(Robot):
     def __init__(self, domain: S.Domain, instance: S.ProblemInstance, functions=None,
                  faults: Optional[dict] = None, seed: int = 0):
         from htn.jshop.planner import Planner
-        self.model = Planner(domain, S.ProblemInstance(instance.state, S.TaskList([])),
-                             functions)
+        self.model = Planner.for_state(domain, instance.state, functions)
         self.world = self.model.state
         self.dynamic = domain.dynamic_predicates()
         self.effect_fault = (faults or {}).get("effect", 0.0)

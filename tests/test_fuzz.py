@@ -1,7 +1,8 @@
 """Property-based fuzzing of the input side: every input gets a clean answer.
 
-Hypothesis mutates the JSHOP2 corpus (domains, problems) and the bundled
-domains and problems - deleting, duplicating, swapping and inserting tokens,
+Hypothesis mutates the JSHOP2 corpus (domains, problems), the IPC 2020 HDDL
+sample (each domain with its smallest instance) and the bundled domains and
+problems - deleting, duplicating, swapping and inserting tokens,
 nesting deeply, breaking the encoding - and runs ``htn plan`` and ``htn
 validate`` on the result through the command line's entry point
 (:func:`htn.cli.main.main`, in this process: a subprocess per input would
@@ -34,11 +35,12 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from conftest import CORPUS, FUNCTIONS, ROOT, corpus_available
+from conftest import CORPUS, FUNCTIONS, ROOT, SHARED, corpus_available
 
 sys.setrecursionlimit(max(sys.getrecursionlimit(), 20000))   # as htn's main() does
 EXAMPLES = int(os.environ.get("HTN_FUZZ_EXAMPLES", "500"))
 RANDOM = bool(os.environ.get("HTN_FUZZ_RANDOM"))
+IPC = SHARED / "corpus" / "ipc2020-to"
 LOCATED = re.compile(r"^[^\n]+:\d+:\d+: ")
 
 FUNCTION_FILES = {"freecell": FUNCTIONS / "freecell.py", "test": FUNCTIONS / "test.py"}
@@ -58,6 +60,9 @@ def _cases() -> list[tuple[Path, Path, Path | None, Path | None]]:
                 plans = None                    # JSHOP2 found none: nothing to validate
             cases.append((folder / stats["domain_file"], folder / stats["problem_file"],
                           FUNCTION_FILES.get(folder.name), plans))
+    if IPC.is_dir():
+        for folder in sorted(p for p in IPC.iterdir() if p.is_dir()):
+            cases.append((folder / "domain.hddl", sorted(folder.glob("p*.hddl"))[0], None, None))
     for problem in sorted((ROOT / "problems").glob("*.jshop")):
         domain = re.search(r"\(defproblem\s+\S+\s+(\S+)", problem.read_text()).group(1)
         cases.append((ROOT / "domains" / f"{domain}.jshop", problem, None, None))
@@ -81,6 +86,11 @@ TOKENS = [
     "\t", "é", "\ufeff", "\x00", "#", "\"", "'", "{", "\\",
     " ".join(f"(p{i} ?x)" for i in range(25)),
     "(" * 40 + "a" + ")" * 40,
+    # HDDL
+    ":parameters", ":task", ":subtasks", ":ordered-subtasks", ":ordering", "(< t1 t2)",
+    "(t2 < t1)", "- object", "- undeclared_type", "(exists (?v - object) (p ?v))",
+    "(when (p ?x) (not (p ?x)))", "(= ?x ?y)", "(imply (p a) (q a))", ":precondition ()",
+    "(:goal (and))", "(define (domain other))",
 ]
 
 
@@ -232,7 +242,8 @@ def test_every_mutant_gets_a_clean_answer(tmp_path_factory, data):
     command = data.draw(st.sampled_from(["plan", "plan", "plan", "validate"] if plans
                                         else ["plan"]), label="command")
     if command == "plan":
-        fmt = data.draw(st.sampled_from(["jshop", "json", "text"]), label="format")
+        formats = ["jshop", "json", "text"] + (["ipc"] if domain.suffix == ".hddl" else [])
+        fmt = data.draw(st.sampled_from(formats), label="format")
         how = data.draw(st.sampled_from([["-n", "1"], ["-n", "3"], ["--all"]]), label="plans")
         argv = ["plan", d, p, "-f", fmt, *how, "--timeout", "0.5", "-o", folder / "out.txt",
                 *extra]

@@ -158,6 +158,13 @@ def test_goal_is_checked_on_the_final_state(tmp_path):
     result = run_htn("validate", d, p, plan)
     assert result.returncode == 1
     assert "the goal does not hold in the final state: (at box shop) is false" in result.stderr
+    # a goal no action touches is found false only at the end: --explain says which atom
+    d, p = _write(tmp_path, problem=PROBLEM.replace("(:goal (at box home))",
+                                                    "(:goal (and (at box home) (road shop shop)))"))
+    result = run_htn("plan", d, p, "-f", "jshop")
+    assert result.returncode == 1 and "Traceback" not in result.stderr
+    assert f"goal ({p}:6:10): (road shop shop) does not hold in the final state " \
+           f"[{p}:6:29]" in result.stderr
 
 
 @pytest.mark.parametrize("domain,problem,where,message", [

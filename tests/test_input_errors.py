@@ -91,7 +91,12 @@ def test_a_problem_for_another_domain(tmp_path):
     d, p = write(tmp_path, problem="(defproblem p\n    elsewhere ((at home)) ((travel work)))")
     out = tmp_path / "plan.txt"
     out.write_text("previous plan\n")
-    for command in (["plan", d, p, "-o", out], ["validate", d, p, out]):
+    good = tmp_path / "good.txt"            # a plan of the domain's own problem
+    (tmp_path / "own").mkdir()
+    assert run_htn("plan", d, write(tmp_path / "own")[1], "-o", good, "-q").returncode == 0
+    for command in (["plan", d, p, "-o", out], ["validate", d, p, out],
+                    ["run", good, "--robot", "symbolic", "--domain", d, "--problem", p],
+                    ["transform", d, p], ["evaluate", p, "--domain", d, "--runs", "2"]):
         r = run_htn(*command)
         check_error(r, f"{p}:2:5:", "problem 'p' is for domain 'elsewhere', but")
         assert "defines 'd'" in r.stderr.splitlines()[0]

@@ -30,11 +30,11 @@ def prepare_study(domain_path: str, problem_path: str, robot: str = "projection"
                   faults: str = "") -> tuple[Study, list]:
     """Plan the problem, transform the plan with every registered rule, and
     return the study of both plans with the names of the rules applied."""
-    from htn.jshop import load_domain, load_problem
+    from htn.jshop.parser import load_inputs
 
     from .framework import Workspace, default_framework
-    domain = load_domain(domain_path)
-    instance = load_problem(problem_path).instances[0]
+    domain, problem = load_inputs(domain_path, problem_path)
+    instance = problem.instances[0]
     ws = Workspace.from_problem(domain, instance)
     original = ws.plan
     default_framework().apply_all_transformations(ws)

@@ -77,15 +77,14 @@ class Workspace:
         """The current plan's tree; each top-level node rewritten by a
         transformation carries the replacement tasks in its code-replacement
         slot (the paper's mechanism, here filled in for inspection)."""
-        from htn.jshop.terms import source_str
+        from htn.jshop.terms import source_atom
         tree = self.plan.tree
         nodes = iter(tree.children)
         for unit in self.units:
             for node in [next(nodes) for _ in unit.tasks]:
                 if unit.transformed_by:
                     node.code_replacement = [
-                        "(" + " ".join([t.name, *[source_str(a) for a in t.args]]) + ")"
-                        for t in unit.tasks]
+                        source_atom(t.name, t.args) for t in unit.tasks]
         return tree
 
     def replan(self, units=None):
