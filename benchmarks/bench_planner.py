@@ -12,6 +12,11 @@ Measures, for each example in ``shared/corpus/jshop2``:
 * the whole ``htn plan ... --format jshop`` command in a fresh process (median
   of a few runs), against JSHOP2's end-to-end figure (compile + javac + run).
 
+The timed calls run pinned to one core (``--pin``, the default, where the OS
+allows it): on this 2-core machine, a process that migrates between cores
+showed medians up to 1.5x slower on the same example, a noise larger than
+the differences measured.
+
 JSHOP2's figures come from each example's ``stats.json``. Run::
 
     python benchmarks/bench_planner.py                 # all examples
@@ -24,6 +29,7 @@ command faster than JSHOP2's end-to-end time.
 from __future__ import annotations
 
 import json
+import os
 import statistics
 import subprocess
 import sys
@@ -93,10 +99,14 @@ def command_time(folder: Path, stats: dict, runs: int) -> float:
 @click.option("--runs", default=3, show_default=True, help="Whole-command runs per example.")
 @click.option("--clock", type=click.Choice(["cpu", "wall"]), default="cpu", show_default=True,
               help="Time the search by the process's CPU time or by wall time.")
+@click.option("--pin/--no-pin", default=True, show_default=True,
+              help="Run the timed calls on one core (no migrations between cores).")
 @click.option("--json", "as_json", is_flag=True, help="Print JSON instead of a table.")
-def main(corpus, only, repeats, budget, runs, clock, as_json):
+def main(corpus, only, repeats, budget, runs, clock, pin, as_json):
     """Time first-plan search on the JSHOP2 corpus against JSHOP2's own figures."""
     corpus = Path(corpus)
+    if pin and hasattr(os, "sched_setaffinity"):
+        os.sched_setaffinity(0, {max(os.sched_getaffinity(0))})
     if not (corpus / "SUMMARY.md").is_file():
         raise click.ClickException(f"no JSHOP2 corpus at {corpus}")
     rows = []

@@ -88,9 +88,9 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
     sinks: list = []
     found = 0
     try:
-        out = AtomicFile(output) if output else None
+        out = AtomicFile(output, "-o") if output else None
         sinks.append(out)
-        dot_out = _DotFile(AtomicFile(dot)) if dot else None
+        dot_out = _DotFile(AtomicFile(dot, "--dot")) if dot else None
         sinks.append(dot_out)
         table = FunctionTable()
         if functions:
@@ -123,7 +123,7 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
     if isinstance(stop, BrokenPipeError):
         raise stop          # the reader went away: main() exits quietly
     if not found and not quiet and stop is None and not totals["timed_out"] \
-            and not totals["depth_limit_reached"]:
+            and not totals["depth_limit_reached"] and not totals["memory_limit_reached"]:
         search.explain_no_plan()
     if search.explainers:
         totals["explain"] = [e.to_dict(full=explain_all) for e in search.explainers]
@@ -204,11 +204,11 @@ class _Search:
                     if planner.stats.timed_out:
                         totals["timed_out"] = True
                         break
-                    if planner.stats.depth_limit is not None:
-                        totals["depth_limit_reached"] = True
-                        totals["memory_limit_reached"] = \
-                            planner.stats.as_dict()["memory_limit_reached"]
-                        warn(planner.stats.depth_limit)
+                    if planner.stats.bound is not None:
+                        reached = planner.stats.as_dict()
+                        for key in ("depth_limit_reached", "memory_limit_reached"):
+                            totals[key] = reached[key]
+                        warn(planner.stats.bound)
                         break
         except DeadlineExceeded:
             totals["timed_out"] = True

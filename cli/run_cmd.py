@@ -12,7 +12,7 @@ from htn.jshop.errors import HtnError
 from .extras import require_robot_extra
 from .output import check_output_file, check_output_folder, make_output_folder, stdout_is_terminal
 from .run_checks import check_display
-from .signals import Signals, held, interrupt_exit
+from .signals import Signals, held, interrupt_exit, silence_stdout
 
 RUN_OPTIONS = ("plan_file", "robot_name", "sim", "faults", "seed", "retries", "replan",
                "plan_index", "domain", "problem", "functions")
@@ -111,8 +111,9 @@ def _run(ctx, signals, plan_file, robot_name, sim, gui, snapshots, faults, seed,
     from htn.robot.interface import Robot
 
     if from_log:
-        given = [n for n in RUN_OPTIONS
-                 if ctx.get_parameter_source(n) == click.core.ParameterSource.COMMANDLINE]
+        given = [max(p.opts, key=len) if isinstance(p, click.Option) else p.human_readable_name
+                 for p in ctx.command.params if p.name in RUN_OPTIONS and
+                 ctx.get_parameter_source(p.name) == click.core.ParameterSource.COMMANDLINE]
         if given:
             raise click.UsageError(f"--from-log takes the run from the log; do not give "
                                    f"{', '.join(given)} as well")
@@ -265,7 +266,11 @@ def _snapshotter(robot, folder):
 
 
 class _PlainView:
-    """One line per action outcome, fault and repair (when stdout is not a terminal)."""
+    """One line per action outcome, fault and repair (when stdout is not a terminal).
+
+    If the reader goes away (``htn run ... | head``) the lines go to
+    /dev/null and the run goes on: a robot does not stop because nobody
+    reads its progress. The log and the exit code tell how it ended."""
 
     def __enter__(self):
         return self
@@ -277,6 +282,12 @@ class _PlainView:
              "interrupted", "fault")
 
     def event(self, rec) -> None:
+        try:
+            self._show(rec)
+        except BrokenPipeError:
+            silence_stdout()
+
+    def _show(self, rec) -> None:
         if rec["event"] in self.SHOWN:
             step = "" if rec["step"] is None else f"{rec['step']:>2} "
             what = rec["action"] or ""

@@ -37,7 +37,7 @@ def transform(domain, problem, rules, metric, output, as_json):
     from htn.jshop.planfile import header
 
     # a bad -o fails before the work; the file is replaced once all is done
-    with atomic_write(output) if output else contextlib.nullcontext() as out:
+    with atomic_write(output, "-o") if output else contextlib.nullcontext() as out:
         result, ws = _transform(domain, problem, rules, metric)
         if out:
             out.write(header(output, domain, problem))

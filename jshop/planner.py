@@ -31,7 +31,7 @@ the current path) is bounded by ``max_depth``, and the search's memory by a
 :class:`htn.jshop.limits.MemoryGuard` (see :mod:`htn.jshop.limits`): a method
 that decomposes into itself without end would otherwise grow the stack until
 memory runs out (JSHOP2 ends such a search with a ``StackOverflowError``).
-Reaching a bound ends the search like a timeout; ``stats.depth_limit`` then
+Reaching a bound ends the search like a timeout; ``stats.bound`` then
 says which bound, and names the task that was being reduced deepest.
 """
 from __future__ import annotations
@@ -266,7 +266,7 @@ def _deepest_task(root: Node, req: Node) -> Optional[Task]:
 class Stats:
     __slots__ = ("plans_found", "expansions", "operator_applications",
                  "backtracks", "started", "elapsed", "timed_out", "interrupted",
-                 "depth_limit")
+                 "bound")
 
     def __init__(self):
         self.plans_found = 0
@@ -277,7 +277,7 @@ class Stats:
         self.elapsed = 0.0
         self.timed_out = False
         self.interrupted = False
-        self.depth_limit = None    # a DepthLimit when the search hit max_depth
+        self.bound = None      # the SearchBound (depth or memory) that stopped the search
 
     def as_dict(self) -> dict:
         return {
@@ -288,13 +288,13 @@ class Stats:
             "backtracks": self.backtracks,
             "timed_out": self.timed_out,
             "interrupted": self.interrupted,
-            "depth_limit_reached": self.depth_limit is not None,
-            "memory_limit_reached": isinstance(self.depth_limit, MemoryLimit),
+            "depth_limit_reached": isinstance(self.bound, DepthLimit),
+            "memory_limit_reached": isinstance(self.bound, MemoryLimit),
         }
 
 
-class DepthLimit:
-    """Why the search stopped at ``max_depth``: the task being reduced deepest."""
+class SearchBound:
+    """A bound that stopped the search, and the task being reduced deepest."""
     __slots__ = ("limit", "task")
 
     def __init__(self, limit: int, task: Optional[Task]):
@@ -308,13 +308,21 @@ class DepthLimit:
         return (f"{pos}: " if pos else "") + self.message(self.task)
 
     def message(self, task) -> str:
+        raise NotImplementedError
+
+
+class DepthLimit(SearchBound):
+    """The search stopped at ``max_depth`` nested reductions without a step."""
+    __slots__ = ()
+
+    def message(self, task) -> str:
         what = (f"task {task} recurses past the search depth limit" if task is not None
                 else "the search reached its depth limit")
         return (f"{what} ({self.limit:,} nested reductions without a step); "
                 "search stopped (raise it with --max-depth N)")
 
 
-class MemoryLimit(DepthLimit):
+class MemoryLimit(SearchBound):
     """Why the search stopped at its memory budget: the plan on the current
     path needs more memory than the budget, or the search never ends."""
     __slots__ = ()
@@ -444,7 +452,7 @@ class Planner:
                 else:
                     depth = depths[-1] + 1
                     if depth >= max_depth:
-                        stats.depth_limit = DepthLimit(max_depth, _deepest_task(root, req))
+                        stats.bound = DepthLimit(max_depth, _deepest_task(root, req))
                         return
                 push(frame(req))
                 dpush(depth)
@@ -457,8 +465,7 @@ class Planner:
                         if guard is None:
                             guard = MemoryGuard(self.max_memory)
                         if guard.exceeded():
-                            stats.depth_limit = MemoryLimit(guard.limit_bytes,
-                                                            _deepest_task(root, req))
+                            stats.bound = MemoryLimit(guard.limit_bytes, _deepest_task(root, req))
                             return
         except KeyboardInterrupt:
             stats.interrupted = True

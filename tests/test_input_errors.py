@@ -339,7 +339,7 @@ def test_unwritable_outputs_are_found_before_planning(tmp_path, option):
     d, p = write(tmp_path, domain=DOMAIN.replace("((at ?from))", "((at ?from) (call mark ?from))"))
     fns = functions_file(tmp_path)
     for target, message in [(tmp_path / "missing" / "x.out",
-                             f"no such folder {tmp_path / 'missing'}"),
+                             f"{option}: no such folder {tmp_path / 'missing'}"),
                             (tmp_path, "is a directory")]:     # click's check
         r = run_htn("plan", d, p, "--functions", fns, option, target)
         assert r.returncode == 2 and message in r.stderr and "Traceback" not in r.stderr
@@ -353,4 +353,4 @@ def test_other_commands_check_options_first(tmp_path):
     r = run_htn("transform", tmp_path / "no.jshop", p, "--rules", "bogus")
     assert r.returncode == 2 and "unknown rule(s) bogus" in r.stderr    # before the files
     r = run_htn("transform", d, p, "-o", tmp_path / "missing" / "t.txt")
-    check_error(r, f"{tmp_path / 'missing' / 't.txt'}:", f"no such folder {tmp_path / 'missing'}")
+    check_error(r, f"{tmp_path / 'missing' / 't.txt'}:", f"-o: no such folder {tmp_path / 'missing'}")

@@ -101,3 +101,4 @@ def test_max_memory_option(tmp_path):
     assert "memory budget (120 MB)" in result.stderr
     stats = json.loads(result.stdout.splitlines()[-1])
     assert stats["memory_limit_reached"] is True and stats["plans_found"] == 0
+    assert stats["depth_limit_reached"] is False         # the bound that stopped it, only

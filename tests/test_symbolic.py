@@ -3,11 +3,14 @@ and logs that reproduce their run."""
 from __future__ import annotations
 
 import json
+import os
 import shutil
+import subprocess
 
 import pytest
 
-from conftest import CORPUS, FUNCTIONS, ROOT, corpus_available, needs_corpus, run_htn
+from conftest import (CORPUS, FUNCTIONS, ROOT, corpus_available, htn_command, needs_corpus,
+                      run_htn)
 
 FUNCTION_FILES = {"freecell": FUNCTIONS / "freecell.py", "test": FUNCTIONS / "test.py"}
 DOMESTIC = ROOT / "domains" / "domestic.jshop"
@@ -121,6 +124,26 @@ def test_symbolic_faults_are_caught_retried_and_logged(tmp_path):
     assert recovered >= 2
 
 
+@pytest.mark.parametrize("faults,code,result", [("", 0, "verified"),
+                                                ("effect=1", 1, "aborted")])
+def test_a_run_goes_on_when_its_reader_goes_away(tmp_path, faults, code, result):
+    # htn run ... | head -1: the robot does not stop because nobody reads its
+    # progress; the exit code and the log say how the run ended
+    plan, log = tmp_path / "plan.txt", tmp_path / "run.jsonl"
+    assert run_htn("plan", DOMESTIC, BRING, "-o", plan).returncode == 0
+    read, write = os.pipe()
+    os.close(read)                          # the reader is gone before the first line
+    try:
+        proc = subprocess.run(htn_command("run", plan, "--robot", "symbolic", "--log", log,
+                                          *(["--faults", faults] if faults else [])),
+                              stdout=write, stderr=subprocess.PIPE, text=True, timeout=120)
+    finally:
+        os.close(write)
+    assert proc.returncode == code and "Traceback" not in proc.stderr, proc.stderr
+    summary = events_of(log)[-1]
+    assert summary["event"] == "summary" and summary["result"] == result
+
+
 def test_replan_on_the_symbolic_robot_continues_from_the_observed_world(tmp_path):
     plan, log = tmp_path / "plan.txt", tmp_path / "run.jsonl"
     assert run_htn("plan", DOMESTIC, BRING, "-o", plan).returncode == 0
@@ -185,8 +208,9 @@ def test_the_log_header_reproduces_a_pybullet_run(tmp_path):
     plan.write_text(plan.read_text() + "\n")
     r3 = run_htn("run", "--from-log", first)
     assert r3.returncode == 2 and "has changed since this run" in r3.stderr
-    r4 = run_htn("run", plan, "--from-log", first)
-    assert r4.returncode == 2 and "--from-log takes the run from the log" in r4.stderr
+    r4 = run_htn("run", plan, "--from-log", first, "--seed", "3", "--robot", "symbolic")
+    assert r4.returncode == 2 and "--from-log takes the run from the log; do not give " \
+        "PLAN_FILE, --robot, --seed as well" in r4.stderr
 
 
 def test_unknown_robot_lists_the_known_ones(tmp_path):
