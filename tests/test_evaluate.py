@@ -189,15 +189,23 @@ def test_figures_of_runs_that_differ_by_rounding_only(tmp_path):
     from htn.transform.figures import plot
     from htn.transform.statistics import Comparison
 
-    def run(navigation, manipulation):
+    def run(navigation, manipulation, result="verified"):
         return {"navigation": navigation, "manipulation": manipulation, "actions": 15,
-                "failed": 0, "failures": 0.0}
+                "failed": 0, "failures": 0.0, "result": result}
     # two physics runs without faults: the same distances but for the last bits
     comp = Comparison("tray_three.jshop", 2, ["tray"], robot="pybullet",
                       original=[run(6.177372650994691, 10.1), run(6.177372650994689, 10.2)],
                       transformed=[run(2.4829454599947622, 24.5), run(2.48294545999476, 24.6)])
     files = plot(comp, str(tmp_path))
     assert len(files) == 6 and all(os.path.getsize(f) > 1000 for f in files)
+    svg = (tmp_path / "tray_three_metrics.svg").read_text()
+    assert "runs verified" not in svg            # said only when a run did not end verified
+    # a run a fault stopped counts what it did until then: the title says how many did not
+    comp.original[1] = run(3.1, 4.0, "aborted")
+    plot(comp, str(tmp_path))
+    for figure in ("metrics", "distributions"):
+        svg = (tmp_path / f"tray_three_{figure}.svg").read_text()
+        assert "runs verified: original 1 of 2, transformed 2 of 2" in svg
 
 
 def test_output_options_are_checked_before_any_work(tmp_path):

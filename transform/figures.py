@@ -63,8 +63,15 @@ def _save(fig, stem: str) -> list[str]:
 def _runs_title(comp: Comparison, name: str) -> str:
     from .runs import MEASURES
     what = MEASURES[comp.robot].description
-    return (f"{name}: {comp.runs} {what} run{'s' if comp.runs != 1 else ''} of each plan; "
-            f"applied: {applied_rules(comp.applied)}")
+    title = (f"{name}: {comp.runs} {what} run{'s' if comp.runs != 1 else ''} of each plan; "
+             f"applied: {applied_rules(comp.applied)}")
+    # a run a fault stopped counts what it did until then: say how many did
+    results = comp.results()
+    verified = {side: results[side].get("verified", 0) for side in results}
+    if any(verified[side] < sum(results[side].values()) for side in results):
+        title += "\nruns verified: " + ", ".join(
+            f"{side} {verified[side]} of {sum(results[side].values())}" for side in results)
+    return title
 
 
 def _metrics_figure(comp: Comparison, name: str):
@@ -97,7 +104,8 @@ def _metrics_figure(comp: Comparison, name: str):
             change = format_change(s["change_pct"])
         ax.set_title(f"{metric}\n{change}, p {_p_text(s['p_value'])}")
     fig.suptitle(_runs_title(comp, name))
-    fig.supxlabel("Bars: mean over runs; error bars: \u00b11 SD of the runs (clipped at 0). "
+    fig.supxlabel("Bars: mean over runs (a run a fault stopped counts what it did until then); "
+                  "error bars: \u00b11 SD of the runs (clipped at 0).\n"
                   "Failures: pooled over all runs, error bars: Wilson 95% CI.\n"
                   "Change: of the mean; p: Welch's two-sided t-test on per-run values "
                   "(n/a: fewer than 2 runs or no variance).", fontsize=6.5)
