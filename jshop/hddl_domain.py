@@ -46,6 +46,7 @@ from .hddl import (ActionDef, EffectCost, EffectForall, EffectWhen, Exists, HDom
 # An initial task network with parameters is the body of this task's one
 # method, which binds them (the IPC 2020 plan format's artificial root)
 TOP, TOP_METHOD = "__top", "__top_method"
+from .parser import _walk_expr
 from .terms import Var, variables
 
 
@@ -172,24 +173,10 @@ def type_condition(v: Var, types: tuple, pos) -> object:
 # ------------------------------------------------------------------ ordering
 
 def _slots(e) -> set:
+    """The variable slots an expression mentions (bound or quantified)."""
     out: set = set()
-    _collect(e, out)
+    _walk_expr(e, lambda v: out.add(v.index))
     return out
-
-
-def _collect(e, out: set) -> None:
-    if isinstance(e, S.Atom):
-        out.update(v.index for v in variables(e.args, []))
-    elif isinstance(e, (S.And, S.Or)):
-        for x in e.items:
-            _collect(x, out)
-    elif isinstance(e, S.Not):
-        _collect(e.expr, out)
-    elif isinstance(e, S.ForAll):
-        _collect(e.cond, out)
-        _collect(e.then, out)
-    elif isinstance(e, S.Equal):
-        out.update(v.index for v in variables((e.left, e.right), []))
 
 
 def order_conjuncts(conds: list, types: list, bound: set, outer: set) -> list:
