@@ -223,7 +223,10 @@ def _run(ctx, signals, plan_file, robot_name, sim, gui, snapshots, faults, seed,
         if log is not None:
             log.close()
         robot.close()
-    click.echo(summary_line(summary))
+    try:
+        click.echo(summary_line(summary))
+    except BrokenPipeError:      # the reader went away: the exit code still tells
+        silence_stdout()
     if summary.result == "interrupted":     # log closed, robot disconnected
         interrupt_exit(signals.received, now=True)
     sys.exit(0 if summary.result == "verified" else 1)
