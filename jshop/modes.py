@@ -14,11 +14,13 @@ generator of nested loops over Python locals. A conjunct with every variable
 bound is a set lookup (``if (x1, x2) in members``); one with free variables
 is a loop over the predicate's live list of atoms that binds locals; a call
 is evaluated inline; the binding list is copied once, when a satisfier is
-yielded. Anything else (axioms, ``or``, ``forall``, list terms, a variable
-bound to a term with variables in it) is asked of the general engine
-(:class:`htn.jshop.logic.Logic`) from inside the loops, and the rest of the
-conjunction continues on the general path when such a conjunct leaves a
-variable unbound or bound to a term with variables in it.
+yielded; a flat list argument (``(goal (on ?x ?z))``) is matched element by
+element in the same loop. Anything else (axioms, ``or``, ``forall``, list
+terms nested deeper, a variable bound to a term with variables in it) is
+asked of the general engine (:class:`htn.jshop.logic.Logic`) from inside
+the loops, and the rest of the conjunction continues on the general path
+when such a conjunct leaves a variable unbound or bound to a term with
+variables in it.
 
 Satisfiers and their order are exactly those of the general engine: atoms of
 the state in insertion order, then fact axioms (a predicate whose axioms are
@@ -98,8 +100,12 @@ class _Literal:
             atom, kind = expr.expr, _NOT_ATOM
         if isinstance(atom, S.Atom):
             axs = axioms.get(atom.pred)
-            plain = all(type(a) in (str, float, Var) or a == () for a in atom.args)
-            if plain and (not axs or _facts_only(axs)):
+            plain = all(_flat_term(a) for a in atom.args)
+            # a flat list argument, like (on ?x ?z) in (goal (on ?x ?z)), is
+            # matched element by element in the loop as well
+            lists = all(_flat_term(a) or (type(a) is tuple and all(map(_flat_term, a)))
+                        for a in atom.args)
+            if lists and (not axs or _facts_only(axs)):
                 self.kind, self.pred, self.args = kind, atom.pred, atom.args
                 self.facts = bool(axs)
             elif plain:       # proved by its axioms, asked directly (Logic.solver)
@@ -114,6 +120,11 @@ class _Literal:
         """Can an atom of another length be met (must the length be tested)?"""
         return self.kind in (_ATOM, _NOT_ATOM) and bool(
             self.facts or arities is None or arities.get(self.pred, set()) - {len(self.args)})
+
+
+def _flat_term(t) -> bool:
+    """A symbol, a number, a variable or nil."""
+    return type(t) in (str, float, Var) or t == ()
 
 
 def _facts_only(axioms: list) -> bool:
@@ -372,7 +383,7 @@ class _Writer:
 
     def atom(self, k: int, lit: _Literal, negated: bool) -> None:
         args = lit.args
-        if all(type(a) is not Var or a.index in self.known for a in args):
+        if lit.vars <= self.known:
             tup = self.term(args)
             if negated:
                 test = f"{tup} not in M{k}"
@@ -389,16 +400,15 @@ class _Writer:
             return
         conds = [f"len(t) == {len(args)}"] if self.sized[k] else []
         binds = []
-        first: dict = {}
+        first: dict = {}      # variable -> where it is first met in ``t``
         for i, a in enumerate(args):
-            if type(a) is Var and a.index not in self.known:
-                if a.index in first:
-                    conds.append(f"t[{i}] == t[{first[a.index]}]")
-                else:
-                    first[a.index] = i
-                    binds.append(f"x{a.index} = t[{i}]")
+            if type(a) is tuple and a and not _vars(a, set()) <= self.known:
+                # a list with a free variable: its shape, then element by element
+                conds.append(f"type(t[{i}]) is tuple and len(t[{i}]) == {len(a)}")
+                for j, x in enumerate(a):
+                    self.match(f"t[{i}][{j}]", x, conds, binds, first)
             else:
-                conds.append(f"t[{i}] == {self.term(a)}")
+                self.match(f"t[{i}]", a, conds, binds, first)
         source = f"chain(L{k}, H{k}[0])" if lit.facts else f"L{k}"
         cond = " and ".join(conds) or "True"
         if negated:
@@ -421,6 +431,19 @@ class _Writer:
             self.emit(b)
         self.known |= set(first)
         self.local |= set(first)
+
+    def match(self, place: str, a, conds: list, binds: list, first: dict) -> None:
+        """Match the pattern term ``a`` (flat) with ``place`` of an atom, as
+        unifying does with a ground atom: a free variable binds at its first
+        place and must be equal at the others; anything else must be equal."""
+        if type(a) is Var and a.index not in self.known:
+            if a.index in first:
+                conds.append(f"{place} == {first[a.index]}")
+            else:
+                first[a.index] = place
+                binds.append(f"x{a.index} = {place}")
+        else:
+            conds.append(f"{place} == {self.term(a)}")
 
     def bound(self, args: tuple) -> str:
         """The atom's arguments as the general engine's binder gives them:
