@@ -174,12 +174,19 @@ def compile_conjunction(logic, e: S.And, entry: frozenset = None) -> Callable:
         return gen
     state = logic.state
     modes: dict = {}
+    met: set = set()      # the modes met once, whose code was not written yet
     constants = _constants(logic, lits, general)
 
     def build(mode: int):
+        """This mode's code, or None for the general path: a mode met for
+        the first time is not worth compiling (a tiny search meets it once),
+        unless an earlier planner of the domain compiled it already."""
         key = (id(e), mode, sized, entry)
         hit = _CODE.get(key)
         if hit is None or hit[0] is not e:
+            if mode not in met:
+                met.add(mode)
+                return None
             known = {v for j, v in enumerate(names) if mode >> j & 1}
             hit = _CODE[key] = (e, _Writer(lits, known, sized).factory())
         factory = hit[1]
@@ -235,14 +242,9 @@ def _entry(names: list):
     make = _ENTRIES.get(key)
     if make is not None:
         return make
-    # the first call takes the general path: a conjunction met once (a tiny
-    # search) is not worth compiling
     lines = ["def make(state, gen, modes, build):",
-             "    warm = False",
              "    def sat(env):",
-             "        nonlocal warm",
-             "        if not warm or state.nonground:",
-             "            warm = True",
+             "        if state.nonground:",
              "            return gen(env)",
              "        m = 0"]
     for j, v in enumerate(names):
@@ -255,6 +257,8 @@ def _entry(names: list):
     lines += ["        f = modes.get(m)",
               "        if f is None:",
               "            f = build(m)",
+              "            if f is None:",
+              "                return gen(env)",
               "        return f(env)",
               "    return sat"]
     ns = {"is_ground": is_ground}
