@@ -122,6 +122,11 @@ class _Literal:
             self.facts or arities is None or arities.get(self.pred, set()) - {len(self.args)})
 
 
+def _has_call(t) -> bool:
+    tt = type(t)
+    return tt is CallTerm or (tt is tuple and any(map(_has_call, t)))
+
+
 def _flat_term(t) -> bool:
     """A symbol, a number, a variable or nil."""
     return type(t) in (str, float, Var) or t == ()
@@ -276,7 +281,7 @@ class _Writer:
         self.entry = set(known)
         self.known = set(known)
         self.ns: dict = {"_call": _call, "_call_nested": _call_nested, "chain": chain,
-                         "is_ground": is_ground}
+                         "is_ground": is_ground, "HtnError": HtnError}
         self.lines: list = []
         self.depth = 2           # indentation, in levels of four spaces
         self.loops = 0
@@ -293,18 +298,39 @@ class _Writer:
         self.ns[name] = value
         return name
 
-    def term(self, t) -> str:
+    def term(self, t, direct: bool = False) -> str:
+        """The expression computing ``t`` (its variables known). ``direct``:
+        calls are made without :func:`_call`, for :meth:`value`."""
         tt = type(t)
         if tt is Var:
             return f"x{t.index}"
         if tt is tuple:
-            return "(" + "".join(self.term(x) + ", " for x in t) + ")"
+            return "(" + "".join(self.term(x, direct) + ", " for x in t) + ")"
         if tt is CallTerm:
+            args = "(" + "".join(self.term(x, direct) + ", " for x in t.args) + ")"
+            if direct:
+                return f"{self.const(t.func)}({args})"
             nested = any(type(x) is CallTerm or type(x) is tuple for x in t.args)
             helper = "_call_nested" if nested else "_call"
-            return (f"{helper}({self.const(t.func)}, ("
-                    + "".join(self.term(x) + ", " for x in t.args) + f"), {self.const(t)})")
+            return f"{helper}({self.const(t.func)}, {args}, {self.const(t)})"
         return self.const(t)
+
+    def value(self, target: str, t) -> None:
+        """Emit ``target = t``. Its calls are made directly, in one ``try``:
+        every value met here is ground (a known variable is bound to a ground
+        term, a function's value is ground), so :func:`_call_nested` would
+        never keep a call as a term. Only when a call fails is the term
+        computed again through :func:`_call`, which places the error at the
+        failing call (as ``compile._fast_path`` does)."""
+        if not _has_call(t):
+            self.emit(f"{target} = {self.term(t)}")
+            return
+        fast = self.term(t, direct=True)
+        slow = self.term(t)
+        self.emit("try:")
+        self.emit(f"    {target} = {fast}")
+        self.emit("except HtnError:")
+        self.emit(f"    {target} = {slow}")
 
     def factory(self):
         """The code's factory ``make(*constants) -> run``, or None when this
@@ -362,13 +388,13 @@ class _Writer:
             # have been (they may fail), as ``subst`` evaluates them
             self.inner_calls(lit.expr.call)
         elif kind == _CALL:
-            self.emit(f"v{k} = {self.term(lit.expr.call)}")
+            self.value(f"v{k}", lit.expr.call)
             self.emit(f"if not (type(v{k}) is tuple and not v{k}):")
             self.depth += 1
         elif kind == _ASSIGN:
             v = lit.expr.var.index
             if v not in self.known:     # an earlier binding wins, as in JSHOP2
-                self.emit(f"x{v} = {self.term(lit.expr.term)}")
+                self.value(f"x{v}", lit.expr.term)
                 self.known.add(v)
                 self.local.add(v)
         else:

@@ -58,3 +58,15 @@ def test_list_arguments_match_element_by_element(tmp_path):
     finds = [("(!pick a b)", "(!pick a b)"), ("(!pick a b)", "(!pick NIL d)"),
              ("(!pick NIL d)", "(!pick a b)"), ("(!pick NIL d)", "(!pick NIL d)")]
     assert steps == [s for pair in finds for s in (*pair, "(!pick c c)", "(!pick c c)")]
+
+
+def test_a_call_failing_in_compiled_code_is_reported_at_its_place(tmp_path):
+    # the second (sum 3) runs the compiled code, where (call + a 1) fails
+    (tmp_path / "d.jshop").write_text(
+        "(defdomain m (\n  (:operator (!pick ?x ?y) () () ())\n"
+        "  (:method (sum ?y) ((p ?x) (call = (call + ?x 1) ?y)) ((!pick ?x ?y)))))\n")
+    (tmp_path / "p.jshop").write_text("(defproblem p m ((p 1) (p a)) ((sum 2) (sum 3)))\n")
+    result = run_htn("plan", tmp_path / "d.jshop", tmp_path / "p.jshop")
+    assert result.returncode == 2
+    assert result.stderr.startswith(f"{tmp_path / 'd.jshop'}:3:37: call +: expected a number, "
+                                    "got a")
