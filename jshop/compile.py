@@ -4,7 +4,9 @@ JSHOP2 compiles a domain to Java for speed (manual section 4); we do the same
 on a small scale for the two hottest operations on argument tuples:
 
 * :func:`binder` - apply a binding to a tuple of terms (``subst``), and
-* :func:`head_unifier` - unify a method's or operator's head with a task.
+* :func:`head_unifier` - unify a method's or operator's head with a task;
+
+and for binding a method body's task list (:func:`task_list_maker`).
 
 Only "flat" tuples (constants and variables) are compiled; anything with a
 nested list or call term uses the generic functions in :mod:`htn.jshop.terms`, so
