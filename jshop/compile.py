@@ -4,7 +4,9 @@ JSHOP2 compiles a domain to Java for speed (manual section 4); we do the same
 on a small scale for the two hottest operations on argument tuples:
 
 * :func:`binder` - apply a binding to a tuple of terms (``subst``), and
-* :func:`head_unifier` - unify a method's or operator's head with a task.
+* :func:`head_unifier` - unify a method's or operator's head with a task;
+
+and for binding a method body's task list (:func:`task_list_maker`).
 
 Only "flat" tuples (constants and variables) are compiled; anything with a
 nested list or call term uses the generic functions in :mod:`htn.jshop.terms`, so
@@ -69,6 +71,43 @@ def substituter(args: tuple) -> Callable[[list], tuple]:
                 return bind(env)[1]
         hit = _SUBSTITUTERS[id(args)] = (args, fn)
     return hit[1]
+
+
+_TASK_LISTS: dict = {}
+
+
+def task_list_maker(tl, node: Callable, task: Callable) -> Callable[[list], list]:
+    """``env -> [node]``: the members of a domain's task list bound by
+    ``env``, one function of generated code per list: a task atom becomes
+    ``node(task(name, args, immediate, atom))`` with its arguments substituted
+    inline (as :func:`substituter` does), a nested list ``node(None, members,
+    ordered)`` (its own function, so the code never nests). Cached per list
+    object and node and task constructors."""
+    hit = _TASK_LISTS.get(id(tl))
+    if hit is None or hit[0] is not tl or hit[1] is not node or hit[2] is not task:
+        ns: dict = {"N": node, "T": task}
+        parts = []
+        for i, x in enumerate(tl.items):
+            if hasattr(x, "items"):       # a nested task list
+                ns[f"m{i}"] = task_list_maker(x, node, task)
+                parts.append(f"N(None, m{i}(env), {bool(x.ordered)})")
+                continue
+            ns[f"a{i}"], ns[f"n{i}"] = x, x.name
+            if _flat(x.args):
+                args = []
+                for j, a in enumerate(x.args):
+                    ns[f"c{i}_{j}"] = a
+                    args.append(f"(env[{a.index}] if env[{a.index}] is not None else c{i}_{j})"
+                                if type(a) is Var else f"c{i}_{j}")
+                bound = "(" + "".join(a + ", " for a in args) + ")"
+            else:
+                ns[f"s{i}"] = substituter(x.args)
+                bound = f"s{i}(env)"
+            parts.append(f"N(T(n{i}, {bound}, {bool(x.immediate)}, a{i}))")
+        src = "def make(env):\n    return [" + "".join(p + ",\n        " for p in parts) + "]"
+        exec(src, ns)
+        hit = _TASK_LISTS[id(tl)] = (tl, node, task, ns["make"])
+    return hit[3]
 
 
 def head_unifier(head: tuple) -> Callable[[tuple, list], bool]:
@@ -287,7 +326,7 @@ def clear_caches() -> None:
     """Forget every compiled function. The caches keep the domain's tuples
     alive, which is right for one planning run per process (the command
     line) but not for a long-lived process that parses many domains."""
-    for cache in (_BINDERS, _UNIFIERS, _SCANNERS, _TERMS, _SUBSTITUTERS):
+    for cache in (_BINDERS, _UNIFIERS, _SCANNERS, _TERMS, _SUBSTITUTERS, _TASK_LISTS):
         cache.clear()
     from .logic import clear_caches as clear_logic    # its caches sit on these
     clear_logic()

@@ -14,11 +14,13 @@ generator of nested loops over Python locals. A conjunct with every variable
 bound is a set lookup (``if (x1, x2) in members``); one with free variables
 is a loop over the predicate's live list of atoms that binds locals; a call
 is evaluated inline; the binding list is copied once, when a satisfier is
-yielded. Anything else (axioms, ``or``, ``forall``, list terms, a variable
-bound to a term with variables in it) is asked of the general engine
-(:class:`htn.jshop.logic.Logic`) from inside the loops, and the rest of the
-conjunction continues on the general path when such a conjunct leaves a
-variable unbound or bound to a term with variables in it.
+yielded; a flat list argument (``(goal (on ?x ?z))``) is matched element by
+element in the same loop. Anything else (axioms, ``or``, ``forall``, list
+terms nested deeper, a variable bound to a term with variables in it) is
+asked of the general engine (:class:`htn.jshop.logic.Logic`) from inside
+the loops, and the rest of the conjunction continues on the general path
+when such a conjunct leaves a variable unbound or bound to a term with
+variables in it.
 
 Satisfiers and their order are exactly those of the general engine: atoms of
 the state in insertion order, then fact axioms (a predicate whose axioms are
@@ -98,8 +100,12 @@ class _Literal:
             atom, kind = expr.expr, _NOT_ATOM
         if isinstance(atom, S.Atom):
             axs = axioms.get(atom.pred)
-            plain = all(type(a) in (str, float, Var) or a == () for a in atom.args)
-            if plain and (not axs or _facts_only(axs)):
+            plain = all(_flat_term(a) for a in atom.args)
+            # a flat list argument, like (on ?x ?z) in (goal (on ?x ?z)), is
+            # matched element by element in the loop as well
+            lists = all(_flat_term(a) or (type(a) is tuple and all(map(_flat_term, a)))
+                        for a in atom.args)
+            if lists and (not axs or _facts_only(axs)):
                 self.kind, self.pred, self.args = kind, atom.pred, atom.args
                 self.facts = bool(axs)
             elif plain:       # proved by its axioms, asked directly (Logic.solver)
@@ -114,6 +120,16 @@ class _Literal:
         """Can an atom of another length be met (must the length be tested)?"""
         return self.kind in (_ATOM, _NOT_ATOM) and bool(
             self.facts or arities is None or arities.get(self.pred, set()) - {len(self.args)})
+
+
+def _has_call(t) -> bool:
+    tt = type(t)
+    return tt is CallTerm or (tt is tuple and any(map(_has_call, t)))
+
+
+def _flat_term(t) -> bool:
+    """A symbol, a number, a variable or nil."""
+    return type(t) in (str, float, Var) or t == ()
 
 
 def _facts_only(axioms: list) -> bool:
@@ -163,12 +179,19 @@ def compile_conjunction(logic, e: S.And, entry: frozenset = None) -> Callable:
         return gen
     state = logic.state
     modes: dict = {}
+    met: set = set()      # the modes met once, whose code was not written yet
     constants = _constants(logic, lits, general)
 
     def build(mode: int):
+        """This mode's code, or None for the general path: a mode met for
+        the first time is not worth compiling (a tiny search meets it once),
+        unless an earlier planner of the domain compiled it already."""
         key = (id(e), mode, sized, entry)
         hit = _CODE.get(key)
         if hit is None or hit[0] is not e:
+            if mode not in met:
+                met.add(mode)
+                return None
             known = {v for j, v in enumerate(names) if mode >> j & 1}
             hit = _CODE[key] = (e, _Writer(lits, known, sized).factory())
         factory = hit[1]
@@ -224,14 +247,9 @@ def _entry(names: list):
     make = _ENTRIES.get(key)
     if make is not None:
         return make
-    # the first call takes the general path: a conjunction met once (a tiny
-    # search) is not worth compiling
     lines = ["def make(state, gen, modes, build):",
-             "    warm = False",
              "    def sat(env):",
-             "        nonlocal warm",
-             "        if not warm or state.nonground:",
-             "            warm = True",
+             "        if state.nonground:",
              "            return gen(env)",
              "        m = 0"]
     for j, v in enumerate(names):
@@ -244,6 +262,8 @@ def _entry(names: list):
     lines += ["        f = modes.get(m)",
               "        if f is None:",
               "            f = build(m)",
+              "            if f is None:",
+              "                return gen(env)",
               "        return f(env)",
               "    return sat"]
     ns = {"is_ground": is_ground}
@@ -261,7 +281,7 @@ class _Writer:
         self.entry = set(known)
         self.known = set(known)
         self.ns: dict = {"_call": _call, "_call_nested": _call_nested, "chain": chain,
-                         "is_ground": is_ground}
+                         "is_ground": is_ground, "HtnError": HtnError}
         self.lines: list = []
         self.depth = 2           # indentation, in levels of four spaces
         self.loops = 0
@@ -278,18 +298,39 @@ class _Writer:
         self.ns[name] = value
         return name
 
-    def term(self, t) -> str:
+    def term(self, t, direct: bool = False) -> str:
+        """The expression computing ``t`` (its variables known). ``direct``:
+        calls are made without :func:`_call`, for :meth:`value`."""
         tt = type(t)
         if tt is Var:
             return f"x{t.index}"
         if tt is tuple:
-            return "(" + "".join(self.term(x) + ", " for x in t) + ")"
+            return "(" + "".join(self.term(x, direct) + ", " for x in t) + ")"
         if tt is CallTerm:
+            args = "(" + "".join(self.term(x, direct) + ", " for x in t.args) + ")"
+            if direct:
+                return f"{self.const(t.func)}({args})"
             nested = any(type(x) is CallTerm or type(x) is tuple for x in t.args)
             helper = "_call_nested" if nested else "_call"
-            return (f"{helper}({self.const(t.func)}, ("
-                    + "".join(self.term(x) + ", " for x in t.args) + f"), {self.const(t)})")
+            return f"{helper}({self.const(t.func)}, {args}, {self.const(t)})"
         return self.const(t)
+
+    def value(self, target: str, t) -> None:
+        """Emit ``target = t``. Its calls are made directly, in one ``try``:
+        every value met here is ground (a known variable is bound to a ground
+        term, a function's value is ground), so :func:`_call_nested` would
+        never keep a call as a term. Only when a call fails is the term
+        computed again through :func:`_call`, which places the error at the
+        failing call (as ``compile._fast_path`` does)."""
+        if not _has_call(t):
+            self.emit(f"{target} = {self.term(t)}")
+            return
+        fast = self.term(t, direct=True)
+        slow = self.term(t)
+        self.emit("try:")
+        self.emit(f"    {target} = {fast}")
+        self.emit("except HtnError:")
+        self.emit(f"    {target} = {slow}")
 
     def factory(self):
         """The code's factory ``make(*constants) -> run``, or None when this
@@ -347,13 +388,13 @@ class _Writer:
             # have been (they may fail), as ``subst`` evaluates them
             self.inner_calls(lit.expr.call)
         elif kind == _CALL:
-            self.emit(f"v{k} = {self.term(lit.expr.call)}")
+            self.value(f"v{k}", lit.expr.call)
             self.emit(f"if not (type(v{k}) is tuple and not v{k}):")
             self.depth += 1
         elif kind == _ASSIGN:
             v = lit.expr.var.index
             if v not in self.known:     # an earlier binding wins, as in JSHOP2
-                self.emit(f"x{v} = {self.term(lit.expr.term)}")
+                self.value(f"x{v}", lit.expr.term)
                 self.known.add(v)
                 self.local.add(v)
         else:
@@ -372,7 +413,7 @@ class _Writer:
 
     def atom(self, k: int, lit: _Literal, negated: bool) -> None:
         args = lit.args
-        if all(type(a) is not Var or a.index in self.known for a in args):
+        if lit.vars <= self.known:
             tup = self.term(args)
             if negated:
                 test = f"{tup} not in M{k}"
@@ -389,16 +430,15 @@ class _Writer:
             return
         conds = [f"len(t) == {len(args)}"] if self.sized[k] else []
         binds = []
-        first: dict = {}
+        first: dict = {}      # variable -> where it is first met in ``t``
         for i, a in enumerate(args):
-            if type(a) is Var and a.index not in self.known:
-                if a.index in first:
-                    conds.append(f"t[{i}] == t[{first[a.index]}]")
-                else:
-                    first[a.index] = i
-                    binds.append(f"x{a.index} = t[{i}]")
+            if type(a) is tuple and a and not _vars(a, set()) <= self.known:
+                # a list with a free variable: its shape, then element by element
+                conds.append(f"type(t[{i}]) is tuple and len(t[{i}]) == {len(a)}")
+                for j, x in enumerate(a):
+                    self.match(f"t[{i}][{j}]", x, conds, binds, first)
             else:
-                conds.append(f"t[{i}] == {self.term(a)}")
+                self.match(f"t[{i}]", a, conds, binds, first)
         source = f"chain(L{k}, H{k}[0])" if lit.facts else f"L{k}"
         cond = " and ".join(conds) or "True"
         if negated:
@@ -421,6 +461,19 @@ class _Writer:
             self.emit(b)
         self.known |= set(first)
         self.local |= set(first)
+
+    def match(self, place: str, a, conds: list, binds: list, first: dict) -> None:
+        """Match the pattern term ``a`` (flat) with ``place`` of an atom, as
+        unifying does with a ground atom: a free variable binds at its first
+        place and must be equal at the others; anything else must be equal."""
+        if type(a) is Var and a.index not in self.known:
+            if a.index in first:
+                conds.append(f"{place} == {first[a.index]}")
+            else:
+                first[a.index] = place
+                binds.append(f"x{a.index} = {place}")
+        else:
+            conds.append(f"{place} == {self.term(a)}")
 
     def bound(self, args: tuple) -> str:
         """The atom's arguments as the general engine's binder gives them:

@@ -49,7 +49,7 @@ from .goals import GoalGuard
 from .loops import LoopCheck
 from .operators import Operators
 from .state import Change, HashedState, State
-from .compile import head_unifier, substituter
+from .compile import head_unifier, substituter, task_list_maker
 from .terms import subst, term_str, variables
 from .tree import snapshot
 
@@ -92,23 +92,16 @@ class Node:
 
 def compile_tasks(tl):
     """Compile a task list into ``env -> [Node]`` (its bound subtasks)."""
-    makers = []
-    for x in tl.items:
-        if isinstance(x, S.TaskAtom):
-            makers.append(_atom_maker(x))
-        else:
-            makers.append(_list_maker(x))
-    return lambda env: [make(env) for make in makers]
+    return task_list_maker(tl, Node, Task)
 
 
-def _atom_maker(t: S.TaskAtom):
-    bind, name, immediate = substituter(t.args), t.name, t.immediate
-    return lambda env: Node(Task(name, bind(env), immediate, t))
-
-
-def _list_maker(tl: S.TaskList):
-    subtasks, ordered = compile_tasks(tl), tl.ordered
-    return lambda env: Node(None, subtasks(env), ordered)
+def _bind_tasks(tl: S.TaskList, env: list) -> Node:
+    """The node of a task list bound by ``env``, built directly: the
+    problem's task list is bound once, and may be long (compiling it would
+    cost more than it saves)."""
+    return Node(None, [_bind_tasks(x, env) if isinstance(x, S.TaskList)
+                       else Node(Task(x.name, subst(x.args, env), x.immediate, x))
+                       for x in tl.items], tl.ordered)
 
 
 def first_tasks(root: Node, trail: Optional[list] = None, path: Optional[list] = None) -> list:
@@ -387,9 +380,9 @@ class Planner:
             self._methods[m.name] = [(m, head_unifier(m.head.args),
                                       [(pre(b.pre, m.head.args), compile_tasks(b.tasks), True)
                                        for b in m.branches])]
-            self.root = _list_maker(S.TaskList([m.head]))([])
+            self.root = _bind_tasks(S.TaskList([m.head]), [])
         else:
-            self.root = _list_maker(instance.tasks)([None] * nvars)
+            self.root = _bind_tasks(instance.tasks, [None] * nvars)
         self._steps: list = []
         self._cost = 0.0
         self._trail: list = []     # nodes marked done, see first_tasks

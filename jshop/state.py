@@ -33,15 +33,20 @@ class State:
 
     def add(self, pred: str, args: tuple) -> bool:
         """Append an atom; False if it was already there (nothing changes)."""
-        lst = self.bucket(pred)
-        m = self.members[pred]
-        if is_ground(args):
+        m = self.members.get(pred)
+        if m is None:
+            self.bucket(pred)
+            m = self.members[pred]
+        for x in args:      # is_ground(args), the common flat atom without a call
+            tx = type(x)
+            if tx is not str and tx is not float and not is_ground(x):
+                self.nonground += 1
+                break
+        else:
             if args in m:
                 return False
             m.add(args)
-        else:
-            self.nonground += 1
-        lst.append(args)
+        self.atoms[pred].append(args)
         return True
 
     def delete(self, pred: str, args: tuple) -> int:
@@ -69,10 +74,13 @@ class State:
     def retract(self, pred: str, args: tuple) -> None:
         """Undo an :meth:`add` (the atom was appended, so look from the end)."""
         lst = self.atoms[pred]
-        for i in range(len(lst) - 1, -1, -1):
-            if lst[i] == args:
-                del lst[i]
-                break
+        if lst[-1] == args:     # undone in reverse order: usually still the last
+            lst.pop()
+        else:
+            for i in range(len(lst) - 2, -1, -1):
+                if lst[i] == args:
+                    del lst[i]
+                    break
         m = self.members[pred]
         if args in m:
             m.remove(args)
