@@ -16,7 +16,7 @@ import click
 from htn.jshop.limits import DEFAULT_MAX_DEPTH
 
 from .output import AtomicFile, console, stdout_is_terminal, warn
-from .signals import DeadlineExceeded, deadline, held, interrupt_exit
+from .signals import DeadlineExceeded, deadline, held, interrupt_exit, raise_again
 
 FORMATS = ["text", "jshop", "json", "ipc"]
 
@@ -197,6 +197,7 @@ class _Search:
                                     dot_out.add(p.tree)
                                 _count(totals, p)
                                 render.plan(p)
+                            raise_again()       # a Ctrl-C a finalizer swallowed
                             if limit is not None and planner.stats.plans_found >= limit:
                                 break
                     finally:

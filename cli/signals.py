@@ -82,22 +82,50 @@ def silence_stdout() -> None:
         pass
 
 
-def _raise_terminated(signum, frame):
-    raise Terminated()
+_RAISED: list = []     # the interrupts the handlers raised, see raise_again
+
+
+def _raise_interrupt(signum, frame):
+    exc = interrupt(signum)
+    _RAISED.append(exc)
+    raise exc
+
+
+def raise_again() -> None:
+    """Raise an interrupt once more if one was raised and the command goes on.
+
+    Python ignores an exception raised while a finalizer runs (it prints
+    "Exception ignored in ..."), and the search drops generators all the
+    time: a Ctrl-C whose handler ran in one was lost, and ``htn plan --all``
+    went on writing plans. A command calls this where it may stop (after
+    each plan), so such a signal still ends it there."""
+    if _RAISED:
+        raise _RAISED[-1]
 
 
 @contextmanager
 def sigterm_as_interrupt():
-    """Turn SIGTERM into :class:`Terminated` while the block runs."""
+    """While the block runs, Ctrl-C raises ``KeyboardInterrupt`` and SIGTERM
+    :class:`Terminated`, each remembered for :func:`raise_again`."""
+    _RAISED.clear()             # a new command (in-process callers run several)
     try:
-        old = signal.signal(signal.SIGTERM, _raise_terminated)
+        old = {sig: signal.signal(sig, _raise_interrupt)
+               for sig in (signal.SIGINT, signal.SIGTERM)}
     except ValueError:          # not the main thread: leave signals alone
         yield
         return
+    # the signal mask as the caller had it: a command never leaves signals
+    # blocked behind it (child processes inherit the mask, and a test
+    # process that ran a command in-process would hand it to every later one)
+    mask = signal.pthread_sigmask(signal.SIG_BLOCK, ()) \
+        if hasattr(signal, "pthread_sigmask") else None
     try:
         yield
     finally:
-        signal.signal(signal.SIGTERM, old)
+        for sig, handler in old.items():
+            signal.signal(sig, handler)
+        if mask is not None:
+            signal.pthread_sigmask(signal.SIG_SETMASK, mask)
 
 
 class Signals:
@@ -181,8 +209,11 @@ def held():
     if not hasattr(signal, "pthread_sigmask"):
         yield
         return
-    old = signal.pthread_sigmask(signal.SIG_BLOCK, HELD)
+    # the mask is read before it changes: an interrupt raised between the
+    # blocking call and ``try`` would otherwise leave the signals blocked
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, ())
     try:
+        signal.pthread_sigmask(signal.SIG_BLOCK, HELD)
         yield
     finally:
         signal.pthread_sigmask(signal.SIG_SETMASK, old)

@@ -27,6 +27,7 @@ import io
 import json
 import os
 import re
+import signal
 import sys
 from collections import Counter
 from pathlib import Path
@@ -251,6 +252,10 @@ def test_every_mutant_gets_a_clean_answer(tmp_path_factory, data):
         argv = ["validate", d, p, plans, *extra]
     clear_caches()          # each mutant is a new domain: do not keep the old ones alive
     code, out, err = run_cli(*argv)
+    # a deadline that came while a plan was written once left SIGINT, SIGTERM
+    # and SIGALRM blocked in this process, and in every process started after
+    blocked = signal.pthread_sigmask(signal.SIG_BLOCK, ())
+    assert not blocked & {signal.SIGINT, signal.SIGTERM, signal.SIGALRM}, blocked
     TALLY[f"exit {code}"] += 1
     TALLY[command] += 1
     assert code in (0, 1, 2), (code, err)
