@@ -234,16 +234,18 @@ class Logic:
             yield from self.match(pred, args, env)
         return varatom
 
+    def _lookup(self, e: S.Atom) -> tuple:
+        """What a compiled atom test holds on to: the binder of its arguments,
+        its predicate's atom list and set (the state keeps them for good),
+        its axioms, and a cache of scanners per binding key."""
+        pred = e.pred
+        return (binder(e.args), self.state.bucket(pred), self.state.members[pred],
+                self._axioms.get(pred), {})
+
     def _atom(self, e: S.Atom) -> Sat:
-        pred, args = e.pred, e.args
-        bind = binder(args)
-        # the state keeps one list and one set per predicate for good, so the
-        # compiled atom can hold on to them
-        lst = self.state.bucket(pred)
-        members = self.state.members[pred]
-        axioms = self._axioms.get(pred)
+        args = e.args
+        bind, lst, members, axioms, scanners = self._lookup(e)
         prove = self._prove
-        scanners: dict = {}
 
         def atom(env):
             key, bound = bind(env)
@@ -265,13 +267,9 @@ class Logic:
         """``(not (p ...))``: the same test as :meth:`_atom`, stopping at the
         first satisfier without making generators for it (the most common
         negation, so worth its own code)."""
-        pred, args = e.pred, e.args
-        bind = binder(args)
-        lst = self.state.bucket(pred)
-        members = self.state.members[pred]
-        axioms = self._axioms.get(pred)
+        args = e.args
+        bind, lst, members, axioms, scanners = self._lookup(e)
         prove = self._prove
-        scanners: dict = {}
 
         def neg(env):
             key, bound = bind(env)
