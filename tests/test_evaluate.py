@@ -30,6 +30,14 @@ def reference(tmp_path_factory):
     return json.loads(r.stdout), records.read_text()
 
 
+def _address(info: Path) -> str | None:
+    """The address in a scheduler file, or None while it is not all there."""
+    try:
+        return json.loads(info.read_text()).get("address")
+    except (OSError, ValueError):
+        return None
+
+
 @contextmanager
 def dask_cluster(folder: Path, workers: int = 2):
     """A Dask scheduler and ``workers`` workers on 127.0.0.1, each its own
@@ -47,8 +55,10 @@ def dask_cluster(folder: Path, workers: int = 2):
     try:
         start("scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
               "--scheduler-file", info, log="scheduler.log")
-        wait_until(info.is_file, "the scheduler's address file", procs[0])
-        address = json.loads(info.read_text())["address"]
+        # Dask writes the file in place: it can exist and still be empty or
+        # half-written, so wait until it parses and names an address
+        wait_until(lambda: _address(info), "the scheduler's address file", procs[0])
+        address = _address(info)
         nodes = [start("worker", address, "--host", "127.0.0.1", "--nthreads", "1",
                        "--no-nanny", "--no-dashboard", "--name", f"w{i}", log=f"w{i}.log")
                  for i in range(workers)]
