@@ -27,15 +27,15 @@ ROOT = Path(__file__).resolve().parent.parent
 
 
 def _runs_phase(study, problem, applied, runs, runner) -> float:
-    from htn.transform.evaluate import run_study
+    from htn.evaluation.study import run_study
     return run_study(study, problem, applied, runs, 0, runner).seconds
 
 
 def _projected(problem: str, runs: int, repeats: int) -> list:
     """Runs-phase times of (1 worker, 2 workers), measured in turn, pair by
     pair, so that a machine whose speed drifts moves both alike."""
-    from htn.transform.cluster import InProcess, open_runner
-    from htn.transform.evaluate import prepare_study
+    from htn.evaluation.cluster import InProcess, open_runner
+    from htn.evaluation.study import prepare_study
     study, applied = prepare_study(str(ROOT / "domains" / "kitchen.jshop"), problem)
     one = InProcess()
     started = time.perf_counter()
@@ -80,8 +80,8 @@ def _control(repeats: int, n: int = 4_000_000) -> None:
 
 
 def _physics(problem: str, runs: int) -> None:
-    from htn.transform.cluster import open_runner
-    from htn.transform.evaluate import prepare_study
+    from htn.evaluation.cluster import open_runner
+    from htn.evaluation.study import prepare_study
     study, applied = prepare_study(str(ROOT / "domains" / "kitchen.jshop"), problem,
                                    robot="pybullet")
     for workers in (1, 2):

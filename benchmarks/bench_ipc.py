@@ -71,7 +71,7 @@ def process_time(domain: Path, problem: Path, limit: float) -> tuple[float, bool
 
 def search(domain: Path, problem: Path, limit: float) -> dict:
     from htn.jshop import Planner, load_domain, load_problem
-    from htn.jshop.validate import validate_plan
+    from htn.jshop.plans.validate import validate_plan
     dom = load_domain(str(domain))
     inst = load_problem(str(problem)).instances[0]
     planner = Planner(dom, inst)

@@ -43,7 +43,8 @@ def main(problem, runs, faults, transformed):
     domain = str(ROOT / "domains" / ("kitchen.jshop" if kitchen else "domestic.jshop"))
     dom = load_domain(domain)
     if transformed:
-        from htn.transform.framework import Workspace, default_framework
+        from htn.transform.framework import Workspace
+        from htn.transform.registered import default_framework
         plan = default_framework().apply_all_transformations(Workspace.from_problem(dom, inst)).plan
     else:
         plan = next(Planner(dom, inst, record_trees=True).plans())

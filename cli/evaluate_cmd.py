@@ -7,7 +7,7 @@ import os
 
 import click
 
-from htn.jshop.errors import HtnError
+from htn.jshop.language.errors import HtnError
 
 from .extras import require_extra, require_robot_extra
 from .output import check_output_file, check_output_folder, make_output_folder, warn
@@ -17,7 +17,7 @@ def _domain_for(problem: str) -> str:
     """The problem's domain file: ../domains/NAME.jshop beside it, domains/
     here, or the bundled one of that name."""
     from htn import EXAMPLES
-    from htn.jshop.parser import load_problem
+    from htn.jshop.readers.load import load_problem
     name = load_problem(problem).domain_name
     for base in (os.path.join(os.path.dirname(os.path.abspath(problem)), "..", "domains"),
                  "domains", str(EXAMPLES / "domains")):
@@ -36,7 +36,7 @@ def _check_options(problem, domain, robot, faults, workers, scheduler, plot_dir,
         raise HtnError("no such file", problem)
     if domain is not None and not os.path.isfile(domain):
         raise HtnError("no such file", domain)
-    from htn.transform.runs import MEASURES
+    from htn.evaluation.runs import MEASURES
     if robot not in MEASURES:
         raise HtnError(f"--robot {robot}: this robot cannot be evaluated (choose from "
                        f"{', '.join(MEASURES)})")
@@ -100,8 +100,8 @@ def evaluate(problem, domain, runs, seed, robot, faults, workers, scheduler, rec
     from rich.console import Console
     from rich.progress import Progress
 
-    from htn.transform.cluster import ClusterError, open_runner
-    from htn.transform.evaluate import RecordsFile, plot, prepare_study, run_study
+    from htn.evaluation.cluster import ClusterError, open_runner
+    from htn.evaluation.study import RecordsFile, plot, prepare_study, run_study
 
     console = Console(stderr=True)
     stream = None
@@ -147,8 +147,8 @@ def _print_table(comp, stats: dict, problem: str) -> None:
     from rich.console import Console
     from rich.table import Table
 
-    from htn.transform.runs import MEASURES
-    from htn.transform.statistics import METRIC_NAMES, applied_rules, format_change, format_p
+    from htn.evaluation.runs import MEASURES
+    from htn.evaluation.statistics import METRIC_NAMES, applied_rules, format_change, format_p
 
     def cell(value, fmt: str) -> str:
         return "n/a" if value is None else fmt.format(value)

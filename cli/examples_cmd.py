@@ -7,7 +7,7 @@ from pathlib import Path
 
 import click
 
-from htn.jshop.errors import HtnError
+from htn.jshop.language.errors import HtnError
 
 from .output import stdout_is_terminal
 

@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 from htn import missing_modules
-from htn.jshop.errors import HtnError
+from htn.jshop.language.errors import HtnError
 
 
 def require_extra(extra: str, what: str) -> None:

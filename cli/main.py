@@ -1,7 +1,7 @@
 """``htn``: plan with a JSHOP2 domain, execute plans, evaluate.
 
 This module only parses arguments, calls the library and prints. Errors in the
-user's input are :class:`htn.jshop.errors.HtnError`; they are caught once, in
+user's input are :class:`htn.jshop.language.errors.HtnError`; they are caught once, in
 :func:`main`, and printed as ``file:line:col: message`` with exit code 2.
 Ctrl-C exits with 130, SIGTERM with 143 (both after the command's own clean-up,
 see :mod:`htn.cli.signals`), and a reader that closes the pipe early (``htn
@@ -13,7 +13,7 @@ import sys
 
 import click
 
-from htn.jshop.errors import HtnError
+from htn.jshop.language.errors import HtnError
 
 from .output import fail
 from .signals import interrupt_exit, sigterm_as_interrupt, silence_stdout

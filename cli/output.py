@@ -35,7 +35,7 @@ _pending: set = set()       # temporary files of this process not yet committed
 # caller does not name it).
 
 def _refused(path: str, option: str | None, message: str):
-    from htn.jshop.errors import HtnError
+    from htn.jshop.language.errors import HtnError
     return HtnError(f"{option}: {message}" if option else message, path)
 
 

@@ -13,7 +13,7 @@ import time
 
 import click
 
-from htn.jshop.limits import DEFAULT_MAX_DEPTH
+from htn.jshop.search.limits import DEFAULT_MAX_DEPTH
 
 from .output import AtomicFile, console, stdout_is_terminal, warn
 from .signals import DeadlineExceeded, deadline, held, interrupt_exit, raise_again
@@ -74,11 +74,11 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
       htn plan DOMAIN PROBLEM --all --format jshop
       htn plan DOMAIN PROBLEM -o plan.txt && htn run plan.txt --sim
     """
-    from htn.jshop.checks import check_domain, check_problem
-    from htn.jshop.functions import FunctionTable
-    from htn.jshop.parser import load_inputs
-    from htn.jshop.planfile import header
-    from htn.jshop.planner import compat_warning
+    from htn.jshop.language.functions import FunctionTable
+    from htn.jshop.plans.planfile import header
+    from htn.jshop.readers.checks import check_domain, check_problem
+    from htn.jshop.readers.load import load_inputs
+    from htn.jshop.search.planner import compat_warning
 
     started = time.perf_counter()
     fmt = fmt or ("text" if stdout_is_terminal() else "jshop")
@@ -162,7 +162,7 @@ class _Search:
     def run(self, render, out, dot_out, started, timeout, limit):
         """Returns the summed statistics and what stopped the stream early
         (Ctrl-C, SIGTERM or a closed stdout), if anything."""
-        from htn.jshop.planner import Planner
+        from htn.jshop.search.planner import Planner
 
         totals = {"plans_found": 0, "search_ms": 0.0, "expansions": 0,
                   "operator_applications": 0, "backtracks": 0, "timed_out": False,
@@ -180,7 +180,7 @@ class _Search:
                             break
                     explainer = None
                     if self.explain:
-                        from htn.jshop.explain import Explainer
+                        from htn.jshop.plans.explain import Explainer
                         explainer = Explainer(keep_all=self.explain_all)
                         self.explainers.append(explainer)
                     planner = Planner(self.dom, inst, self.table, record_trees=self.record_trees,
@@ -224,7 +224,7 @@ class _Search:
         without --explain pays nothing for them)."""
         if self.explainers:
             return
-        from htn.jshop.explain import explain_search
+        from htn.jshop.plans.explain import explain_search
         self.explainers = [explain_search(self.dom, inst, self.table, **self.options)
                            for inst in self.prob.instances]
 
@@ -304,7 +304,7 @@ class _Renderer:
         elif self.fmt == "text":
             self._text_plan(p)
         elif self.fmt == "ipc":
-            from htn.jshop.ipc import ipc_text
+            from htn.jshop.plans.ipc import ipc_text
             sys.stdout.write(ipc_text(p, self.spelling))
             sys.stdout.flush()
         else:
@@ -318,9 +318,10 @@ class _Renderer:
         sys.stdout.flush()
 
     def _text_plan(self, p) -> None:
-        from rich.table import Table
         from rich import box
-        from htn.jshop.terms import java_double
+        from rich.table import Table
+
+        from htn.jshop.language.terms import java_double
         c = self.console
         c.print(f"[bold]Plan {self.count}[/bold]  cost {java_double(p.cost)}  "
                 f"{len(p.steps)} step{'s' if len(p.steps) != 1 else ''}")

@@ -6,7 +6,7 @@ import os
 
 import click
 
-from htn.jshop.errors import HtnError
+from htn.jshop.language.errors import HtnError
 
 
 def check_display() -> None:

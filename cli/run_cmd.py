@@ -7,7 +7,7 @@ import sys
 
 import click
 
-from htn.jshop.errors import HtnError
+from htn.jshop.language.errors import HtnError
 
 from .extras import require_robot_extra
 from .output import check_output_file, check_output_folder, make_output_folder, stdout_is_terminal
@@ -98,15 +98,15 @@ def run(ctx, plan_file, robot_name, sim, gui, snapshots, faults, seed, retries, 
 
 def _run(ctx, signals, plan_file, robot_name, sim, gui, snapshots, faults, seed, retries,
          replan, log_path, from_log, plan_index, domain, problem, functions, bt_dot, quiet):
-    from htn.executor.actions import machine_for
     from htn.executor.config import load_retries, parse_overrides
     from htn.executor.dispatcher import TaskDispatcher
     from htn.executor.log import EventLog, check_plan_digest, read_header, run_header
+    from htn.executor.machines import machine_for
     from htn.executor.plan_tree import check_runnable, recover_tree
-    from htn.jshop.functions import FunctionTable
-    from htn.jshop.parser import load_inputs
-    from htn.jshop.planfile import read_plan_file
-    from htn.jshop.validate import check_steps
+    from htn.jshop.language.functions import FunctionTable
+    from htn.jshop.plans.planfile import read_plan_file
+    from htn.jshop.plans.validate import check_steps
+    from htn.jshop.readers.load import load_inputs
     from htn.robot.backends import RobotRequest, backends, make_robot
     from htn.robot.interface import Robot
 

@@ -12,7 +12,7 @@
   :class:`DeadlineExceeded` wherever the program is, also inside a user
   function or comparator that never returns (the planner's own check between
   expansions cannot see those). It is not an ``Exception``, so the user-code
-  wrappers of :mod:`htn.jshop.functions` let it pass.
+  wrappers of :mod:`htn.jshop.language.functions` let it pass.
 * Output units (a plan, a JSON line) are written with these signals held back
   (:func:`held`), so streams and files only ever contain whole units.
 

@@ -3,7 +3,7 @@ being imported end the process quietly (exit 130, 143), without a traceback;
 once imported, each command handles them (``htn run`` halts its robot)."""
 import signal
 
-from htn.cli.signals import interrupt, interrupt_exit
+from .signals import interrupt, interrupt_exit
 
 
 def _before_main(signum, frame):
@@ -14,7 +14,7 @@ def _before_main(signum, frame):
 def main(argv=None):
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, _before_main)
-    from htn.cli.main import main as cli_main
+    from .main import main as cli_main
     signal.signal(signal.SIGINT, signal.default_int_handler)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     cli_main(argv)

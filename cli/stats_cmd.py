@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from htn.jshop.errors import HtnError
+from htn.jshop.language.errors import HtnError
 
 from .output import console
 from .signals import DeadlineExceeded, deadline
@@ -48,8 +48,8 @@ def stats(files, repeat, as_json, functions, timeout):
       htn stats
       htn stats domains/domestic.jshop problems/bring_coke.jshop problems/bring_two.jshop
     """
-    from htn.jshop.functions import FunctionTable
-    from htn.jshop.stats import PAPER, scenario_stats
+    from htn.api.stats import PAPER, scenario_stats
+    from htn.jshop.language.functions import FunctionTable
 
     if len(files) == 1:
         raise click.UsageError("give a DOMAIN and at least one PROBLEM (or no arguments)")

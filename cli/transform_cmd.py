@@ -33,8 +33,8 @@ def transform(domain, problem, rules, metric, output, as_json):
     step's precondition holds in sequence from the initial state; a rewrite
     that breaks the plan or costs more on --metric is rolled back.
     """
-    from htn.jshop import syntax as S
-    from htn.jshop.planfile import header
+    from htn.jshop.language import syntax as S
+    from htn.jshop.plans.planfile import header
 
     # a bad -o fails before the work; the file is replaced once all is done
     with atomic_write(output, "-o") if output else contextlib.nullcontext() as out:
@@ -64,8 +64,9 @@ def transform(domain, problem, rules, metric, output, as_json):
 
 def _transform(domain: str, problem: str, rules, metric: str):
     """Plan, transform and check; the result document and the workspace."""
-    from htn.jshop.parser import load_inputs
-    from htn.transform.framework import METRICS, Workspace, default_framework
+    from htn.jshop.readers.load import load_inputs
+    from htn.transform.framework import METRICS, Workspace
+    from htn.transform.registered import default_framework
 
     fw = default_framework()
     names = [t.name for t in fw.transformations]
@@ -99,5 +100,5 @@ def _transform(domain: str, problem: str, rules, metric: str):
 
 
 def _task_text(t) -> str:
-    from htn.jshop.terms import source_atom
+    from htn.jshop.language.terms import source_atom
     return source_atom(t.name, t.args)

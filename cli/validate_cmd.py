@@ -29,11 +29,11 @@ def validate(domain, problem, plan_file, plan_index, functions, quiet):
       htn plan DOMAIN PROBLEM -o plan.txt && htn validate DOMAIN PROBLEM plan.txt
       htn validate basic problem plans-all.txt
     """
-    from htn.jshop.errors import HtnError
-    from htn.jshop.functions import FunctionTable
-    from htn.jshop.parser import load_inputs
-    from htn.jshop.planfile import read_plan_file
-    from htn.jshop.validate import check_steps, validate_plan
+    from htn.jshop.language.errors import HtnError
+    from htn.jshop.language.functions import FunctionTable
+    from htn.jshop.plans.planfile import read_plan_file
+    from htn.jshop.plans.validate import check_steps, validate_plan
+    from htn.jshop.readers.load import load_inputs
 
     table = FunctionTable()
     if functions:

@@ -32,10 +32,10 @@ from typing import Any, Optional
 import py_trees
 from py_trees.common import OneShotPolicy, ParallelPolicy, Status
 
-from htn.jshop.errors import HtnError
+from htn.jshop.language.errors import HtnError
 from htn.robot.interface import SkillResult
 
-from .actions import Outcome
+from .outcome import Outcome
 
 
 @dataclass

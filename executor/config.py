@@ -6,7 +6,7 @@ from __future__ import annotations
 import os
 import tomllib
 
-from htn.jshop.errors import HtnError
+from htn.jshop.language.errors import HtnError
 
 
 def config_path(domain_path: str) -> str:

@@ -25,15 +25,15 @@ from typing import Optional
 
 from py_trees.common import Status
 
-from htn.jshop import syntax as S
-from htn.jshop.planner import Planner
+from htn.jshop.language import syntax as S
+from htn.jshop.search.planner import Planner
 
-from .actions import Outcome, all_of, machine_for
 from .behaviours import ActionContext, action_subtree
 from .log import EventLog
+from .machines import all_of, machine_for
+from .outcome import Outcome
 from .repair import find_repair, graft, observed_instance
 from .task_bt import actions, build, flat_tree
-
 
 STOPPED_BY_USER = "stopped by the user"     # why a run halted, unless told otherwise
 

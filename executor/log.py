@@ -13,7 +13,7 @@ import os
 import time
 from typing import IO, Optional
 
-from htn.jshop.errors import HtnError
+from htn.jshop.language.errors import HtnError
 
 
 class EventLog:

@@ -12,10 +12,10 @@ from __future__ import annotations
 
 from typing import Optional
 
-from htn.jshop import syntax as S
-from htn.jshop.errors import HtnError
-from htn.jshop.planner import Planner
-from htn.jshop.terms import Var
+from htn.jshop.language import syntax as S
+from htn.jshop.language.errors import HtnError
+from htn.jshop.language.terms import Var
+from htn.jshop.search.planner import Planner
 
 RECOVER_TIMEOUT = 5.0     # seconds of search
 RECOVER_PLANS = 50        # plans looked at, at most
@@ -28,7 +28,7 @@ def recover_tree(domain: S.Domain, instance: S.ProblemInstance, steps, functions
     or None. ``tasks`` (a task list's text, as ``htn transform -o`` notes it)
     replaces the problem's task list."""
     if tasks:
-        from htn.jshop.parser import parse_text
+        from htn.jshop.readers.load import parse_text
         try:
             listed = parse_text(f"(defproblem tasks {domain.name} () ({tasks}))",
                                 "<tasks>").instances[0].tasks
@@ -61,8 +61,8 @@ def check_runnable(domain: S.Domain, instance: S.ProblemInstance, plan, plan_fil
     """Before the robot moves: every step is ground, and the steps apply in
     sequence from the problem's initial state (manual 5.2.1; the plan's cost
     is not checked). A bad step is an input error at its line of the plan file."""
-    from htn.jshop.plan import Plan
-    from htn.jshop.validate import validate_plan
+    from htn.jshop.plans.plan import Plan
+    from htn.jshop.plans.validate import validate_plan
     lines = _read_lines(plan_file)
     for s in plan.steps:
         var = next((v for v in map(_variable, s.args) if v is not None), None)

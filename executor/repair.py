@@ -3,7 +3,7 @@ re-planned from what the robot observes, and graft it into the behaviour tree.
 
 When an action ends failed or aborted, the tasks that enclose it are tried
 from the nearest up: each is planned again (JSHOP2's search, this planner's
-:class:`~htn.jshop.planner.Planner`, on that one task atom) from the
+:class:`~htn.jshop.search.planner.Planner`, on that one task atom) from the
 **observed state**: the problem's static facts plus what the robot observes of
 the domain's dynamic predicates. A plan is accepted when what comes after the
 task in the current plan still applies after it (each remaining step's
@@ -18,8 +18,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Optional
 
-from htn.jshop import syntax as S
-from htn.jshop.planner import Planner
+from htn.jshop.language import syntax as S
+from htn.jshop.search.planner import Planner
 
 from .task_bt import ROOT_NAME, actions, build, enclosing_tasks, label_among, rebase, task_atom
 
@@ -105,7 +105,7 @@ def find_repair(shot, root, tree_known: bool, domain, observed: S.ProblemInstanc
 
 
 def _atoms(tasks: S.TaskList) -> list:
-    from htn.jshop.terms import atom_str
+    from htn.jshop.language.terms import atom_str
     return [atom_str(t.name, t.args) for t in S.task_atoms(tasks)]
 
 

@@ -20,8 +20,8 @@ from typing import Callable, Optional
 
 import py_trees
 
-from htn.jshop import syntax as S
-from htn.jshop.tree import TaskTree
+from htn.jshop.language import syntax as S
+from htn.jshop.plans.tree import TaskTree
 
 MAX_DEPTH = 48
 ROOT_NAME = "plan"

@@ -8,7 +8,7 @@ Typical use::
     planner = Planner(domain, problem.instances[0])
     plan = next(planner.plans())
 
-The names below are imported on first use, so that importing ``htn.jshop.errors``
+The names below are imported on first use, so that importing ``htn.jshop.language.errors``
 (as the command line does for ``htn --help``) does not load the parser.
 """
 from importlib import import_module

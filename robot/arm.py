@@ -121,6 +121,20 @@ class Arm:
                 p.setCollisionFilterPair(self.arm, body, link, -1, 1, physicsClientId=c)
         self.held = None
 
+    def _put_down_at(self, x: float, y: float, centre: float, above: float, gap: float):
+        """The place motion: bring what the hand holds over (x, y), ``above``
+        metres higher than where its centre rests (``centre``), lower it to
+        ``gap`` above that, let go, and lift the empty hand again. False
+        (without moving) if the spot is out of reach."""
+        if not (yield from self._reach([x, y, centre + above], 0.8)):
+            return False
+        yield from self._reach([x, y, centre + gap], 0.6)
+        self._release()
+        self._set_fingers(0.04)
+        yield from self._settle(0.3)
+        yield from self._reach([x, y, centre + above], 0.5)
+        return True
+
     def _slip(self, obj: str, where: str) -> None:
         """Fault: the object slips out of the selected gripper."""
         self.inject("slip", f"{obj} slips out of the {where}")

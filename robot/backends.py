@@ -10,15 +10,15 @@ the robot's name, its object the factory::
     turtle = "my_package.robot:make_robot"
 
 A factory checks its request (unknown fault kinds, a world it cannot build)
-by raising :class:`~htn.jshop.errors.HtnError`, before anything moves.
+by raising :class:`~htn.jshop.language.errors.HtnError`, before anything moves.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
 from typing import Any, Callable, Optional
 
-from htn.jshop import syntax as S
-from htn.jshop.errors import HtnError
+from htn.jshop.language import syntax as S
+from htn.jshop.language.errors import HtnError
 
 from .faults import parse_faults
 

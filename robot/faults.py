@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, fields
 from typing import Iterable, Optional
 
-from htn.jshop.errors import HtnError
+from htn.jshop.language.errors import HtnError
 
 
 def parse_faults(text: Optional[str], known: Iterable[str]) -> dict[str, float]:

@@ -41,7 +41,7 @@ class Check:
 
 
 Ticking = Iterator[None]      # a skill in progress: one physics step per next()
-Outcome = Union[SkillResult, Ticking]
+SkillRun = Union[SkillResult, Ticking]   # what act() returns: done at once, or ticking
 
 
 def skill(name: str) -> Callable:
@@ -60,7 +60,7 @@ def check(name: str) -> Callable:
     return mark
 
 
-def complete(result: Outcome) -> SkillResult:
+def complete(result: SkillRun) -> SkillResult:
     """Run a skill to its end without ticking (set-up, tests, plugins)."""
     if isinstance(result, SkillResult):
         return result
@@ -103,7 +103,7 @@ class Robot:
                     cls._checks[name] = attr
 
     # ---- by name
-    def act(self, name: str, *args) -> Outcome:
+    def act(self, name: str, *args) -> SkillRun:
         """Start skill ``name``: a result, or a generator to tick (see module
         doc). A robot written without the decorator offers its method of the
         same name."""

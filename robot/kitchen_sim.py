@@ -21,7 +21,7 @@ from typing import Optional
 
 import numpy as np
 
-from htn.jshop.errors import HtnError
+from htn.jshop.language.errors import HtnError
 
 from .arm import ARM_JOINTS, EE_LINK, FINGERS
 from .base import BASE_SPEED, POSE_TOLERANCE, TURN_SPEED
@@ -429,14 +429,8 @@ class KitchenRobot(Drawers, Trays, PyBulletRobot):
 
     def _put_down(self, obj: str, x: float, y: float, z: float, what: str):
         """Lower what the selected hand holds onto (x, y) of a surface at z, let go."""
-        h = self.height[obj]
-        if not (yield from self._reach([x, y, z + h / 2 + 0.12], 0.8)):
+        if not (yield from self._put_down_at(x, y, z + self.height[obj] / 2, 0.12, 0.012)):
             return SkillResult(False, f"{what} is out of the {self.active} arm's reach")
-        yield from self._reach([x, y, z + h / 2 + 0.012], 0.6)
-        self._release()
-        self._set_fingers(0.04)
-        yield from self._settle(0.3)
-        yield from self._reach([x, y, z + h / 2 + 0.12], 0.5)
         yield from self._rest_pose()
         return SkillResult(True, f"{self.active} gripper opened over {what}")
 

@@ -61,7 +61,7 @@ class Physics:
         with quiet_fds():
             self.cid = p.connect(p.GUI if gui else p.DIRECT)
         if self.cid < 0:
-            from htn.jshop.errors import HtnError
+            from htn.jshop.language.errors import HtnError
             raise HtnError("--gui: PyBullet cannot open a window on display "
                            f"{os.environ.get('DISPLAY', '(none)')!r}")
         p.setAdditionalSearchPath(pybullet_data.getDataPath(), physicsClientId=self.cid)

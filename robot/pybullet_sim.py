@@ -235,13 +235,8 @@ class PyBulletRobot(Physics, MobileBase, Arm, Perception, Robot):
         used = sum(1 for t, _ in self._resting_objects() if t == furniture)
         x, y, z = self._spot_on(furniture, used)
         yield from self._face(x, y)
-        if not (yield from self._reach([x, y, z + CAN_HEIGHT / 2 + 0.15], 0.8)):
+        if not (yield from self._put_down_at(x, y, z + CAN_HEIGHT / 2, 0.15, 0.015)):
             return SkillResult(False, f"{furniture} is out of the arm's reach")
-        yield from self._reach([x, y, z + CAN_HEIGHT / 2 + 0.015], 0.6)
-        self._release()
-        self._set_fingers(0.04)
-        yield from self._settle(0.3)
-        yield from self._reach([x, y, z + CAN_HEIGHT / 2 + 0.15], 0.5)
         yield from self._carry_pose()
         return SkillResult(True, f"released over {furniture}")
 

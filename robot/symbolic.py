@@ -18,8 +18,8 @@ from __future__ import annotations
 import random
 from typing import Optional
 
-from htn.jshop import syntax as S
-from htn.jshop.terms import atom_str
+from htn.jshop.language import syntax as S
+from htn.jshop.language.terms import atom_str
 
 from .interface import Check, Robot, SkillResult, check, skill
 
@@ -35,7 +35,7 @@ class SymbolicRobot(Robot):
 
     def __init__(self, domain: S.Domain, instance: S.ProblemInstance, functions=None,
                  faults: Optional[dict] = None, seed: int = 0):
-        from htn.jshop.planner import Planner
+        from htn.jshop.search.planner import Planner
         self.model = Planner.for_state(domain, instance.state, functions)
         self.world = self.model.state
         self.dynamic = domain.dynamic_predicates()

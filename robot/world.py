@@ -13,7 +13,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Optional
 
-from htn.jshop.errors import HtnError
+from htn.jshop.language.errors import HtnError
 
 
 @dataclass

@@ -26,8 +26,8 @@ class Oracle:
     """Listens to a run's events and judges every ``aborted`` one."""
 
     def __init__(self, robot, domain, instance):
-        from htn.jshop import syntax as S
-        from htn.jshop.planner import Planner
+        from htn.jshop.language import syntax as S
+        from htn.jshop.search.planner import Planner
         self.robot, self.p, self.c = robot, robot.p, robot.cid
         self.domain, self.instance = domain, instance
         self.model = Planner(domain, S.ProblemInstance(instance.state, S.TaskList([])))
@@ -139,7 +139,7 @@ class Oracle:
         if hold is not None:
             return any(not (self._attached(o) and self._at_gripper(o, 0.15))
                        for o in self.held_at_start)
-        from htn.jshop.parser import parse_step
+        from htn.jshop.readers.jshop2 import parse_step
         step = parse_step(rec["action"], "<log>", 1)
         added = set()
         for op, env in self.model.step_options(step.name, tuple(step.args)):
@@ -151,12 +151,12 @@ class Oracle:
         after a repair, with what was observed, as the dispatcher does)."""
         if rec["event"] == "replanned":
             from htn.executor.repair import observed_instance
-            from htn.jshop import syntax as S
-            from htn.jshop.planner import Planner
+            from htn.jshop.language import syntax as S
+            from htn.jshop.search.planner import Planner
             seen = observed_instance(self.domain, self.instance, self.robot)
             self.model = Planner(self.domain, S.ProblemInstance(seen.state, S.TaskList([])))
         if rec["event"] == "verified":
-            from htn.jshop.parser import parse_step
+            from htn.jshop.readers.jshop2 import parse_step
             step = parse_step(rec["action"], "<log>", 1)
             self.model.apply_step(step.name, tuple(step.args))
 

@@ -13,7 +13,6 @@ from contextlib import contextmanager
 from pathlib import Path
 
 import pytest
-
 from conftest import run_htn, start_htn, wait_until
 
 PROBLEM = "problems/transport_four.jshop"
@@ -175,7 +174,7 @@ def test_few_runs_print_na_and_leak_no_warning():
 
 
 def test_statistics_edge_cases():
-    from htn.transform.statistics import applied_rules, format_p, pooled_failures, welch_p
+    from htn.evaluation.statistics import applied_rules, format_p, pooled_failures, welch_p
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         assert welch_p([1.0], [2.0, 3.0]) is None                  # fewer than 2 runs
@@ -196,8 +195,8 @@ def test_statistics_edge_cases():
 
 
 def test_figures_of_runs_that_differ_by_rounding_only(tmp_path):
-    from htn.transform.figures import plot
-    from htn.transform.statistics import Comparison
+    from htn.evaluation.figures import plot
+    from htn.evaluation.statistics import Comparison
 
     def run(navigation, manipulation, result="verified"):
         return {"navigation": navigation, "manipulation": manipulation, "actions": 15,

@@ -33,10 +33,8 @@ from collections import Counter
 from pathlib import Path
 
 import pytest
-from hypothesis import HealthCheck, given, settings
-from hypothesis import strategies as st
-
 from conftest import CORPUS, FUNCTIONS, ROOT, SHARED, corpus_available
+from hypothesis import HealthCheck, given, settings, strategies as st
 
 sys.setrecursionlimit(max(sys.getrecursionlimit(), 20000))   # as htn's main() does
 EXAMPLES = int(os.environ.get("HTN_FUZZ_EXAMPLES", "500"))
@@ -230,7 +228,7 @@ def _report():
           suppress_health_check=list(HealthCheck))
 @given(data=st.data())
 def test_every_mutant_gets_a_clean_answer(tmp_path_factory, data):
-    from htn.jshop.compile import clear_caches
+    from htn.jshop.logic.caches import clear_caches
     domain, problem, functions, plans = data.draw(st.sampled_from(CASES), label="example")
     which = data.draw(st.sampled_from(["domain", "problem", "both"]), label="mutate")
     folder = tmp_path_factory.mktemp("mutant")

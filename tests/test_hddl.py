@@ -6,11 +6,9 @@ symbolic``. Errors in HDDL files are ``file:line:col`` with exit code 2."""
 from __future__ import annotations
 
 import json
-
 from pathlib import Path
 
 import pytest
-
 from conftest import SHARED, run_htn
 
 SAMPLE = SHARED / "corpus" / "ipc2020-to"
@@ -30,8 +28,8 @@ def check_ipc_decomposition(text: str, domain: Path, problem: Path, steps: list)
     names a method of its task, the method's subtasks match the children under
     one binding of the method's variables, ids are used once, the root tasks
     are the problem's, and the actions are the plan's steps."""
-    from htn.jshop.hddl import parse_model
-    from htn.jshop.hddl_domain import linearise
+    from htn.jshop.readers.hddl import parse_model
+    from htn.jshop.readers.hddl_order import linearise
     dom, prob = parse_model(domain.read_text(), str(domain)), parse_model(problem.read_text())
     lines = text.splitlines()
     assert lines[0] == "==>" and lines[-1] == "<=="

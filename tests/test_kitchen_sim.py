@@ -11,22 +11,22 @@ import json
 import math
 
 import pytest
-
 from conftest import ROOT, run_htn
-from htn.executor.actions import Outcome
+
 from htn.executor.config import load_retries
 from htn.executor.dispatcher import TaskDispatcher
-from htn.executor.repair import observed_instance
 from htn.executor.log import EventLog
+from htn.executor.outcome import Outcome
+from htn.executor.repair import observed_instance
 from htn.jshop import Planner, load_domain, load_problem
-from htn.jshop import syntax as S
-from htn.jshop.errors import HtnError
-from htn.jshop.parser import parse_step, parse_text
-from htn.jshop.plan import Step
+from htn.jshop.language import syntax as S
+from htn.jshop.language.errors import HtnError
+from htn.jshop.plans.plan import Step
+from htn.jshop.readers.jshop2 import parse_step
+from htn.jshop.readers.load import parse_text
 from htn.robot.kitchen_sim import KitchenRobot
 from htn.robot.pybullet_sim import Faults
-from htn.robot.world import (ROBOT_HALF_WIDTH, _rect_seg_dist, _table_rect,
-                         kitchen_world_from_state)
+from htn.robot.world import ROBOT_HALF_WIDTH, _rect_seg_dist, _table_rect, kitchen_world_from_state
 from htn.transform import rules
 from htn.transform.framework import Framework, Workspace
 

@@ -1,4 +1,4 @@
-"""Conjunctions compiled per binding mode (htn.jshop.modes) find the same
+"""Conjunctions compiled per binding mode (htn.jshop.logic.modes) find the same
 satisfiers in the same order as JSHOP2's left-to-right backtracking: fact
 axioms stated twice give two satisfiers, an atom of another length is not a
 match, a call with an unbound variable holds, and a call that fails inline

@@ -8,7 +8,6 @@ import json
 import multiprocessing
 
 import pytest
-
 from conftest import ROOT, run_htn
 from monitoring_oracle import Oracle, run_checked
 
@@ -21,8 +20,8 @@ RUNS = 200
 
 
 def short_steps():
-    from htn.jshop.parser import parse_step
-    from htn.jshop.plan import Step
+    from htn.jshop.plans.plan import Step
+    from htn.jshop.readers.jshop2 import parse_step
     return [Step(a.name, a.args) for a in (parse_step(t, "<test>", 1) for t in SHORT_PLAN)]
 
 

@@ -14,7 +14,6 @@ import textwrap
 from pathlib import Path
 
 import pytest
-
 from conftest import ROOT
 
 BASIC_PLAN = "Plan cost: 2.0\n\n(!drop kiwi)\n(!pickup banjo)\n--------------------\n"
@@ -153,7 +152,7 @@ def register(framework):
 
 PLUGIN_ACTIONS = '''
 """Action state machines for the basic domain's operators on the toy robot."""
-from htn.executor.actions import ActionMachine, action
+from htn.executor.machines import ActionMachine, action
 
 
 @action("!pickup", domain="basic")

@@ -5,11 +5,11 @@ from __future__ import annotations
 import json
 
 import pytest
-
 from conftest import ROOT, run_htn
+
 from htn.jshop import Planner, load_domain, load_problem
-from htn.jshop import syntax as S
-from htn.jshop.errors import HtnError
+from htn.jshop.language import syntax as S
+from htn.jshop.language.errors import HtnError
 from htn.transform import rules
 from htn.transform.framework import Framework, Unit, Workspace, navigation_distance
 
@@ -21,7 +21,7 @@ def workspace(problem: str, text: str | None = None) -> Workspace:
     dom = load_domain(DOMAIN)
     if text is not None:
         path = ROOT / "problems" / "transport_four.jshop"   # for a position only
-        from htn.jshop.parser import parse_text
+        from htn.jshop.readers.load import parse_text
         prob = parse_text(text, str(path))
     else:
         prob = load_problem(str(PROBLEMS / f"{problem}.jshop"))
@@ -189,7 +189,7 @@ def test_htn_transform_cli(tmp_path):
 def test_projection_is_deterministic_and_monitored():
     from htn.executor.config import load_retries
     from htn.robot.projection import FailureRates
-    from htn.transform.runs import project
+    from htn.transform.projection import project
     ws = workspace("transport_four")
     retries = load_retries(DOMAIN)
     runs = [project(ws.domain, ws.instance, ws.plan.steps, seed, retries=retries)
@@ -206,7 +206,7 @@ def test_projection_is_deterministic_and_monitored():
 
 
 def test_evaluate_reproduces_the_papers_findings():
-    from htn.transform.evaluate import compare
+    from htn.evaluation.study import compare
     four = compare(DOMAIN, str(PROBLEMS / "transport_four.jshop"), runs=120, seed=0).metrics()
     assert -40 < four["navigation"]["change_pct"] < -20 and four["navigation"]["p_value"] < 1e-3
     assert abs(four["manipulation"]["change_pct"]) < 10
@@ -217,7 +217,7 @@ def test_evaluate_reproduces_the_papers_findings():
 
 def test_task_tree_annotated_by_a_projected_run():
     from htn.executor.config import load_retries
-    from htn.transform.runs import projected_tree
+    from htn.transform.projection import projected_tree
     ws = workspace("transport_four")
     framework().apply_all_transformations(ws)
     tree = ws.annotated_tree()

@@ -3,8 +3,8 @@ from __future__ import annotations
 
 import pytest
 
-from htn.jshop.functions import STDLIB
-from htn.jshop.terms import NIL, CallTerm, Dotted, Var, make_list, subst, term_str, unify
+from htn.jshop.language.functions import STDLIB
+from htn.jshop.language.terms import NIL, CallTerm, Dotted, Var, make_list, subst, term_str, unify
 
 
 def V(i, name=None):

@@ -14,11 +14,11 @@ the reason. Costs are re-projected: the mean of a metric over projected runs
 of the plan (:func:`projected`), as the paper projects plans before executing
 them.
 
-API (as in the paper): :func:`register_transformation`,
-:func:`disable_transformation`, :func:`enable_transformation`,
-:func:`prioritize_transformation`, :func:`apply_all_transformations`. Rules can
-also come from plugins: the entry-point group ``htn.transformations`` names
-functions called with the framework to register theirs.
+API (as in the paper): :meth:`Framework.register_transformation`,
+``disable_transformation``, ``enable_transformation``,
+``prioritize_transformation``, ``apply_all_transformations``; the framework
+with the built-in rules and the plugins' is
+:func:`htn.transform.registered.default_framework`.
 """
 from __future__ import annotations
 
@@ -28,12 +28,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Optional
 
-from htn.jshop import syntax as S
-from htn.jshop.errors import HtnError
-from htn.jshop.logic import Logic
-from htn.jshop.parser import parse_text
-from htn.jshop.planner import Planner
-from htn.jshop.state import State
+from htn.jshop.language import syntax as S
+from htn.jshop.language.errors import HtnError
+from htn.jshop.logic.engine import Logic
+from htn.jshop.logic.state import State
+from htn.jshop.readers.load import parse_text
+from htn.jshop.search.planner import Planner
 
 RULES_FILE = Path(__file__).with_name("rules.jshop")
 
@@ -77,7 +77,7 @@ class Workspace:
         """The current plan's tree; each top-level node rewritten by a
         transformation carries the replacement tasks in its code-replacement
         slot (the paper's mechanism, here filled in for inspection)."""
-        from htn.jshop.terms import source_atom
+        from htn.jshop.language.terms import source_atom
         tree = self.plan.tree
         nodes = iter(tree.children)
         for unit in self.units:
@@ -159,7 +159,8 @@ def projected(metric: str) -> Callable:
     so the same plan always gets the same cost)."""
     def cost(ws: "Workspace", plan) -> float:
         from htn.executor.config import load_retries
-        from .runs import project
+
+        from .projection import project
         retries = load_retries(ws.domain.file) if ws.domain.file else {}
         runs = [project(ws.domain, ws.instance, plan.steps, seed, retries=retries)
                 for seed in PROJECTION_SEEDS]
@@ -298,49 +299,7 @@ class Framework:
 
 
 def _vars_of(expr) -> list:
-    from htn.jshop.parser import _walk_expr
+    from htn.jshop.language.walk import walk_expr
     found: list = []
-    _walk_expr(expr, found.append)
+    walk_expr(expr, found.append)
     return found
-
-
-_DEFAULT: Optional[Framework] = None
-
-
-def default_framework() -> Framework:
-    """The framework with the three built-in rules and any plugins registered,
-    priorities tray > container > both-hands."""
-    global _DEFAULT
-    if _DEFAULT is None:
-        from . import rules
-        fw = Framework()
-        rules.register(fw)
-        _load_plugins(fw)
-        _DEFAULT = fw
-    return _DEFAULT
-
-
-def _load_plugins(fw: Framework) -> None:
-    from importlib.metadata import entry_points
-    for ep in entry_points(group="htn.transformations"):
-        ep.load()(fw)
-
-
-def register_transformation(function, applicability_rule, name=None):
-    return default_framework().register_transformation(function, applicability_rule, name)
-
-
-def disable_transformation(which):
-    default_framework().disable_transformation(which)
-
-
-def enable_transformation(which):
-    default_framework().enable_transformation(which)
-
-
-def prioritize_transformation(superior, inferior):
-    default_framework().prioritize_transformation(superior, inferior)
-
-
-def apply_all_transformations(ws: Workspace, metric: str = "navigation") -> Workspace:
-    return default_framework().apply_all_transformations(ws, metric)

@@ -13,8 +13,8 @@ from __future__ import annotations
 import itertools
 from collections import OrderedDict
 
-from htn.jshop import syntax as S
-from htn.jshop.terms import Var
+from htn.jshop.language import syntax as S
+from htn.jshop.language.terms import Var
 
 from .framework import Framework, Unit
 

@@ -1,0 +1,188 @@
+"""Where an evaluation's runs execute: in this process, on a local Dask
+cluster of worker processes, or on an existing Dask distributed cluster
+reached through its scheduler (the ``dask scheduler`` / ``dask worker``
+commands, or any deployment of them: SSH, SLURM via dask-jobqueue,
+Kubernetes; the scheduler and every worker need htn installed).
+
+A runner executes batches of runs and yields each batch's results as soon as
+it finishes, in whatever order. Dask gives the batches of a lost worker to
+the others; the caller keys results by run number, so nothing is counted
+twice.
+"""
+from __future__ import annotations
+
+import logging
+import warnings
+from contextlib import contextmanager
+from typing import Callable, Iterable, Iterator, Optional
+
+from htn.jshop.language.errors import HtnError
+
+
+class ClusterError(RuntimeError):
+    """The cluster could not complete the runs (not an input error)."""
+
+
+class InProcess:
+    """Runs the batches one after another in this process."""
+    workers = 1
+    notes: list = []
+
+    def results(self, function: Callable, batches: Iterable[tuple]) -> Iterator:
+        for args in batches:
+            yield function(*args)
+
+
+class DaskRunner:
+    """Runs the batches as tasks of a Dask client's cluster."""
+
+    def __init__(self, client):
+        self.client = client
+        self.notes: list[str] = []      # one-line warnings about the cluster
+
+    @property
+    def workers(self) -> int:
+        return len(self.client.scheduler_info()["workers"])
+
+    def results(self, function: Callable, batches: Iterable[tuple]) -> Iterator:
+        from distributed import as_completed
+        from distributed.scheduler import KilledWorker
+        futures = [self.client.submit(function, *args, pure=False) for args in batches]
+        try:
+            for _, result in as_completed(futures, loop=self.client.loop, with_results=True):
+                yield result
+        except KilledWorker as exc:
+            raise ClusterError(f"a batch of runs was lost with every worker that took it "
+                               f"({exc}); giving up") from None
+        except (ImportError, RuntimeError) as exc:
+            # e.g. a worker without pybullet, or Dask's "Error during
+            # deserialization of the task graph" caused by one
+            missing = _missing_module(exc)
+            if missing is None:
+                raise
+            raise ClusterError(f"the Dask cluster cannot import {missing}: {NEEDS}") from None
+        finally:
+            for f in futures:
+                f.release()
+
+
+NEEDS = "the scheduler and every worker need htn, with its sim extra for --robot pybullet"
+
+
+def _missing_module(exc: BaseException) -> Optional[str]:
+    while exc is not None:
+        if isinstance(exc, ModuleNotFoundError):
+            return exc.name
+        exc = exc.__cause__ or exc.__context__
+    return None
+
+
+def _lacking_htn(client) -> list[str]:
+    """The scheduler and workers of ``client`` that cannot import htn."""
+    # a lambda travels by value, so it runs where htn is missing
+    probe = lambda: __import__("importlib.util").util.find_spec("htn") is not None  # noqa: E731
+    lacking = [address for address, ok in client.run(probe).items() if not ok]
+    try:
+        if not client.run_on_scheduler(probe):
+            lacking.insert(0, "the scheduler")
+    except Exception:   # a scheduler may refuse to run code; its error comes later then
+        pass
+    return lacking
+
+
+def _version_notes(caught) -> list[str]:
+    """Dask's version-mismatch warnings as one line each."""
+    notes = []
+    for w in caught:
+        rows = [[c.strip() for c in line.strip("|").split("|")]
+                for line in str(w.message).splitlines() if line.startswith("|")]
+        if len(rows) > 1:
+            header = rows[0][1:]
+            notes.append("package versions differ on the Dask cluster: " + "; ".join(
+                f"{row[0]} " + ", ".join(f"{h.lower()} {v}" for h, v in zip(header, row[1:]))
+                for row in rows[1:]))
+        else:
+            notes.append(" ".join(str(w.message).split()))
+    return notes
+
+
+def check_scheduler_address(address: str) -> None:
+    """A Dask address ``PROTOCOL://HOST:PORT`` (e.g. ``tcp://10.0.0.5:8786``)."""
+    from distributed.comm import parse_address
+    from distributed.comm.addressing import parse_host_port
+    from distributed.comm.registry import backends
+    try:
+        scheme, location = parse_address(address, strict=True)
+        if scheme not in backends:
+            raise ValueError(f"unknown protocol '{scheme}' (known: {', '.join(backends)})")
+        if scheme in ("tcp", "tls", "ws", "wss"):
+            host, port = parse_host_port(location)
+            if not host or not 0 < port < 65536:
+                raise ValueError("expected HOST:PORT")
+    except ValueError as exc:
+        raise HtnError(f"--scheduler {address}: not a Dask scheduler address "
+                       f"like tcp://HOST:PORT ({exc})") from None
+
+
+def _quiet_dask() -> None:
+    # Dask logs worker losses and restarts at WARNING; the evaluation
+    # survives them, so the user needs only errors
+    for name in ("distributed", "distributed.client", "distributed.scheduler",
+                 "distributed.nanny", "distributed.worker", "distributed.core"):
+        logging.getLogger(name).setLevel(logging.ERROR)
+
+
+@contextmanager
+def open_runner(workers: int = 1, scheduler: Optional[str] = None,
+                preload: tuple = ("htn.evaluation.runs",)):
+    """A runner for ``workers`` processes (1: this process; more: a local
+    Dask cluster), or for the Dask cluster whose scheduler is at
+    ``scheduler``. The scheduler is reached, and has a worker, before this
+    returns; otherwise a one-line :class:`HtnError`."""
+    if scheduler is None and workers <= 1:
+        yield InProcess()
+        return
+    _quiet_dask()
+    import dask
+    from distributed import Client, LocalCluster
+    if scheduler is not None:
+        check_scheduler_address(scheduler)
+        timeout = dask.config.get("distributed.comm.timeouts.connect")
+        from distributed.versions import VersionMismatchWarning
+        try:
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always", VersionMismatchWarning)
+                client = Client(scheduler, timeout=timeout, set_as_default=False)
+        except OSError as exc:
+            raise HtnError(f"--scheduler {scheduler}: cannot reach the Dask scheduler "
+                           f"({exc})") from None
+        cluster = None
+        try:
+            client.wait_for_workers(1, timeout=timeout)
+            lacking = _lacking_htn(client)
+        except TimeoutError:
+            client.close()
+            raise HtnError(f"--scheduler {scheduler}: the scheduler has no workers "
+                           f"(waited {timeout})") from None
+        if lacking:
+            client.close()
+            raise HtnError(f"--scheduler {scheduler}: htn is not installed on "
+                           f"{', '.join(lacking)}; {NEEDS}")
+        notes = _version_notes(caught)
+    else:
+        # the workers' statistical profiler feeds the dashboard, which is not
+        # started; sampling the runs' Python stacks every 10 ms slows them
+        with dask.config.set({"distributed.worker.profile.enabled": False}):
+            cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                                   dashboard_address=None, silence_logs=logging.ERROR,
+                                   preload=list(preload))
+        client = Client(cluster, set_as_default=False)
+        notes = []
+    try:
+        runner = DaskRunner(client)
+        runner.notes = notes
+        yield runner
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()

@@ -1,0 +1,115 @@
+"""Evaluation of plan transformations (the paper's Section IV-A): a plan and
+its transformed version are executed RUNS times each, on the fast projection
+or on the PyBullet physics robot, run ``i`` with seed ``seed + i`` for both,
+and their metrics are compared (:mod:`.statistics`, :mod:`.figures`).
+
+The runs go to a runner (:mod:`.cluster`): this process, a local Dask cluster
+or an existing one. They are sent in batches and come back as batches
+finish; results are keyed by run, so a batch redone after a lost worker
+counts once, and put in run order. A run depends only on its seed, so the
+metrics for a given seed are the same on any number of workers.
+"""
+from __future__ import annotations
+
+import json
+import math
+import os
+import time
+from typing import Callable, Optional
+
+from htn.executor.config import load_retries
+
+from .cluster import open_runner
+from .runs import MEASURES, Study, run_batch
+from .statistics import Comparison
+
+BATCHES_PER_WORKER = 4          # at least, to even out batches of uneven length
+
+
+def prepare_study(domain_path: str, problem_path: str, robot: str = "projection",
+                  faults: str = "") -> tuple[Study, list]:
+    """Plan the problem, transform the plan with every registered rule, and
+    return the study of both plans with the names of the rules applied."""
+    from htn.jshop.readers.load import load_inputs
+    from htn.transform.framework import Workspace
+    from htn.transform.registered import default_framework
+    domain, problem = load_inputs(domain_path, problem_path)
+    instance = problem.instances[0]
+    ws = Workspace.from_problem(domain, instance)
+    original = ws.plan
+    default_framework().apply_all_transformations(ws)
+    applied = [rule for rule, status, _ in ws.log if status == "applied"]
+    plans = {"original": original.steps, "transformed": ws.plan.steps}
+    return Study(domain, instance, plans, load_retries(domain_path), robot, faults), applied
+
+
+def batches(runs: int, seed: int, size: int) -> list[list[tuple[int, int]]]:
+    """Runs ``0..runs-1`` as ``(number, seed + number)``, in batches of ``size``."""
+    numbered = [(i, seed + i) for i in range(runs)]
+    return [numbered[i:i + size] for i in range(0, runs, size)]
+
+
+def run_study(study: Study, problem: str, applied: list, runs: int, seed: int, runner,
+              on_batch: Optional[Callable[[list], None]] = None) -> Comparison:
+    """Execute ``runs`` runs of every plan of ``study`` on ``runner``;
+    ``on_batch`` gets each batch's new records as they arrive."""
+    workers = runner.workers
+    size = max(1, min(MEASURES[study.robot].batch,
+                      math.ceil(runs / (workers * BATCHES_PER_WORKER))))
+    key, blob = study.pack()
+    tasks = [(key, blob, batch) for batch in batches(runs, seed, size)]
+    done: dict = {}
+    start = time.perf_counter()
+    for records in runner.results(run_batch, tasks):
+        fresh = [r for r in records if (r["run"], r["plan"]) not in done]
+        done.update(((r["run"], r["plan"]), r) for r in fresh)
+        if on_batch and fresh:
+            on_batch(fresh)
+    seconds = time.perf_counter() - start
+    comp = Comparison(problem, runs, applied, robot=study.robot, workers=workers,
+                      seconds=seconds)
+    comp.original = [done[(i, "original")] for i in range(runs)]
+    comp.transformed = [done[(i, "transformed")] for i in range(runs)]
+    return comp
+
+
+def compare(domain_path: str, problem_path: str, runs: int, seed: int = 0, workers: int = 1,
+            on_batch: Optional[Callable[[list], None]] = None, robot: str = "projection",
+            faults: str = "", scheduler: Optional[str] = None) -> Comparison:
+    """Execute the plan and its transformed version ``runs`` times each on
+    ``workers`` processes (or the cluster at ``scheduler``) and compare them."""
+    with open_runner(workers, scheduler) as runner:
+        study, applied = prepare_study(domain_path, problem_path, robot, faults)
+        return run_study(study, problem_path, applied, runs, seed, runner, on_batch)
+
+
+def plot(comp: Comparison, folder: str) -> list[str]:
+    from .figures import plot as figures
+    return figures(comp, folder)
+
+
+class RecordsFile:
+    """``--records FILE``: one JSON line per plan execution, appended and
+    flushed as batches finish (an interrupted evaluation leaves the runs it
+    completed); once all are in, the file is rewritten in run order, in one
+    atomic replace, so that it is the same for a seed on any number of workers."""
+
+    def __init__(self, path: str):
+        self.path = path
+        self.fh = open(path, "w", encoding="utf-8")
+
+    def write(self, records: list) -> None:
+        for r in records:
+            self.fh.write(json.dumps(r) + "\n")
+        self.fh.flush()
+
+    def finish(self, comp: Comparison) -> None:
+        self.fh.close()
+        ordered = [r for pair in zip(comp.original, comp.transformed) for r in pair]
+        partial = f"{self.path}.partial"
+        with open(partial, "w", encoding="utf-8") as fh:
+            fh.writelines(json.dumps(r) + "\n" for r in ordered)
+        os.replace(partial, self.path)
+
+    def close(self) -> None:
+        self.fh.close()

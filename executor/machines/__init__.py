@@ -1,0 +1,9 @@
+"""Action state machines: the life cycle every operator runs (:mod:`.base`)
+and the machines of the bundled domains (:mod:`.domestic`: the RoboCup@Home
+robot; :mod:`.kitchen`: the two-armed pick-and-place robot).
+
+A plugin registers its own with ``@htn.executor.machines.action("!op")``.
+"""
+from .base import ActionMachine, HoldMonitor, action, all_of, machine_for
+
+__all__ = ["ActionMachine", "HoldMonitor", "action", "all_of", "machine_for"]

@@ -1,0 +1,279 @@
+"""Functions callable with ``(call f ...)``: JSHOP2's standard library (manual
+appendix A) and user functions loaded from a Python file.
+
+A user function file is plain Python: every public top-level function is
+callable from a domain by its name, case-insensitively. Arguments arrive as
+plain Python values (numbers as ``float``, symbols as lower-case ``str``, lists
+as Python lists, ``nil`` as ``[]``) and the return value is converted back the
+same way (``None``/``False`` become ``nil``, ``True`` becomes ``1.0``). A
+function used as a ``:sort-by`` comparator takes two such values and returns a
+negative, zero or positive number (manual appendix B).
+
+A user function that raises, calls ``sys.exit`` or returns something that is
+not a term is an input error; the caller reports it at the call's place in the
+domain (:func:`htn.jshop.language.terms.at_call`). Ctrl-C and the command line's
+``--timeout`` deadline (exceptions that are not ``Exception``) pass through.
+"""
+from __future__ import annotations
+
+import importlib.machinery
+import importlib.util
+import inspect
+import math
+import operator
+from typing import Any, Callable
+
+from .errors import HtnError
+from .terms import NIL, Dotted, term_str
+
+TRUE = 1.0
+
+
+def _num(x: Any, fn: str) -> float:
+    if type(x) is not float:
+        raise HtnError(f"call {fn}: expected a number, got {term_str(x)}")
+    return x
+
+
+def _plus(args):
+    s = 0.0
+    for a in args:
+        s += a if type(a) is float else _num(a, "+")
+    return s
+
+
+def _mult(args):
+    s = 1.0
+    for a in args:
+        s *= _num(a, "*")
+    return s
+
+
+def _fold(op, name):
+    def f(args):
+        if len(args) == 2:     # the common case
+            a, b = args
+            if type(a) is float and type(b) is float:
+                return op(a, b)
+        res = _num(args[0], name)
+        for a in args[1:]:
+            res = op(res, _num(a, name))
+        return res
+    return f
+
+
+def _div(a, b):
+    if b == 0.0:
+        # Java double division: x/0 is +-Infinity, 0/0 is NaN
+        if a == 0.0 or a != a:
+            return math.nan
+        return math.copysign(math.inf, a) * math.copysign(1.0, b)
+    return a / b
+
+
+def _pow(a, b):
+    try:
+        return math.pow(a, b)
+    except (OverflowError, ValueError):
+        return math.nan if a < 0 else math.inf
+
+
+def _chain(test, name):
+    def f(args):
+        if len(args) == 2:     # the common case, without zip and slicing
+            a, b = args
+            if type(a) is not float or type(b) is not float:
+                _num(a, name), _num(b, name)
+            return TRUE if test(a, b) else NIL
+        for a, b in zip(args, args[1:]):
+            if not test(_num(a, name), _num(b, name)):
+                return NIL
+        return TRUE
+    return f
+
+
+def _equal(args):
+    for a, b in zip(args, args[1:]):
+        if not (a == b and type(a) is type(b)):
+            return NIL
+    return TRUE
+
+
+def _not_equal(args):
+    for a, b in zip(args, args[1:]):
+        if a == b and type(a) is type(b):
+            return NIL
+    return TRUE
+
+
+def _member(args):
+    if len(args) < 2 or type(args[1]) is not tuple:
+        raise HtnError("call member: the second argument must be a list")
+    x = args[0]
+    for y in args[1]:
+        if x == y and type(x) is type(y):
+            return TRUE
+    return NIL
+
+
+STDLIB: dict[str, Callable] = {
+    "+": _plus,
+    "-": _fold(operator.sub, "-"),
+    "*": _mult,
+    "/": _fold(_div, "/"),
+    "^": _fold(_pow, "^"),
+    "<": _chain(operator.lt, "<"),
+    "<=": _chain(operator.le, "<="),
+    ">": _chain(operator.gt, ">"),
+    ">=": _chain(operator.ge, ">="),
+    "=": _equal,
+    "!=": _not_equal,
+    "member": _member,
+}
+
+# How many arguments a standard function needs, where any number will not do:
+# (min, max or None). JSHOP2 leaves these unchecked until run time.
+STDLIB_ARITY = {"-": (1, None), "/": (1, None), "^": (1, None), "member": (2, 2)}
+
+
+def arity_error(name: str, given: int) -> str | None:
+    """Why ``(call name ...)`` with ``given`` arguments can never work, or None."""
+    least, most = STDLIB_ARITY.get(name, (0, None))
+    if given < least:
+        return f"call {name} needs at least {least} argument{'s' if least > 1 else ''}, given {given}"
+    if most is not None and given > most:
+        return f"call {name} takes {most} arguments, given {given}"
+    return None
+
+
+# Names JSHOP2 prints for standard functions inside an unevaluated call term.
+STDLIB_JAVA_NAMES = {
+    "+": "StdLib.plus", "-": "StdLib.minus", "*": "StdLib.mult",
+    "/": "StdLib.div", "^": "StdLib.power", "<": "StdLib.less",
+    "<=": "StdLib.lessEq", ">": "StdLib.more", ">=": "StdLib.moreEq",
+    "=": "StdLib.equal", "!=": "StdLib.notEq", "member": "StdLib.member",
+}
+
+
+def to_python(t: Any) -> Any:
+    """Convert a ground term to the plain value a user function receives."""
+    tt = type(t)
+    if tt is tuple:
+        return [to_python(x) for x in t]
+    if tt is Dotted:
+        return [to_python(x) for x in t.items] + [to_python(t.tail)]
+    return t
+
+
+def from_python(v: Any) -> Any:
+    """Convert a user function's return value back to a term."""
+    tv = type(v)
+    if tv is float:
+        return v
+    if tv is int:
+        return float(v)
+    if v is None or v is False:
+        return NIL
+    if v is True:
+        return TRUE
+    if isinstance(v, (int, float)):
+        return float(v)
+    if isinstance(v, str):
+        return v.lower()
+    if isinstance(v, (list, tuple)):
+        return tuple(from_python(x) for x in v)
+    raise HtnError(f"a user function returned {_shown(v)}, which is not a term")
+
+
+def _shown(v: Any, limit: int = 80) -> str:
+    """A user value for a message: its repr, cut to ``limit`` characters."""
+    try:
+        text = repr(v)
+    except Exception:  # a user object whose repr fails
+        text = f"a {type(v).__name__}"
+    return _clip(text, limit)
+
+
+def _clip(text: str, limit: int) -> str:
+    return text if len(text) <= limit else text[:limit - 3] + "..."
+
+
+def run_user_code(what: str, fn: Callable, *args) -> Any:
+    """``fn(*args)``; what goes wrong inside becomes an :class:`HtnError`
+    naming ``what`` ran (the caller adds the place of the call)."""
+    try:
+        return fn(*args)
+    except HtnError:
+        raise
+    except SystemExit as exc:
+        raise HtnError(f"{what} called sys.exit({_shown(exc.code)})") from None
+    except RecursionError:
+        raise HtnError(f"{what} recursed too deeply") from None
+    except Exception as exc:  # the user's code failed: report, no traceback
+        raise HtnError(f"{what} raised {type(exc).__name__}: {_clip(str(exc), 160)}") from None
+
+
+def wrap_user_function(name: str, fn: Callable) -> Callable:
+    what = f"function {name}"
+
+    def call(args):
+        result = run_user_code(what, fn, *[a if type(a) is str or type(a) is float
+                                           else to_python(a) for a in args])
+        try:
+            return from_python(result)
+        except (OverflowError, RecursionError):   # a huge int, a list nested in itself
+            raise HtnError(f"function {name} returned {_shown(result)}, which is not a term") \
+                from None
+    call.__name__ = name
+    return call
+
+
+def compare(name: str, fn: Callable, a: Any, b: Any) -> int:
+    """A user comparator's verdict on two terms: negative, zero or positive
+    (manual appendix B); anything but a number is an error."""
+    r = run_user_code(f"comparator {name}", fn, to_python(a), to_python(b))
+    if isinstance(r, bool) or not isinstance(r, (int, float)) or r != r:
+        raise HtnError(f"comparator {name} returned {_shown(r)}, not a number "
+                       "(negative, zero or positive)")
+    return (r > 0) - (r < 0)
+
+
+class FunctionTable:
+    """Maps call names (case-insensitive) to callables on term tuples."""
+
+    def __init__(self):
+        self.calls: dict[str, Callable] = dict(STDLIB)
+        self.user: dict[str, Callable] = {}
+        self.source: str | None = None
+
+    def lookup(self, name: str) -> Callable | None:
+        return self.calls.get(name.lower())
+
+    def comparator(self, name: str) -> Callable | None:
+        return self.user.get(name.lower())
+
+    def load_file(self, path: str) -> None:
+        """Load every public top-level function of a Python file (whatever
+        its name ends with: it is read as Python source)."""
+        import os
+        if not os.path.isfile(path):
+            raise HtnError("functions file not found", path)
+        loader = importlib.machinery.SourceFileLoader("_htn_user_functions", path)
+        spec = importlib.util.spec_from_loader(loader.name, loader)
+        module = importlib.util.module_from_spec(spec)
+        try:
+            loader.exec_module(module)
+        except SyntaxError as exc:
+            raise HtnError(f"syntax error: {exc.msg}", path, exc.lineno, exc.offset)
+        except SystemExit as exc:
+            raise HtnError(f"loading failed: it called sys.exit({_shown(exc.code)})", path)
+        except Exception as exc:
+            raise HtnError(f"loading failed: {type(exc).__name__}: {exc}", path)
+        self.source = path
+        for name, fn in vars(module).items():
+            if name.startswith("_") or not inspect.isfunction(fn):
+                continue
+            if fn.__module__ != module.__name__:
+                continue  # imported helpers are not the file's own functions
+            self.user[name.lower()] = fn
+            self.calls[name.lower()] = wrap_user_function(name, fn)

@@ -1,0 +1,505 @@
+"""The logic engine: satisfiers of logical expressions in a state (manual 5.1.2).
+
+Each expression is compiled once into a function ``sat(env)`` that lazily yields
+extended bindings (Python lists indexed by variable number), in the order the
+Java JSHOP2 finds them: state atoms in insertion order, then axioms in
+definition order; conjunctions left to right with backtracking; disjunctions
+disjunct by disjunct. Laziness matters: the planner keeps a precondition's
+generator open while it searches below one binding, exactly as JSHOP2 keeps its
+precondition iterator, and the state is restored before the next binding.
+
+Axioms follow 3.6: a later branch is tried only if no earlier branch had a
+satisfier. ``:first`` keeps the first satisfier, ``:sort-by`` sorts all of them
+with Java's sort algorithm (see :func:`java_sort`).
+"""
+from __future__ import annotations
+
+from functools import cmp_to_key
+from typing import Callable, Iterator, Optional
+
+from htn.jshop.language import syntax as S
+from htn.jshop.language.errors import HtnError, PlanningError
+from htn.jshop.language.terms import Var, is_ground, subst, term_str, unify, variables
+
+from .caches import cache
+from .compile import GENERIC, binder, head_unifier, scanner, term_binder
+from .modes import always, compile_conjunction
+
+_HEADS: dict = cache()
+
+
+def head_variables(args: tuple) -> frozenset:
+    """The indices of the variables of a head (cached by the head's tuple)."""
+    hit = _HEADS.get(id(args))
+    if hit is None or hit[0] is not args:
+        hit = _HEADS[id(args)] = (args, frozenset(v.index for v in variables(args, [])))
+    return hit[1]
+
+Sat = Callable[[list], Iterator[list]]
+
+
+def _unify_args(pattern: tuple, args: tuple, env: list) -> bool:
+    if len(pattern) != len(args):
+        return False
+    for p, t in zip(pattern, args):
+        if not unify(p, t, env):
+            return False
+    return True
+
+
+def atom_from_term(t, pos) -> tuple[str, tuple]:
+    """A list term ``(p a1 .. an)`` used as an atom (manual 3.14)."""
+    if type(t) is tuple and t and type(t[0]) is str:
+        return t[0], t[1:]
+    raise PlanningError.at(pos, f"a variable used as an atom is bound to {term_str(t)}, "
+                           "which is not an atom")
+
+
+class Logic:
+    """Compiles expressions of one domain against one (mutable) state."""
+
+    def __init__(self, domain: S.Domain, state, functions=None):
+        self.domain = domain
+        self.state = state
+        self.functions = functions
+        self.arities = arities(domain, state)
+        # axiom bodies refer to axioms (their own predicate too): every list
+        # exists before any body is compiled, and is filled in place
+        self._axioms: dict[str, list] = {pred: [] for pred in domain.axioms}
+        for pred, axs in domain.axioms.items():
+            self._axioms[pred][:] = self._segments(axs)
+
+    def _segments(self, axs: list) -> list:
+        """A predicate's axioms, in definition order, as segments: a run of
+        facts (a ground head whose first branch is empty, ``(:- (diff-clr s
+        h) nil)``) is matched like state atoms, in one scan; any other axiom
+        is proved by its branches (3.6). The satisfiers and their order are
+        those of proving each axiom in turn."""
+        segments: list = []
+        for ax in axs:
+            if is_ground(ax.head.args) and always(ax.branches[0].pre):
+                if not segments or segments[-1][0] is not _FACTS:
+                    segments.append((_FACTS, [], {}, None, None))
+                _, heads, counts, _, _ = segments[-1]
+                heads.append(ax.head.args)
+                counts[ax.head.args] = counts.get(ax.head.args, 0) + 1
+            else:
+                flat = all(type(a) in (str, float, Var) for a in ax.head.args)
+                segments.append((ax, head_unifier(ax.head.args), binder(ax.head.args),
+                                 [self.precondition(b.pre, ax.head.args) for b in ax.branches],
+                                 flat))
+        return segments
+
+    # ------------------------------------------------------------ preconditions
+    def precondition(self, pre: S.Precondition, head: tuple = None) -> Sat:
+        """``head``: the arguments of the method's, operator's or axiom's head,
+        whose variables are the only ones bound when the precondition is
+        asked (the binding is fresh), so only they decide its binding mode."""
+        e = pre.expr
+        if isinstance(e, (S.Atom, S.Not)):   # one literal: compiled as a conjunction of one
+            e = _single(e)
+        if head is not None and isinstance(e, S.And) and e.items:
+            sat = compile_conjunction(self, e, head_variables(head))
+        else:
+            sat = self.expr(e)
+        if pre.first:
+            def first(env, sat=sat):
+                for e in sat(env):
+                    yield e
+                    return
+            return first
+        if pre.sort_var is not None:
+            return self._sorted(sat, pre)
+        return sat
+
+    def _sorted(self, sat: Sat, pre: S.Precondition) -> Sat:
+        idx = pre.sort_var.index
+        name = pre.comparator
+        if name in ("<", ">"):
+            sign = 1 if name == "<" else -1
+
+            def cmp(a, b):
+                x, y = a[idx], b[idx]
+                if type(x) is not float or type(y) is not float:
+                    raise PlanningError.at(pre.pos, f":sort-by {name} needs numbers, got "
+                                           f"{term_str(x)} and {term_str(y)}")
+                return sign * ((x > y) - (x < y))
+        else:
+            from htn.jshop.language.functions import compare
+            user = self.functions.comparator(name) if self.functions else None
+            if user is None:
+                raise HtnError.at(pre.pos, f"undefined comparator '{name}'")
+
+            def cmp(a, b):
+                try:
+                    return compare(name, user, a[idx], b[idx])
+                except HtnError as exc:    # placed at the :sort-by that called it
+                    raise PlanningError.at(pre.pos, exc.message) from None
+
+        def sorted_sat(env):
+            yield from java_sort(list(sat(env)), cmp)
+        return sorted_sat
+
+    # ------------------------------------------------------------ expressions
+    def expr(self, e) -> Sat:
+        method = getattr(self, "_" + type(e).__name__.lower())
+        return method(e)
+
+    def _and(self, e: S.And) -> Sat:
+        if not e.items:
+            return _true
+        return compile_conjunction(self, e)
+
+    def _or(self, e: S.Or) -> Sat:
+        sats = [self.expr(x) for x in e.items]
+
+        def disj(env):
+            for s in sats:
+                yield from s(env)
+        return disj
+
+    def _not(self, e: S.Not) -> Sat:
+        if isinstance(e.expr, S.Atom):
+            return self._not_atom(e.expr)
+        sat = self.expr(e.expr)
+
+        def neg(env):
+            for _ in sat(env):
+                return
+            yield env
+        return neg
+
+    def _forall(self, e: S.ForAll) -> Sat:
+        cond, then = self.expr(e.cond), self.expr(e.then)
+
+        def forall(env):
+            for c in cond(env):
+                for _ in then(c):
+                    break
+                else:
+                    return
+            yield env
+        return forall
+
+    def _equal(self, e: S.Equal) -> Sat:
+        left, right, pos = e.left, e.right, e.pos
+
+        def equal(env):
+            a, b = subst(left, env), subst(right, env)
+            if type(a) is Var:
+                if type(b) is Var:
+                    raise PlanningError.at(pos, f"(= {a.name} {b.name}) compares two "
+                                           "unbound variables")
+                new = env[:]
+                new[a.index] = b
+                yield new
+            elif type(b) is Var:
+                new = env[:]
+                new[b.index] = a
+                yield new
+            elif a == b and type(a) is type(b):
+                yield env
+        return equal
+
+    def _assign(self, e: S.Assign) -> Sat:
+        idx, bind = e.var.index, term_binder(e.term)
+
+        def assign(env):
+            if env[idx] is not None:  # JSHOP2 merges: an earlier binding wins
+                yield env
+                return
+            new = env[:]
+            new[idx] = bind(env)[1][0]
+            yield new
+        return assign
+
+    def _callexpr(self, e: S.CallExpr) -> Sat:
+        bind = term_binder(e.call)
+
+        def callexpr(env):
+            v = bind(env)[1][0]
+            if type(v) is tuple and not v:
+                return
+            yield env
+        return callexpr
+
+    def _varatom(self, e: S.VarAtom) -> Sat:
+        idx, pos = e.var.index, e.pos
+
+        def varatom(env):
+            t = env[idx]
+            if t is None:
+                raise PlanningError.at(pos, f"variable {e.var.name} is used as an atom "
+                                       "but is not bound")
+            pred, args = atom_from_term(t, pos)
+            yield from self.match(pred, args, env)
+        return varatom
+
+    def _lookup(self, e: S.Atom) -> tuple:
+        """What a compiled atom test holds on to: the binder of its arguments,
+        its predicate's atom list and set (the state keeps them for good),
+        its axioms, and a cache of scanners per binding key."""
+        pred = e.pred
+        return (binder(e.args), self.state.bucket(pred), self.state.members[pred],
+                self._axioms.get(pred), {})
+
+    def _atom(self, e: S.Atom) -> Sat:
+        args = e.args
+        bind, lst, members, axioms, scanners = self._lookup(e)
+        prove = self._prove
+
+        def atom(env):
+            key, bound = bind(env)
+            if key is None:
+                if bound in members:
+                    yield env
+            elif key >= GENERIC:
+                yield from _scan(lst, bound, env)
+            else:
+                scan = scanners.get(key)
+                if scan is None:
+                    scan = scanners[key] = scanner(args, key)
+                yield from scan(lst, bound, env)
+            if axioms:
+                yield from prove(axioms, bound, env, key is None)
+        return atom
+
+    def _not_atom(self, e: S.Atom) -> Sat:
+        """``(not (p ...))``: the same test as :meth:`_atom`, stopping at the
+        first satisfier without making generators for it (the most common
+        negation, so worth its own code)."""
+        args = e.args
+        bind, lst, members, axioms, scanners = self._lookup(e)
+        prove = self._prove
+
+        def neg(env):
+            key, bound = bind(env)
+            if key is None:
+                if bound in members:
+                    return
+            elif key >= GENERIC:
+                if next(_scan(lst, bound, env), None) is not None:
+                    return
+            else:
+                scan = scanners.get(key)
+                if scan is None:
+                    scan = scanners[key] = scanner(args, key)
+                if next(scan(lst, bound, env), None) is not None:
+                    return
+            if axioms and next(prove(axioms, bound, env, key is None), None) is not None:
+                return
+            yield env
+        return neg
+
+    # ------------------------------------------------------------ atoms
+    def solver(self, pred: str) -> Callable:
+        """``solve(bound, env, ground)``: the satisfiers of ``(pred . bound)``
+        as :meth:`_atom` finds them (state atoms, then axioms), for a caller
+        that knows already whether ``bound`` is ground (htn.jshop.logic.modes)."""
+        lst = self.state.bucket(pred)
+        members = self.state.members[pred]
+        axioms = self._axioms.get(pred)
+        prove = self._prove
+
+        def solve(bound, env, ground):
+            if ground:
+                if bound in members:
+                    yield env
+            elif lst:
+                yield from _scan(lst, bound, env)
+            if axioms:
+                yield from prove(axioms, bound, env, ground)
+        return solve
+
+    def match(self, pred: str, bound: tuple, env: list) -> Iterator[list]:
+        """Satisfiers of the atom ``(pred . bound)``: state atoms, then axioms."""
+        state = self.state
+        if is_ground(bound):
+            if state.has(pred, bound):
+                yield env
+        else:
+            yield from _scan(state.bucket(pred), bound, env)
+        axioms = self._axioms.get(pred)
+        if axioms:
+            yield from self._prove(axioms, bound, env)
+
+    def _prove(self, axioms, bound: tuple, env: list, ground=None) -> Iterator[list]:
+        """Satisfiers of ``(pred . bound)`` by the predicate's axioms (3.6).
+
+        When ``bound`` is ground and an axiom's head is flat, the head under
+        any satisfier of a branch is ``bound`` itself (every head variable
+        was bound by unifying the head), so ``env`` is yielded unchanged."""
+        if ground is None:
+            ground = is_ground(bound)
+        for ax, unify_head, bind_head, branches, flat in axioms:
+            if ax is _FACTS:     # (unify_head, bind_head) are (heads, counts) here
+                if ground:
+                    for _ in range(bind_head.get(bound, 0)):
+                        yield env
+                else:
+                    yield from _scan(unify_head, bound, env)
+                continue
+            aenv = [None] * ax.nvars
+            if not unify_head(bound, aenv):
+                continue
+            for sat in branches:
+                found = False
+                try:
+                    if ground and flat:
+                        for _ in sat(aenv):
+                            found = True
+                            yield env
+                        if found:
+                            break
+                        continue
+                    for nb in sat(aenv):
+                        head = bind_head(nb)[1]
+                        new = env[:]
+                        if _unify_args(bound, head, new):
+                            found = True
+                            yield new
+                except RecursionError:   # JSHOP2 overflows its stack here too
+                    raise PlanningError.at(ax.pos, f"proving an axiom for {ax.head.pred} "
+                                           "recursed too deeply: does it depend on itself?") \
+                        from None
+                if found:
+                    break
+
+
+def arities(domain: S.Domain, state) -> Optional[dict]:
+    """``pred -> {arity}``: the lengths the atoms of each predicate can have
+    in ``state`` from now on (those already there and those of add lists);
+    None when an add list has a variable atom (3.14), which can be anything."""
+    out = {pred: {len(a) for a in lst} for pred, lst in state.atoms.items()}
+    for ops in domain.operators.values():
+        for op in ops:
+            if op.add.var is not None:
+                return None
+            for item in op.add.items:
+                if isinstance(item, S.Protection):
+                    continue         # protects an atom, adds none
+                for a in item.atoms if isinstance(item, S.EffectForAll) else [item]:
+                    if not isinstance(a, S.Atom):
+                        return None
+                    out.setdefault(a.pred, set()).add(len(a.args))
+    return out
+
+
+_SINGLES: dict = cache()
+
+
+def _single(e) -> S.And:
+    """The conjunction of ``e`` alone, one object per ``e`` (the compiled
+    code is cached by conjunction object)."""
+    hit = _SINGLES.get(id(e))
+    if hit is None or hit[0] is not e:
+        hit = _SINGLES[id(e)] = (e, S.And([e], getattr(e, "pos", None)))
+    return hit[1]
+
+
+def _true(env):
+    yield env
+
+
+_FACTS = object()    # marks a run of fact axioms, see Logic._segments
+
+
+def _scan(lst: list, bound: tuple, env: list) -> Iterator[list]:
+    """Match a non-ground pattern against a live list of atoms, in order.
+
+    Iterating the live list by index is deliberate: it reproduces JSHOP2's
+    behaviour when a forall effect deletes atoms while it enumerates them.
+    """
+    n = len(bound)
+    consts = []
+    binds = []
+    others = []
+    seen = set()
+    i = 0
+    for t in bound:
+        tt = type(t)
+        if tt is str or tt is float:
+            consts.append((i, t))
+        elif tt is Var and t.index not in seen:
+            seen.add(t.index)
+            binds.append((i, t.index))
+        else:
+            others.append((i, t))
+        i += 1
+    if not others and len(consts) == 1:
+        (ci, c), = consts
+        for args in lst:
+            if len(args) == n and args[ci] == c:
+                new = env[:]
+                for i, k in binds:
+                    new[k] = args[i]
+                yield new
+        return
+    if not others and not consts:
+        for args in lst:
+            if len(args) == n:
+                new = env[:]
+                for i, k in binds:
+                    new[k] = args[i]
+                yield new
+        return
+    for args in lst:
+        if len(args) != n:
+            continue
+        for i, c in consts:
+            if args[i] != c:
+                break
+        else:
+            new = env[:]
+            for i, k in binds:
+                new[k] = args[i]
+            if others:
+                ok = True
+                for i, t in others:
+                    if not unify(t, args[i], new):
+                        ok = False
+                        break
+                if not ok:
+                    continue
+            yield new
+
+
+# ------------------------------------------------------------ Java's sort
+
+def java_sort(a: list, cmp) -> list:
+    """Sort like Java 17's ``Arrays.sort(Object[], Comparator)``.
+
+    JSHOP2 sorts ``:sort-by`` bindings with it. For fewer than 32 elements Java's
+    TimSort is a binary insertion sort after one run scan; that is ported here
+    step by step, because with an inconsistent comparator (the corpus's
+    MyComparator) only the exact algorithm gives JSHOP2's order. Longer inputs
+    use Python's stable TimSort, which agrees with Java for every consistent
+    comparator.
+    """
+    n = len(a)
+    if n < 2:
+        return a
+    if n >= 32:
+        return sorted(a, key=cmp_to_key(cmp))
+    run = 1
+    if cmp(a[1], a[0]) < 0:
+        run = 2
+        while run < n and cmp(a[run], a[run - 1]) < 0:
+            run += 1
+        a[:run] = a[:run][::-1]
+    else:
+        run = 2
+        while run < n and cmp(a[run], a[run - 1]) >= 0:
+            run += 1
+    for start in range(run, n):
+        pivot = a[start]
+        left, right = 0, start
+        while left < right:
+            mid = (left + right) >> 1
+            if cmp(pivot, a[mid]) < 0:
+                right = mid
+            else:
+                left = mid + 1
+        a[left + 1:start + 1] = a[left:start]
+        a[left] = pivot
+    return a

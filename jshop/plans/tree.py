@@ -1,0 +1,199 @@
+"""Task trees: the decomposition behind one plan (the paper's task network).
+
+A :class:`TaskTree` node is a task with its bound arguments, what decomposed it
+(the method and branch label) or achieved it (the operator, with its plan step
+index), its children in order, and a stable path such as
+``bring_object/fetch_object/grasp_object``; when siblings share a name, each
+gets ``:call N`` (1-based) appended, as in the plan-transformations paper:
+``transport/transporting :call 2/delivering``.
+
+The planner takes a snapshot of the task network when it finds a plan, so each
+plan's tree holds only the decompositions of that plan, never those of a branch
+the search backtracked over.
+"""
+from __future__ import annotations
+
+from collections import Counter
+from dataclasses import dataclass, field
+from typing import Any, Iterator, Optional
+
+from htn.jshop.language.terms import atom_str, term_str
+
+
+@dataclass
+class TaskTree:
+    """One node of a task tree; the root is the problem's task list."""
+    name: str
+    args: tuple = ()
+    path: str = ""
+    method: Optional[str] = None       # method head name that decomposed it
+    method_index: Optional[int] = None  # which of the methods for that task (0-based)
+    branch: Optional[str] = None       # that method's branch label
+    step: Optional[int] = None         # index in the plan, for primitive tasks
+    children: list = field(default_factory=list)
+    outcome: Optional[str] = None      # after an execution or projection (annotate())
+    code_replacement: Optional[list] = None   # what a transformation put in its place
+
+    @property
+    def primitive(self) -> bool:
+        return self.name.startswith("!")
+
+    @property
+    def task(self) -> str:
+        return atom_str(self.name, self.args) if self.name else "(root)"
+
+    def walk(self) -> Iterator["TaskTree"]:
+        """Every node, depth first in order (iterative: trees can be thousands deep)."""
+        stack = [self]
+        while stack:
+            node = stack.pop()
+            yield node
+            stack.extend(reversed(node.children))
+
+    def leaves(self) -> list["TaskTree"]:
+        return [n for n in self.walk() if n.step is not None]
+
+    def find(self, path: str) -> Optional["TaskTree"]:
+        for n in self.walk():
+            if n.path == path:
+                return n
+        return None
+
+    def to_dict(self) -> dict[str, Any]:
+        """The tree as JSON-ready data, flat so that its depth does not matter
+        to JSON readers: ``{"nodes": [...]}``, depth first in order. Each node
+        has ``id`` (its index in the list) and ``parent`` (the parent's id;
+        None for the root, whose task is ``(root)``), so a node's children are
+        the nodes naming it as parent, in list order."""
+        nodes: list = []
+        stack: list = [(self, None)]
+        while stack:
+            node, parent = stack.pop()
+            args = [term_str(a) for a in node.args]
+            task = ("(" + " ".join([node.name, *args]) + ")") if node.name else "(root)"
+            d: dict[str, Any] = {"id": len(nodes), "parent": parent, "task": task,
+                                 "name": node.name, "args": args, "path": node.path}
+            if node.method is not None:
+                d["method"] = node.method
+                d["method_index"] = node.method_index
+                d["branch"] = node.branch
+            if node.step is not None:
+                d["step"] = node.step
+            if node.outcome is not None:
+                d["outcome"] = node.outcome
+            if node.code_replacement is not None:
+                d["code_replacement"] = node.code_replacement
+            nodes.append(d)
+            stack.extend((c, d["id"]) for c in reversed(node.children))
+        return {"nodes": nodes}
+
+    def to_text(self) -> str:
+        """A plain, stable text rendering (used for golden files)."""
+        lines = []
+        stack = [(c, 0) for c in reversed(self.children)]
+        while stack:
+            n, depth = stack.pop()
+            pad = "  " * depth
+            if n.step is not None:
+                how = f"step {n.step + 1}"
+            elif n.method is not None:
+                how = f"method {n.method}#{n.method_index + 1} branch {n.branch}"
+            else:
+                how = "not decomposed"
+            lines.append(f"{pad}{n.task}  [{how}]  @{n.path}")
+            stack.extend((c, depth + 1) for c in reversed(n.children))
+        return "\n".join(lines) + "\n"
+
+    def to_dot(self) -> str:
+        """Graphviz DOT of the tree."""
+        out = ["digraph task_tree {", '  node [shape=box, fontname="monospace"];']
+        ids: dict[int, str] = {}
+        for i, n in enumerate(self.walk()):
+            ids[id(n)] = f"n{i}"
+            label = n.task if n.name else "root"
+            if n.method:
+                label += f"\\n[{n.branch}]"
+            shape = ', style=rounded' if n.step is not None else ""
+            out.append(f'  n{i} [label="{_dot_escape(label)}"{shape}];')
+        for n in self.walk():
+            for c in n.children:
+                out.append(f"  {ids[id(n)]} -> {ids[id(c)]};")
+        out.append("}")
+        return "\n".join(out) + "\n"
+
+
+def annotate(tree: TaskTree, step_outcomes: dict) -> TaskTree:
+    """Set each node's outcome from an execution: a leaf gets its step's final
+    outcome (``verified``, ``aborted``, ``failed``, or ``not run``); a task is
+    ``verified`` when all its children are, else the first other outcome."""
+    order = list(tree.walk())
+    for node in reversed(order):          # children before parents
+        if node.step is not None:
+            node.outcome = step_outcomes.get(node.step, "not run")
+        elif node.children:
+            outs = [c.outcome for c in node.children]
+            node.outcome = next((o for o in outs if o != "verified"), "verified")
+        elif node.method is not None:      # decomposed into nothing: nothing to do
+            node.outcome = "verified"
+    return tree
+
+
+def _dot_escape(s: str) -> str:
+    return s.replace("\\", "\\\\").replace('"', '\\"').replace("\\\\n", "\\n")
+
+
+def snapshot(root, steps, paths: bool = True) -> TaskTree:
+    """Build the tree of the current task network (a planner ``Node``).
+
+    Without ``paths`` every node's path is left empty: a path spells all its
+    ancestors, so a tail recursion thousands deep (Towers) makes the paths
+    quadratic in the plan's length, and the IPC output does not need them."""
+    tree = TaskTree(name="", path="")
+    tree.children = _children(root, "", paths)
+    return tree
+
+
+def _flatten(node) -> list:
+    """The task nodes of a task list, nested lists flattened in order."""
+    out = []
+    stack = [iter(node.subtasks or ())]
+    while stack:
+        for child in stack[-1]:
+            if child.task is not None:
+                out.append(child)
+            else:
+                stack.append(iter(child.subtasks))
+            break
+        else:
+            stack.pop()
+    return out
+
+
+def _children(node, prefix: str, paths: bool = True) -> list:
+    """The subtrees below a network node, built without recursion."""
+    out: list = []
+    work = [(node, prefix, out)]
+    while work:
+        parent, path, sink = work.pop()
+        kids = _flatten(parent)
+        counts = Counter(k.task.name for k in kids) if paths else None
+        seen: Counter = Counter()
+        for k in kids:
+            name = k.task.name
+            kpath = ""
+            if paths:
+                seen[name] += 1
+                label = name if counts[name] == 1 else f"{name} :call {seen[name]}"
+                kpath = f"{path}/{label}" if path else label
+            t = TaskTree(name=name, args=k.task.args, path=kpath)
+            how = k.how
+            if isinstance(how, int):
+                t.step = how
+            elif how is not None:
+                method, branch, index = how
+                t.method = method.name
+                t.method_index = index
+                t.branch = method.branches[branch].label
+                work.append((k, kpath, t.children))
+            sink.append(t)
+    return out

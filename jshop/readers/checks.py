@@ -1,0 +1,221 @@
+"""Static checks of a domain and a problem before planning.
+
+Errors stop planning; warnings point at likely domain bugs but keep JSHOP2's
+behaviour. Where JSHOP2 itself accepts the input we only warn: a task used in
+a method body with no method or operator, or with an arity none of them has,
+simply cannot be achieved there (manual 3.7 and 5.2.1: that branch never
+applies; the JSHOP2 ``test`` example relies on it), and a variable a method
+passes down unbound is how bindings fail to propagate upwards
+(``propagation``).
+
+Two errors go further than JSHOP2's compiler, because JSHOP2 would go wrong
+later: a problem written for another domain (JSHOP2 compiles a problem against
+the domain it names), and an add-list atom with a variable that neither the
+operator's head nor its precondition binds (a state holds ground atoms only,
+manual 5.1.2; such an atom would carry an unbound variable into the state).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from htn.jshop.language import syntax as S
+from htn.jshop.language.errors import HtnError
+from htn.jshop.language.terms import source_atom, variables
+from htn.jshop.language.walk import walk_expr, walk_term
+
+from .load import check_domain_name
+
+
+@dataclass
+class Warning_:
+    pos: S.Pos | None
+    message: str
+
+    def __str__(self) -> str:
+        return f"{self.pos}: warning: {self.message}" if self.pos else f"warning: {self.message}"
+
+
+def _arities(domain: S.Domain) -> dict[str, set[int]]:
+    out: dict[str, set[int]] = {}
+    for name, ops in domain.operators.items():
+        out.setdefault(name, set()).update(len(o.head.args) for o in ops)
+    for name, ms in domain.methods.items():
+        out.setdefault(name, set()).update(len(m.head.args) for m in ms)
+    return out
+
+
+def _describe_task(t: S.TaskAtom) -> str:
+    return "primitive task" if t.primitive else "task"
+
+
+def check_problem(domain: S.Domain, problem: S.Problem) -> list[Warning_]:
+    """Raise :class:`HtnError` for tasks the problem asks that cannot exist."""
+    warnings: list[Warning_] = []
+    check_domain_name(domain, problem)
+    if problem.domain_name != domain.name:      # HDDL: see check_domain_name
+        warnings.append(Warning_(problem.domain_pos or problem.pos,
+                                 f"problem '{problem.name}' names domain "
+                                 f"'{problem.domain_name}', not '{domain.name}'"))
+    arities = _arities(domain)
+    for inst in problem.instances:
+        for t in S.task_atoms(inst.tasks):
+            known = arities.get(t.name)
+            if not known:
+                kind = "operator" if t.primitive else "method"
+                raise HtnError.at(t.pos, f"unknown {_describe_task(t)} '{t.name}': "
+                                  f"the domain has no {kind} for it")
+            if len(t.args) not in known:
+                raise HtnError.at(t.pos, f"'{t.name}' takes {_plural(known)}, "
+                                  f"given {len(t.args)}")
+    for name, open_ in _open_positions(domain, problem).items():
+        for op in domain.operators.get(name, ()):
+            _unbound_effect_vars(op, open_)
+    return warnings
+
+
+def _plural(arities: set[int]) -> str:
+    ns = sorted(arities)
+    words = " or ".join(str(n) for n in ns)
+    return f"{words} argument" + ("" if ns == [1] else "s")
+
+
+def check_domain(domain: S.Domain) -> list[Warning_]:
+    """Arity errors inside the domain, and warnings for likely bugs."""
+    warnings: list[Warning_] = []
+    arities = _arities(domain)
+    for ms in domain.methods.values():
+        for m in ms:
+            for b in m.branches:
+                for t in S.task_atoms(b.tasks):
+                    known = arities.get(t.name)
+                    if not known:
+                        warnings.append(Warning_(t.pos, f"{_describe_task(t)} '{t.name}' has no "
+                                                 f"{'operator' if t.primitive else 'method'}; "
+                                                 f"branch {b.label} of {m.name} can never succeed"))
+                    elif len(t.args) not in known:
+                        warnings.append(Warning_(t.pos, f"'{t.name}' takes {_plural(known)}, "
+                                                 f"given {len(t.args)}; branch {b.label} of "
+                                                 f"{m.name} can never succeed"))
+    for ops in domain.operators.values():
+        for op in ops:
+            warnings.extend(_unbound_effect_vars(op))
+    return warnings
+
+
+def _binds(e, out: set) -> set:
+    """Add to ``out`` the names of the variables a satisfier of expression
+    ``e`` binds to ground terms (manual 5.1.2), given those in ``out``: the
+    variables of its positive atoms, and an assigned variable whose term's
+    variables are bound. A negation, a forall and a call bind nothing; a
+    disjunction counts what any disjunct binds."""
+    assigns = []
+    stack = [e]
+    while stack:
+        x = stack.pop()
+        if isinstance(x, S.Atom):
+            walk_term(x.args, lambda v: out.add(v.name))
+        elif isinstance(x, (S.And, S.Or)):
+            stack.extend(x.items)
+        elif isinstance(x, S.Assign):
+            assigns.append(x)
+    while True:
+        ready = [a for a in assigns if all(v.name in out for v in variables(a.term, []))]
+        if not ready:
+            return out
+        out.update(a.var.name for a in ready)
+        assigns = [a for a in assigns if a not in ready]
+
+
+def _head_binds(head: S.TaskAtom, open_: dict) -> set:
+    """Variables the head binds, except in the argument positions ``open_``
+    (those a task may fill with a term that has unbound variables)."""
+    out: set = set()
+    for j, a in enumerate(head.args):
+        if j not in open_:
+            walk_term(a, lambda v: out.add(v.name))
+    return out
+
+
+def _unbound_effect_vars(op: S.Operator, open_: dict | None = None) -> list[Warning_]:
+    """Warnings for effect and cost variables nothing binds; an error for
+    such a variable in an add-list atom (it would enter the state unbound).
+    ``open_`` maps head positions a task may leave unbound to where that task
+    is written (see :func:`_open_positions`)."""
+    open_ = open_ or {}
+    bound = _binds(op.pre.expr, _head_binds(op.head, open_))
+    found: dict[str, None] = {}
+    for eff in (op.delete, op.add):
+        for item in eff.items:
+            if isinstance(item, S.EffectForAll):
+                local = _binds(item.cond, bound | {v.name for v in item.vars})
+                atoms, known = item.atoms, bound | local
+            else:
+                atoms, known = [item.atom if isinstance(item, S.Protection) else item], bound
+            for a in atoms:
+                free = [v.name for v in _vars_of(a) if v.name not in known]
+                if free and eff is op.add and isinstance(a, S.Atom) \
+                        and not isinstance(item, S.Protection):
+                    raise HtnError.at(a.pos or op.pos, f"operator {op.name} adds ({a.pred} ...) "
+                                      f"with {free[0]} unbound: {_why_unbound(op, free[0], open_)}"
+                                      ", and a state holds only ground atoms")
+                for name in free:
+                    found.setdefault(name)
+        if eff.var is not None and eff.var.name not in bound:
+            found.setdefault(eff.var.name)
+    walk_term(op.cost, lambda v: v.name in bound or found.setdefault(v.name))
+    return [Warning_(op.pos, f"operator {op.name}: variable {name} in its effects or cost is "
+                     "bound by neither its head nor its precondition")
+            for name in found]
+
+
+def _why_unbound(op: S.Operator, name: str, open_: dict) -> str:
+    for j, a in enumerate(op.head.args):
+        if j in open_ and any(v.name == name for v in variables(a, [])):
+            return f"{open_[j].message} passes it unbound"
+    return "neither its head nor its precondition binds it"
+
+
+@dataclass
+class _Source:
+    """A task (as written, and where) that may pass an unbound variable on."""
+    task: S.TaskAtom
+
+    @property
+    def message(self) -> str:
+        text = source_atom(self.task.name, self.task.args)
+        return f"{text} at {self.task.pos}" if self.task.pos else text
+
+
+def _open_positions(domain: S.Domain, problem: S.Problem) -> dict[str, dict[int, _Source]]:
+    """For each task name, the argument positions a task may fill with a term
+    that has unbound variables (a variable of the problem, or one a method
+    neither receives bound nor binds in its precondition), found by
+    following method bodies to a fixed point."""
+    open_: dict[str, dict[int, _Source]] = {}
+    todo = list(domain.methods)
+
+    def mark(t: S.TaskAtom, bound: set | None) -> None:
+        for j, arg in enumerate(t.args):
+            names = {v.name for v in variables(arg, [])}
+            if names and (bound is None or not names <= bound) \
+                    and j not in open_.setdefault(t.name, {}):
+                open_[t.name][j] = _Source(t)
+                todo.append(t.name)
+
+    for inst in problem.instances:
+        for t in S.task_atoms(inst.tasks):
+            mark(t, None)
+    while todo:
+        for m in domain.methods.get(todo.pop(), ()):
+            head = _head_binds(m.head, open_.get(m.name, {}))
+            for b in m.branches:
+                bound = _binds(b.pre.expr, set(head))
+                for t in S.task_atoms(b.tasks):
+                    mark(t, bound)
+    return open_
+
+
+def _vars_of(a) -> list:
+    out: list = []
+    walk_expr(a, out.append)
+    return out

@@ -1,0 +1,469 @@
+"""Turn an HDDL model (:mod:`htn.jshop.readers.hddl`) into the planner's syntax objects.
+
+How HDDL's semantics (Höller et al., AAAI 2020) map onto JSHOP2's:
+
+* **Types** become unary type predicates named ``type:t`` (a name no HDDL
+  predicate can have, so that a predicate may share its name with a type, as
+  Barman's ``ingredient`` does): an object ``o - t`` is the atom
+  ``(type:t o)`` of the initial state, every supertype is implied
+  (``Domain.implied``; ``object`` is the root of every type), and the
+  domain's constants are ``Domain.facts``.
+* An **action** ``a`` becomes the operator ``!a``: its typed parameters become
+  type conditions after its precondition; ``forall`` and ``when`` effects
+  become conditional delete/add items evaluated in the state before the action
+  (``Operator.effects_in_prestate``, PDDL's semantics); ``(increase
+  (total-cost) n)`` is its cost (default 1).
+* A **method** becomes a one-branch JSHOP2 method of its task, the branch
+  labelled with the method's name. In HDDL every method parameter is bound to
+  an object of its type before the subtasks are instantiated, so its
+  precondition is the conjunction of the written precondition, the
+  ``:constraints``, the type conditions of the parameters and the conditions
+  pulled up from its subtasks (:mod:`htn.jshop.readers.pullup`), in an order that
+  binds variables early and tests a literal as soon as its variables are bound
+  (:func:`order_conjuncts`; a negation, disjunction, ``forall`` or equality
+  needs its variables bound to mean what PDDL says). JSHOP2's if-then-else
+  between branches does not arise: HDDL methods are independent alternatives.
+* Subtasks come in their total order: ``:ordered-subtasks`` as written, or
+  ``:subtasks`` sorted by ``:ordering``; an ``:ordering`` that leaves two
+  subtasks unordered is an error (the planner is a total-order planner).
+  ``:subtasks`` with no ``:ordering`` at all are taken in the written order,
+  as the IPC 2020 total-order planners do (some of the track's domains write
+  a sequence so); this is one of its linearisations, not all of them.
+* The **problem**'s objects become type atoms, its initial task network the
+  task list, its goal ``ProblemInstance.goal`` (checked on the final state).
+
+Every error names ``file:line:col``.
+"""
+from __future__ import annotations
+
+from typing import Optional
+
+from htn.jshop.language import syntax as S
+from htn.jshop.language.errors import HtnError
+from htn.jshop.language.terms import Var, variables
+from htn.jshop.language.walk import walk_expr
+
+from .hddl_model import (ActionDef, EffectCost, EffectForall, EffectWhen, Exists, HDomain,
+                         HProblem, MethodDef, Subtask, TaskDef)
+from .hddl_order import linearise
+from .pullup import pulled_conditions
+
+# An initial task network with parameters is the body of this task's one
+# method, which binds them (the IPC 2020 plan format's artificial root)
+TOP, TOP_METHOD = "__top", "__top_method"
+
+
+class Scope:
+    """Variable numbering of one domain element (operator, method, goal):
+    JSHOP2's binding array slot of each variable (manual 5.1.1)."""
+
+    def __init__(self):
+        self.slots: dict = {}
+        self.renamed = 0
+
+    def var(self, name: str) -> Var:
+        return Var(name, self.slots.setdefault(name, len(self.slots)))
+
+    def fresh(self, name: str) -> str:
+        """A new name for a quantified variable, apart from every other."""
+        self.renamed += 1
+        return f"{name}#{self.renamed}"
+
+    @property
+    def size(self) -> int:
+        return len(self.slots)
+
+
+# ------------------------------------------------------------------ formulas
+
+class Formulas:
+    """Converts model formulas into syntax expressions within one scope.
+
+    ``names`` maps a variable's written name to its name in the scope
+    (quantified variables are renamed apart); ``outer`` collects the slots
+    that the element's precondition must bind (its parameters and the
+    variables of ``exists`` at the top level of the precondition).
+    """
+
+    def __init__(self, scope: Scope, predicates: Optional[dict] = None):
+        self.scope = scope
+        self.predicates = predicates      # name -> params, to check atoms (domain only)
+        self.outer: set = set()
+
+    def term(self, x, names: dict, pos):
+        if isinstance(x, Var):
+            if x.name not in names:
+                raise HtnError.at(pos, f"variable {x.name} is not declared here "
+                                  "(not a parameter nor quantified)")
+            return self.scope.var(names[x.name])
+        return x
+
+    def atom(self, e: S.Atom, names: dict) -> S.Atom:
+        if self.predicates is not None:
+            params = self.predicates.get(e.pred)
+            if params is None:
+                raise HtnError.at(e.pos, f"unknown predicate {e.pred}")
+            if len(params) != len(e.args):
+                raise HtnError.at(e.pos, f"predicate {e.pred} takes {len(params)} "
+                                  f"argument(s), given {len(e.args)}")
+        return S.Atom(e.pred, tuple(self.term(a, names, e.pos) for a in e.args), e.pos)
+
+    def quantify(self, params, names: dict, pos) -> tuple[list, list, dict]:
+        """Rename quantified variables apart: (vars, their type conditions, names)."""
+        names = dict(names)
+        vs, conds = [], []
+        for p in params:
+            names[p.name] = self.scope.fresh(p.name)
+            v = self.scope.var(names[p.name])
+            vs.append(v)
+            conds.append(type_condition(v, p.types, p.pos or pos))
+        return vs, conds, names
+
+    def expr(self, e, names: dict):
+        if e is None:
+            return S.And([])
+        if isinstance(e, S.Atom):
+            return self.atom(e, names)
+        if isinstance(e, S.And):
+            return S.And([self.expr(x, names) for x in e.items], e.pos)
+        if isinstance(e, S.Or):
+            return S.Or([self.expr(x, names) for x in e.items], e.pos)
+        if isinstance(e, S.Not):
+            return S.Not(self.expr(e.expr, names), e.pos)
+        if isinstance(e, S.Equal):
+            return S.Equal(self.term(e.left, names, e.pos), self.term(e.right, names, e.pos),
+                           e.pos)
+        if isinstance(e, Exists):
+            _, conds, inner = self.quantify(e.vars, names, e.pos)
+            return S.And(conds + [self.expr(e.expr, inner)], e.pos)
+        if isinstance(e, S.ForAll):
+            vs, conds, inner = self.quantify(e.vars, names, e.pos)
+            return S.ForAll(vs, S.And(conds) if len(conds) != 1 else conds[0],
+                            self.expr(e.then, inner), e.pos)
+        raise HtnError.at(getattr(e, "pos", None), "unsupported formula")  # pragma: no cover
+
+    def conjuncts(self, e, names: dict) -> tuple[list, list]:
+        """The top-level conjuncts of a precondition and the type conditions
+        of its top-level ``exists`` variables (which join ``outer``)."""
+        if e is None:
+            return [], []
+        if isinstance(e, S.And):
+            conds, types = [], []
+            for x in e.items:
+                c, t = self.conjuncts(x, names)
+                conds += c
+                types += t
+            return conds, types
+        if isinstance(e, Exists):
+            vs, types, inner = self.quantify(e.vars, names, e.pos)
+            self.outer.update(v.index for v in vs)
+            conds, more = self.conjuncts(e.expr, inner)
+            return conds, types + more
+        return [self.expr(e, names)], []
+
+
+def type_predicate(t: str) -> str:
+    """The predicate that holds of the objects of type ``t``."""
+    return "type:" + t
+
+
+def type_condition(v: Var, types: tuple, pos) -> object:
+    """``(type:t ?v)``, or a disjunction for ``(either t1 t2)``."""
+    atoms = [S.Atom(type_predicate(t), (v,), pos) for t in types]
+    return atoms[0] if len(atoms) == 1 else S.Or(atoms, pos)
+
+
+# ------------------------------------------------------------------ ordering
+
+def _slots(e) -> set:
+    """The variable slots an expression mentions (bound or quantified)."""
+    out: set = set()
+    walk_expr(e, lambda v: out.add(v.index))
+    return out
+
+
+def order_conjuncts(conds: list, types: list, bound: set, outer: set) -> list:
+    """Order a precondition's conjuncts for JSHOP2's left-to-right evaluation.
+
+    Greedy: every literal whose outer variables are all bound is emitted at
+    once as a test (written order kept); otherwise the positive atom (or an
+    equality with one side bound) with the most bound arguments binds next;
+    when none is left, the next type condition enumerates its variable's
+    objects. Negations, disjunctions, ``forall`` and equalities thus only see
+    bound variables, which is the PDDL meaning of a method's or action's
+    existentially bound parameters.
+    """
+    bound = set(bound)
+    pending, tpending, out = list(conds), list(types), []
+    while pending or tpending:
+        for e in [e for e in pending if _is_test(e, bound, outer)]:
+            out.append(e)
+            pending.remove(e)
+        for e in [e for e in tpending if _slots(e) <= bound]:
+            out.append(e)
+            tpending.remove(e)
+        best = _best_generator(pending, bound)
+        if best is not None:
+            pending.remove(best)
+        elif tpending:
+            best = tpending.pop(0)
+        elif pending:      # nothing binds what is left: keep it as written
+            out += pending
+            break
+        else:
+            break
+        out.append(best)
+        bound |= _slots(best)
+    return out
+
+
+def _is_test(e, bound: set, outer: set) -> bool:
+    need = _slots(e) & outer if not isinstance(e, (S.Atom, S.Equal)) else _slots(e)
+    return need <= bound
+
+
+def _best_generator(pending: list, bound: set):
+    best, best_key = None, None
+    for i, e in enumerate(pending):
+        if isinstance(e, S.Equal):
+            sides = [type(x) is not Var or x.index in bound for x in (e.left, e.right)]
+            key = (0, 0, i) if any(sides) else None
+        elif isinstance(e, S.Atom):
+            vs = {v.index for v in variables(e.args, [])}
+            unbound = len(vs - bound)
+            key = (1 if len(vs) - unbound == 0 else 0, unbound, i)
+        else:
+            key = None
+        if key is not None and (best_key is None or key < best_key):
+            best, best_key = e, key
+    return best
+
+
+# ------------------------------------------------------------------ domain
+
+class _Domain:
+    def __init__(self, h: HDomain):
+        self.h = h
+        self.ancestors = self._type_closure()
+        self.method_count = 0
+
+    def _type_closure(self) -> dict:
+        types = dict(self.h.types)
+        types.setdefault("object", [])
+        out = {}
+        for t in types:
+            seen, stack = [], list(types[t])
+            while stack:
+                s = stack.pop()
+                if s not in types:
+                    raise HtnError.at(self.h.pos, f"type {s} (a supertype of {t}) is not "
+                                      "declared")
+                if s not in seen and s != t:
+                    seen.append(s)
+                    stack.extend(types[s])
+            if t != "object" and "object" not in seen:
+                seen.append("object")
+            out[t] = seen
+        return out
+
+    def check_types(self, params) -> None:
+        for p in params:
+            for t in p.types:
+                if t not in self.ancestors:
+                    raise HtnError.at(p.type_pos or p.pos, f"unknown type {t}")
+
+    def declare(self, scope: Scope, params, what: str) -> dict:
+        self.check_types(params)
+        names = {}
+        for p in params:
+            if p.name in names:
+                raise HtnError.at(p.pos, f"{what}: parameter {p.name} is declared twice")
+            names[p.name] = p.name
+            scope.var(p.name)
+        return names
+
+    # ------------------------------------------------------------ actions
+    def operator(self, a: ActionDef) -> S.Operator:
+        scope = Scope()
+        names = self.declare(scope, a.params, f"action {a.name}")
+        f = Formulas(scope, self.h.predicates)
+        params = [scope.var(p.name) for p in a.params]
+        f.outer.update(v.index for v in params)
+        conds, types = f.conjuncts(a.pre, names)
+        types += [type_condition(v, p.types, p.pos) for v, p in zip(params, a.params)
+                  if p.types != ("object",)]
+        pre = order_conjuncts(conds, types, {v.index for v in params}, f.outer)
+        dels, adds, cost, conditional = _Effects(f).convert(a.effect, names)
+        head = S.TaskAtom("!" + a.name, tuple(params), False, a.pos)
+        return S.Operator(head, S.Precondition(_and(pre), pos=a.pos), S.Effects(dels),
+                          S.Effects(adds), cost, nvars=scope.size, pos=a.pos,
+                          effects_in_prestate=conditional)
+
+    # ------------------------------------------------------------ methods
+    def task_name(self, st) -> str:
+        if st.name in self.h.actions:
+            params = self.h.actions[st.name].params
+            name = "!" + st.name
+        elif st.name in self.h.tasks:
+            params = self.h.tasks[st.name].params
+            name = st.name
+        else:
+            raise HtnError.at(st.pos, f"unknown task {st.name}: neither a task nor an action "
+                              "of the domain")
+        if len(params) != len(st.args):
+            raise HtnError.at(st.pos, f"{st.name} takes {len(params)} argument(s), given "
+                              f"{len(st.args)}")
+        return name
+
+    def method(self, m: MethodDef, pulled: list) -> S.Method:
+        task = self.h.tasks.get(m.task.name) if m.task.name != TOP else TaskDef(TOP, [])
+        if task is None:
+            kind = "an action" if m.task.name in self.h.actions else "not a declared task"
+            raise HtnError.at(m.task.pos, f"method {m.name} decomposes {m.task.name}, "
+                              f"which is {kind}")
+        if len(task.params) != len(m.task.args):
+            raise HtnError.at(m.task.pos, f"{m.task.name} takes {len(task.params)} "
+                              f"argument(s), given {len(m.task.args)}")
+        scope = Scope()
+        names = self.declare(scope, m.params, f"method {m.name}")
+        f = Formulas(scope, self.h.predicates)
+        params = [scope.var(p.name) for p in m.params]
+        f.outer.update(v.index for v in params)
+        head = tuple(f.term(x, names, m.task.pos) for x in m.task.args)
+        conds, types = f.conjuncts(m.pre, names)
+        more, more_types = f.conjuncts(m.network.constraints, names)
+        conds += more + [f.expr(e, names) for e in pulled]
+        types += more_types + [type_condition(v, p.types, p.pos)
+                               for v, p in zip(params, m.params)]
+        bound = {v.index for v in variables(head, [])}
+        pre = order_conjuncts(conds, types, bound, f.outer)
+        subtasks = linearise(m.network, f"method {m.name}", m.pos)
+        items = [S.TaskAtom(self.task_name(st), tuple(f.term(x, names, st.pos) for x in st.args),
+                            False, st.pos) for st in subtasks]
+        branch = S.Branch(m.name, S.Precondition(_and(pre), pos=m.pos),
+                          S.TaskList(items, True, m.network.pos), m.pos)
+        method = S.Method(S.TaskAtom(m.task.name, head, False, m.task.pos), [branch],
+                          nvars=scope.size, index=self.method_count, pos=m.pos)
+        self.method_count += 1
+        return method
+
+
+class _Effects:
+    """Flattens an action's effect into delete and add lists."""
+
+    def __init__(self, formulas: Formulas):
+        self.f = formulas
+
+    def convert(self, effect, names: dict):
+        self.dels, self.adds, self.cost = [], [], 1.0
+        self.conditional = False
+        self.groups: dict = {}
+        self._walk(effect, names, [], [])
+        return self.dels, self.adds, self.cost, self.conditional
+
+    def _walk(self, e, names, vs, conds) -> None:
+        if isinstance(e, list):
+            for x in e:
+                self._walk(x, names, vs, conds)
+        elif isinstance(e, EffectCost):
+            self.cost = e.amount
+        elif isinstance(e, EffectForall):
+            new_vs, types, inner = self.f.quantify(e.vars, names, e.pos)
+            self._walk(e.effect, inner, vs + new_vs, conds + types)
+        elif isinstance(e, EffectWhen):
+            cond = self.f.expr(e.cond, names)
+            self._walk(e.effect, names, vs, conds + [cond])
+        else:
+            negative = isinstance(e, S.Not)
+            atom = self.f.atom(e.expr if negative else e, names)
+            target = self.dels if negative else self.adds
+            if not vs and not conds:
+                target.append(atom)
+                return
+            self.conditional = True
+            key = (id(conds[-1]) if conds else None, tuple(v.index for v in vs), negative)
+            group = self.groups.get(key)
+            if group is None:
+                group = self.groups[key] = S.EffectForAll(vs, _and(conds), [], atom.pos)
+                target.append(group)
+            group.atoms.append(atom)
+
+
+def _and(items: list):
+    return items[0] if len(items) == 1 else S.And(items)
+
+
+def domain_from_model(h: HDomain) -> S.Domain:
+    """The syntax objects of an HDDL domain (see the module docstring)."""
+    t = _Domain(h)
+    for c in h.constants:
+        t.check_types([c])
+    for task in h.tasks.values():
+        t.check_types(task.params)
+        if task.name in h.actions:
+            raise HtnError.at(task.pos, f"{task.name} is both a task and an action")
+    d = S.Domain(h.name, file=h.file, pos=h.pos, language="hddl", spelling=h.spelling)
+    for a in h.actions.values():
+        d.operators["!" + a.name] = [t.operator(a)]
+    pulled = pulled_conditions(h, t.ancestors)
+    d.hddl = h
+    for m in h.methods:
+        d.methods.setdefault(m.task.name, []).append(t.method(m, pulled.get(id(m), [])))
+    d.facts = [S.Atom(type_predicate(c.types[0]), (c.name,), c.pos) for c in h.constants]
+    d.implied = {type_predicate(ty): [type_predicate(a) for a in anc]
+                 for ty, anc in t.ancestors.items() if anc}
+    return d
+
+
+def top_method(domain: S.Domain, top: MethodDef) -> S.Method:
+    """The method of the artificial root task that binds the parameters of an
+    initial task network (``ProblemInstance.top``), with its pulled-up
+    conditions, in the domain's terms."""
+    if domain.hddl is None:
+        raise HtnError.at(top.pos, "an HDDL problem with parameters needs an HDDL domain")
+    t = _Domain(domain.hddl)
+    pulled = pulled_conditions(domain.hddl, t.ancestors, extra=[top])
+    return t.method(top, pulled.get(id(top), []))
+
+
+# ------------------------------------------------------------------ problem
+
+def problem_from_model(h: HProblem) -> S.Problem:
+    """The syntax objects of an HDDL problem (see the module docstring)."""
+    state = []
+    for o in h.objects:
+        if len(o.types) != 1:
+            raise HtnError.at(o.pos, f"object {o.name} must have one type, not (either ...)")
+        state.append(S.Atom(type_predicate(o.types[0]), (o.name,), o.pos))
+    for a in h.init:
+        if any(isinstance(x, Var) for x in a.args):
+            raise HtnError.at(a.pos, "atoms in the initial state must be ground")
+        state.append(a)
+    declared = {p.name for p in h.params}
+    items = []
+    for st in linearise(h.network, "the initial task network", h.pos):
+        for x in st.args:
+            if isinstance(x, Var) and x.name not in declared:
+                raise HtnError.at(st.pos, f"variable {x.name} is not a parameter of the "
+                                  "initial task network")
+        items.append(S.TaskAtom(st.name, st.args, False, st.pos))
+    top = None
+    if h.params:
+        top = MethodDef(TOP_METHOD, h.params, Subtask(None, TOP, (), h.pos), None, h.network,
+                        h.pos)
+    goal, nvars = None, 0
+    if h.goal is not None:
+        scope = Scope()
+        f = Formulas(scope)
+        goal = S.Precondition(f.expr(h.goal, {}), pos=getattr(h.goal, "pos", None))
+        nvars = scope.size
+    pos = h.network.pos if h.network is not None else h.pos
+    instance = S.ProblemInstance(state, S.TaskList(items, True, pos), h.pos, goal=goal,
+                                 goal_nvars=nvars, top=top)
+    return S.Problem(h.name, h.domain_name, [instance], file=h.file, pos=h.pos,
+                     language="hddl", spelling=h.spelling)
+
+
+def from_model(h):
+    """The syntax objects of an HDDL domain or problem model."""
+    return domain_from_model(h) if isinstance(h, HDomain) else problem_from_model(h)

@@ -1,0 +1,124 @@
+"""The HDDL model as read (Höller et al., AAAI 2020): tasks, methods, actions,
+their task networks, and problems, before they are turned into the planner's
+syntax objects (:mod:`htn.jshop.readers.hddl_domain`)."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Optional
+
+from htn.jshop.language import syntax as S
+
+
+@dataclass
+class Param:
+    """A typed variable or object; ``types`` has several names for ``either``."""
+    name: str
+    types: tuple
+    pos: Optional[S.Pos] = None
+    type_pos: Optional[S.Pos] = None    # where its type is written
+
+
+@dataclass
+class TaskDef:
+    name: str
+    params: list
+    pos: Optional[S.Pos] = None
+
+
+@dataclass
+class Subtask:
+    label: Optional[str]
+    name: str
+    args: tuple
+    pos: Optional[S.Pos] = None
+
+
+@dataclass
+class Network:
+    """A task network: subtasks, ``<`` constraints between labels, and
+    whether it was written ``:ordered-subtasks``."""
+    subtasks: list = field(default_factory=list)
+    ordered: bool = False
+    ordering: list = field(default_factory=list)     # [(before, after, pos)]
+    constraints: object = None
+    pos: Optional[S.Pos] = None
+
+
+@dataclass
+class MethodDef:
+    name: str
+    params: list
+    task: Subtask
+    pre: object          # a syntax expression or None
+    network: Network
+    pos: Optional[S.Pos] = None
+
+
+@dataclass
+class ActionDef:
+    name: str
+    params: list
+    pre: object
+    effect: object       # a nested effect structure, see Effect*
+    pos: Optional[S.Pos] = None
+
+
+@dataclass
+class Exists:
+    """``(exists (typed vars) formula)``; becomes a conjunction with type
+    conditions when translated (its variables renamed apart)."""
+    vars: list
+    expr: object
+    pos: Optional[S.Pos] = None
+
+
+@dataclass
+class EffectWhen:
+    vars: list           # [Param] of enclosing foralls
+    cond: object
+    effect: object
+    pos: Optional[S.Pos] = None
+
+
+@dataclass
+class EffectForall:
+    vars: list
+    effect: object
+    pos: Optional[S.Pos] = None
+
+
+@dataclass
+class EffectCost:
+    amount: object       # a number
+    pos: Optional[S.Pos] = None
+
+
+@dataclass
+class HDomain:
+    name: str
+    types: dict = field(default_factory=dict)        # type -> [parent types]
+    constants: list = field(default_factory=list)    # [Param]
+    predicates: dict = field(default_factory=dict)   # name -> [Param]
+    tasks: dict = field(default_factory=dict)        # name -> TaskDef
+    methods: list = field(default_factory=list)
+    actions: dict = field(default_factory=dict)      # name -> ActionDef
+    spelling: dict = field(default_factory=dict)
+    file: str = ""
+    pos: Optional[S.Pos] = None
+
+
+@dataclass
+class HProblem:
+    name: str
+    domain_name: str
+    objects: list = field(default_factory=list)
+    params: list = field(default_factory=list)
+    network: Optional[Network] = None
+    init: list = field(default_factory=list)         # [S.Atom]
+    goal: object = None
+    spelling: dict = field(default_factory=dict)
+    file: str = ""
+    pos: Optional[S.Pos] = None
+
+
+# ------------------------------------------------------------------ builder

@@ -1,0 +1,424 @@
+"""Read JSHOP2 domain and problem files into :mod:`htn.jshop.language.syntax` objects.
+
+The grammar lives in ``jshop2.lark``; one :class:`Builder` transformer turns the
+parse tree into domain objects. Variables are numbered per domain element in the
+order JSHOP2's parser meets them (manual 5.1.1), because that index is what an
+unbound variable prints as (``VAR<n>``).
+
+Reading a file (its encoding, its nesting) is :mod:`htn.jshop.readers.source`;
+choosing the reader by content is :mod:`htn.jshop.readers.load`.
+"""
+from __future__ import annotations
+
+from functools import lru_cache
+from pathlib import Path
+
+from lark import Lark, Token, v_args
+from lark.exceptions import UnexpectedInput, VisitError
+from lark.visitors import Transformer_NonRecursive
+
+from htn.jshop.language import syntax as S
+from htn.jshop.language.errors import HtnError
+from htn.jshop.language.functions import STDLIB_JAVA_NAMES, FunctionTable, arity_error
+from htn.jshop.language.terms import NIL, CallTerm, Var, make_list, variables
+
+from . import lark_errors
+from .source import check_nesting
+
+GRAMMAR = Path(__file__).with_name("jshop2.lark")
+
+
+@lru_cache(maxsize=1)
+def _lark() -> Lark:
+    return Lark(GRAMMAR.read_text(), parser="lalr", propagate_positions=True,
+                maybe_placeholders=False, start=["start", "task_atom"], cache=True)
+
+
+_TOKEN_NAMES = {
+    "LPAR": "'('", "RPAR": "')'", "NAME": "a symbol", "OPNAME": "an operator name (!name)",
+    "VAR": "a variable (?name)", "NUM": "a number", "$END": "end of file",
+}
+
+
+class Builder(Transformer_NonRecursive):
+    """Turns the Lark tree into syntax objects (method names = rule names);
+    it walks the tree with a stack, so nesting costs no Python recursion."""
+
+    def __init__(self, file: str, functions: FunctionTable):
+        super().__init__()
+        self.file = file
+        self.functions = functions
+        self.method_count = 0
+        self.axiom_count = 0
+
+    def pos(self, meta) -> S.Pos | None:
+        if getattr(meta, "empty", True):
+            return None
+        return S.Pos(self.file, meta.line, meta.column)
+
+    def tpos(self, tok: Token) -> S.Pos:
+        return S.Pos(self.file, tok.line, tok.column)
+
+    # ---------------------------------------------------------------- terms
+    def var(self, items):
+        return Var(str(items[0]).lower())
+
+    def symbol(self, items):
+        return str(items[0]).lower()
+
+    def number(self, items):
+        return float(str(items[0]))
+
+    def nil(self, items):
+        return NIL
+
+    def list_term(self, items):
+        return tuple(items)
+
+    def dotted_term(self, items):
+        *head, _dot, tail = items
+        return make_list(head, tail)
+
+    def function(self, items):
+        return items[0]
+
+    @v_args(meta=True)
+    def call(self, meta, items):
+        tok, *args = items
+        name = str(tok).lower()
+        func = self.functions.lookup(name)
+        if func is None:
+            raise HtnError.at(self.tpos(tok), f"undefined function '{tok}' in call "
+                              "(give its Python file with --functions)")
+        why = arity_error(name, len(args))
+        if why:
+            raise HtnError.at(self.pos(meta), why)
+        shown = STDLIB_JAVA_NAMES.get(name, str(tok))
+        return CallTerm(shown, func, tuple(args), self.pos(meta))
+
+    # ---------------------------------------------------------------- logic
+    @v_args(meta=True)
+    def atom(self, meta, items):
+        name, *args = items
+        return S.Atom(str(name).lower(), tuple(args), self.pos(meta))
+
+    def var_atom(self, items):
+        return S.VarAtom(Var(str(items[0]).lower()), self.tpos(items[0]))
+
+    @v_args(meta=True)
+    def and_expr(self, meta, items):
+        if len(items) == 1:
+            return items[0]
+        return S.And(list(items), self.pos(meta))
+
+    @v_args(meta=True)
+    def or_expr(self, meta, items):
+        if len(items) == 1:
+            return items[0]
+        return S.Or(list(items), self.pos(meta))
+
+    @v_args(meta=True)
+    def not_expr(self, meta, items):
+        return S.Not(items[0], self.pos(meta))
+
+    @v_args(meta=True)
+    def imply_expr(self, meta, items):
+        # JSHOP2 compiles (imply Y Z) to (or (not Y) Z)
+        y, z = items
+        return S.Or([S.Not(y, self.pos(meta)), z], self.pos(meta))
+
+    def forall_vars(self, items):
+        return [Var(str(t).lower()) for t in items]
+
+    @v_args(meta=True)
+    def forall_expr(self, meta, items):
+        vs, cond, then = items
+        return S.ForAll(vs, cond, then, self.pos(meta))
+
+    @v_args(meta=True)
+    def assign_expr(self, meta, items):
+        return S.Assign(Var(str(items[0]).lower()), items[1], self.pos(meta))
+
+    @v_args(meta=True)
+    def call_expr(self, meta, items):
+        return S.CallExpr(items[0], self.pos(meta))
+
+    @v_args(meta=True)
+    def precondition(self, meta, items):
+        return S.Precondition(items[0], pos=self.pos(meta))
+
+    @v_args(meta=True)
+    def first_pre(self, meta, items):
+        return S.Precondition(items[0], first=True, pos=self.pos(meta))
+
+    @v_args(meta=True)
+    def sort_pre(self, meta, items):
+        var = Var(str(items[0]).lower())
+        if len(items) == 3:
+            cmp_tok, expr = items[1], items[2]
+            cmp = str(cmp_tok).lower()
+            if cmp not in ("<", ">") and self.functions.comparator(cmp) is None:
+                raise HtnError.at(self.tpos(cmp_tok), f"undefined comparator '{cmp_tok}' "
+                                  "(give its Python file with --functions)")
+        else:
+            cmp, expr = "<", items[1]
+        return S.Precondition(expr, sort_var=var, comparator=cmp, pos=self.pos(meta))
+
+    # ---------------------------------------------------------------- tasks
+    @v_args(meta=True)
+    def task_atom(self, meta, items):
+        immediate = False
+        if isinstance(items[0], Token) and items[0].type == "IMMEDIATE":
+            immediate = True
+            items = items[1:]
+        name, *args = items
+        return S.TaskAtom(str(name).lower(), tuple(args), immediate, self.tpos(name))
+
+    @v_args(meta=True)
+    def tasklist(self, meta, items):
+        ordered = True
+        if items and isinstance(items[0], Token) and items[0].type == "UNORDERED":
+            ordered = False
+            items = items[1:]
+        return S.TaskList(list(items), ordered, self.pos(meta))
+
+    # ---------------------------------------------------------------- effects
+    def effect_list(self, items):
+        return S.Effects(items=list(items))
+
+    def effect_var(self, items):
+        return S.Effects(var=Var(str(items[0]).lower()))
+
+    @v_args(meta=True)
+    def protection(self, meta, items):
+        return S.Protection(items[0], self.pos(meta))
+
+    def effect_atoms(self, items):
+        return list(items)
+
+    @v_args(meta=True)
+    def effect_forall(self, meta, items):
+        vs, cond, atoms = items
+        return S.EffectForAll(vs, cond, atoms, self.pos(meta))
+
+    # ---------------------------------------------------------------- elements
+    @v_args(meta=True)
+    def operator(self, meta, items):
+        name, *rest = items
+        # rest: head terms..., precondition, del, add, [cost]
+        idx = next(i for i, x in enumerate(rest) if isinstance(x, S.Precondition))
+        args, (pre, dele, add, *cost) = tuple(rest[:idx]), rest[idx:]
+        head = S.TaskAtom(str(name).lower(), args, False, self.tpos(name))
+        op = S.Operator(head, pre, dele, add, cost[0] if cost else 1.0,
+                        pos=self.pos(meta))
+        op.nvars = _number_operator(op)
+        return op
+
+    @v_args(meta=True)
+    def branch(self, meta, items):
+        label = str(items[0]) if isinstance(items[0], Token) else None
+        pre, tasks = items[-2], items[-1]
+        return S.Branch(label, pre, tasks, self.pos(meta))
+
+    @v_args(meta=True)
+    def method(self, meta, items):
+        name = items[0]
+        args = tuple(x for x in items[1:] if not isinstance(x, S.Branch))
+        branches = [x for x in items[1:] if isinstance(x, S.Branch)]
+        for k, b in enumerate(branches):
+            if b.label is None:
+                b.label = f"Method{self.method_count}Branch{k}"
+        head = S.TaskAtom(str(name).lower(), args, False, self.tpos(name))
+        m = S.Method(head, branches, index=self.method_count, pos=self.pos(meta))
+        self.method_count += 1
+        m.nvars = _number_method(m)
+        return m
+
+    @v_args(meta=True)
+    def axiom_branch(self, meta, items):
+        label = str(items[0]) if isinstance(items[0], Token) else None
+        return S.AxiomBranch(label, items[-1], self.pos(meta))
+
+    @v_args(meta=True)
+    def axiom(self, meta, items):
+        head, *branches = items
+        if isinstance(head, S.VarAtom):
+            raise HtnError.at(head.pos, "an axiom's head must be an atom, not a variable")
+        for k, b in enumerate(branches):
+            if b.label is None:
+                b.label = f"Axiom{self.axiom_count}Branch{k}"
+        ax = S.Axiom(head, branches, pos=self.pos(meta))
+        self.axiom_count += 1
+        ax.nvars = _number_axiom(ax)
+        return ax
+
+    @v_args(meta=True)
+    def domain(self, meta, items):
+        name, *elements = items
+        d = S.Domain(str(name).lower(), file=self.file, pos=self.pos(meta))
+        for e in elements:
+            if isinstance(e, S.Operator):
+                d.operators.setdefault(e.name, []).append(e)
+            elif isinstance(e, S.Method):
+                d.methods.setdefault(e.name, []).append(e)
+            else:
+                d.axioms.setdefault(e.head.pred, []).append(e)
+        return d
+
+    # ---------------------------------------------------------------- problem
+    def initial_state(self, items):
+        return list(items)
+
+    @v_args(meta=True)
+    def instance(self, meta, items):
+        state, tasks = items
+        for a in state:
+            if isinstance(a, S.VarAtom) or variables(a.args, []):
+                raise HtnError.at(a.pos, "atoms in the initial state must be ground")
+        scope: dict = {}
+        walk_tasks(tasks, lambda v: _index(scope, v))
+        return S.ProblemInstance(state, tasks, self.pos(meta))
+
+    @v_args(meta=True)
+    def problem(self, meta, items):
+        name, dname, *instances = items
+        return S.Problem(str(name).lower(), str(dname).lower(), instances,
+                         file=self.file, pos=self.pos(meta), domain_pos=self.tpos(dname))
+
+    def start(self, items):
+        return items[0]
+
+
+# ------------------------------------------------------------ variable numbering
+# JSHOP2 adds a variable to its element's list when its parser first reads it:
+# textual order, except that (assign ?v t) reads t before adding ?v. A variable
+# that is only ever used as an atom or as a delete/add list is looked up, not
+# added; we add it so that such domains get a checkable error instead of -1.
+
+def _index(scope: dict, v: Var) -> None:
+    if v.name not in scope:
+        scope[v.name] = len(scope)
+    v.index = scope[v.name]
+
+
+def walk_term(t, cb) -> None:
+    for v in variables(t, []):
+        cb(v)
+
+
+def walk_expr(e, cb) -> None:
+    if isinstance(e, S.Atom):
+        walk_term(e.args, cb)
+    elif isinstance(e, S.VarAtom):
+        cb(e.var)
+    elif isinstance(e, (S.And, S.Or)):
+        for x in e.items:
+            walk_expr(x, cb)
+    elif isinstance(e, S.Not):
+        walk_expr(e.expr, cb)
+    elif isinstance(e, S.ForAll):
+        walk_expr(e.cond, cb)
+        walk_expr(e.then, cb)
+        for v in e.vars:
+            cb(v)
+    elif isinstance(e, S.Assign):
+        walk_term(e.term, cb)
+        cb(e.var)
+    elif isinstance(e, S.CallExpr):
+        walk_term(e.call, cb)
+    elif isinstance(e, S.Equal):        # HDDL's (= a b)
+        walk_term((e.left, e.right), cb)
+
+
+def walk_pre(p: S.Precondition, cb) -> None:
+    if p.sort_var is not None:
+        cb(p.sort_var)
+    walk_expr(p.expr, cb)
+
+
+def walk_tasks(tl, cb) -> None:
+    if isinstance(tl, S.TaskAtom):
+        walk_term(tl.args, cb)
+    else:
+        for x in tl.items:
+            walk_tasks(x, cb)
+
+
+def walk_effects(eff: S.Effects, cb) -> None:
+    if eff.var is not None:
+        cb(eff.var)
+    for x in eff.items:
+        if isinstance(x, S.Protection):
+            walk_expr(x.atom, cb)
+        elif isinstance(x, S.EffectForAll):
+            walk_expr(x.cond, cb)
+            for a in x.atoms:
+                walk_expr(a, cb)
+            for v in x.vars:
+                cb(v)
+        else:
+            walk_expr(x, cb)
+
+
+def _number_operator(op: S.Operator) -> int:
+    scope: dict = {}
+    cb = lambda v: _index(scope, v)  # noqa: E731
+    walk_term(op.head.args, cb)
+    walk_pre(op.pre, cb)
+    walk_effects(op.delete, cb)
+    walk_effects(op.add, cb)
+    walk_term(op.cost, cb)
+    return len(scope)
+
+
+def _number_method(m: S.Method) -> int:
+    scope: dict = {}
+    cb = lambda v: _index(scope, v)  # noqa: E731
+    walk_term(m.head.args, cb)
+    for b in m.branches:
+        walk_pre(b.pre, cb)
+        walk_tasks(b.tasks, cb)
+    return len(scope)
+
+
+def _number_axiom(ax: S.Axiom) -> int:
+    scope: dict = {}
+    cb = lambda v: _index(scope, v)  # noqa: E731
+    walk_term(ax.head.args, cb)
+    for b in ax.branches:
+        walk_pre(b.pre, cb)
+    return len(scope)
+
+
+# ------------------------------------------------------------ entry points
+
+def parse_jshop2(text: str, file: str = "<string>", functions: FunctionTable | None = None):
+    """Parse a JSHOP2 domain or problem from text (nesting checked by the
+    caller, :func:`htn.jshop.readers.load.parse_text`)."""
+    functions = functions or FunctionTable()
+    tree = lark_errors.parse(_lark(), text, file, _TOKEN_NAMES, start="start")
+    try:
+        return Builder(file, functions).transform(tree)
+    except VisitError as e:
+        if isinstance(e.orig_exc, HtnError):
+            raise e.orig_exc from None
+        raise
+
+
+def parse_step(text: str, file: str = "<plan>", line: int = 1):
+    """Parse one plan step such as ``(!move_base jenny home kitchen)``."""
+    try:
+        check_nesting(text, file)
+    except HtnError as exc:           # the step is one line of the plan file
+        raise HtnError(exc.message, file, line, exc.col) from None
+    try:
+        tree = _lark().parse(text, start="task_atom")
+    except UnexpectedInput as e:
+        raise HtnError(f"not a plan step: {text.strip()!r}", file, line,
+                       getattr(e, "column", 1))
+    try:
+        return Builder(file, FunctionTable()).transform(tree)
+    except VisitError as e:
+        if isinstance(e.orig_exc, HtnError):
+            raise HtnError(e.orig_exc.message, file, line, 1) from None
+        raise

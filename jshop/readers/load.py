@@ -1,0 +1,84 @@
+"""Load domains and problems: the reader is chosen by content, JSHOP2 or HDDL.
+
+HDDL text (``(define (domain ...`` or ``(define (problem ...``) is read by
+:mod:`htn.jshop.readers.hddl` and turned into the same syntax objects as
+JSHOP2 text (:mod:`htn.jshop.readers.hddl_domain`); the HDDL grammar is
+loaded only for HDDL input.
+"""
+from __future__ import annotations
+
+import os
+import re
+
+from htn.jshop.language import syntax as S
+from htn.jshop.language.errors import HtnError
+from htn.jshop.language.functions import FunctionTable
+
+from .jshop2 import parse_jshop2
+from .source import check_nesting, read_source
+
+_HDDL_HEAD = re.compile(r"\A(?:\s|;[^\n]*\n)*\(\s*define\s*\(\s*(domain|problem)\b", re.I)
+
+
+def is_hddl(text: str) -> bool:
+    """True if the text starts like an HDDL (PDDL) file: ``(define (domain``
+    or ``(define (problem``, after comments."""
+    return _HDDL_HEAD.match(text) is not None
+
+
+def parse_text(text: str, file: str = "<string>", functions: FunctionTable | None = None):
+    """Parse a domain or problem from text, JSHOP2 or HDDL; raise
+    :class:`HtnError` on bad input."""
+    check_nesting(text, file)
+    if is_hddl(text):
+        from . import hddl, hddl_domain
+        model = hddl.parse_model(text, file)
+        return hddl_domain.from_model(model)
+    return parse_jshop2(text, file, functions or FunctionTable())
+
+
+def parse_file(path: str, functions: FunctionTable | None = None):
+    if not os.path.exists(path):
+        raise HtnError("no such file", path)
+    if os.path.isdir(path):
+        raise HtnError("is a directory, not a JSHOP2 file", path)
+    return parse_text(read_source(path), path, functions)
+
+
+def load_domain(path: str, functions: FunctionTable | None = None) -> S.Domain:
+    d = parse_file(path, functions)
+    if not isinstance(d, S.Domain):
+        wanted = "(define (domain ...))" if d.language == "hddl" else "(defdomain ...)"
+        raise HtnError.at(d.pos, f"expected a {wanted} here, found a problem")
+    return d
+
+
+def load_problem(path: str, functions: FunctionTable | None = None) -> S.Problem:
+    p = parse_file(path, functions)
+    if not isinstance(p, S.Problem):
+        wanted = "(define (problem ...))" if p.language == "hddl" else "(defproblem ...)"
+        raise HtnError.at(p.pos, f"expected a {wanted} here, found a domain")
+    return p
+
+
+def load_inputs(domain_path: str, problem_path: str,
+                functions: FunctionTable | None = None) -> tuple[S.Domain, S.Problem]:
+    """Load a domain and a problem for it: every command that reads the pair
+    (``plan``, ``run``, ``validate``, ``transform``, ``evaluate``) goes
+    through here, so each refuses another domain's problem the same way."""
+    dom = load_domain(domain_path, functions)
+    prob = load_problem(problem_path, functions)
+    check_domain_name(dom, prob)
+    return dom, prob
+
+
+def check_domain_name(domain: S.Domain, problem: S.Problem) -> None:
+    """A problem names its domain (manual 3.12) and JSHOP2 compiles it against
+    that domain only: another domain's problem is an error at the name. An
+    HDDL problem may name another domain (a warning): the IPC 2020 planners
+    do not compare the names, and Barman-BDI's problems name ``barman_htn``
+    while its domain is ``barman_agent``."""
+    if problem.domain_name != domain.name and domain.language != "hddl":
+        raise HtnError.at(problem.domain_pos or problem.pos,
+                          f"problem '{problem.name}' is for domain '{problem.domain_name}', "
+                          f"but {domain.file or 'the domain'} defines '{domain.name}'")
