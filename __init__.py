@@ -3,10 +3,12 @@ and plan transformations.
 
 One import package. Its parts are the repository's top-level folders:
 
-* :mod:`htn.jshop` - reads JSHOP2 domains and problems, plans (no robot, no CLI);
+* :mod:`htn.jshop` - reads JSHOP2 and HDDL domains and problems, plans (no robot, no CLI);
 * :mod:`htn.executor` - task dispatcher, action state machines, outcome log;
 * :mod:`htn.robot` - robot back ends: PyBullet (``sim`` extra), projection, symbolic;
-* :mod:`htn.transform` - plan transformations and their evaluation (``eval`` extra);
+* :mod:`htn.transform` - plan transformations over task trees;
+* :mod:`htn.evaluation` - their evaluation over many runs (``eval`` extra);
+* :mod:`htn.api` - the use cases, one function each (what the command line calls);
 * :mod:`htn.cli` - the ``htn`` command line (also ``python -m htn``).
 
 The bundled example domains and problems are in :data:`EXAMPLES`; the

@@ -78,7 +78,7 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
     from htn.jshop.plans.planfile import header
     from htn.jshop.readers.checks import check_domain, check_problem
     from htn.jshop.readers.load import load_inputs
-    from htn.jshop.search.planner import compat_warning
+    from htn.jshop.readers.checks import compat_warning
 
     started = time.perf_counter()
     fmt = fmt or ("text" if stdout_is_terminal() else "jshop")

@@ -31,6 +31,7 @@ from htn.jshop.search.planner import Planner
 from .behaviours import ActionContext, action_subtree
 from .log import EventLog
 from .machines import all_of, machine_for
+from .machines.base import carry_predicate
 from .outcome import Outcome
 from .repair import find_repair, graft, observed_instance
 from .task_bt import actions, build, flat_tree
@@ -82,7 +83,8 @@ class TaskDispatcher:
         self._halt: Optional[str] = None
         self.in_tick = False
         self._carrying: tuple = (None, [])        # (action, attempt) -> what it carries
-        self.carry_checks = "still_held" in robot.check_names()
+        self.carry = carry_predicate(domain.name)    # the domain's word for carrying
+        self.carry_checks = self.carry is not None and "still_held" in robot.check_names()
         steps = list(steps)
         self.root = build(tree if tree is not None else flat_tree(steps), steps, self._action)
 
@@ -125,15 +127,15 @@ class TaskDispatcher:
         return ok
 
     def carried(self, ctx: ActionContext) -> list[str]:
-        """What the belief state says the robot holds (``(holding ... ?obj)``),
-        except what this step lets go of."""
-        held = [args[-1] for pred, args in self.belief.state.facts() if pred == "holding"]
+        """What the belief state says the robot carries (``(P ... ?obj)`` for
+        the domain's carry predicate P), except what this step lets go of."""
+        held = [args[-1] for pred, args in self.belief.state.facts() if pred == self.carry]
         if not held:
             return []
         released = set()
         for op, env in self.belief.step_options(ctx.step.name, tuple(ctx.step.args)):
             deleted, _ = self.belief.effects(op, env)
-            released |= {args[-1] for pred, args in deleted if pred == "holding"}
+            released |= {args[-1] for pred, args in deleted if pred == self.carry}
             break
         return [o for o in held if o not in released]
 

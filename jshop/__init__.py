@@ -8,15 +8,22 @@ Typical use::
     planner = Planner(domain, problem.instances[0])
     plan = next(planner.plans())
 
-The names below are imported on first use, so that importing ``htn.jshop.language.errors``
-(as the command line does for ``htn --help``) does not load the parser.
+Its rooms: :mod:`.language` (terms, syntax, functions, errors), :mod:`.readers`
+(JSHOP2 and HDDL files), :mod:`.logic` (the logic engine and its generated
+code), :mod:`.search` (the planner) and :mod:`.plans` (plans, task trees,
+plan files, validation, ``--explain``). The names below are imported on first
+use, so that importing ``htn.jshop.language.errors`` (as the command line
+does for ``htn --help``) does not load the parser.
 """
 from importlib import import_module
 
 _EXPORTS = {
-    "HtnError": "errors", "PlanningError": "errors", "FunctionTable": "functions",
-    "load_domain": "parser", "load_problem": "parser", "load_inputs": "parser", "parse_text": "parser",
-    "Plan": "plan", "Step": "plan", "Planner": "planner", "TaskTree": "tree",
+    "HtnError": "language.errors", "PlanningError": "language.errors",
+    "FunctionTable": "language.functions",
+    "load_domain": "readers.load", "load_problem": "readers.load", "load_inputs": "readers.load",
+    "parse_text": "readers.load",
+    "Plan": "plans.plan", "Step": "plans.plan", "TaskTree": "plans.tree",
+    "Planner": "search.planner",
 }
 
 __all__ = list(_EXPORTS)

@@ -16,43 +16,35 @@ towards the table, ``v`` to the robot's left.
 from __future__ import annotations
 
 import math
-from contextlib import contextmanager
 from typing import Optional
 
-import numpy as np
 
 from htn.jshop.language.errors import HtnError
 
-from .arm import ARM_JOINTS, EE_LINK, FINGERS
+from .arm import ARM_JOINTS, FINGERS
 from .base import BASE_SPEED, POSE_TOLERANCE, TURN_SPEED
 from .drawer import DRAWER_OPEN, Drawers
 from .interface import Check, SkillResult, check, skill
-from .physics import DT, quiet_fds, yaw_quat
+from .physics import quiet_fds, yaw_quat
 from .pybullet_sim import PyBulletRobot
-from .tray import SIDE, Trays
+from .table_spots import TableSpots
+from .tray import Trays
+from .two_arms import ARM_HOMES, TwoArms
 
-ARM_HOMES = {   # tucked to the robot's sides, out of the head camera's view
-    "left": (1.5, -0.3, 0.0, -2.6, 0.0, 2.2, 0.785),
-    "right": (-1.5, -0.3, 0.0, -2.6, 0.0, 2.2, 0.785),
-}
-MOUNTS = {"left": (0.25, 0.2, 0.48), "right": (0.25, -0.2, 0.48)}
 SHAPES = {   # kind -> (radius, height, colour)
     "bowl": (0.035, 0.06, (0.95, 0.95, 0.9, 1)),
     "cup": (0.03, 0.09, (0.2, 0.4, 0.9, 1)),
     "spoon": (0.02, 0.08, (0.6, 0.6, 0.65, 1)),
 }
 DEFAULT_SHAPE = (0.033, 0.12, (0.9, 0.2, 0.1, 1))
-ROWS = (0.70, 0.84)                 # u of the spots where objects stand on a table
-SPOT_VS = tuple(round(-0.55 + 0.1 * i, 2) for i in range(12))
 TRAY_BASE_SPEED, TRAY_TURN_SPEED = 0.35, 0.6
 ARM_AND_FINGERS = [*ARM_JOINTS, *FINGERS]
 DOCK = 0.35                         # backing away from a table before turning
 
 
-class KitchenRobot(Drawers, Trays, PyBulletRobot):
+class KitchenRobot(Drawers, Trays, TableSpots, TwoArms, PyBulletRobot):
     """The simulated two-armed kitchen robot; ``gui=True`` opens a window."""
 
-    ARMS = ("left", "right")
     CAMERA_PIXELS = (160, 120)   # finer than the domestic robot's: spoons are thin
 
     # ------------------------------------------------------------ building
@@ -108,159 +100,6 @@ class KitchenRobot(Drawers, Trays, PyBulletRobot):
         self._select("left")
         self.body_of[w.robot] = self.husky
         self._run(self._settle(0.5))
-
-    def _frame(self, area: str) -> tuple[float, float, float]:
-        pl = self.world.places[area]
-        return pl.x, pl.y, pl.theta
-
-    def _to_world(self, area: str, u: float, v: float) -> tuple[float, float]:
-        x, y, yaw = self._frame(area)
-        return (x + u * math.cos(yaw) - v * math.sin(yaw),
-                y + u * math.sin(yaw) + v * math.cos(yaw))
-
-    def _to_area(self, area: str, x: float, y: float) -> tuple[float, float]:
-        ax, ay, yaw = self._frame(area)
-        dx, dy = x - ax, y - ay
-        return (dx * math.cos(yaw) + dy * math.sin(yaw), -dx * math.sin(yaw) + dy * math.cos(yaw))
-
-    def _boxes(self, parts, mass: float, pos, yaw: float, rgba) -> int:
-        """A rigid body made of boxes: parts are (half extents, offset) in the body frame."""
-        p, c = self.p, self.cid
-        n = len(parts)
-        col = p.createCollisionShapeArray([p.GEOM_BOX] * n, halfExtents=[h for h, _ in parts],
-                                          collisionFramePositions=[o for _, o in parts],
-                                          physicsClientId=c)
-        vis = p.createVisualShapeArray([p.GEOM_BOX] * n, halfExtents=[h for h, _ in parts],
-                                       visualFramePositions=[o for _, o in parts],
-                                       rgbaColors=[rgba] * n, physicsClientId=c)
-        return p.createMultiBody(mass, col, vis, pos, yaw_quat(p, yaw), physicsClientId=c)
-
-    def _open_box(self, hu: float, hv: float, hz: float, wall: float = 0.006) -> list:
-        """Bottom and four walls of an open-top box (body frame: x = u, y = v)."""
-        return [((hu, hv, wall / 2), (0, 0, wall / 2)),
-                ((wall / 2, hv, hz), (hu - wall / 2, 0, hz)),
-                ((wall / 2, hv, hz), (-hu + wall / 2, 0, hz)),
-                ((hu, wall / 2, hz), (0, hv - wall / 2, hz)),
-                ((hu, wall / 2, hz), (0, -hv + wall / 2, hz))]
-
-    # ------------------------------------------------------------ places for things
-    def _footprints(self, area: str, skip=()) -> list[tuple[float, float, float]]:
-        """Discs (u, v, radius) of what occupies the area's table."""
-        out = self._drawer_discs(area)
-        for bid in self.trays.values():
-            pos = self._pos(bid)
-            if self._on_table(bid, area):
-                out += self._tray_discs(*self._to_area(area, pos[0], pos[1]))
-        for t in self.world.things:
-            if t in self.body_of and t not in skip and t not in self.arm_held.values():
-                pos = self._body_pos(t)
-                u, v = self._to_area(area, pos[0], pos[1])
-                if 0.4 < u < 1.7 and abs(v) < 0.9:
-                    out.append((u, v, self.radius[t]))
-        return out
-
-    def _free_spot(self, area: str, arm: Optional[str], radius: float, skip=()):
-        """A free, reachable spot on the area's table: near the front, on the
-        arm's side. Returns world (x, y, table top) or None."""
-        taken = self._footprints(area, skip)
-        side = SIDE.get(arm, 0.0)
-        spots = sorted(((u, v) for u in ROWS for v in SPOT_VS),
-                       key=lambda s: (abs(s[1] - 0.15 * side) + 0.8 * (s[0] - ROWS[0])))
-        top = self.furniture_top[area]
-        for u, v in spots:
-            if all(math.hypot(u - tu, v - tv) > radius + tr + 0.04 for tu, tv, tr in taken):
-                x, y = self._to_world(area, u, v)
-                if arm is None or self._reachable(arm, [x, y, top + 0.2]):
-                    return x, y, top
-        return None
-
-    def _reachable(self, arm: str, pos) -> bool:
-        with self._using(arm):
-            return self._ik(pos) is not None
-
-    # ------------------------------------------------------------ arms, one at a time
-    def _arm_mount(self, arm: str, base=None) -> list[float]:
-        x, y, yaw = base or self.base
-        mu, mv, mz = MOUNTS[arm]
-        return [x + mu * math.cos(yaw) - mv * math.sin(yaw),
-                y + mu * math.sin(yaw) + mv * math.cos(yaw), mz]
-
-    def _select(self, arm: str) -> None:
-        self.active = arm
-        self.arm = self.arm_body[arm]
-        self.held = self.arm_held[arm]
-        self._grip_constraint = self.arm_grip[arm]
-
-    @contextmanager
-    def _using(self, arm: str):
-        """Run the one-arm helpers of the arm part on ``arm``."""
-        previous = self.active
-        self._select(arm)
-        try:
-            yield
-        finally:
-            self.arm_held[arm], self.arm_grip[arm] = self.held, self._grip_constraint
-            self._select(previous)
-
-    def _pick_arm(self, arm: Optional[str]) -> Optional[str]:
-        if arm in self.ARMS:
-            return arm
-        return next((a for a in self.ARMS if self.arm_held[a] is None), None)
-
-    def _rest_pose(self):
-        """The selected arm: holding something, close to its side; else tucked."""
-        if self.held is None:
-            yield from self._move_arm(ARM_HOMES[self.active], 0.7)
-            return
-        x, y, yaw = self.base
-        side = SIDE[self.active]
-        mx, my, _ = self._arm_mount(self.active)
-        lx, ly = -math.sin(yaw) * side, math.cos(yaw) * side
-        fx, fy = math.cos(yaw), math.sin(yaw)
-        if not (yield from self._reach([mx + 0.2 * fx + 0.25 * lx, my + 0.2 * fy + 0.25 * ly, 0.95],
-                                       0.7)):
-            yield from self._move_arm(ARM_HOMES[self.active], 0.7)
-        yield from self._step(12)
-
-    def _move_arms(self, goals: dict, seconds: float):
-        """Both arms at once, in joint space."""
-        p, c = self.p, self.cid
-        starts = {a: [p.getJointState(self.arm_body[a], j, physicsClientId=c)[0]
-                      for j in ARM_JOINTS] for a in goals}
-        n = max(1, int(seconds / DT))
-        for i in range(1, n + 1):
-            k = i / n
-            for a, q in goals.items():
-                self._command(a, [s + (g - s) * k for s, g in zip(starts[a], q)])
-            yield from self._step()
-
-    def _command(self, arm: str, q) -> None:
-        """Set an arm's joints; every physics step keeps them there (kinematic arms)."""
-        self.q_cmd[arm] = list(q)
-        for j, v in zip(ARM_JOINTS, q):
-            self.p.resetJointState(self.arm_body[arm], j, v, physicsClientId=self.cid)
-
-    def _move_arm(self, q_goal, seconds: float = 1.0):
-        return self._move_arms({self.active: q_goal}, seconds)
-
-    def _set_fingers(self, width: float) -> None:
-        self._set_fingers_of(self.active, width)
-
-    def _set_fingers_of(self, arm: str, width: float) -> None:
-        self.f_cmd[arm] = width
-        for j in FINGERS:
-            self.p.resetJointState(self.arm_body[arm], j, width, physicsClientId=self.cid)
-
-    def _ik_for(self, arm: str, pos) -> Optional[list[float]]:
-        with self._using(arm):
-            return self._ik(pos)
-
-    def _ee_of(self, arm: str) -> np.ndarray:
-        return np.array(self.p.getLinkState(self.arm_body[arm], EE_LINK,
-                                            physicsClientId=self.cid)[4])
-
-    def _home_both(self):
-        return self._move_arms({a: ARM_HOMES[a] for a in self.ARMS}, 0.8)
 
     # ------------------------------------------------------------ clock and base
     def _physics_step(self) -> None:

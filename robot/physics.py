@@ -94,6 +94,26 @@ class Physics:
         return bid
 
     # ------------------------------------------------------------ clock
+    def _boxes(self, parts, mass: float, pos, yaw: float, rgba) -> int:
+        """A rigid body made of boxes: parts are (half extents, offset) in the body frame."""
+        p, c = self.p, self.cid
+        n = len(parts)
+        col = p.createCollisionShapeArray([p.GEOM_BOX] * n, halfExtents=[h for h, _ in parts],
+                                          collisionFramePositions=[o for _, o in parts],
+                                          physicsClientId=c)
+        vis = p.createVisualShapeArray([p.GEOM_BOX] * n, halfExtents=[h for h, _ in parts],
+                                       visualFramePositions=[o for _, o in parts],
+                                       rgbaColors=[rgba] * n, physicsClientId=c)
+        return p.createMultiBody(mass, col, vis, pos, yaw_quat(p, yaw), physicsClientId=c)
+
+    def _open_box(self, hu: float, hv: float, hz: float, wall: float = 0.006) -> list:
+        """Bottom and four walls of an open-top box (body frame: x = u, y = v)."""
+        return [((hu, hv, wall / 2), (0, 0, wall / 2)),
+                ((wall / 2, hv, hz), (hu - wall / 2, 0, hz)),
+                ((wall / 2, hv, hz), (-hu + wall / 2, 0, hz)),
+                ((hu, wall / 2, hz), (0, hv - wall / 2, hz)),
+                ((hu, wall / 2, hz), (0, -hv + wall / 2, hz))]
+
     def _physics_step(self) -> None:
         self.p.stepSimulation(physicsClientId=self.cid)
         self.sim_time += DT

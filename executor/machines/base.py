@@ -71,6 +71,23 @@ def action(operator: str, domain: Optional[str] = None):
     return register
 
 
+CARRIED: dict[Optional[str], str] = {}   # domain or None -> predicate of what is carried
+
+
+def carried_by(predicate: str, domain: Optional[str] = None) -> None:
+    """Declare that in the belief state ``(predicate ... ?obj)`` means the
+    robot carries ``?obj`` (for every domain, or for one): while any action
+    runs, the task dispatcher then checks on every tick that what the robot
+    carries stays in its gripper (the robot's ``still_held`` check)."""
+    CARRIED[domain] = predicate
+
+
+def carry_predicate(domain: Optional[str]) -> Optional[str]:
+    """The predicate of what the robot carries in ``domain``, if declared."""
+    load_plugins()
+    return CARRIED.get(domain) or CARRIED.get(None)
+
+
 # the machines of the bundled domains, loaded like plugins (by name)
 BUNDLED = ("htn.executor.machines.domestic", "htn.executor.machines.kitchen")
 _plugins_loaded = False
@@ -132,5 +149,5 @@ def all_of(*checks: Check) -> Check:
     return Check(not bad, "; ".join(c.detail for c in (bad or checks)))
 
 
-__all__ = ["ActionMachine", "action", "machine_for", "all_of", "SkillResult",
+__all__ = ["ActionMachine", "action", "carried_by", "machine_for", "all_of", "SkillResult",
            "Check", "HoldMonitor"]

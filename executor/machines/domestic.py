@@ -2,12 +2,15 @@
 the paper's RoboCup@Home operators on the PyBullet domestic robot."""
 from __future__ import annotations
 
-from .base import ActionMachine, action, all_of
+from .base import ActionMachine, action, all_of, carried_by
 
 
 def no_collision(robot):
     return [("no collision", lambda: robot.check("no_collision"))]
 
+
+# (holding ROBOT-OR-ARM OBJECT): what the robot carries, checked while it acts
+carried_by("holding", domain="domestic")
 
 @action("!move_base")
 class MoveBase(ActionMachine):

@@ -25,7 +25,7 @@ from __future__ import annotations
 
 from typing import Any, Callable, Sequence
 
-from .errors import HtnError
+from .errors import HtnError, PlanningError
 
 NIL: tuple = ()
 
@@ -315,3 +315,11 @@ def variables(t: Any, out: list) -> list:
         for x in t.args:
             variables(x, out)
     return out
+
+
+def atom_from_term(t, pos) -> tuple[str, tuple]:
+    """A list term ``(p a1 .. an)`` used as an atom (manual 3.14)."""
+    if type(t) is tuple and t and type(t[0]) is str:
+        return t[0], t[1:]
+    raise PlanningError.at(pos, f"a variable used as an atom is bound to {term_str(t)}, "
+                           "which is not an atom")

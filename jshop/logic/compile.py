@@ -4,9 +4,9 @@ JSHOP2 compiles a domain to Java for speed (manual section 4); we do the same
 on a small scale for the two hottest operations on argument tuples:
 
 * :func:`binder` - apply a binding to a tuple of terms (``subst``), and
-* :func:`head_unifier` - unify a method's or operator's head with a task;
+* :func:`head_unifier` - unify a method's or operator's head with a task
 
-and for binding a method body's task list (:func:`task_list_maker`).
+(method bodies are bound by :mod:`htn.jshop.logic.task_lists`).
 
 Only "flat" tuples (constants and variables) are compiled; anything with a
 nested list or call term uses the generic functions in :mod:`htn.jshop.language.terms`, so
@@ -29,7 +29,7 @@ from htn.jshop.language.terms import CallTerm, Var, is_ground, subst, unify
 from .caches import cache
 
 
-def _flat(args: tuple) -> bool:
+def flat_args(args: tuple) -> bool:
     return all(type(a) in (str, float, Var) for a in args)
 
 
@@ -54,7 +54,7 @@ def substituter(args: tuple) -> Callable[[list], tuple]:
     tuple of symbols, numbers and variables needs no groundness test."""
     hit = _SUBSTITUTERS.get(id(args))
     if hit is None or hit[0] is not args:
-        if _flat(args):
+        if flat_args(args):
             ns: dict = {}
             parts = []
             for i, a in enumerate(args):
@@ -73,43 +73,6 @@ def substituter(args: tuple) -> Callable[[list], tuple]:
                 return bind(env)[1]
         hit = _SUBSTITUTERS[id(args)] = (args, fn)
     return hit[1]
-
-
-_TASK_LISTS: dict = cache()
-
-
-def task_list_maker(tl, node: Callable, task: Callable) -> Callable[[list], list]:
-    """``env -> [node]``: the members of a domain's task list bound by
-    ``env``, one function of generated code per list: a task atom becomes
-    ``node(task(name, args, immediate, atom))`` with its arguments substituted
-    inline (as :func:`substituter` does), a nested list ``node(None, members,
-    ordered)`` (its own function, so the code never nests). Cached per list
-    object and node and task constructors."""
-    hit = _TASK_LISTS.get(id(tl))
-    if hit is None or hit[0] is not tl or hit[1] is not node or hit[2] is not task:
-        ns: dict = {"N": node, "T": task}
-        parts = []
-        for i, x in enumerate(tl.items):
-            if hasattr(x, "items"):       # a nested task list
-                ns[f"m{i}"] = task_list_maker(x, node, task)
-                parts.append(f"N(None, m{i}(env), {bool(x.ordered)})")
-                continue
-            ns[f"a{i}"], ns[f"n{i}"] = x, x.name
-            if _flat(x.args):
-                args = []
-                for j, a in enumerate(x.args):
-                    ns[f"c{i}_{j}"] = a
-                    args.append(f"(env[{a.index}] if env[{a.index}] is not None else c{i}_{j})"
-                                if type(a) is Var else f"c{i}_{j}")
-                bound = "(" + "".join(a + ", " for a in args) + ")"
-            else:
-                ns[f"s{i}"] = substituter(x.args)
-                bound = f"s{i}(env)"
-            parts.append(f"N(T(n{i}, {bound}, {bool(x.immediate)}, a{i}))")
-        src = "def make(env):\n    return [" + "".join(p + ",\n        " for p in parts) + "]"
-        exec(src, ns)
-        hit = _TASK_LISTS[id(tl)] = (tl, node, task, ns["make"])
-    return hit[3]
 
 
 def head_unifier(head: tuple) -> Callable[[tuple, list], bool]:
@@ -160,7 +123,7 @@ def make_binder(args: tuple) -> Callable[[list], tuple]:
             consts[f"c{i}"] = a
             parts.append(f"c{i}")
             unbound.append(f"c{i}")
-        elif ta is tuple and _flat(a):
+        elif ta is tuple and flat_args(a):
             # a flat list such as (on ?x ?z): built inline, without subst
             inner, inner_unbound, inner_tests = [], [], []
             for j, x in enumerate(a):

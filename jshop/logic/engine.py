@@ -14,16 +14,19 @@ with Java's sort algorithm (see :func:`java_sort`).
 """
 from __future__ import annotations
 
-from functools import cmp_to_key
 from typing import Callable, Iterator, Optional
 
 from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import HtnError, PlanningError
-from htn.jshop.language.terms import Var, is_ground, subst, term_str, unify, variables
+from htn.jshop.language.terms import (Var, atom_from_term, is_ground, subst, term_str, unify,
+                                      variables)
 
 from .caches import cache
 from .compile import GENERIC, binder, head_unifier, scanner, term_binder
-from .modes import always, compile_conjunction
+from .conjuncts import always
+from .java_sort import java_sort
+from .modes import compile_conjunction
+from .scan import scan_atoms
 
 _HEADS: dict = cache()
 
@@ -45,14 +48,6 @@ def _unify_args(pattern: tuple, args: tuple, env: list) -> bool:
         if not unify(p, t, env):
             return False
     return True
-
-
-def atom_from_term(t, pos) -> tuple[str, tuple]:
-    """A list term ``(p a1 .. an)`` used as an atom (manual 3.14)."""
-    if type(t) is tuple and t and type(t[0]) is str:
-        return t[0], t[1:]
-    raise PlanningError.at(pos, f"a variable used as an atom is bound to {term_str(t)}, "
-                           "which is not an atom")
 
 
 class Logic:
@@ -254,7 +249,7 @@ class Logic:
                 if bound in members:
                     yield env
             elif key >= GENERIC:
-                yield from _scan(lst, bound, env)
+                yield from scan_atoms(lst, bound, env)
             else:
                 scan = scanners.get(key)
                 if scan is None:
@@ -278,7 +273,7 @@ class Logic:
                 if bound in members:
                     return
             elif key >= GENERIC:
-                if next(_scan(lst, bound, env), None) is not None:
+                if next(scan_atoms(lst, bound, env), None) is not None:
                     return
             else:
                 scan = scanners.get(key)
@@ -306,7 +301,7 @@ class Logic:
                 if bound in members:
                     yield env
             elif lst:
-                yield from _scan(lst, bound, env)
+                yield from scan_atoms(lst, bound, env)
             if axioms:
                 yield from prove(axioms, bound, env, ground)
         return solve
@@ -318,7 +313,7 @@ class Logic:
             if state.has(pred, bound):
                 yield env
         else:
-            yield from _scan(state.bucket(pred), bound, env)
+            yield from scan_atoms(state.bucket(pred), bound, env)
         axioms = self._axioms.get(pred)
         if axioms:
             yield from self._prove(axioms, bound, env)
@@ -337,7 +332,7 @@ class Logic:
                     for _ in range(bind_head.get(bound, 0)):
                         yield env
                 else:
-                    yield from _scan(unify_head, bound, env)
+                    yield from scan_atoms(unify_head, bound, env)
                 continue
             aenv = [None] * ax.nvars
             if not unify_head(bound, aenv):
@@ -402,104 +397,3 @@ def _true(env):
 
 
 _FACTS = object()    # marks a run of fact axioms, see Logic._segments
-
-
-def _scan(lst: list, bound: tuple, env: list) -> Iterator[list]:
-    """Match a non-ground pattern against a live list of atoms, in order.
-
-    Iterating the live list by index is deliberate: it reproduces JSHOP2's
-    behaviour when a forall effect deletes atoms while it enumerates them.
-    """
-    n = len(bound)
-    consts = []
-    binds = []
-    others = []
-    seen = set()
-    i = 0
-    for t in bound:
-        tt = type(t)
-        if tt is str or tt is float:
-            consts.append((i, t))
-        elif tt is Var and t.index not in seen:
-            seen.add(t.index)
-            binds.append((i, t.index))
-        else:
-            others.append((i, t))
-        i += 1
-    if not others and len(consts) == 1:
-        (ci, c), = consts
-        for args in lst:
-            if len(args) == n and args[ci] == c:
-                new = env[:]
-                for i, k in binds:
-                    new[k] = args[i]
-                yield new
-        return
-    if not others and not consts:
-        for args in lst:
-            if len(args) == n:
-                new = env[:]
-                for i, k in binds:
-                    new[k] = args[i]
-                yield new
-        return
-    for args in lst:
-        if len(args) != n:
-            continue
-        for i, c in consts:
-            if args[i] != c:
-                break
-        else:
-            new = env[:]
-            for i, k in binds:
-                new[k] = args[i]
-            if others:
-                ok = True
-                for i, t in others:
-                    if not unify(t, args[i], new):
-                        ok = False
-                        break
-                if not ok:
-                    continue
-            yield new
-
-
-# ------------------------------------------------------------ Java's sort
-
-def java_sort(a: list, cmp) -> list:
-    """Sort like Java 17's ``Arrays.sort(Object[], Comparator)``.
-
-    JSHOP2 sorts ``:sort-by`` bindings with it. For fewer than 32 elements Java's
-    TimSort is a binary insertion sort after one run scan; that is ported here
-    step by step, because with an inconsistent comparator (the corpus's
-    MyComparator) only the exact algorithm gives JSHOP2's order. Longer inputs
-    use Python's stable TimSort, which agrees with Java for every consistent
-    comparator.
-    """
-    n = len(a)
-    if n < 2:
-        return a
-    if n >= 32:
-        return sorted(a, key=cmp_to_key(cmp))
-    run = 1
-    if cmp(a[1], a[0]) < 0:
-        run = 2
-        while run < n and cmp(a[run], a[run - 1]) < 0:
-            run += 1
-        a[:run] = a[:run][::-1]
-    else:
-        run = 2
-        while run < n and cmp(a[run], a[run - 1]) >= 0:
-            run += 1
-    for start in range(run, n):
-        pivot = a[start]
-        left, right = 0, start
-        while left < right:
-            mid = (left + right) >> 1
-            if cmp(pivot, a[mid]) < 0:
-                right = mid
-            else:
-                left = mid + 1
-        a[left + 1:start + 1] = a[left:start]
-        a[left] = pivot
-    return a

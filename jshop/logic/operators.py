@@ -19,10 +19,9 @@ from typing import Optional
 
 from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import PlanningError
-from htn.jshop.language.terms import term_str
+from htn.jshop.language.terms import atom_from_term, term_str
 
 from .compile import substituter
-from .engine import atom_from_term
 from .state import Change
 
 _ATOM, _VAR_ATOM, _PROTECT, _FORALL = range(4)

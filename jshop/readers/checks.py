@@ -219,3 +219,16 @@ def _vars_of(a) -> list:
     out: list = []
     walk_expr(a, out.append)
     return out
+
+
+def compat_warning(domain: S.Domain):
+    """The one warning ``--jshop2-compat`` gives for a domain whose method
+    bodies are written ``(:unordered ...)`` (they will run in order), or None."""
+    bodies = [b for ms in domain.methods.values() for m in ms for b in m.branches
+              if not b.tasks.ordered]
+    if not bodies:
+        return None
+    more = f" (and {len(bodies) - 1} more)" if len(bodies) > 1 else ""
+    return Warning_(bodies[0].tasks.pos or bodies[0].pos,
+                    f"--jshop2-compat: this (:unordered ...) method body{more} runs in "
+                    "order, as in JSHOP2 1.0.3; without the option it is unordered")

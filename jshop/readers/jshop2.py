@@ -21,8 +21,10 @@ from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import HtnError
 from htn.jshop.language.functions import STDLIB_JAVA_NAMES, FunctionTable, arity_error
 from htn.jshop.language.terms import NIL, CallTerm, Var, make_list, variables
+from htn.jshop.language.walk import walk_tasks
 
 from . import lark_errors
+from .numbering import index_var, number_axiom, number_method, number_operator
 from .source import check_nesting
 
 GRAMMAR = Path(__file__).with_name("jshop2.lark")
@@ -211,7 +213,7 @@ class Builder(Transformer_NonRecursive):
         head = S.TaskAtom(str(name).lower(), args, False, self.tpos(name))
         op = S.Operator(head, pre, dele, add, cost[0] if cost else 1.0,
                         pos=self.pos(meta))
-        op.nvars = _number_operator(op)
+        op.nvars = number_operator(op)
         return op
 
     @v_args(meta=True)
@@ -231,7 +233,7 @@ class Builder(Transformer_NonRecursive):
         head = S.TaskAtom(str(name).lower(), args, False, self.tpos(name))
         m = S.Method(head, branches, index=self.method_count, pos=self.pos(meta))
         self.method_count += 1
-        m.nvars = _number_method(m)
+        m.nvars = number_method(m)
         return m
 
     @v_args(meta=True)
@@ -249,7 +251,7 @@ class Builder(Transformer_NonRecursive):
                 b.label = f"Axiom{self.axiom_count}Branch{k}"
         ax = S.Axiom(head, branches, pos=self.pos(meta))
         self.axiom_count += 1
-        ax.nvars = _number_axiom(ax)
+        ax.nvars = number_axiom(ax)
         return ax
 
     @v_args(meta=True)
@@ -276,7 +278,7 @@ class Builder(Transformer_NonRecursive):
             if isinstance(a, S.VarAtom) or variables(a.args, []):
                 raise HtnError.at(a.pos, "atoms in the initial state must be ground")
         scope: dict = {}
-        walk_tasks(tasks, lambda v: _index(scope, v))
+        walk_tasks(tasks, lambda v: index_var(scope, v))
         return S.ProblemInstance(state, tasks, self.pos(meta))
 
     @v_args(meta=True)
@@ -290,106 +292,6 @@ class Builder(Transformer_NonRecursive):
 
 
 # ------------------------------------------------------------ variable numbering
-# JSHOP2 adds a variable to its element's list when its parser first reads it:
-# textual order, except that (assign ?v t) reads t before adding ?v. A variable
-# that is only ever used as an atom or as a delete/add list is looked up, not
-# added; we add it so that such domains get a checkable error instead of -1.
-
-def _index(scope: dict, v: Var) -> None:
-    if v.name not in scope:
-        scope[v.name] = len(scope)
-    v.index = scope[v.name]
-
-
-def walk_term(t, cb) -> None:
-    for v in variables(t, []):
-        cb(v)
-
-
-def walk_expr(e, cb) -> None:
-    if isinstance(e, S.Atom):
-        walk_term(e.args, cb)
-    elif isinstance(e, S.VarAtom):
-        cb(e.var)
-    elif isinstance(e, (S.And, S.Or)):
-        for x in e.items:
-            walk_expr(x, cb)
-    elif isinstance(e, S.Not):
-        walk_expr(e.expr, cb)
-    elif isinstance(e, S.ForAll):
-        walk_expr(e.cond, cb)
-        walk_expr(e.then, cb)
-        for v in e.vars:
-            cb(v)
-    elif isinstance(e, S.Assign):
-        walk_term(e.term, cb)
-        cb(e.var)
-    elif isinstance(e, S.CallExpr):
-        walk_term(e.call, cb)
-    elif isinstance(e, S.Equal):        # HDDL's (= a b)
-        walk_term((e.left, e.right), cb)
-
-
-def walk_pre(p: S.Precondition, cb) -> None:
-    if p.sort_var is not None:
-        cb(p.sort_var)
-    walk_expr(p.expr, cb)
-
-
-def walk_tasks(tl, cb) -> None:
-    if isinstance(tl, S.TaskAtom):
-        walk_term(tl.args, cb)
-    else:
-        for x in tl.items:
-            walk_tasks(x, cb)
-
-
-def walk_effects(eff: S.Effects, cb) -> None:
-    if eff.var is not None:
-        cb(eff.var)
-    for x in eff.items:
-        if isinstance(x, S.Protection):
-            walk_expr(x.atom, cb)
-        elif isinstance(x, S.EffectForAll):
-            walk_expr(x.cond, cb)
-            for a in x.atoms:
-                walk_expr(a, cb)
-            for v in x.vars:
-                cb(v)
-        else:
-            walk_expr(x, cb)
-
-
-def _number_operator(op: S.Operator) -> int:
-    scope: dict = {}
-    cb = lambda v: _index(scope, v)  # noqa: E731
-    walk_term(op.head.args, cb)
-    walk_pre(op.pre, cb)
-    walk_effects(op.delete, cb)
-    walk_effects(op.add, cb)
-    walk_term(op.cost, cb)
-    return len(scope)
-
-
-def _number_method(m: S.Method) -> int:
-    scope: dict = {}
-    cb = lambda v: _index(scope, v)  # noqa: E731
-    walk_term(m.head.args, cb)
-    for b in m.branches:
-        walk_pre(b.pre, cb)
-        walk_tasks(b.tasks, cb)
-    return len(scope)
-
-
-def _number_axiom(ax: S.Axiom) -> int:
-    scope: dict = {}
-    cb = lambda v: _index(scope, v)  # noqa: E731
-    walk_term(ax.head.args, cb)
-    for b in ax.branches:
-        walk_pre(b.pre, cb)
-    return len(scope)
-
-
 # ------------------------------------------------------------ entry points
 
 def parse_jshop2(text: str, file: str = "<string>", functions: FunctionTable | None = None):

@@ -23,6 +23,11 @@ a ``StackOverflowError`` or an ``OutOfMemoryError``):
 """
 from __future__ import annotations
 
+from typing import TYPE_CHECKING, Optional
+
+if TYPE_CHECKING:
+    from .network import Task
+
 DEFAULT_MAX_DEPTH = 250_000
 
 _PAGE = 4096
@@ -78,3 +83,43 @@ class MemoryGuard:
         space, resident = process_memory() or (0, 0)
         return ((self.max_space is not None and space > self.max_space)
                 or (self.max_resident is not None and resident > self.max_resident))
+
+
+class SearchBound:
+    """A bound that stopped the search, and the task being reduced deepest."""
+    __slots__ = ("limit", "task")
+
+    def __init__(self, limit: int, task: Optional[Task]):
+        self.limit = limit
+        self.task = task
+
+    def __str__(self) -> str:
+        if self.task is None:
+            return self.message(None)
+        pos = getattr(self.task.src, "pos", None)
+        return (f"{pos}: " if pos else "") + self.message(self.task)
+
+    def message(self, task) -> str:
+        raise NotImplementedError
+
+
+class DepthLimit(SearchBound):
+    """The search stopped at ``max_depth`` nested reductions without a step."""
+    __slots__ = ()
+
+    def message(self, task) -> str:
+        what = (f"task {task} recurses past the search depth limit" if task is not None
+                else "the search reached its depth limit")
+        return (f"{what} ({self.limit:,} nested reductions without a step); "
+                "search stopped (raise it with --max-depth N)")
+
+
+class MemoryLimit(SearchBound):
+    """Why the search stopped at its memory budget: the plan on the current
+    path needs more memory than the budget, or the search never ends."""
+    __slots__ = ()
+
+    def message(self, task) -> str:
+        at = f" at task {task}" if task is not None else ""
+        return (f"the search used its memory budget ({self.limit >> 20:,} MB){at}; "
+                "search stopped (raise it with --max-memory MB)")

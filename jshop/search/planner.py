@@ -43,7 +43,7 @@ from typing import Iterator, Optional
 from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import PlanningError
 from htn.jshop.language.terms import subst, term_str, variables
-from htn.jshop.logic.compile import head_unifier, substituter, task_list_maker
+from htn.jshop.logic.compile import head_unifier, substituter
 from htn.jshop.logic.engine import Logic
 from htn.jshop.logic.operators import Operators
 from htn.jshop.logic.state import Change, HashedState, State
@@ -51,280 +51,13 @@ from htn.jshop.plans.plan import Plan, Step
 from htn.jshop.plans.tree import snapshot
 
 from .goals import GoalGuard
-from .limits import DEFAULT_MAX_DEPTH, MemoryGuard
+from .limits import DEFAULT_MAX_DEPTH, DepthLimit, MemoryGuard, MemoryLimit
+from .network import (Node, bind_tasks, compile_tasks, deepest_task, first_in_order,
+                      first_tasks, undo_marks)
+from .stats import Stats
 from .loops import LoopCheck
 
 _PLAN = object()
-
-
-class Task:
-    """A task instance in the network: a bound task atom."""
-    __slots__ = ("name", "args", "immediate", "primitive", "src")
-
-    def __init__(self, name, args, immediate, src=None):
-        self.name = name
-        self.args = args
-        self.immediate = immediate
-        self.primitive = name[0] == "!"
-        self.src = src
-
-    def __str__(self) -> str:
-        from htn.jshop.language.terms import atom_str
-        return atom_str(self.name, self.args)
-
-
-class Node:
-    """A task list in the network; atomic while ``subtasks`` is None.
-
-    ``how`` records what reduced an atomic node (for the task tree): a
-    ``(method, branch_index, method_index)`` triple or the plan step's index.
-    """
-    __slots__ = ("task", "subtasks", "ordered", "how", "done", "start", "loop_key")
-
-    def __init__(self, task=None, subtasks=None, ordered=True):
-        self.task = task
-        self.subtasks = subtasks
-        self.ordered = ordered
-        self.how = None
-        self.done = False   # cached: every task below is achieved
-        self.start = 0      # cached: members before this index are achieved
-        self.loop_key = None   # the active task instance it is, see loops.py
-
-
-def compile_tasks(tl):
-    """Compile a task list into ``env -> [Node]`` (its bound subtasks)."""
-    return task_list_maker(tl, Node, Task)
-
-
-def _bind_tasks(tl: S.TaskList, env: list) -> Node:
-    """The node of a task list bound by ``env``, built directly: the
-    problem's task list is bound once, and may be long (compiling it would
-    cost more than it saves)."""
-    return Node(None, [_bind_tasks(x, env) if isinstance(x, S.TaskList)
-                       else Node(Task(x.name, subst(x.args, env), x.immediate, x))
-                       for x in tl.items], tl.ordered)
-
-
-def first_tasks(root: Node, trail: Optional[list] = None, path: Optional[list] = None) -> list:
-    """JSHOP2's ``TaskList.getFirst``, without recursion.
-
-    An ordered list contributes the first tasks of its first non-empty member;
-    an unordered list those of every member; an immediate task, wherever it is
-    met, is then the only option.
-
-    With a ``trail``, what is found achieved is cached for later calls: a
-    member with nothing left is marked ``done``, and a list's ``start`` moves
-    past its achieved leading members. Each change is pushed on the trail; the
-    planner undoes those made below a search frame when it backtracks into it.
-
-    With a ``path`` (an empty list), an ordered network's walk leaves in it
-    where the task found is (see :func:`_first_in_order`); it is emptied if
-    the general way was taken.
-    """
-    if trail is not None and root.ordered:
-        found = _first_in_order(root, trail, path)
-        if found is not None:
-            return found
-    if path:
-        path.clear()
-    return _first_tasks(root, trail)
-
-
-def _first_in_order(root: Node, trail: list, path: Optional[list] = None,
-                    at: Optional[tuple] = None) -> Optional[list]:
-    """:func:`first_tasks` while every list met is ordered (the common case,
-    and all of HDDL): one walk down to the first task left; None when an
-    unordered list is met (the caller then takes the general way).
-
-    ``path`` is left holding the ``(list, index)`` of each ancestor of the
-    task found, its own last. A later walk can resume from there (``at``, the
-    task's own entry popped off ``path``) instead of walking down from the
-    root again: the planner's cursor, which makes a long tail recursion
-    linear rather than quadratic (see ``Planner._first``).
-    """
-    if path is None:
-        path = []
-    node, i = at if at is not None else (root, root.start)
-    while True:
-        subs = node.subtasks
-        n = len(subs)
-        while i < n:
-            child = subs[i]
-            cs = child.subtasks
-            if cs is None:
-                path.append((node, i))
-                return [child]
-            if cs and not child.done:
-                if not child.ordered:
-                    return None
-                path.append((node, i))
-                node, i = child, child.start
-                break
-            if i == node.start:
-                trail.append((node, i))
-                node.start = i + 1
-            i += 1
-        else:
-            if not path:
-                return []
-            node.done = True
-            trail.append(node)
-            node, i = path.pop()
-            i += 1
-
-
-def _first_tasks(root: Node, trail: Optional[list]) -> list:
-    res: list = []
-    stack: list = []       # (list, next member, len(res) on entry) of each ancestor
-    node, i, n0 = root, root.start, 0
-    while True:
-        subs = node.subtasks
-        n = len(subs)
-        down = False
-        while i < n:
-            child = subs[i]
-            i += 1
-            cs = child.subtasks
-            if cs is None:
-                if child.task.immediate:
-                    return [child]
-                res.append(child)
-                if node.ordered:
-                    break
-            elif cs and not child.done:
-                stack.append((node, i, n0))
-                node, i, n0 = child, child.start, len(res)
-                down = True
-                break
-            elif trail is not None and i - 1 == node.start:
-                trail.append((node, i - 1))
-                node.start = i
-        if down:
-            continue
-        # ``node`` is finished: exhausted, or ordered and it gave a task
-        while True:
-            if trail is not None and len(res) == n0 and stack:
-                node.done = True
-                trail.append(node)
-            if not stack:
-                return res
-            node, i, n0 = stack.pop()
-            if not (node.ordered and len(res) != n0):
-                break
-
-
-def _undo_marks(trail: list, mark: int, loops=None) -> None:
-    """Forget what :func:`first_tasks` cached since ``mark``."""
-    while len(trail) > mark:
-        entry = trail.pop()
-        if type(entry) is tuple:
-            entry[0].start = entry[1]
-        else:
-            entry.done = False
-            if loops is not None:
-                loops.reopened(entry)
-
-
-def compat_warning(domain: S.Domain):
-    """The one warning ``--jshop2-compat`` gives for a domain whose method
-    bodies are written ``(:unordered ...)`` (they will run in order), or None."""
-    from htn.jshop.readers.checks import Warning_
-    bodies = [b for ms in domain.methods.values() for m in ms for b in m.branches
-              if not b.tasks.ordered]
-    if not bodies:
-        return None
-    more = f" (and {len(bodies) - 1} more)" if len(bodies) > 1 else ""
-    return Warning_(bodies[0].tasks.pos or bodies[0].pos,
-                    f"--jshop2-compat: this (:unordered ...) method body{more} runs in "
-                    "order, as in JSHOP2 1.0.3; without the option it is unordered")
-
-
-def _deepest_task(root: Node, req: Node) -> Optional[Task]:
-    """The task to name when the search is too deep: the one just reduced, or
-    else the deepest reduced compound task of the network."""
-    if req.task is not None and not req.task.primitive:
-        return req.task
-    best, best_depth = None, -1
-    stack = [(root, 0)]
-    while stack:
-        node, depth = stack.pop()
-        if node.task is not None and node.subtasks is not None and not node.task.primitive:
-            depth += 1
-            if depth > best_depth:
-                best, best_depth = node.task, depth
-        for child in node.subtasks or ():
-            stack.append((child, depth))
-    return best
-
-
-class Stats:
-    __slots__ = ("plans_found", "expansions", "operator_applications",
-                 "backtracks", "started", "elapsed", "timed_out", "interrupted",
-                 "bound")
-
-    def __init__(self):
-        self.plans_found = 0
-        self.expansions = 0
-        self.operator_applications = 0
-        self.backtracks = 0
-        self.started = 0.0
-        self.elapsed = 0.0
-        self.timed_out = False
-        self.interrupted = False
-        self.bound = None      # the SearchBound (depth or memory) that stopped the search
-
-    def as_dict(self) -> dict:
-        return {
-            "plans_found": self.plans_found,
-            "search_ms": round(self.elapsed * 1000, 3),
-            "expansions": self.expansions,
-            "operator_applications": self.operator_applications,
-            "backtracks": self.backtracks,
-            "timed_out": self.timed_out,
-            "interrupted": self.interrupted,
-            "depth_limit_reached": isinstance(self.bound, DepthLimit),
-            "memory_limit_reached": isinstance(self.bound, MemoryLimit),
-        }
-
-
-class SearchBound:
-    """A bound that stopped the search, and the task being reduced deepest."""
-    __slots__ = ("limit", "task")
-
-    def __init__(self, limit: int, task: Optional[Task]):
-        self.limit = limit
-        self.task = task
-
-    def __str__(self) -> str:
-        if self.task is None:
-            return self.message(None)
-        pos = getattr(self.task.src, "pos", None)
-        return (f"{pos}: " if pos else "") + self.message(self.task)
-
-    def message(self, task) -> str:
-        raise NotImplementedError
-
-
-class DepthLimit(SearchBound):
-    """The search stopped at ``max_depth`` nested reductions without a step."""
-    __slots__ = ()
-
-    def message(self, task) -> str:
-        what = (f"task {task} recurses past the search depth limit" if task is not None
-                else "the search reached its depth limit")
-        return (f"{what} ({self.limit:,} nested reductions without a step); "
-                "search stopped (raise it with --max-depth N)")
-
-
-class MemoryLimit(SearchBound):
-    """Why the search stopped at its memory budget: the plan on the current
-    path needs more memory than the budget, or the search never ends."""
-    __slots__ = ()
-
-    def message(self, task) -> str:
-        at = f" at task {task}" if task is not None else ""
-        return (f"the search used its memory budget ({self.limit >> 20:,} MB){at}; "
-                "search stopped (raise it with --max-memory MB)")
 
 
 class Planner:
@@ -381,9 +114,9 @@ class Planner:
             self._methods[m.name] = [(m, head_unifier(m.head.args),
                                       [(pre(b.pre, m.head.args), compile_tasks(b.tasks), True)
                                        for b in m.branches])]
-            self.root = _bind_tasks(S.TaskList([m.head]), [])
+            self.root = bind_tasks(S.TaskList([m.head]), [])
         else:
-            self.root = _bind_tasks(instance.tasks, [None] * nvars)
+            self.root = bind_tasks(instance.tasks, [None] * nvars)
         self._steps: list = []
         self._cost = 0.0
         self._trail: list = []     # nodes marked done, see first_tasks
@@ -446,7 +179,7 @@ class Planner:
                 else:
                     depth = depths[-1] + 1
                     if depth >= max_depth:
-                        stats.bound = DepthLimit(max_depth, _deepest_task(root, req))
+                        stats.bound = DepthLimit(max_depth, deepest_task(root, req))
                         return
                 push(frame(req))
                 dpush(depth)
@@ -459,7 +192,7 @@ class Planner:
                         if guard is None:
                             guard = MemoryGuard(self.max_memory)
                         if guard.exceeded():
-                            stats.bound = MemoryLimit(guard.limit_bytes, _deepest_task(root, req))
+                            stats.bound = MemoryLimit(guard.limit_bytes, deepest_task(root, req))
                             return
         except KeyboardInterrupt:
             stats.interrupted = True
@@ -528,7 +261,7 @@ class Planner:
                             yield root
                             self._cursor_ok = False
                             if len(trail) > mark:
-                                _undo_marks(trail, mark, loops)
+                                undo_marks(trail, mark, loops)
                             steps.pop()
                             self._cost -= cost
                             if type(op.cost) is not float:
@@ -560,7 +293,7 @@ class Planner:
                             yield node
                             self._cursor_ok = False
                             if len(trail) > mark:
-                                _undo_marks(trail, mark, loops)
+                                undo_marks(trail, mark, loops)
                             if node.loop_key is not None:
                                 loops.leave(node)
                             found = True
@@ -585,7 +318,7 @@ class Planner:
         cursor = self._cursor
         if chosen is self.root:
             if self._cursor_ok and cursor:
-                found = _first_in_order(chosen, trail, cursor, cursor.pop())
+                found = first_in_order(chosen, trail, cursor, cursor.pop())
                 if found is not None:
                     return found
             cursor.clear()
@@ -596,7 +329,7 @@ class Planner:
             parent, i = cursor[-1]
             if parent.subtasks[i] is chosen:     # searching inside the task just reduced
                 inner: list = []
-                found = _first_in_order(chosen, trail, inner)
+                found = first_in_order(chosen, trail, inner)
                 if found is not None:
                     cursor.extend(inner)
                     return found

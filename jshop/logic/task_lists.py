@@ -1,0 +1,48 @@
+"""Method bodies bound by generated code: one function per task list of the
+domain, which substitutes a binding into its task atoms inline (the search
+binds a method body each time it reduces a task with it)."""
+from __future__ import annotations
+
+from typing import Callable
+
+from htn.jshop.language.terms import Var
+
+from .caches import cache
+from .compile import flat_args, substituter
+
+
+_TASK_LISTS: dict = cache()
+
+
+def task_list_maker(tl, node: Callable, task: Callable) -> Callable[[list], list]:
+    """``env -> [node]``: the members of a domain's task list bound by
+    ``env``, one function of generated code per list: a task atom becomes
+    ``node(task(name, args, immediate, atom))`` with its arguments substituted
+    inline (as :func:`substituter` does), a nested list ``node(None, members,
+    ordered)`` (its own function, so the code never nests). Cached per list
+    object and node and task constructors."""
+    hit = _TASK_LISTS.get(id(tl))
+    if hit is None or hit[0] is not tl or hit[1] is not node or hit[2] is not task:
+        ns: dict = {"N": node, "T": task}
+        parts = []
+        for i, x in enumerate(tl.items):
+            if hasattr(x, "items"):       # a nested task list
+                ns[f"m{i}"] = task_list_maker(x, node, task)
+                parts.append(f"N(None, m{i}(env), {bool(x.ordered)})")
+                continue
+            ns[f"a{i}"], ns[f"n{i}"] = x, x.name
+            if flat_args(x.args):
+                args = []
+                for j, a in enumerate(x.args):
+                    ns[f"c{i}_{j}"] = a
+                    args.append(f"(env[{a.index}] if env[{a.index}] is not None else c{i}_{j})"
+                                if type(a) is Var else f"c{i}_{j}")
+                bound = "(" + "".join(a + ", " for a in args) + ")"
+            else:
+                ns[f"s{i}"] = substituter(x.args)
+                bound = f"s{i}(env)"
+            parts.append(f"N(T(n{i}, {bound}, {bool(x.immediate)}, a{i}))")
+        src = "def make(env):\n    return [" + "".join(p + ",\n        " for p in parts) + "]"
+        exec(src, ns)
+        hit = _TASK_LISTS[id(tl)] = (tl, node, task, ns["make"])
+    return hit[3]

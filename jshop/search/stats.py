@@ -1,0 +1,35 @@
+"""What a search did: plans found, expansions, operator applications,
+backtracks, time, and what ended it early (``--timeout``, Ctrl-C, a bound)."""
+from __future__ import annotations
+
+from .limits import DepthLimit, MemoryLimit
+
+
+class Stats:
+    __slots__ = ("plans_found", "expansions", "operator_applications",
+                 "backtracks", "started", "elapsed", "timed_out", "interrupted",
+                 "bound")
+
+    def __init__(self):
+        self.plans_found = 0
+        self.expansions = 0
+        self.operator_applications = 0
+        self.backtracks = 0
+        self.started = 0.0
+        self.elapsed = 0.0
+        self.timed_out = False
+        self.interrupted = False
+        self.bound = None      # the SearchBound (depth or memory) that stopped the search
+
+    def as_dict(self) -> dict:
+        return {
+            "plans_found": self.plans_found,
+            "search_ms": round(self.elapsed * 1000, 3),
+            "expansions": self.expansions,
+            "operator_applications": self.operator_applications,
+            "backtracks": self.backtracks,
+            "timed_out": self.timed_out,
+            "interrupted": self.interrupted,
+            "depth_limit_reached": isinstance(self.bound, DepthLimit),
+            "memory_limit_reached": isinstance(self.bound, MemoryLimit),
+        }
