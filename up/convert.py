@@ -31,6 +31,7 @@ from htn.jshop.readers.hddl_model import (ActionDef, EffectCost, HDomain, HProbl
 from htn.jshop.readers.hddl_order import linearise
 
 from .formulas import Expressions, Unsupported, param, var_name
+from .kind import TASK_ORDERS
 
 
 @dataclass
@@ -58,6 +59,7 @@ def convert(problem) -> Conversion:
     if not isinstance(problem, HierarchicalProblem):
         raise Unsupported(f"htn solves hierarchical problems (HierarchicalProblem), not "
                           f"{type(problem).__name__}")
+    _check_problem(problem)
     warnings: list = []
     h = HDomain(problem.name or "unified-planning", file="")
     for t in problem.user_types:
@@ -97,8 +99,35 @@ def convert(problem) -> Conversion:
                   network=net, init=_initial_state(problem),
                   goal=_conjunction(x, problem.goals))
     instance = problem_from_model(hp).instances[0]
+    # problem_from_model leaves the names of the network's subtasks as written,
+    # without the "!" of an action's operator (it does not see the domain)
+    for t in instance.tasks.items:
+        if t.name in h.actions:
+            t.name = "!" + t.name
     methods = {m.branches[0].label: m for ms in domain.methods.values() for m in ms}
     return Conversion(problem, domain, instance, order, orders, methods, warnings)
+
+
+def _check_problem(problem) -> None:
+    """Refuse what the rest of the conversion would not notice."""
+    for what, items in (("timed effects", problem.timed_effects),
+                        ("timed goals", problem.timed_goals),
+                        ("trajectory constraints", problem.trajectory_constraints),
+                        ("state invariants", problem.state_invariants)):
+        if items:
+            raise Unsupported(f"the problem has {what}")
+    defaults = problem.fluents_defaults
+    explicit: dict = {}
+    for fe in problem.explicit_initial_values:
+        explicit[fe.fluent().name] = explicit.get(fe.fluent().name, 0) + 1
+    for f in problem.fluents:
+        if f not in defaults:
+            groundings = 1
+            for p in f.signature:
+                groundings *= len(list(problem.objects(p.type))) if p.type.is_user_type() else 0
+            if explicit.get(f.name, 0) < groundings:
+                raise Unsupported(f"fluent {f.name} has no initial value for some arguments "
+                                  "(and no default)")
 
 
 def _check_action(a) -> None:
@@ -131,6 +160,9 @@ def _network(x: Expressions, tn, owner: str) -> tuple[Network, list]:
         precedences = tn.partial_order()
         if precedences is None:
             raise Unsupported(f"{owner} has temporal constraints; htn orders subtasks only")
+        if "TASK_ORDER_PARTIAL" not in TASK_ORDERS:
+            raise Unsupported(f"{owner} orders its subtasks partially; htn plans with "
+                              "totally ordered subtasks")
         net = Network(list(subs.values()), ordered=False,
                       ordering=[(a, b, None) for a, b in precedences])
     net.constraints = _conjunction(x, tn.non_temporal_constraints())
