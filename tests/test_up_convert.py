@@ -202,3 +202,27 @@ def test_a_sequential_plan_is_not_validated_by_htn():
         with pytest.warns(UserWarning):
             res = v.validate(problem, plan.action_plan)
     assert res.status.name == "UNKNOWN"
+
+
+def test_subtasks_run_in_their_order_not_in_the_order_they_were_added():
+    pb = HierarchicalProblem("order")
+    first, second = InstantaneousAction("first"), InstantaneousAction("second")
+    ready = pb.add_fluent("ready", BoolType(), default_initial_value=False)
+    first.add_effect(ready, True)
+    second.add_precondition(ready)
+    pb.add_action(first)
+    pb.add_action(second)
+    task = pb.add_task("both")
+    m = Method("m_both")
+    m.set_task(task)
+    s2, s1 = m.add_subtask(second, ident="s2"), m.add_subtask(first, ident="s1")
+    m.set_ordered(s1, s2)
+    pb.add_method(m)
+    pb.task_network.add_subtask(task, ident="root")
+    with OneshotPlanner(name="htn") as planner:
+        plan = planner.solve(pb).plan
+    assert [a.action.name for a in plan.action_plan.actions] == ["first", "second"]
+    (mi,) = plan.decomposition.subtasks.values()
+    assert {k: v.action.name for k, v in mi.decomposition.subtasks.items()} == \
+        {"s1": "first", "s2": "second"}
+    assert validate(pb, plan).status.name == "VALID"
