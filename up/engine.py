@@ -148,7 +148,9 @@ class HtnEngine(Engine, OneshotPlannerMixin, PlanValidatorMixin):
         try:
             conv = checked(problem)
         except Unsupported as e:
-            logs.append(LogMessage(LogLevel.ERROR, f"unsupported problem: {e}"))
+            extra = kind.unsupported_features(problem.kind)
+            logs.append(LogMessage(LogLevel.ERROR, f"unsupported problem: {e}" + (
+                f" (features htn does not support: {', '.join(extra)})" if extra else "")))
             return PlanGenerationResult(Status.UNSUPPORTED_PROBLEM, None, self.name,
                                         log_messages=logs)
         logs += [LogMessage(LogLevel.WARNING, w) for w in conv.warnings]
