@@ -22,9 +22,10 @@ Every plan is checked three ways, each letter V (valid), I (invalid) or -:
   in UP's semantics. UP has no validator of its own for hierarchical plans;
 * ``H``: the hierarchical plan (actions and decomposition) with the validator
   UP's factory gives for its kind, htn left out: ``aries-val``; where that
-  does not support the problem's kind, htn's (``htn validate``'s replay and
-  the decomposition check of :mod:`htn.up.check`). The letter is followed by
-  ``a`` or ``h`` for which one;
+  does not support the problem's kind, or gives no answer within
+  ``--validate-timeout`` (it has no time limit of its own), htn's
+  (``htn validate``'s replay and the decomposition check of
+  :mod:`htn.up.check`). The letter is followed by ``a`` or ``h`` for which one;
 * ``F`` (IPC problems): ``htn validate`` of the action sequence against the
   HDDL files as htn's own reader reads them, independent of UP.
 
@@ -120,11 +121,42 @@ def solve(engine: str, problem, timeout: float, repeat: int) -> dict:
             "log": [str(m) for m in (result.log_messages or []) if m.message][:3]}
 
 
-def checks(problem, plan, files) -> tuple[str, list]:
+def _validate(name: str, problem, plan) -> tuple[str, str]:
+    from unified_planning.shortcuts import PlanValidator
+    with PlanValidator(name=name) as v:
+        res = v.validate(problem, plan)
+    return res.status.name, _why(res)
+
+
+def _aries_val(problem, plan, timeout: float) -> tuple:
+    """aries-val's verdict, or (None, why) when it has none within
+    ``timeout`` seconds: it has no time limit of its own, so it runs in a
+    forked process group that is killed then (its server with it)."""
+    import multiprocessing
+    import signal
+    ctx = multiprocessing.get_context("fork")
+    here, there = ctx.Pipe(duplex=False)
+
+    def child():
+        os.setpgrp()
+        there.send(_validate("aries-val", problem, plan))
+    proc = ctx.Process(target=child)
+    proc.start()
+    answer = here.recv() if here.poll(timeout) else None
+    if answer is None:
+        try:
+            os.killpg(proc.pid, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+    proc.join()
+    return answer or (None, f"no answer in {timeout:g} s")
+
+
+def checks(problem, plan, files, validate_timeout: float = 30.0) -> tuple[str, list]:
     """The check letters of a plan (see the module docstring), and why any said invalid."""
     from unified_planning.engines.plan_validator import SequentialPlanValidator
     from unified_planning.shortcuts import PlanValidator
-    notes = []
+    notes: list = []
     seq = SequentialPlanValidator()
     seq.skip_checks = True          # it refuses hierarchical kinds; the actions are flat
     res = seq.validate(problem, plan.action_plan)
@@ -135,11 +167,15 @@ def checks(problem, plan, files) -> tuple[str, list]:
     with PlanValidator(name="aries-val") as v:
         if not (v.supports(problem.kind) and v.supports_plan(plan.kind)):
             name = "htn"
-    with PlanValidator(name=name) as v:
-        res = v.validate(problem, plan)
-    letters += " H" + ("V" if res.status.name == "VALID" else "I") + name[0]
-    if res.status.name != "VALID":
-        notes.append(f"{name}: {_why(res)}")
+    status, why = (_aries_val(problem, plan, validate_timeout) if name == "aries-val"
+                   else _validate("htn", problem, plan))
+    if status is None:              # aries-val gave no answer in time: htn's validator
+        notes.append(f"aries-val: {why}")
+        name = "htn"
+        status, why = _validate("htn", problem, plan)
+    letters += " H" + ("V" if status == "VALID" else "I") + name[0]
+    if status != "VALID":
+        notes.append(f"{name}: {why}")
     if files is not None:
         ok, why = _htn_validate(plan, files)
         letters += " F" + ("V" if ok else "I")
@@ -185,10 +221,13 @@ def engines() -> tuple[list, list]:
               help="Seconds per engine and problem.")
 @click.option("--repeat", type=click.IntRange(min=1), default=1, show_default=True,
               help="Solve each problem this many times; the median time is shown.")
+@click.option("--validate-timeout", type=float, default=20.0, show_default=True,
+              help="Seconds aries-val may take on one plan (it has no limit of its own); "
+                   "without its answer the plan's decomposition is checked by htn's validator.")
 @click.option("--only", default="", help="Problems whose name contains this text.")
 @click.option("--json", "json_path", type=click.Path(dir_okay=False),
               help="Also write the records as JSON.")
-def main(timeout, repeat, only, json_path):
+def main(timeout, repeat, validate_timeout, only, json_path):
     """htn and Aries through unified-planning on UP's hierarchical test cases and the IPC sample."""
     from unified_planning.shortcuts import get_environment
     get_environment().credits_stream = None
@@ -209,7 +248,7 @@ def main(timeout, repeat, only, json_path):
         row = {"problem": name}
         cells = []
         for engine in names:
-            with_engine = _run(engine, problem, files, timeout, repeat)
+            with_engine = _run(engine, problem, files, timeout, repeat, validate_timeout)
             row[engine] = with_engine
             cells.append(_cells(with_engine))
         row["ratio"], row["cpu_ratio"] = _ratio(row, "time"), _ratio(row, "cpu")
@@ -221,14 +260,15 @@ def main(timeout, repeat, only, json_path):
         Path(json_path).write_text(json.dumps(records, indent=1, default=str))
 
 
-def _run(engine, problem, files, timeout, repeat) -> dict:
+def _run(engine, problem, files, timeout, repeat, validate_timeout) -> dict:
     from unified_planning.shortcuts import OneshotPlanner
     with OneshotPlanner(name=engine) as planner:
         if not planner.supports(problem.kind):
             return {"status": "unsupported kind"}
     r = solve(engine, problem, timeout, repeat)
     plan = r.pop("plan")
-    r["checks"], r["notes"] = checks(problem, plan, files) if plan is not None else ("", [])
+    r["checks"], r["notes"] = (checks(problem, plan, files, validate_timeout)
+                               if plan is not None else ("", []))
     return r
 
 
