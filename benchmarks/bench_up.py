@@ -23,7 +23,8 @@ Every plan is checked three ways, each letter V (valid), I (invalid) or -:
 * ``H``: the hierarchical plan (actions and decomposition) with the validator
   UP's factory gives for its kind, htn left out: ``aries-val``; where that
   does not support the problem's kind, or gives no answer within
-  ``--validate-timeout`` (it has no time limit of its own), htn's
+  ``--validate-timeout`` (it has no time limit of its own; its server is
+  then killed) or fails (a plan over gRPC's 4 MB message limit), htn's
   (``htn validate``'s replay and the decomposition check of
   :mod:`htn.up.check`). The letter is followed by ``a`` or ``h`` for which one;
 * ``F`` (IPC problems): ``htn validate`` of the action sequence against the
@@ -130,26 +131,42 @@ def _validate(name: str, problem, plan) -> tuple[str, str]:
 
 def _aries_val(problem, plan, timeout: float) -> tuple:
     """aries-val's verdict, or (None, why) when it has none within
-    ``timeout`` seconds: it has no time limit of its own, so it runs in a
-    forked process group that is killed then (its server with it)."""
-    import multiprocessing
+    ``timeout`` seconds or fails: it has no time limit of its own, so it runs
+    in a thread, and its server (a child process of this one) is killed then."""
     import signal
-    ctx = multiprocessing.get_context("fork")
-    here, there = ctx.Pipe(duplex=False)
+    import threading
+    box: dict = {}
 
-    def child():
-        os.setpgrp()
-        there.send(_validate("aries-val", problem, plan))
-    proc = ctx.Process(target=child)
-    proc.start()
-    answer = here.recv() if here.poll(timeout) else None
-    if answer is None:
+    def run():
         try:
-            os.killpg(proc.pid, signal.SIGKILL)
-        except ProcessLookupError:
-            pass
-    proc.join()
-    return answer or (None, f"no answer in {timeout:g} s")
+            box["answer"] = _validate("aries-val", problem, plan)
+        except Exception as e:        # e.g. a plan over gRPC's 4 MB message limit
+            box["answer"] = (None, f"failed: {type(e).__name__}: "
+                                   f"{str(e).splitlines()[0][:200]}")
+    before = _aries_servers()
+    worker = threading.Thread(target=run, daemon=True)
+    worker.start()
+    worker.join(timeout)
+    if worker.is_alive():
+        for pid in _aries_servers() - before:
+            os.kill(pid, signal.SIGKILL)
+        worker.join(10)
+        return None, f"no answer in {timeout:g} s"
+    return box["answer"]
+
+
+def _aries_servers() -> set:
+    """The pids of this process's Aries server children."""
+    out = set()
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            text = stat.read_text()
+        except OSError:
+            continue
+        name, rest = text[text.index("(") + 1:text.rindex(")")], text[text.rindex(")") + 2:]
+        if name.startswith("up-aries") and int(rest.split()[1]) == os.getpid():
+            out.add(int(stat.parent.name))
+    return out
 
 
 def checks(problem, plan, files, validate_timeout: float = 30.0) -> tuple[str, list]:
