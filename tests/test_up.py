@@ -205,13 +205,14 @@ def test_the_depth_bound_stops_the_search_and_is_logged():
 
 def test_the_timeout_stops_a_long_search():
     started = time.perf_counter()
-    result = solve(chain(30, solvable=False), timeout=0.5)
+    result = solve(chain(30, solvable=False), timeout=1)
     assert result.status == Status.TIMEOUT and result.plan is None
-    assert time.perf_counter() - started < 5
+    assert time.perf_counter() - started < 10
 
 
 def test_optimize_at_the_timeout_returns_the_best_plan_so_far():
-    result = solve(chain(30), timeout=0.5, optimize=True)
+    # the limit counts the conversion too: leave the search some of it on a loaded machine
+    result = solve(chain(30), timeout=3, optimize=True)
     assert result.status == Status.TIMEOUT and result.plan is not None
     assert int(result.metrics["plans_found"]) > 1
 
