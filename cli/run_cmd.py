@@ -29,7 +29,7 @@ RUN_OPTIONS = ("plan_file", "robot_name", "sim", "faults", "seed", "retries", "r
               help="Save a PNG camera image after each action attempt (PyBullet).")
 @click.option("--faults", metavar="KIND=P,...",
               help="Inject faults with these probabilities: slip, nav, detect, moved on "
-                   "PyBullet; effect on the symbolic robot.")
+                   "PyBullet; effect, fail on the symbolic robot.")
 @click.option("--seed", type=int, default=0, show_default=True,
               help="Random seed for faults (same seed, same run).")
 @click.option("--retries", multiple=True, metavar="OPERATOR=N",
@@ -158,7 +158,7 @@ def _run(ctx, signals, plan_file, robot_name, sim, gui, snapshots, faults, seed,
     plan = pf.plans[plan_index - 1]
     steps = plan.steps
     check_steps(dom, steps, plan_file)
-    limits = load_retries(domain)
+    limits = load_retries(domain, dom.operators)
     overrides = parse_overrides(retries)
     unknown = sorted(op for op in overrides if op not in dom.operators)
     if unknown:
@@ -234,12 +234,7 @@ def _run(ctx, signals, plan_file, robot_name, sim, gui, snapshots, faults, seed,
 
 def summary_line(summary) -> str:
     """``aborted: 3 of 8 steps verified, ...; aborted at step 4: (!grasp ...)``."""
-    line = (f"{summary.result}: {summary.verified} of {summary.steps} steps verified, "
-            f"{summary.retries} retries, {summary.replans} replans, "
-            f"{summary.sim_time:.1f} s simulated")
-    if summary.failed_step:
-        line += f"; {summary.result} at step {summary.failed_at}: {summary.failed_step}"
-    return line
+    return summary.line()
 
 
 def _write_dot(root, path: str) -> None:
