@@ -37,10 +37,10 @@ class List_:
 
 @dataclass
 class Suspect:
-    """A parenthesis the layout disagrees with: ``insert`` a ``)`` at an
-    offset (``unclosed`` never closes) or ``remove`` the one at ``at``
-    (``closed`` is the list it closes too early); ``line`` is the first line
-    whose layout shows it."""
+    """A parenthesis the layout disagrees with. ``unclosed``: the list
+    ``opened`` is never closed, the fix inserts a ``)`` at offset ``at``;
+    ``extra``: the ``)`` at ``at`` closes ``opened`` too early, the fix
+    removes it. ``line`` is the first line whose layout shows it."""
     kind: str                          # "unclosed" | "extra"
     at: int                            # offset to insert at, or of the ')' to remove
     opened: List_
@@ -53,9 +53,10 @@ class Suspect:
 
 
 def scan(text: str, upto: Optional[int] = None):
-    """Walk the tokens before offset ``upto``; yields ``(kind, offset, line,
-    col, stack)`` for each '(' / ')' / word (comments skipped), the stack of
-    open lists as it is *before* the token."""
+    """Walk the tokens before offset ``upto``; yields ``(token, offset, line,
+    col, first, stack)`` for each '(' / ')' / word (comments skipped):
+    ``first`` when it is the first token of its line, ``stack`` the lists
+    open *before* it (one list object, updated as the walk goes on)."""
     stack: list[List_] = []
     line, bol = 1, 0
     first_col = None                   # column of the line's first token
