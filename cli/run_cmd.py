@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import contextlib
-import os
 import sys
 
 import click
@@ -238,29 +237,17 @@ def summary_line(summary) -> str:
 
 
 def _write_dot(root, path: str) -> None:
-    """py_trees' DOT export of the tree. Node paths hold ':' (``:call 2``),
-    which pydot would read as a port: it is written as U+2236 (looks alike)."""
-    import py_trees
+    """py_trees' DOT export of the tree, with readable names (executor/bt_dot.py)."""
+    from htn.executor.bt_dot import behaviour_tree_dot
 
     from .output import atomic_write
-    names = {b: b.name for b in root.iterate()}
-    for b in names:
-        b.name = b.name.replace(":", "\u2236")
-    try:
-        text = py_trees.display.dot_tree(root).to_string()
-    finally:
-        for b, name in names.items():
-            b.name = name
     with atomic_write(path, "--bt-dot") as fh:
-        fh.write(text)
+        fh.write(behaviour_tree_dot(root))
 
 
 def _snapshotter(robot, folder):
-    def on_event(rec):
-        if rec["event"] in ("verified", "failed", "aborted") and rec["step"] is not None:
-            name = f"step{rec['step']:02d}_try{rec['attempt'] or 1}_{rec['event']}.png"
-            robot.snapshot(os.path.join(folder, name))
-    return on_event
+    from htn.executor.snapshots import snapshot_listener
+    return snapshot_listener(robot, folder)
 
 
 class _PlainView:
