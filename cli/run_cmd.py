@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import contextlib
-import os
 import sys
 
 import click
@@ -29,7 +28,7 @@ RUN_OPTIONS = ("plan_file", "robot_name", "sim", "faults", "seed", "retries", "r
               help="Save a PNG camera image after each action attempt (PyBullet).")
 @click.option("--faults", metavar="KIND=P,...",
               help="Inject faults with these probabilities: slip, nav, detect, moved on "
-                   "PyBullet; effect on the symbolic robot.")
+                   "PyBullet; effect, fail on the symbolic robot.")
 @click.option("--seed", type=int, default=0, show_default=True,
               help="Random seed for faults (same seed, same run).")
 @click.option("--retries", multiple=True, metavar="OPERATOR=N",
@@ -158,7 +157,7 @@ def _run(ctx, signals, plan_file, robot_name, sim, gui, snapshots, faults, seed,
     plan = pf.plans[plan_index - 1]
     steps = plan.steps
     check_steps(dom, steps, plan_file)
-    limits = load_retries(domain)
+    limits = load_retries(domain, dom.operators)
     overrides = parse_overrides(retries)
     unknown = sorted(op for op in overrides if op not in dom.operators)
     if unknown:
@@ -234,38 +233,21 @@ def _run(ctx, signals, plan_file, robot_name, sim, gui, snapshots, faults, seed,
 
 def summary_line(summary) -> str:
     """``aborted: 3 of 8 steps verified, ...; aborted at step 4: (!grasp ...)``."""
-    line = (f"{summary.result}: {summary.verified} of {summary.steps} steps verified, "
-            f"{summary.retries} retries, {summary.replans} replans, "
-            f"{summary.sim_time:.1f} s simulated")
-    if summary.failed_step:
-        line += f"; {summary.result} at step {summary.failed_at}: {summary.failed_step}"
-    return line
+    return summary.line()
 
 
 def _write_dot(root, path: str) -> None:
-    """py_trees' DOT export of the tree. Node paths hold ':' (``:call 2``),
-    which pydot would read as a port: it is written as U+2236 (looks alike)."""
-    import py_trees
+    """py_trees' DOT export of the tree, with readable names (executor/bt_dot.py)."""
+    from htn.executor.bt_dot import behaviour_tree_dot
 
     from .output import atomic_write
-    names = {b: b.name for b in root.iterate()}
-    for b in names:
-        b.name = b.name.replace(":", "\u2236")
-    try:
-        text = py_trees.display.dot_tree(root).to_string()
-    finally:
-        for b, name in names.items():
-            b.name = name
     with atomic_write(path, "--bt-dot") as fh:
-        fh.write(text)
+        fh.write(behaviour_tree_dot(root))
 
 
 def _snapshotter(robot, folder):
-    def on_event(rec):
-        if rec["event"] in ("verified", "failed", "aborted") and rec["step"] is not None:
-            name = f"step{rec['step']:02d}_try{rec['attempt'] or 1}_{rec['event']}.png"
-            robot.snapshot(os.path.join(folder, name))
-    return on_event
+    from htn.executor.snapshots import snapshot_listener
+    return snapshot_listener(robot, folder)
 
 
 class _PlainView:

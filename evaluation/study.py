@@ -40,7 +40,8 @@ def prepare_study(domain_path: str, problem_path: str, robot: str = "projection"
     default_framework().apply_all_transformations(ws)
     applied = [rule for rule, status, _ in ws.log if status == "applied"]
     plans = {"original": original.steps, "transformed": ws.plan.steps}
-    return Study(domain, instance, plans, load_retries(domain_path), robot, faults), applied
+    return Study(domain, instance, plans, load_retries(domain_path, domain.operators), robot,
+                 faults), applied
 
 
 def batches(runs: int, seed: int, size: int) -> list[list[tuple[int, int]]]:

@@ -1,6 +1,12 @@
 """Execution settings: per-operator retry limits from a TOML file next to the
 domain (``domains/domestic.jshop`` -> ``domains/domestic.toml``), overridable
-on the command line."""
+on the command line (``--retries grasp=3``).
+
+A domain without such a file gets :data:`DEFAULT_RETRIES` for every operator:
+an action whose monitor did not verify it is tried once more before the run
+(or ``--replan``) gives up on it, as a robot operator would. A file states
+its limits itself: an operator it does not name gets no retry.
+"""
 from __future__ import annotations
 
 import os
@@ -13,11 +19,16 @@ def config_path(domain_path: str) -> str:
     return os.path.splitext(domain_path)[0] + ".toml"
 
 
-def load_retries(domain_path: str) -> dict[str, int]:
-    """Retry limits by operator name ('!grasp'); missing file -> no retries."""
+DEFAULT_RETRIES = 1      # per operator, for a domain without a .toml
+
+
+def load_retries(domain_path: str, operators=()) -> dict[str, int]:
+    """Retry limits by operator name ('!grasp'). Without a file beside the
+    domain: :data:`DEFAULT_RETRIES` for each of ``operators`` (names; the
+    internal ``!!`` ones, which are never retried, left out)."""
     path = config_path(domain_path)
     if not os.path.isfile(path):
-        return {}
+        return {op: DEFAULT_RETRIES for op in operators if not op.startswith("!!")}
     try:
         with open(path, "rb") as fh:
             data = tomllib.load(fh)

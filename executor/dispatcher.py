@@ -10,8 +10,10 @@ belief state (the verified effects) and the plan's progress. Internal
 operators (``!!``) are applied to the belief state only.
 
 When an action ends failed or aborted, the robot stops and holds its pose (as
-in the paper). With ``replan=True`` the dispatcher repairs the task tree
-instead (:mod:`htn.executor.repair`) and goes on. :meth:`TaskDispatcher.halt`
+in the paper). With ``replan=True`` the dispatcher repairs instead and goes
+on: first by trying the step again, if its retry limit allows and it still
+applies in the observed state, else by re-planning in the task tree
+(:mod:`htn.executor.repair`). :meth:`TaskDispatcher.halt`
 (Ctrl-C, SIGTERM) stops the tree between two ticks.
 
 Events go to an :class:`~htn.executor.log.EventLog`; ``step`` is the action's
@@ -28,12 +30,12 @@ from py_trees.common import Status
 from htn.jshop.language import syntax as S
 from htn.jshop.search.planner import Planner
 
-from .behaviours import ActionContext, action_subtree
+from .behaviours import ActionContext, action_subtree, out_of_retries, retries_left
 from .log import EventLog
 from .machines import all_of, machine_for
 from .machines.base import carry_predicate
 from .outcome import Outcome
-from .repair import find_repair, graft, observed_instance
+from .repair import find_repair, graft, observed_instance, retry_applies
 from .task_bt import actions, build, flat_tree
 
 STOPPED_BY_USER = "stopped by the user"     # why a run halted, unless told otherwise
@@ -50,9 +52,22 @@ class RunSummary:
     failed_step: Optional[str] = None    # the action that ended the run
     failed_at: Optional[int] = None      # its 1-based step
     executed: int = 0                    # steps started (each once, however many attempts)
+    advice: Optional[str] = None         # what might have saved it (retries used up)
 
     def as_dict(self) -> dict:
         return dict(self.__dict__)
+
+    def line(self) -> str:
+        """``aborted: 3 of 8 steps verified, ...; aborted at step 4: (!grasp ...)``,
+        and the advice, if any."""
+        line = (f"{self.result}: {self.verified} of {self.steps} steps verified, "
+                f"{self.retries} retries, {self.replans} replans, "
+                f"{self.sim_time:.1f} s simulated")
+        if self.failed_step:
+            line += f"; {self.result} at step {self.failed_at}: {self.failed_step}"
+        if self.advice:
+            line += f"; {self.advice}"
+        return line
 
 
 class TaskDispatcher:
@@ -183,7 +198,9 @@ class TaskDispatcher:
                     if self.replan and self.replans < self.max_replans and self._repair(ctx):
                         continue
                     self.robot.hold()
-                    return self._summary(ctx.outcome.value, ctx)
+                    advice = None if ctx.outcome is not Outcome.ABORTED or ctx.preempted \
+                        or retries_left(ctx) else out_of_retries(ctx)
+                    return self._summary(ctx.outcome.value, ctx, advice)
         except KeyboardInterrupt as exc:
             # an interrupt between two ticks (e.g. while repair plans) halts
             # the same way; its message, if any, says why (SIGTERM's does:
@@ -211,19 +228,31 @@ class TaskDispatcher:
         """The plan as executed and repaired: verified steps, then the pending ones."""
         return [c.text for c in self.done] + [a.text for a in actions(self.root) if not a.done]
 
-    def _summary(self, result: str, ctx: Optional[ActionContext] = None) -> RunSummary:
+    def _summary(self, result: str, ctx: Optional[ActionContext] = None,
+                 advice: Optional[str] = None) -> RunSummary:
         pending = sum(1 for a in actions(self.root) if not a.done)
         summary = RunSummary(result, len(self.done) + pending, len(self.done), self.retries,
                              self.replans, round(self.robot.sim_time, 3),
                              ctx.text if ctx else None, self.number(ctx) if ctx else None,
-                             self.started)
+                             self.started, advice)
         self.log.emit(None, None, "summary", None, result, **summary.as_dict())
         return summary
 
     # ------------------------------------------------------------ repair
     def _repair(self, ctx: ActionContext) -> bool:
-        shot = next(b for b in self.root.iterate() if getattr(b, "htn_action", None) is ctx)
+        """Repair after ``ctx`` failed or was aborted: try the step again if
+        its retry limit allows and it still applies in the observed state
+        (with the rest of the plan after it), else re-plan its enclosing tasks."""
         observed = observed_instance(self.domain, self.instance, self.robot)
+        if retries_left(ctx) and ctx.machine is not None and retry_applies(
+                ctx, self.root, self.domain, observed, self.functions):
+            self.retries += 1
+            self.belief = Planner.for_state(self.domain, observed.state, self.functions)
+            self.failed = None
+            self.emit(ctx, "retrying", f"retry {ctx.attempt} of {ctx.limit}, by repair: the "
+                      "step still applies in the observed state")
+            return True
+        shot = next(b for b in self.root.iterate() if getattr(b, "htn_action", None) is ctx)
         repair, tried = find_repair(shot, self.root, self.tree_known, self.domain, observed,
                                     self.instance.tasks, self.functions)
         if repair is None:

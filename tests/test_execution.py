@@ -163,7 +163,9 @@ def test_plain_view_lists_outcomes(tmp_path):
     assert " 1 aborted     (!move_base jenny home_base entrance)" in r.stdout
     last = r.stdout.splitlines()[-1]
     assert last.startswith("aborted: 0 of 5 steps verified, 0 retries, 0 replans, ")
-    assert last.endswith(" s simulated; aborted at step 1: (!move_base jenny home_base entrance)")
+    # and, retries being used up, what would allow more (issue 19)
+    assert last.endswith(" s simulated; aborted at step 1: (!move_base jenny home_base entrance)"
+                         "; no retries for !move_base (--retries move_base=1 allows one)")
 
 
 @pytest.mark.parametrize("args,message", [

@@ -167,7 +167,7 @@ def test_goal_is_checked_on_the_final_state(tmp_path):
 
 @pytest.mark.parametrize("domain,problem,where,message", [
     (DOMAIN.replace("(at ?t ?a) (road ?a ?p))", "(at ?t ?a) (road ?a ?p)"), PROBLEM,
-     "d.hddl:11:5", "unexpected ':ordered-subtasks'; expected '(', ')'"),
+     "d.hddl:10:19", "this '(' is never closed; a ')' at the end of line 10 would close it"),
     (DOMAIN.replace("(road ?a ?p))\n", "(raod ?a ?p))\n"), PROBLEM,
      "d.hddl:10:35", "unknown predicate raod"),
     (DOMAIN.replace("(t1 (go ?t ?a ?p))", "(t1 (go ?t ?p))"), PROBLEM,
@@ -181,7 +181,7 @@ def test_goal_is_checked_on_the_final_state(tmp_path):
     (DOMAIN, PROBLEM.replace("(< t1 t2)", "(< t1 t3)"),
      "p.hddl:4:25", "no subtask is labelled t3"),
     (DOMAIN, PROBLEM.replace("(:init", "(:int"),
-     "p.hddl:5:4", "unexpected ':int'"),
+     "p.hddl:5:4", "unknown keyword ':int'; did you mean :init?"),
 ])
 def test_hddl_errors_name_file_line_col(tmp_path, domain, problem, where, message):
     d, p = _write(tmp_path, domain, problem)
