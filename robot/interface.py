@@ -151,4 +151,10 @@ class Robot:
         pass
 
     def snapshot(self, path: str) -> Optional[str]:
+        """Save a PNG camera image of the world to ``path`` (None: no camera)."""
+        return None
+
+    def camera_frame(self, width: int = 320, height: int = 240) -> Optional[bytes]:
+        """A camera image of the world now, as JPEG bytes (None: no camera).
+        Called between two ticks, in the thread that runs the robot."""
         return None

@@ -21,10 +21,10 @@ import math
 import random
 from typing import Optional
 
-import numpy as np
 
 from .arm import ARM_JOINTS, Arm
 from .base import MobileBase
+from .camera import OverviewCamera
 from .faults import Faults
 from .interface import Check, Robot, SkillResult, check, skill
 from .odometry import Odometry
@@ -39,7 +39,7 @@ PERSON_RADIUS, PERSON_HEIGHT = 0.2, 1.6
 HAND_REACH = 0.7          # a person takes an object within this distance of their axis
 
 
-class PyBulletRobot(Physics, MobileBase, Arm, Perception, Robot):
+class PyBulletRobot(Physics, MobileBase, Arm, Perception, OverviewCamera, Robot):
     """The simulated domestic robot; ``gui=True`` opens a window (needs a display)."""
 
     def __init__(self, world: World, gui: bool = False, faults: Optional[Faults] = None,
@@ -375,22 +375,6 @@ class PyBulletRobot(Physics, MobileBase, Arm, Perception, Robot):
             facts.append(("has", (person, obj)))
         return [(p, tuple(float(a) if isinstance(a, (int, float)) else a for a in args))
                 for p, args in facts]
-
-    # ------------------------------------------------------------ output
-    def snapshot(self, path: str) -> Optional[str]:
-        """Save a PNG from an overview camera following the robot."""
-        p, c = self.p, self.cid
-        x, y, yaw = self.base
-        eye = [x - 2.2 * math.cos(yaw) + 0.8, y - 2.2 * math.sin(yaw) - 0.8, 2.6]
-        view = p.computeViewMatrix(eye, [x + 0.6 * math.cos(yaw), y + 0.6 * math.sin(yaw), 0.5],
-                                   [0, 0, 1], physicsClientId=c)
-        proj = p.computeProjectionMatrixFOV(60, 4 / 3, 0.1, 20, physicsClientId=c)
-        w_, h_, rgb, _, _ = p.getCameraImage(480, 360, view, proj, renderer=p.ER_TINY_RENDERER,
-                                             physicsClientId=c)
-        from PIL import Image
-        arr = np.asarray(rgb, dtype=np.uint8).reshape(h_, w_, 4)[:, :, :3]
-        Image.fromarray(arr).save(path)
-        return path
 
 
 __all__ = ["PyBulletRobot", "Faults", "ARM_JOINTS"]
