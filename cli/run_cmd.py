@@ -242,9 +242,8 @@ def _run(ctx, signals, plan_file, robot_name, sim, gui, snapshots, faults, seed,
         silence_stdout()
     if summary.result == "interrupted":     # log closed, robot disconnected
         interrupt_exit(signals.received, now=True)
-    if viewer:
-        signals.restore()        # Ctrl-C ends the view; the exit code is the run's
-        keep_up(viewer)
+    if viewer:                   # Ctrl-C ends the view; the exit code is the run's
+        keep_up(viewer, listen=signals.restore)
     sys.exit(0 if summary.result == "verified" else 1)
 
 

@@ -52,10 +52,17 @@ def wait_for_page(view) -> None:
     view.wait_for_page()
 
 
-def keep_up(view) -> None:
-    """After the run: the page stays until Ctrl-C (or SIGTERM)."""
-    click.echo(f"view: the run is over; the page stays at {view.url} until Ctrl-C", err=True)
-    _serve_until_interrupted()
+def keep_up(view, listen=None) -> None:
+    """After the run: the page stays until Ctrl-C (or SIGTERM). ``listen``
+    turns those signals on again (they were held off while the run ended)."""
+    try:
+        if listen is not None:
+            listen()
+        click.echo(f"view: the run is over; the page stays at {view.url} until Ctrl-C",
+                   err=True)
+        _serve_until_interrupted()
+    except KeyboardInterrupt:
+        pass
     view.close()
 
 
@@ -107,7 +114,12 @@ def view(log_file, host, port):
         click.echo(f"warning: {warning}", err=True)
     hub = Hub("log", page_records(records), title=title_of(records[0]))
     server = ViewServer(hub, host, port).start()
-    _announce(server.url, host)
-    click.echo(f"view: {len(records)} events of {log_file}; Ctrl-C stops the server", err=True)
-    _serve_until_interrupted()
-    server.close()
+    try:
+        _announce(server.url, host)
+        click.echo(f"view: {len(records)} events of {log_file}; Ctrl-C stops the server",
+                   err=True)
+        _serve_until_interrupted()
+    except KeyboardInterrupt:       # Ctrl-C is how a server stops: not an error
+        pass
+    finally:
+        server.close()

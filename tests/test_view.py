@@ -207,8 +207,9 @@ def test_a_page_that_does_not_read_never_blocks_the_robot_and_loses_no_event():
 
     from htn.view.hub import Hub
     from htn.view.server import ViewServer
-    hub = Hub("live", camera=True)
+    hub = Hub("live")
     server = ViewServer(hub).start()
+    hub.begin([], "a run", camera=True, wall_start=None)
     port, token = server.port, server.token
     try:
         with connect(f"ws://127.0.0.1:{port}/ws?token={token}", open_timeout=10,

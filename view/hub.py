@@ -58,6 +58,8 @@ class Hub:
         self._pages: set = set()
         self._poked = False
         self._closed = False
+        self._texts: dict = {}
+        self.begun = mode != "live"           # a live run's pages wait for begin()
         self.watching = threading.Event()    # set once a page has shown what it got
 
     # ------------------------------------------------------------ the robot's thread
@@ -71,6 +73,13 @@ class Hub:
         self.frames += 1
         self.frame = (self.frames, sim_t, jpeg)
         self._poke()
+
+    def begin(self, records, title: str, camera: bool, wall_start: float) -> None:
+        """A live run's log exists: its first records, and what pages are told first."""
+        self.history.extend(records)
+        self.title, self.camera, self.wall_start = title, camera, wall_start
+        self.begun = True
+        self._poke(force=True)
 
     def close(self) -> None:
         """No more events: the pages' senders end (their pages say the view is closed)."""
@@ -104,6 +113,9 @@ class Hub:
         self._pages.add(page)
         self.pages += 1
         try:
+            while not self.begun and not self._closed:   # the robot is still being built
+                page.wake.clear()
+                await page.wake.wait()
             await send_text(json.dumps(self.hello()))
             while True:
                 page.wake.clear()
@@ -114,6 +126,17 @@ class Hub:
         finally:
             self._pages.discard(page)
             self.pages -= 1
+
+    def _batch_text(self, start: int, batch: list) -> str:
+        """An ``events`` message; a log's (which never changes) is made once for all pages."""
+        key = (start, len(batch))
+        if self.mode == "log" and key in self._texts:
+            return self._texts[key]
+        events = json.dumps(batch)
+        text = f'{{"type": "events", "from": {start}, "sent": {time.time()}, "events": {events}}}'
+        if self.mode == "log":
+            self._texts[key] = text
+        return text
 
     def page_said(self, text: str) -> None:
         """A message from a page: ``{"type": "ready"}`` once it has shown what
@@ -130,8 +153,7 @@ class Hub:
             start = page.sent
             batch = self.history[start:start + BATCH]
             page.sent = start + len(batch)
-            await send_text(json.dumps({"type": "events", "from": start, "sent": time.time(),
-                                        "events": batch}))
+            await send_text(self._batch_text(start, batch))
         frame = self.frame
         if frame is not None and frame[0] != page.frame:
             page.frame = frame[0]

@@ -50,14 +50,13 @@ class RunView:
         the events so far, then each as it is emitted."""
         from htn.robot.interface import Robot
         hub = self.hub
-        hub.wall_start = time.time() - (time.perf_counter() - log.start)
         header = next((r for r in log.events if r["event"] == "header"), None)
-        hub.title = title_of(header) if header else ""
-        hub.history.extend(log.events)
+        camera = type(robot).camera_frame is not Robot.camera_frame
+        hub.begin(list(log.events), title_of(header) if header else "", camera,
+                  time.time() - (time.perf_counter() - log.start))
         log.listeners.append(hub.publish)
-        if type(robot).camera_frame is not Robot.camera_frame:
+        if camera:
             self.robot = robot
-            hub.camera = True
             dispatcher.tick_listeners.append(self._tick)
             log.listeners.append(self._last_frame)
 

@@ -142,7 +142,8 @@ class ViewServer:
         import uvicorn
         config = uvicorn.Config(make_app(self.hub, self.token), log_level="warning",
                                 access_log=False, lifespan="off", ws=_ws_protocol(),
-                                timeout_graceful_shutdown=1, log_config=None)
+                                timeout_graceful_shutdown=1, log_config=None,
+                                ws_per_message_deflate=False)   # loopback: nothing to save
         self._server = uvicorn.Server(config)
         ready = threading.Event()
 

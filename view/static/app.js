@@ -159,7 +159,7 @@
     const ev = history[cursor];
     $("sc-pos").textContent = ev ? `event ${cursor} of ${history.length - 1} · ${ev.event}` +
       (ev.step ? ` · step ${ev.step}` : "") : "";
-    $("sc-play").textContent = playing ? "⏸" : "▶";
+    $("sc-play").textContent = playing ? "‖" : "▶";
     $("sc-last").setAttribute("aria-pressed", follow ? "true" : "false");
   }
 

@@ -14,6 +14,7 @@ class Timeline {
     this.hidden = new Set();
     this.cursor = -1;
     this.listed = 0;
+    this.queue = [];             // chunks of rows still to put in
     this.stick = true;           // following the newest event (scrolled to the bottom)
     this.pending = false;
     el.addEventListener("scroll", () => {
@@ -29,20 +30,37 @@ class Timeline {
   }
 
   add(events, from, sent) {      // events[k] is event number from + k
+    if (events.length <= CHUNK && !this.queue.length) { this.insert(events, from, sent); return; }
+    // many at once (a log, or a page that connects late): the tree is drawn
+    // first, the rows follow in chunks, each in a task of its own
+    for (let k = 0; k < events.length; k += CHUNK) this.queue.push([events.slice(k, k + CHUNK), from + k, sent]);
+    if (this.queue.length === Math.ceil(events.length / CHUNK)) this.drain();
+  }
+
+  drain() {                      // after the next frame is on the screen
+    requestAnimationFrame(() => requestAnimationFrame(() => setTimeout(() => {
+      const [events, from, sent] = this.queue.shift();
+      this.insert(events, from, sent);
+      if (this.queue.length) this.drain();
+    }, 0)));
+  }
+
+  insert(events, from, sent) {
     const now = Date.now();
-    const html = [], added = [];
+    const html = [], added = [], counts = new Map();
     events.forEach((ev, k) => {
       const seq = from + k;
       this.rows[seq] = null;
       if (ev.synthetic) return;
-      const future = seq > this.cursor && this.cursor >= 0 && this.cursorFixed;
-      html.push(rowHtml(ev, seq, now, sent, future, this.hidden.has(ev.event)));
+      const future = this.cursorFixed && seq > this.cursor;
+      html.push(rowHtml(ev, seq, now, sent, future, this.hidden.has(ev.event), seq === this.cursor && this.cursorFixed));
       added.push(seq);
-      this.count(ev.event);
+      counts.set(ev.event, (counts.get(ev.event) || 0) + 1);
     });
     this.el.insertAdjacentHTML("beforeend", html.join(""));
     const rows = this.el.children, first = rows.length - added.length;
     added.forEach((seq, k) => { this.rows[seq] = rows[first + k]; });
+    for (const [kind, n] of counts) this.count(kind, n);
     this.listed += added.length;
     this.countEl.textContent = ` ${this.listed}`;
     this.later();
@@ -62,7 +80,7 @@ class Timeline {
     });
   }
 
-  count(kind) {
+  count(kind, n) {
     let entry = this.kinds.get(kind);
     if (!entry) {
       const label = document.createElement("label");
@@ -77,7 +95,7 @@ class Timeline {
       entry = [0, n];
       this.kinds.set(kind, entry);
     }
-    entry[0] += 1;
+    entry[0] += n;
     entry[1].textContent = entry[0];
   }
 
@@ -103,13 +121,15 @@ class Timeline {
   }
 }
 
-function rowHtml(ev, seq, shown, sent, future, hidden) {
+const CHUNK = 1500;              // rows put into the page in one task, at most
+
+function rowHtml(ev, seq, shown, sent, future, hidden, current) {
   const esc = window.HtnTree.esc;
   const node = ev.node !== undefined && ev.node !== null ? ` data-node="${ev.node}"` : "";
   const head = [ev.step !== null && ev.step !== undefined ? `${ev.step}` : "",
                 ev.event === "fault" ? `${ev.kind}:` : "", ev.action || ""].filter(Boolean).join(" ");
   const detail = detailOf(ev);
-  return `<div class="ev${future ? " future" : ""}" role="listitem" data-seq="${seq}" ` +
+  return `<div class="ev${future ? " future" : ""}${current ? " current" : ""}" role="listitem" data-seq="${seq}" ` +
     `data-kind="${esc(ev.event)}" data-t="${Number(ev.t || 0)}" data-shown="${shown}"` +
     `${sent ? ` data-sent="${sent}"` : ""}${node}${hidden ? " hidden" : ""}>` +
     `<span class="n">#${seq}</span>` +

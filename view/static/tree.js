@@ -108,16 +108,36 @@ class RunModel {
 
   deriveAll() {                      // children before parents
     const order = this.walk();
-    for (let i = order.length - 1; i >= 0; i--) order[i].shown = this.derive(order[i]);
+    for (let i = order.length - 1; i >= 0; i--) {
+      order[i].shown = this.derive(order[i]);
+      this.settle(order[i]);
+    }
   }
 
   deriveUp(node) {                   // the node and its ancestors; returns those that changed
     const changed = [];
     for (let n = node; n; n = this.nodes.get(n.parent)) {
       const s = this.derive(n);
-      if (s !== n.shown || n === node) { n.shown = s; changed.push(n); }
+      const settled = this.settle(n);
+      changed.push(...settled);
+      if (s !== n.shown || n === node || settled.length) { n.shown = s; changed.push(n); }
       else break;
       if (n.parent === null || n.parent === undefined) break;
+    }
+    return changed;
+  }
+
+  settle(node) {                     // a task decomposed into nothing: done once passed
+    const changed = [];
+    let passed = node.shown === "verified";
+    for (let i = node.children.length - 1; i >= 0; i--) {
+      const c = node.children[i];
+      if (c.kind === "task" && !c.children.length && c.method !== undefined && c.method !== null) {
+        const s = passed ? "verified" : "pending";
+        if (c.shown !== s) { c.shown = s; changed.push(c); }
+      } else if (c.shown !== "pending") {
+        passed = true;
+      }
     }
     return changed;
   }
@@ -148,46 +168,62 @@ class TreeView {
     this.model = new RunModel();
     this.rows = new Map();
     this.choice = new Map();      // id -> open, as the user chose
-    this.forced = new Set();      // the running path: always open
+    this.forced = new Set();      // the running path: opened whenever the running action moves
     this.selected = null;
     el.addEventListener("click", e => this.onClick(e));
   }
 
   isOpen(node) {
-    if (this.forced.has(node.id)) return true;
     if (this.choice.has(node.id)) return this.choice.get(node.id);
+    if (this.forced.has(node.id)) return true;
     if (node.replaced !== null) return false;
     return node.depth < 2 || this.model.nodes.size <= 200;
   }
 
-  focus(node) {                   // keep the path to node open
-    this.forced = new Set(this.model.ancestors(node).map(n => n.id));
+  focus(node) {                   // open the path to node (a node new on it opens, even if closed)
+    const path = new Set(this.model.ancestors(node).map(n => n.id));
+    for (const id of path) if (!this.forced.has(id)) this.choice.delete(id);
+    this.forced = path;
   }
 
-  renderAll() {                   // every row, built as one HTML text (fast for thousands)
+  renderAll() {                   // the rows of the open part of the tree, as one HTML text
     const model = this.model;
     model.deriveAll();
     if (model.current) this.focus(model.current);
-    const html = [], order = [];
-    if (model.root) {
-      const stack = [[model.root, true, false]];
-      while (stack.length) {
-        const [n, visible, gone] = stack.pop();
-        const inReplaced = gone || n.replaced !== null;
-        html.push(this.rowHtml(n, inReplaced, !visible));
-        order.push(n);
-        const open = visible && this.isOpen(n);
-        for (let i = n.children.length - 1; i >= 0; i--) stack.push([n.children[i], open, inReplaced]);
-      }
-    }
-    this.el.innerHTML = html.join("");
     this.rows.clear();
-    const rows = this.el.children;
-    for (let i = 0; i < order.length; i++) this.rows.set(order[i].id, rows[i]);
+    this.el.innerHTML = "";
+    if (model.root) this.insertRows(model.root, null);
     if (this.selected !== null && this.rows.has(this.selected)) this.rows.get(this.selected).classList.add("selected");
     const actions = [...model.nodes.values()].filter(n => n.kind === "action").length;
     this.countEl.textContent = `${model.nodes.size} nodes · ${actions} actions` +
       (model.replaced ? ` · ${model.replaced} replaced` : "");
+  }
+
+  insertRows(top, after) {        // rows for top's open subtree (top's own if after is null)
+    const html = [], order = [];
+    const stack = after === null ? [[top, this.inReplaced(top)]] :
+      (this.isOpen(top) ? top.children.map(c => [c, this.inReplaced(c)]).reverse() : []);
+    while (stack.length) {
+      const [n, gone] = stack.pop();
+      html.push(this.rowHtml(n, gone));
+      order.push(n);
+      if (this.isOpen(n)) {
+        for (let i = n.children.length - 1; i >= 0; i--) {
+          const c = n.children[i];
+          stack.push([c, gone || c.replaced !== null]);
+        }
+      }
+    }
+    if (after === null) this.el.insertAdjacentHTML("beforeend", html.join(""));
+    else after.insertAdjacentHTML("afterend", html.join(""));
+    let row = after === null ? this.el.lastElementChild : after.nextElementSibling;
+    if (after === null) for (let i = 1; i < order.length; i++) row = row.previousElementSibling;
+    for (const n of order) { this.rows.set(n.id, row); row = row.nextElementSibling; }
+  }
+
+  inReplaced(n) {
+    for (let a = n; a; a = this.model.nodes.get(a.parent)) if (a.replaced !== null) return true;
+    return false;
   }
 
   parts(n) {                      // what a row shows of a node
@@ -207,7 +243,7 @@ class TreeView {
     return {glyph: n.children.length ? (open ? "▾" : "▸") : "", open, meta, badges};
   }
 
-  rowHtml(n, inReplaced, hidden) {
+  rowHtml(n, inReplaced) {
     const p = this.parts(n);
     const attrs = [`class="node d${Math.min(n.depth, MAX_INDENT)}"`, `data-node="${n.id}"`,
                    `data-kind="${n.kind}"`, `data-depth="${n.depth}"`, `data-status="${n.shown}"`,
@@ -215,7 +251,6 @@ class TreeView {
     if (n.children.length) attrs.push(`aria-expanded="${p.open}"`);
     if (inReplaced) attrs.push("data-replaced");
     if (n.grafted !== null) attrs.push("data-grafted");
-    if (hidden) attrs.push("hidden");
     const deep = n.depth > MAX_INDENT ? `<span class="deep">${n.depth}</span>` : "";
     const badges = p.badges.map(([cls, label, title]) =>
       `<span class="badge ${cls}" title="${esc(title)}">${esc(label)}</span>`).join("");
@@ -266,20 +301,21 @@ class TreeView {
     }
   }
 
-  refreshBelow(node) {            // visibility and toggles of node's subtree
+  refreshBelow(node) {            // node's subtree drawn again, open where it is open
     const row = this.rows.get(node.id);
     if (!row) return;
     this.fill(row, node);
-    const stack = node.children.map(c => [c, !row.hidden && this.isOpen(node)]).reverse();
+    const stack = [...node.children];
     while (stack.length) {
-      const [n, visible] = stack.pop();
+      const n = stack.pop();
       const r = this.rows.get(n.id);
-      if (!r) continue;
-      if (r.hidden !== !visible) r.hidden = !visible;
-      if (n.children.length) this.fill(r, n);
-      const open = visible && this.isOpen(n);
-      for (let i = n.children.length - 1; i >= 0; i--) stack.push([n.children[i], open]);
+      if (!r) continue;                 // not drawn: neither is anything below it
+      r.remove();
+      this.rows.delete(n.id);
+      stack.push(...n.children);
     }
+    this.insertRows(node, row);
+    if (this.selected !== null && this.rows.has(this.selected)) this.rows.get(this.selected).classList.add("selected");
   }
 
   setAll(open) {
@@ -287,12 +323,13 @@ class TreeView {
     if (this.model.root) this.refreshBelow(this.model.root);
   }
 
-  select(id, scroll = true) {
+  select(id, scroll = true) {     // open the way to node id, and mark it
     const node = this.model.nodes.get(id);
     if (!node) return;
-    for (const a of this.model.ancestors(node)) this.choice.set(a.id, true);
-    const top = this.model.ancestors(node).pop();
-    if (top) this.refreshBelow(top);
+    const path = this.model.ancestors(node).reverse();        // the root first
+    const closed = path.find(a => !this.isOpen(a));
+    for (const a of path) this.choice.set(a.id, true);
+    if (closed) this.refreshBelow(closed);
     if (this.selected !== null && this.rows.has(this.selected)) this.rows.get(this.selected).classList.remove("selected");
     this.selected = id;
     const row = this.rows.get(id);
