@@ -154,8 +154,8 @@ class Served:
         return self.proc.returncode, out, "".join(self.err)
 
 
-def plan_file(tmp_path, domain, problem, name="plan.txt"):
-    path = tmp_path / name
+def plan_file(tmp_path, domain, problem):
+    path = tmp_path / f"{problem.stem}.txt"
     r = run_htn("plan", domain, problem, "-o", path)
     assert r.returncode == 0, r.stderr
     return path

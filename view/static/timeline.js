@@ -17,8 +17,11 @@ class Timeline {
     this.queue = [];             // chunks of rows still to put in
     this.stick = true;           // following the newest event (scrolled to the bottom)
     this.pending = false;
+    // a scroll the user makes decides whether the list follows the newest event
+    this.scrolling = false;
     el.addEventListener("scroll", () => {
-      this.stick = el.scrollTop + el.clientHeight >= el.scrollHeight - 30;
+      if (this.scrolling) { this.scrolling = false; return; }
+      this.stick = el.scrollTop + el.clientHeight >= el.scrollHeight - 60;
     }, {passive: true});
     el.addEventListener("click", e => {
       const row = e.target.closest(".ev");
@@ -74,7 +77,8 @@ class Timeline {
       if (this.cursorFixed) {
         const row = this.rows[this.cursor];
         if (row) row.scrollIntoView({block: "nearest"});
-      } else if (this.stick) {
+      } else if (this.stick && this.el.scrollTop + this.el.clientHeight < this.el.scrollHeight) {
+        this.scrolling = true;
         this.el.scrollTop = this.el.scrollHeight;
       }
     });
