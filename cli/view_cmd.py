@@ -15,7 +15,7 @@ import click
 from .extras import require_extra
 
 HOST_HELP = ("Address to serve the view on (default 127.0.0.1: this machine only; any "
-             "other lets other machines reach it, with the token)")
+             "other address lets other machines reach it, with the token, and is warned of)")
 
 
 def view_options(command):
@@ -25,8 +25,7 @@ def view_options(command):
                      help="Watch the run in a browser: serve a live page (task tree, running "
                           "action, camera, events) and print its URL; the page stays up "
                           "after the run until Ctrl-C (the 'view' extra)."),
-        click.option("--view-host", metavar="HOST", default="127.0.0.1", show_default=True,
-                     help=HOST_HELP + "."),
+        click.option("--view-host", metavar="HOST", default="127.0.0.1", help=HOST_HELP + "."),
         click.option("--view-port", metavar="PORT", type=click.IntRange(0, 65535), default=0,
                      help="Port of the view (default: a free one)."),
         click.option("--view-wait", is_flag=True,
@@ -84,7 +83,7 @@ def _serve_until_interrupted() -> None:
 
 @click.command("view")
 @click.argument("log_file", type=click.Path(dir_okay=False))
-@click.option("--host", default="127.0.0.1", show_default=True, metavar="HOST", help=HOST_HELP + ".")
+@click.option("--host", default="127.0.0.1", metavar="HOST", help=HOST_HELP + ".")
 @click.option("--port", type=click.IntRange(0, 65535), default=0, metavar="PORT",
               help="Port to serve on (default: a free one).")
 def view(log_file, host, port):

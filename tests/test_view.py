@@ -266,3 +266,16 @@ def test_view_input_errors_are_one_line(tmp_path):
         assert "Traceback" not in r.stderr
         r = run_htn("view", plan, "--port", port)
     assert r.returncode == 2 and "plan.txt:1:1" in r.stderr, r.stderr
+
+
+def test_only_a_loopback_address_is_served_without_a_warning(capsys):
+    from htn.cli.view_cmd import _announce
+    from htn.view.server import is_loopback
+    assert all(map(is_loopback, ("127.0.0.1", "127.0.0.2", "::1", "localhost")))
+    assert not any(map(is_loopback, ("0.0.0.0", "::", "192.168.1.5", "example.org")))
+    _announce("http://127.0.0.1:1/?token=t", "127.0.0.1")
+    assert capsys.readouterr().err == "view: http://127.0.0.1:1/?token=t\n"
+    _announce("http://host:1/?token=t", "0.0.0.0")
+    err = capsys.readouterr().err.splitlines()
+    assert err[0].startswith("warning: the view is served on 0.0.0.0, reachable from other")
+    assert err[1] == "view: http://host:1/?token=t"
