@@ -8,6 +8,7 @@ One import package. Its parts are the repository's top-level folders:
 * :mod:`htn.robot` - robot back ends: PyBullet (``sim`` extra), projection, symbolic;
 * :mod:`htn.transform` - plan transformations over task trees;
 * :mod:`htn.evaluation` - their evaluation over many runs (``eval`` extra);
+* :mod:`htn.view` - the browser view of a run or a log (``view`` extra);
 * :mod:`htn.api` - the use cases, one function each (what the command line calls);
 * :mod:`htn.cli` - the ``htn`` command line (also ``python -m htn``).
 
@@ -22,6 +23,7 @@ EXAMPLES = Path(__file__).resolve().parent
 EXTRAS = {
     "sim": ("pybullet", "numpy", "PIL"),       # PyBullet robots, snapshots
     "eval": ("scipy", "matplotlib", "distributed"),   # htn evaluate: statistics, plots, Dask
+    "view": ("starlette", "uvicorn", "websockets"),   # htn run --view, htn view: the browser view
 }
 
 

@@ -62,7 +62,8 @@ def _register():
     from .stats_cmd import stats
     from .transform_cmd import transform
     from .validate_cmd import validate
-    for command in (plan, run, validate, stats, transform, evaluate, examples):
+    from .view_cmd import view
+    for command in (plan, run, validate, stats, transform, evaluate, examples, view):
         cli.add_command(command)
 
 

@@ -12,6 +12,7 @@ from .extras import require_robot_extra
 from .output import check_output_file, check_output_folder, make_output_folder, stdout_is_terminal
 from .run_checks import check_display
 from .signals import Signals, held, interrupt_exit, silence_stdout
+from .view_cmd import keep_up, start_run_view, view_options, wait_for_page
 
 RUN_OPTIONS = ("plan_file", "robot_name", "sim", "faults", "seed", "retries", "replan",
                "plan_index", "domain", "problem", "functions")
@@ -54,9 +55,11 @@ RUN_OPTIONS = ("plan_file", "robot_name", "sim", "faults", "seed", "retries", "r
               help="Write the behaviour tree (py_trees' DOT export) before the run, and "
                    "again after it if it was repaired.")
 @click.option("-q", "--quiet", is_flag=True, help="Print only the summary.")
+@view_options
 @click.pass_context
 def run(ctx, plan_file, robot_name, sim, gui, snapshots, faults, seed, retries, replan,
-        log_path, from_log, plan_index, domain, problem, functions, bt_dot, quiet):
+        log_path, from_log, plan_index, domain, problem, functions, bt_dot, quiet,
+        view, view_host, view_port, view_wait):
     """Execute PLAN_FILE (written by 'htn plan -o') with per-action monitoring.
 
     The plan's task tree runs as a behaviour tree (py_trees) of the same
@@ -84,11 +87,15 @@ def run(ctx, plan_file, robot_name, sim, gui, snapshots, faults, seed, retries, 
       htn run --from-log run.jsonl          # the same run again
       htn run plan.txt --sim --faults moved=1 --replan
       htn run plan.txt --robot symbolic --faults effect=0.2
+      htn run plan.txt --sim --view          # watch it in a browser (prints the URL)
     """
+    if view_wait and not view:
+        raise click.UsageError("--view-wait waits for the page of --view: give --view too")
     signals = Signals()
     try:
         _run(ctx, signals, plan_file, robot_name, sim, gui, snapshots, faults, seed, retries,
-             replan, log_path, from_log, plan_index, domain, problem, functions, bt_dot, quiet)
+             replan, log_path, from_log, plan_index, domain, problem, functions, bt_dot, quiet,
+             web=(view_host, view_port, view_wait) if view else None)
     except KeyboardInterrupt as exc:        # before the robot runs: nothing to stop
         interrupt_exit(exc, now=True)       # now: PyBullet may have been interrupted
     finally:
@@ -96,7 +103,8 @@ def run(ctx, plan_file, robot_name, sim, gui, snapshots, faults, seed, retries, 
 
 
 def _run(ctx, signals, plan_file, robot_name, sim, gui, snapshots, faults, seed, retries,
-         replan, log_path, from_log, plan_index, domain, problem, functions, bt_dot, quiet):
+         replan, log_path, from_log, plan_index, domain, problem, functions, bt_dot, quiet,
+         web=None):
     from htn.executor.config import load_retries, parse_overrides
     from htn.executor.dispatcher import TaskDispatcher
     from htn.executor.log import EventLog, check_plan_digest, read_header, run_header
@@ -167,6 +175,7 @@ def _run(ctx, signals, plan_file, robot_name, sim, gui, snapshots, faults, seed,
     check_runnable(dom, instance, plan, plan_file, table)
     tree = recover_tree(dom, instance, steps, table, tasks=pf.notes.get("tasks", (None,))[0])
 
+    viewer = start_run_view(web[0], web[1]) if web else None    # a port in use: input error
     robot = make_robot(robot_name, RobotRequest(dom, instance, faults or "", seed, gui, table))
     log = dispatcher = None
     try:
@@ -200,6 +209,10 @@ def _run(ctx, signals, plan_file, robot_name, sim, gui, snapshots, faults, seed,
             log.listeners.append(view.event)
         if snapshots:
             log.listeners.append(_snapshotter(robot, snapshots))
+        if viewer:
+            viewer.attach(log, dispatcher, robot)
+            if web[2]:
+                wait_for_page(viewer)
         signals.watch(dispatcher)
         with view or contextlib.nullcontext():
             summary = dispatcher.run()
@@ -228,6 +241,8 @@ def _run(ctx, signals, plan_file, robot_name, sim, gui, snapshots, faults, seed,
         silence_stdout()
     if summary.result == "interrupted":     # log closed, robot disconnected
         interrupt_exit(signals.received, now=True)
+    if viewer:                   # Ctrl-C ends the view; the exit code is the run's
+        keep_up(viewer, listen=signals.restore)
     sys.exit(0 if summary.result == "verified" else 1)
 
 

@@ -148,7 +148,7 @@ class LiveTreeView:
 
     def event(self, rec) -> None:
         d = self.dispatcher()
-        if d is None or rec["event"] in ("header", "summary"):
+        if d is None or rec["event"] in ("header", "summary", "tree"):
             return
         ctx = d.running
         if ctx is not None and rec["event"] not in ("feedback",):

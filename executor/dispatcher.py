@@ -37,6 +37,7 @@ from .machines.base import carry_predicate
 from .outcome import Outcome
 from .repair import find_repair, graft, observed_instance, retry_applies
 from .task_bt import actions, build, flat_tree
+from .tree_events import NodeNumbers, tree_detail, tree_nodes
 
 STOPPED_BY_USER = "stopped by the user"     # why a run halted, unless told otherwise
 
@@ -101,7 +102,11 @@ class TaskDispatcher:
         self.carry = carry_predicate(domain.name)    # the domain's word for carrying
         self.carry_checks = self.carry is not None and "still_held" in robot.check_names()
         steps = list(steps)
-        self.root = build(tree if tree is not None else flat_tree(steps), steps, self._action)
+        tree = tree if tree is not None else flat_tree(steps)
+        self.root = build(tree, steps, self._action)
+        self.nodes = NodeNumbers()          # the task-tree nodes as the log numbers them
+        self.tick_listeners: list = []      # called between two ticks (e.g. a camera view)
+        self._log_tree([tree], None, lambda n: n.step + 1)
 
     # ------------------------------------------------------------ building
     def _action(self, step, node):
@@ -121,8 +126,19 @@ class TaskDispatcher:
 
     def emit(self, ctx: Optional[ActionContext], event: str, detail: str = "", **extra) -> None:
         self._flush_faults()
+        if ctx is not None:
+            extra = {"node": self.nodes.of(ctx.node), **extra}
         self.log.emit(self.number(ctx) if ctx else None, ctx.text if ctx else None, event,
                       ctx.attempt if ctx else None, detail, **extra)
+
+    def _log_tree(self, tops, parent, step_of, replaces=()) -> None:
+        """A ``tree`` event with the nodes of the subtrees ``tops``, each
+        under ``parent`` (see :mod:`htn.executor.tree_events`)."""
+        ctxs = {id(a.node): a for a in actions(self.root)}
+        nodes = [n for top in tops for n in
+                 tree_nodes(top, self.nodes, parent, step_of, lambda n: ctxs.get(id(n)))]
+        self.log.emit(None, None, "tree", None, tree_detail(nodes, len(replaces)),
+                      nodes=nodes, parent=parent, replaces=list(replaces))
 
     def report(self, ctx: ActionContext, ok: bool) -> None:
         """The final outcome of an action (the paper's status report)."""
@@ -168,8 +184,9 @@ class TaskDispatcher:
         for f in self.robot.injected_faults()[self._faults_seen:]:
             self._faults_seen += 1
             ctx = self.running
+            where = {"node": self.nodes.of(ctx.node)} if ctx else {}
             self.log.emit(self.number(ctx) if ctx else None, ctx.text if ctx else None, "fault",
-                          None, f["detail"], kind=f["kind"], sim_t=f["sim_t"])
+                          None, f["detail"], kind=f["kind"], sim_t=f["sim_t"], **where)
 
     # ------------------------------------------------------------ the tick loop
     def halt(self, why: str = "") -> None:
@@ -190,6 +207,8 @@ class TaskDispatcher:
                 finally:
                     self.in_tick = False
                 self._flush_faults()
+                for listener in self.tick_listeners:
+                    listener()
                 status = self.root.status
                 if status == Status.SUCCESS:
                     return self._summary(Outcome.VERIFIED.value)
@@ -262,11 +281,22 @@ class TaskDispatcher:
         self.replans += 1
         self.tree_known = True
         paths = repair.paths
-        graft(repair, self.root, self._action)
+        replaced = [self.nodes.of(_task_node(b)) for b in repair.replaced]
+        holder = self.root if repair.target is self.root else repair.target.parent
+        added = graft(repair, self.root, self._action)
         self.belief = Planner.for_state(self.domain, observed.state, self.functions)
         self.failed = None
         self.emit(ctx, "replanned", f"re-planned {tried[-1]} from the observed state: "
                   f"{len(repair.plan.steps)} new steps", path=repair.path, paths=paths,
                   tasks=repair.tasks, steps=repair.plan.lines(), tried=tried,
                   plan=self.plan_lines())
+        pending = [a for a in actions(self.root) if not a.done]
+        number = {id(a.node): len(self.done) + 1 + k for k, a in enumerate(pending)}
+        self._log_tree([_task_node(b) for b in added], self.nodes.of(holder.htn_task),
+                       lambda n: number.get(id(n)), replaced)
         return True
+
+
+def _task_node(behaviour):
+    """The task-tree node of a task's sequence or of an action subtree."""
+    return behaviour.htn_task if hasattr(behaviour, "htn_task") else behaviour.htn_action.node

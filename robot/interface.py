@@ -171,3 +171,8 @@ class Robot:
         """Save a picture of the world as PNG at ``path``, with ``label``
         drawn on it; the path, or None for a robot without a camera."""
         return None
+
+    def camera_frame(self, width: int = 320, height: int = 240) -> Optional[bytes]:
+        """A camera image of the world now, as JPEG bytes (None: no camera).
+        Called between two ticks, in the thread that runs the robot."""
+        return None

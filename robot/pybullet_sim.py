@@ -24,11 +24,11 @@ from typing import Optional
 
 from .arm import ARM_JOINTS, Arm
 from .base import MobileBase
+from .camera import OverviewCamera
 from .drive import XY_TOL
 from .faults import Faults
 from .interface import Check, Robot, SkillResult, check, skill
 from .odometry import Odometry
-from .overview_camera import OverviewCamera
 from .perception import Perception
 from .physics import Physics, quiet_fds, yaw_quat
 from .world import World

@@ -43,7 +43,7 @@ def _tone_pixels(image, tone, box) -> int:
 def test_snapshots_are_large_and_say_what_they_show(faulty_run):
     from PIL import Image
 
-    from htn.robot.overview_camera import BAND, TONE
+    from htn.robot.camera import BAND, TONE
     shots, events = faulty_run
     names = sorted(p.name for p in shots.iterdir())
     outcomes = [(e["step"], e["attempt"], e["event"]) for e in events

@@ -13,7 +13,7 @@ from unified_planning.model.htn import HierarchicalProblem, Method  # noqa: E402
 from unified_planning.plans import ActionInstance, SequentialPlan  # noqa: E402
 from unified_planning.plans.hierarchical_plan import (Decomposition, HierarchicalPlan,  # noqa: E402
                                                       MethodInstance)
-from unified_planning.shortcuts import (And, BoolType, Equals, Exists, Fluent, Forall,  # noqa: E402
+from unified_planning.shortcuts import (And, BoolType, Equals, Exists, Forall,  # noqa: E402
                                         Implies, InstantaneousAction, Not, OneshotPlanner,
                                         PlanValidator, UserType, Variable, get_environment)
 

@@ -1,14 +1,19 @@
-"""The overview camera of the simulated robots: labelled snapshots (``--snapshots``).
+"""The overview camera of the PyBullet robots: a view of the world from behind
+and above the robot, following it.
 
-A camera behind and above the base, following it, renders the scene (PyBullet's
-tiny renderer, which needs no display) at :data:`SIZE`; a caption band along
-the bottom says what the picture shows: the step and its action, the
-attempt, its outcome (coloured: verified green, aborted or failed red) and
-the simulated time, then the monitor's detail. An aborted attempt and a
-verified one no longer look alike.
+:meth:`OverviewCamera.snapshot` saves it as a labelled PNG (``htn run
+--snapshots``): a caption band along the bottom says what the picture shows,
+the step and its action, the attempt, its outcome (coloured: verified green,
+aborted or failed red) and the simulated time, then the monitor's detail, so
+an aborted attempt and a verified one no longer look alike.
+:meth:`OverviewCamera.camera_frame` renders it into memory as a JPEG (the
+browser view of ``htn run --view``). Both render with PyBullet's CPU
+renderer (no display needed) in the thread that owns the simulation: call
+them between two ticks, never from another thread.
 """
 from __future__ import annotations
 
+import io
 import math
 from typing import Optional
 
@@ -25,28 +30,34 @@ FONT_SIZE = 17
 
 
 class OverviewCamera:
-    """Snapshots of the world from behind the robot, captioned."""
+    """A part of a PyBullet robot (needs ``p``, ``cid`` and ``base``)."""
 
-    def snapshot(self, path: str, label: Optional[Caption] = None) -> Optional[str]:
-        """Save a PNG from the overview camera, with ``label`` drawn on it."""
-        from PIL import Image
-        image = Image.fromarray(self._overview())
-        if label is not None:
-            image = _captioned(image, label)
-        image.save(path)
-        return path
-
-    def _overview(self) -> np.ndarray:
+    def _overview_rgb(self, width: int, height: int) -> np.ndarray:
         p, c = self.p, self.cid
         x, y, yaw = self.base
         eye = [x - 2.2 * math.cos(yaw) + 0.8, y - 2.2 * math.sin(yaw) - 0.8, 2.6]
         view = p.computeViewMatrix(eye, [x + 0.6 * math.cos(yaw), y + 0.6 * math.sin(yaw), 0.5],
                                    [0, 0, 1], physicsClientId=c)
-        w, h = SIZE
-        proj = p.computeProjectionMatrixFOV(60, w / h, 0.1, 20, physicsClientId=c)
-        w_, h_, rgb, _, _ = p.getCameraImage(w, h, view, proj, renderer=p.ER_TINY_RENDERER,
-                                             physicsClientId=c)
+        proj = p.computeProjectionMatrixFOV(60, width / height, 0.1, 20, physicsClientId=c)
+        w_, h_, rgb, _, _ = p.getCameraImage(width, height, view, proj,
+                                             renderer=p.ER_TINY_RENDERER, physicsClientId=c)
         return np.asarray(rgb, dtype=np.uint8).reshape(h_, w_, 4)[:, :, :3]
+
+    def snapshot(self, path: str, label: Optional[Caption] = None) -> Optional[str]:
+        """Save a PNG (:data:`SIZE`) from the overview camera, with ``label`` drawn on it."""
+        from PIL import Image
+        image = Image.fromarray(self._overview_rgb(*SIZE))
+        if label is not None:
+            image = _captioned(image, label)
+        image.save(path)
+        return path
+
+    def camera_frame(self, width: int = 320, height: int = 240) -> Optional[bytes]:
+        """The overview camera's image now, as JPEG bytes."""
+        from PIL import Image
+        out = io.BytesIO()
+        Image.fromarray(self._overview_rgb(width, height)).save(out, "JPEG", quality=80)
+        return out.getvalue()
 
 
 def _font(size: int):
