@@ -18,7 +18,8 @@ from unified_planning.exceptions import UPUsageError  # noqa: E402
 from unified_planning.model.htn import HierarchicalProblem, Method  # noqa: E402
 from unified_planning.plans import HierarchicalPlan, PlanKind, SequentialPlan  # noqa: E402
 from unified_planning.shortcuts import (BoolType, Fluent, InstantaneousAction, Not,  # noqa: E402
-                                        OneshotPlanner, PlanValidator, get_all_applicable_engines, get_environment)
+                                        OneshotPlanner, PlanValidator,
+                                        get_all_applicable_engines, get_environment)
 
 from conftest import ROOT  # noqa: E402
 from test_up_cases import REFUSED, SUPPORTED, cases  # noqa: E402
