@@ -50,3 +50,10 @@ def test_the_example_runs_outside_the_checkout_on_the_core_install(tmp_path):
                 "print([m for m in ('pybullet', 'scipy', 'distributed') if u.find_spec(m)])",
                 cwd=work, env=env)
     assert check.stdout.strip() == "[]"
+
+
+def test_the_readme_shows_the_example_as_it_is():
+    readme = (ROOT / "README.md").read_text()
+    block = readme.split("## Python API", 1)[1].split("```python\n", 1)[1].split("```", 1)[0]
+    code = EXAMPLE.read_text()
+    assert code.startswith('"""') and block == code[code.index('"""\n', 3) + 4:].lstrip("\n")
