@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 from typing import Callable, Optional
 
 from htn.jshop.language.errors import HtnError
+from htn.jshop.readers.load import check_domain_name, load_domain, load_problem
 
 from .extras import require_extra, require_robot_extra
 from .files import check_output_file, check_output_folder, make_output_folder
@@ -93,7 +94,10 @@ def evaluate(problem, *, domain=None, runs: int = 200, seed: int = 0,
     records = None if records is None else os.fspath(records)
     plot = None if plot is None else os.fspath(plot)
     check_evaluation(problem, domain, robot, faults, workers, scheduler, plot, records)
-    domain = domain or domain_for(problem)
+    # each file is read once: the problem names its domain when none is given
+    prob = load_problem(problem)
+    dom = load_domain(domain or domain_for(prob))
+    check_domain_name(dom, prob)
 
     from htn.evaluation.cluster import open_runner
     from htn.evaluation.study import RecordsFile, plot as figures, prepare_study, run_study
@@ -106,7 +110,7 @@ def evaluate(problem, *, domain=None, runs: int = 200, seed: int = 0,
             notes = list(runner.notes)
             if on_start:
                 on_start(runner.workers, notes)
-            study, applied = prepare_study(domain, problem, robot, faults)
+            study, applied = prepare_study(dom, prob, robot, faults)
             stream = RecordsFile(records) if records else None
 
             def batch(new: list) -> None:

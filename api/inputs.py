@@ -12,16 +12,13 @@ Whatever is given as a path is read once, here.
 from __future__ import annotations
 
 import os
-from typing import Optional, Union
+from typing import Optional
 
 from htn.installation import EXAMPLES
 from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import HtnError
 from htn.jshop.language.functions import FunctionTable
 from htn.jshop.readers.load import check_domain_name, load_domain, load_problem
-
-PathLike = Union[str, os.PathLike]
-
 
 def is_path(x) -> bool:
     return isinstance(x, (str, os.PathLike))
@@ -62,12 +59,14 @@ def domain_and_problem(domain, problem, table: FunctionTable) -> tuple[S.Domain,
     return dom, prob
 
 
-def domain_for(problem: PathLike) -> str:
-    """The domain file of a problem file: ``../domains/NAME.jshop`` beside
-    it, ``domains/NAME.jshop`` here, or the bundled one of that name (NAME is
-    the domain the problem names)."""
-    problem = os.fspath(problem)
-    name = load_problem(problem).domain_name
+def domain_for(problem) -> str:
+    """The domain file of a problem (a path or a Problem read from one):
+    ``../domains/NAME.jshop`` beside it, ``domains/NAME.jshop`` here, or the
+    bundled one of that name (NAME is the domain the problem names)."""
+    if is_path(problem):
+        problem = load_problem(os.fspath(problem))
+    name = problem.domain_name
+    problem = problem.file
     for base in (os.path.join(os.path.dirname(os.path.abspath(problem)), "..", "domains"),
                  "domains", str(EXAMPLES / "domains")):
         path = os.path.normpath(os.path.join(base, f"{name}.jshop"))
