@@ -15,8 +15,16 @@ import click
 
 from htn.jshop.language.errors import HtnError
 
+from .evaluate_cmd import evaluate
+from .examples_cmd import examples
 from .output import fail
+from .plan_cmd import plan
+from .run_cmd import run
 from .signals import interrupt_exit, sigterm_as_interrupt, silence_stdout
+from .stats_cmd import stats
+from .transform_cmd import transform
+from .validate_cmd import validate
+from .view_cmd import view
 
 CONTEXT = dict(help_option_names=["-h", "--help"], max_content_width=100)
 
@@ -54,20 +62,8 @@ def cli():
     """
 
 
-def _register():
-    from .evaluate_cmd import evaluate
-    from .examples_cmd import examples
-    from .plan_cmd import plan
-    from .run_cmd import run
-    from .stats_cmd import stats
-    from .transform_cmd import transform
-    from .validate_cmd import validate
-    from .view_cmd import view
-    for command in (plan, run, validate, stats, transform, evaluate, examples, view):
-        cli.add_command(command)
-
-
-_register()
+for command in (plan, run, validate, stats, transform, evaluate, examples, view):
+    cli.add_command(command)
 
 
 def main(argv=None) -> None:

@@ -12,7 +12,7 @@ import time
 
 import click
 
-from .extras import require_extra
+from htn.api.extras import require_extra
 
 HOST_HELP = ("Address to serve the view on (default 127.0.0.1: this machine only; any "
              "other address lets other machines reach it, with the token, and is warned of)")

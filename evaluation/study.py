@@ -26,14 +26,20 @@ from .statistics import Comparison
 BATCHES_PER_WORKER = 4          # at least, to even out batches of uneven length
 
 
-def prepare_study(domain_path: str, problem_path: str, robot: str = "projection",
+def prepare_study(domain_path, problem_path, robot: str = "projection",
                   faults: str = "") -> tuple[Study, list]:
     """Plan the problem, transform the plan with every registered rule, and
-    return the study of both plans with the names of the rules applied."""
+    return the study of both plans with the names of the rules applied. The
+    domain and problem are paths, or a Domain and a Problem already read."""
+    from htn.jshop.language import syntax as S
     from htn.jshop.readers.load import load_inputs
     from htn.transform.framework import Workspace
     from htn.transform.registered import default_framework
-    domain, problem = load_inputs(domain_path, problem_path)
+    if isinstance(domain_path, S.Domain):
+        domain, problem = domain_path, problem_path
+        domain_path = domain.file
+    else:
+        domain, problem = load_inputs(domain_path, problem_path)
     instance = problem.instances[0]
     ws = Workspace.from_problem(domain, instance)
     original = ws.plan

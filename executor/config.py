@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import os
 import tomllib
+from typing import Optional
 
 from htn.jshop.language.errors import HtnError
 
@@ -22,12 +23,13 @@ def config_path(domain_path: str) -> str:
 DEFAULT_RETRIES = 1      # per operator, for a domain without a .toml
 
 
-def load_retries(domain_path: str, operators=()) -> dict[str, int]:
+def load_retries(domain_path: Optional[str], operators=()) -> dict[str, int]:
     """Retry limits by operator name ('!grasp'). Without a file beside the
-    domain: :data:`DEFAULT_RETRIES` for each of ``operators`` (names; the
-    internal ``!!`` ones, which are never retried, left out)."""
-    path = config_path(domain_path)
-    if not os.path.isfile(path):
+    domain (or without a domain file: a domain built in memory):
+    :data:`DEFAULT_RETRIES` for each of ``operators`` (names; the internal
+    ``!!`` ones, which are never retried, left out)."""
+    path = config_path(domain_path) if domain_path else None
+    if path is None or not os.path.isfile(path):
         return {op: DEFAULT_RETRIES for op in operators if not op.startswith("!!")}
     try:
         with open(path, "rb") as fh:

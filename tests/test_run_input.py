@@ -114,17 +114,15 @@ def test_sigterm_halts_the_tree_like_ctrl_c(plan, tmp_path):
     assert out.startswith("interrupted: ")
 
 
-# (push-it ?x) calls a user function. In one process its first call is quick
-# (planning, or recovering the task tree before the run); the second one is
-# repair planning, between two ticks: it leaves a marker and takes long.
+# (push-it ?x) calls a user function. Once the test arms it (after planning:
+# the run executes the plan file's task tree without planning again), its
+# next call is repair planning, between two ticks: it leaves a marker and
+# takes long.
 PUSHING = """(defdomain pushing ((:operator (!push ?x) () () ((pushed ?x)))
   (:method (push-it ?x) ((call slow ?x)) ((!push ?x)))))"""
-SLOW_SECOND = """import time
-calls = 0
+SLOW_WHEN_ARMED = """import os, time
 def slow(x):
-    global calls
-    calls += 1
-    if calls > 1:
+    if os.path.exists(__file__ + ".armed"):
         open(__file__ + ".repairing", "w").close()
         time.sleep(30)
     return 1
@@ -135,9 +133,10 @@ def test_sigterm_while_repair_plans_between_ticks_is_logged_as_sigterm(tmp_path)
     domain, problem, fns = tmp_path / "d.jshop", tmp_path / "p.jshop", tmp_path / "slow.py"
     domain.write_text(PUSHING)
     problem.write_text("(defproblem one pushing () ((push-it box)))")
-    fns.write_text(SLOW_SECOND)
+    fns.write_text(SLOW_WHEN_ARMED)
     plan, log = tmp_path / "plan.txt", tmp_path / "run.jsonl"
     assert run_htn("plan", domain, problem, "--functions", fns, "-o", plan).returncode == 0
+    (tmp_path / "slow.py.armed").touch()
     # the push never has its effect: aborted, retried once (the default for a
     # domain without a .toml) and aborted again; then repair re-plans (push-it box)
     proc = start_htn("run", plan, "--robot", "symbolic", "--faults", "effect=1", "--replan",

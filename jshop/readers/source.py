@@ -21,6 +21,12 @@ def read_source(path: str) -> str:
             data = fh.read()
     except OSError as exc:
         raise HtnError(f"cannot read: {exc.strerror}", path)
+    return decode_source(data, path)
+
+
+def decode_source(data: bytes, path: str) -> str:
+    """The text of a file's bytes, as :func:`read_source` reads it (for a
+    reader that also needs the bytes, e.g. to take their SHA-256)."""
     try:
         return data.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
