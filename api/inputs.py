@@ -7,18 +7,23 @@ A domain is a path (``str`` or ``os.PathLike``) or a
 :class:`~htn.jshop.language.functions.FunctionTable`, or None. The JSHOP2
 reader resolves calls while it reads, so a domain or problem passed as an
 object must have been read with the same functions that are passed here.
-Whatever is given as a path is read once, here.
+Whatever is given as a path is read once, here, and every pair of a domain
+and a problem gets the one static check
+(:func:`htn.jshop.readers.checks.check_inputs`), so each use case accepts or
+refuses the same input the same way, with the same located message.
 """
 from __future__ import annotations
 
 import os
+from dataclasses import dataclass, field
 from typing import Optional
 
 from htn.installation import EXAMPLES
 from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import HtnError
 from htn.jshop.language.functions import FunctionTable
-from htn.jshop.readers.load import check_domain_name, load_domain, load_problem
+from htn.jshop.readers.checks import check_inputs
+from htn.jshop.readers.load import load_domain, load_problem
 
 def is_path(x) -> bool:
     return isinstance(x, (str, os.PathLike))
@@ -44,9 +49,27 @@ def function_table(functions) -> FunctionTable:
     return table
 
 
+@dataclass
+class Inputs:
+    """A domain and a problem for it, read and checked; ``warnings`` are the
+    check's located warnings (``file:line:col: warning: ...``)."""
+    domain: S.Domain
+    problem: S.Problem
+    warnings: list = field(default_factory=list)
+
+
 def domain_and_problem(domain, problem, table: FunctionTable) -> tuple[S.Domain, S.Problem]:
-    """The domain and the problem, read if given as paths, and checked to
-    belong together (a problem names its domain: manual 3.12)."""
+    """The domain and the problem, read if given as paths and checked (see
+    :func:`read_inputs`)."""
+    inputs = read_inputs(domain, problem, table)
+    return inputs.domain, inputs.problem
+
+
+def read_inputs(domain, problem, table: FunctionTable) -> Inputs:
+    """The domain and the problem, read if given as paths, and checked: they
+    belong together (a problem names its domain: manual 3.12) and pass the
+    static check every command runs (an :class:`HtnError` at
+    ``file:line:col`` if not)."""
     if domain is None or problem is None:
         raise HtnError("give a domain and a problem")
     dom = load_domain(os.fspath(domain), table) if is_path(domain) else domain
@@ -55,21 +78,32 @@ def domain_and_problem(domain, problem, table: FunctionTable) -> tuple[S.Domain,
         raise HtnError(f"expected a domain (a path or a Domain), got {type(dom).__name__}")
     if not isinstance(prob, S.Problem):
         raise HtnError(f"expected a problem (a path or a Problem), got {type(prob).__name__}")
-    check_domain_name(dom, prob)
-    return dom, prob
+    return Inputs(dom, prob, [str(w) for w in check_inputs(dom, prob)])
 
 
 def domain_for(problem) -> str:
-    """The domain file of a problem (a path or a Problem read from one):
-    ``../domains/NAME.jshop`` beside it, ``domains/NAME.jshop`` here, or the
-    bundled one of that name (NAME is the domain the problem names)."""
+    """The domain file of a problem (a path or a Problem read from one), by
+    the name the problem gives its domain: ``NAME.jshop`` (``NAME.hddl`` or
+    ``domain.hddl`` for an HDDL problem) beside the problem, in
+    ``../domains/`` beside it, in ``domains/`` here, or the bundled one. None
+    found: an input error that names every place looked in."""
     if is_path(problem):
         problem = load_problem(os.fspath(problem))
     name = problem.domain_name
-    problem = problem.file
-    for base in (os.path.join(os.path.dirname(os.path.abspath(problem)), "..", "domains"),
-                 "domains", str(EXAMPLES / "domains")):
-        path = os.path.normpath(os.path.join(base, f"{name}.jshop"))
-        if os.path.isfile(path):
-            return path
-    raise HtnError(f"cannot find the domain file {name}.jshop; give it with --domain", problem)
+    files = [f"{name}.hddl", "domain.hddl"] if problem.language == "hddl" else [f"{name}.jshop"]
+    here = os.path.dirname(os.path.abspath(problem.file))
+    places = [here, os.path.join(here, "..", "domains"), "domains", str(EXAMPLES / "domains")]
+    looked: list = []
+    for base in places:
+        base = os.path.abspath(base)
+        if base in looked:
+            continue
+        looked.append(base)
+        for file in files:
+            path = os.path.join(base, file)
+            if os.path.isfile(path):
+                return path
+    shown = [os.path.join(p, "") for p in looked]
+    raise HtnError(f"cannot find the domain file {' or '.join(files)}: looked in "
+                   f"{', '.join(shown[:-1])} and {shown[-1]}; give it with --domain",
+                   problem.file)

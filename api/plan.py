@@ -13,11 +13,11 @@ import time
 from typing import Iterator, Optional
 
 from htn.jshop.plans.plan import Plan
-from htn.jshop.readers.checks import check_domain, check_problem, compat_warning
+from htn.jshop.readers.checks import compat_warning
 from htn.jshop.search.limits import DEFAULT_MAX_DEPTH
 from htn.jshop.search.planner import Planner
 
-from .inputs import domain_and_problem, function_table, path_of
+from .inputs import function_table, path_of, read_inputs
 
 
 def plan(domain, problem, *, plans: Optional[int] = 1, timeout: Optional[float] = None,
@@ -43,8 +43,8 @@ def plan(domain, problem, *, plans: Optional[int] = 1, timeout: Optional[float] 
     """
     started = time.perf_counter()
     table = function_table(functions)
-    dom, prob = domain_and_problem(domain, problem, table)
-    warnings = [str(w) for w in check_domain(dom) + check_problem(dom, prob)]
+    inputs = read_inputs(domain, problem, table)
+    dom, prob, warnings = inputs.domain, inputs.problem, list(inputs.warnings)
     if jshop2_compat:
         warnings += [str(w) for w in filter(None, [compat_warning(dom)])]
     options = dict(jshop2_compat=jshop2_compat, max_depth=max_depth,

@@ -10,16 +10,15 @@ from __future__ import annotations
 import os
 import statistics
 import time
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Optional
 
 from htn.installation import EXAMPLES
 from htn.jshop.language.errors import HtnError
-from htn.jshop.readers.load import load_domain, load_problem
 from htn.jshop.search.planner import Planner
 
-from .inputs import function_table
+from .inputs import function_table, read_inputs
 
 # the paper's two scenarios, as bundled examples
 SCENARIOS = [("domains/domestic.jshop", "problems/bring_object.jshop"),
@@ -45,9 +44,14 @@ class ScenarioStats:
     methods: int
     operators: int
     timed_out: bool = False
+    # the located warnings of the inputs' check (as htn.plan has them)
+    warnings: list = field(default_factory=list)
 
     def as_dict(self) -> dict:
-        return asdict(self)
+        """The figures (``htn stats --json``), without the warnings."""
+        out = asdict(self)
+        del out["warnings"]
+        return out
 
 
 def bundled_file(rel: str) -> str:
@@ -87,8 +91,8 @@ def scenario_stats(domain_path: str, problem_path: str, functions=None, repeat: 
                    timeout: Optional[float] = None) -> ScenarioStats:
     """Enumerate every plan ``repeat`` times; report the median wall time."""
     functions = function_table(functions)
-    domain = load_domain(domain_path, functions)
-    problem = load_problem(problem_path, functions)
+    inputs = read_inputs(domain_path, problem_path, functions)
+    domain, problem = inputs.domain, inputs.problem
     times = []
     plans: list = []
     timed_out = False
@@ -104,4 +108,5 @@ def scenario_stats(domain_path: str, problem_path: str, functions=None, repeat: 
         domain=domain_path, problem=problem_path, plans=len(plans),
         distinct_plans=len(set(plans)), plan_ms=round(statistics.median(times) * 1000, 3),
         min_length=min((len(p) for p in plans), default=None),
-        methods=domain.n_methods, operators=domain.n_operators, timed_out=timed_out)
+        methods=domain.n_methods, operators=domain.n_operators, timed_out=timed_out,
+        warnings=inputs.warnings)

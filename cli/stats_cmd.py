@@ -38,12 +38,17 @@ def stats(files, repeat, as_json, functions, timeout):
     pairs = scenarios(files)
     table = function_table(functions)
     rows = []
+    shown: set = set()          # a domain's warnings once, however many problems
     for d, p in pairs:
         # --timeout bounds each enumeration; the deadline catches a user
         # function that never returns, which the planner cannot interrupt
         try:
             with deadline(None if timeout is None else timeout * repeat + 1.0):
                 rows.append(scenario_stats(d, p, table, repeat, timeout))
+            for w in rows[-1].warnings:
+                if w not in shown:
+                    shown.add(w)
+                    click.echo(w, err=True)
         except DeadlineExceeded:
             click.echo(f"{p}: --timeout {timeout:g} s ran out inside a user function "
                        "or comparator; no figures", err=True)

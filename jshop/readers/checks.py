@@ -1,4 +1,7 @@
-"""Static checks of a domain and a problem before planning.
+"""Static checks of a domain and a problem: the one check that every command
+reading them runs (``plan``, ``validate``, ``stats``, ``transform``, ``run``,
+``evaluate``: :func:`check_inputs`), so the same input is accepted or refused
+the same way everywhere, with the same located message.
 
 Errors stop planning; warnings point at likely domain bugs but keep JSHOP2's
 behaviour. Where JSHOP2 itself accepts the input we only warn: a task used in
@@ -24,7 +27,6 @@ from htn.jshop.language.errors import HtnError
 from htn.jshop.language.terms import source_atom, variables
 from htn.jshop.language.walk import walk_expr, walk_term
 
-from .load import check_domain_name
 
 
 @dataclass
@@ -47,6 +49,15 @@ def _arities(domain: S.Domain) -> dict[str, set[int]]:
 
 def _describe_task(t: S.TaskAtom) -> str:
     return "primitive task" if t.primitive else "task"
+
+
+def check_inputs(domain: S.Domain, problem: S.Problem) -> list[Warning_]:
+    """The static check of a domain and a problem for it: raise
+    :class:`HtnError` (located) for what no command can use, and return the
+    located warnings (in the domain's order, then the problem's). A problem
+    for another domain is refused first: nothing else about it is known."""
+    check_domain_name(domain, problem)
+    return check_domain(domain) + check_problem(domain, problem)
 
 
 def check_problem(domain: S.Domain, problem: S.Problem) -> list[Warning_]:
@@ -313,3 +324,15 @@ def compat_warning(domain: S.Domain):
     return Warning_(bodies[0].tasks.pos or bodies[0].pos,
                     f"--jshop2-compat: this (:unordered ...) method body{more} runs in "
                     "order, as in JSHOP2 1.0.3; without the option it is unordered")
+
+
+def check_domain_name(domain: S.Domain, problem: S.Problem) -> None:
+    """A problem names its domain (manual 3.12) and JSHOP2 compiles it against
+    that domain only: another domain's problem is an error at the name. An
+    HDDL problem may name another domain (a warning): the IPC 2020 planners
+    do not compare the names, and Barman-BDI's problems name ``barman_htn``
+    while its domain is ``barman_agent``."""
+    if problem.domain_name != domain.name and domain.language != "hddl":
+        raise HtnError.at(problem.domain_pos or problem.pos,
+                          f"problem '{problem.name}' is for domain '{problem.domain_name}', "
+                          f"but {domain.file or 'the domain'} defines '{domain.name}'")

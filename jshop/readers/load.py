@@ -14,6 +14,7 @@ from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import HtnError
 from htn.jshop.language.functions import FunctionTable
 
+from .checks import check_domain_name, check_inputs
 from .jshop2 import parse_jshop2
 from .source import check_nesting, check_not_empty, read_source
 
@@ -65,22 +66,14 @@ def load_problem(path: str, functions: FunctionTable | None = None) -> S.Problem
 
 def load_inputs(domain_path: str, problem_path: str,
                 functions: FunctionTable | None = None) -> tuple[S.Domain, S.Problem]:
-    """Load a domain and a problem for it: every command that reads the pair
-    (``plan``, ``run``, ``validate``, ``transform``, ``evaluate``) goes
-    through here, so each refuses another domain's problem the same way."""
+    """Load a domain and a problem for it, checked together
+    (:func:`htn.jshop.readers.checks.check_inputs`, the check every command
+    runs; its warnings are not returned: :mod:`htn.api.inputs` has them)."""
     dom = load_domain(domain_path, functions)
     prob = load_problem(problem_path, functions)
-    check_domain_name(dom, prob)
+    check_inputs(dom, prob)
     return dom, prob
 
 
-def check_domain_name(domain: S.Domain, problem: S.Problem) -> None:
-    """A problem names its domain (manual 3.12) and JSHOP2 compiles it against
-    that domain only: another domain's problem is an error at the name. An
-    HDDL problem may name another domain (a warning): the IPC 2020 planners
-    do not compare the names, and Barman-BDI's problems name ``barman_htn``
-    while its domain is ``barman_agent``."""
-    if problem.domain_name != domain.name and domain.language != "hddl":
-        raise HtnError.at(problem.domain_pos or problem.pos,
-                          f"problem '{problem.name}' is for domain '{problem.domain_name}', "
-                          f"but {domain.file or 'the domain'} defines '{domain.name}'")
+__all__ = ["is_hddl", "parse_text", "parse_file", "load_domain", "load_problem", "load_inputs",
+           "check_domain_name"]
