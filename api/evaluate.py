@@ -14,11 +14,12 @@ from dataclasses import dataclass, field
 from typing import Callable, Optional
 
 from htn.jshop.language.errors import HtnError
-from htn.jshop.readers.load import check_domain_name, load_domain, load_problem
+from htn.jshop.language.functions import FunctionTable
+from htn.jshop.readers.load import load_problem
 
 from .extras import require_extra, require_robot_extra
 from .files import check_output_file, check_output_folder, make_output_folder
-from .inputs import domain_for
+from .inputs import domain_for, read_inputs
 
 
 @dataclass
@@ -67,18 +68,49 @@ def check_evaluation(problem, domain, robot, faults, workers, scheduler, plot, r
         check_output_file(records, "--records")
 
 
+def check_study(study, log: list, problem: str) -> None:
+    """A study gives a comparison only if a transformation applied to the
+    plan (``log``: the framework's entries; none when no rule's
+    applicability rule found a task) and the robot can execute every step of
+    both plans (an action state machine for each): else an input error at
+    the problem that says why, and what an evaluation needs."""
+    from htn.executor.machines.base import machine_for
+    from htn.transform.registered import default_framework
+    why = []
+    if not log:
+        rules = ", ".join(t.name for t in default_framework().transformations if t.enabled)
+        why.append(f"no registered transformation ({rules}) applies to its plan (the built-in "
+                   "ones rewrite top-level (transporting ...) tasks, as in the kitchen domain; "
+                   "add rules for another domain: entry points 'htn.transformations')")
+    missing: dict = {}
+    for steps in study.plans.values():
+        for s in steps:
+            if not s.internal and machine_for(s.name, study.domain.name) is None:
+                missing.setdefault(s.name)
+    if missing:
+        why.append(f"the {study.robot} robot has no action for {', '.join(missing)} (it runs "
+                   "the bundled domestic and kitchen domains' actions and those of plugins: "
+                   "entry points 'htn.actions'), so its runs would measure nothing")
+    if why:
+        raise HtnError("htn evaluate compares a plan with its transformed plan, but "
+                       + "; and ".join(why), problem)
+
+
 def evaluate(problem, *, domain=None, runs: int = 200, seed: int = 0,
              robot: str = "projection", faults: str = "", workers: Optional[int] = None,
              scheduler: Optional[str] = None, records=None, plot=None,
              on_start: Optional[Callable[[int, list], None]] = None,
-             on_batch: Optional[Callable[[list, float], None]] = None) -> Evaluation:
+             on_batch: Optional[Callable[[list, float], None]] = None,
+             on_warning: Optional[Callable[[str], None]] = None,
+             on_phase: Optional[Callable[[str], None]] = None) -> Evaluation:
     """Plan ``problem`` (a path), transform the plan with every registered
     rule, execute both ``runs`` times and compare navigation, manipulation,
     actions and failures (Welch's t-test; pooled failure proportions with a
     Wilson 95% interval).
 
-    ``domain``: its domain file (default: ``../domains/NAME.jshop`` beside
-    the problem, ``domains/`` here, or the bundled one). ``robot``:
+    ``domain``: its domain file (default: ``NAME.jshop`` beside the
+    problem, in ``../domains/`` beside it, in ``domains/`` here, or the
+    bundled one: :func:`htn.api.inputs.domain_for`). ``robot``:
     ``projection`` or ``pybullet``; ``faults``: failure probabilities
     (``"grasp=0.1"``). ``workers``: processes of a local Dask cluster (None
     or 1: this process); ``scheduler``: the address of an existing cluster.
@@ -86,18 +118,30 @@ def evaluate(problem, *, domain=None, runs: int = 200, seed: int = 0,
     then put in run order); ``plot``: a folder for the figures.
     ``on_start(workers, notes)`` is called once the runner is ready, before
     planning; ``on_batch(records, runs)`` with each batch's new records and
-    the number of runs of every plan they complete. A cluster that cannot
-    complete the runs raises :class:`htn.evaluation.cluster.ClusterError`.
+    the number of runs of every plan they complete; ``on_warning`` with each
+    located warning (the inputs' check, and rewrites all rolled back);
+    ``on_phase`` with a few words as each phase before the runs begins.
+
+    A study that cannot give a comparison is an input error, raised before
+    any run: no registered transformation applies to the plan (the two
+    plans would be the same), or the robot has no action state machine for
+    some of its steps (every run would fail at once, measuring nothing). A
+    cluster that cannot complete the runs raises
+    :class:`htn.evaluation.cluster.ClusterError`.
     """
     problem = os.fspath(problem)
     domain = None if domain is None else os.fspath(domain)
     records = None if records is None else os.fspath(records)
     plot = None if plot is None else os.fspath(plot)
     check_evaluation(problem, domain, robot, faults, workers, scheduler, plot, records)
+    say = on_phase or (lambda text: None)
+    say("reading the problem and its domain")
     # each file is read once: the problem names its domain when none is given
     prob = load_problem(problem)
-    dom = load_domain(domain or domain_for(prob))
-    check_domain_name(dom, prob)
+    inputs = read_inputs(domain or domain_for(prob), prob, FunctionTable())
+    dom = inputs.domain
+    for w in inputs.warnings if on_warning else ():
+        on_warning(w)
 
     from htn.evaluation.cluster import open_runner
     from htn.evaluation.study import RecordsFile, plot as figures, prepare_study, run_study
@@ -110,8 +154,15 @@ def evaluate(problem, *, domain=None, runs: int = 200, seed: int = 0,
             notes = list(runner.notes)
             if on_start:
                 on_start(runner.workers, notes)
-            study, applied = prepare_study(dom, prob, robot, faults)
+            log: list = []
+            study, applied = prepare_study(dom, prob, robot, faults, log=log, on_phase=say)
+            check_study(study, log, problem)
+            if log and not applied and on_warning:
+                on_warning(f"{problem}: warning: every rewrite was rolled back ("
+                           + "; ".join(f"{rule}: {detail}" for rule, _, detail in log)
+                           + "): both plans are the same")
             stream = RecordsFile(records) if records else None
+            say(f"{runs} runs of each plan on the {robot} robot")
 
             def batch(new: list) -> None:
                 if stream:

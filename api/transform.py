@@ -9,14 +9,14 @@ breaks the plan, or costs more on the chosen metric, is rolled back.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Optional
+from typing import Callable, Optional
 
 from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import HtnError
 from htn.jshop.language.terms import source_atom
 from htn.jshop.plans.planfile import header, plan_text
 
-from .inputs import domain_and_problem, function_table, path_of
+from .inputs import function_table, path_of, read_inputs
 
 
 class UnknownRules(HtnError):
@@ -52,14 +52,19 @@ class TransformResult:
                 + f"; tasks: {' '.join(self.tasks)}\n" + plan_text(self.plan))
 
 
-def transform(domain, problem, *, rules=None, metric: str = "navigation",
-              functions=None) -> TransformResult:
+def transform(domain, problem, *, rules=None, metric: str = "navigation", functions=None,
+              on_warning: Optional[Callable[[str], None]] = None,
+              on_phase: Optional[Callable[[str], None]] = None) -> TransformResult:
     """Plan ``problem`` (its first instance), apply the registered
     transformations in priority order (tray > container > both-hands, and any
     plugins'), or only ``rules`` (names, or one comma-separated text), and
     keep each rewrite that keeps the plan valid and does not cost more on
     ``metric`` (``navigation``, ``manipulation``, ``actions``: means over
-    projected runs; ``navigation-static``: distances between area centres)."""
+    projected runs; ``navigation-static``: distances between area centres).
+
+    ``on_warning`` gets each located warning of the inputs' check (as
+    :func:`htn.plan` has them), before planning; ``on_phase`` a few words
+    as each phase begins (planning, each rule's projections), for progress."""
     from htn.transform.framework import METRICS, Workspace
     from htn.transform.registered import default_framework
 
@@ -73,7 +78,12 @@ def transform(domain, problem, *, rules=None, metric: str = "navigation",
         unknown = [r for r in rules if r not in names]
         if unknown:
             raise UnknownRules(unknown, names)
-    dom, prob = domain_and_problem(domain, problem, function_table(functions))
+    say = on_phase or (lambda text: None)
+    inputs = read_inputs(domain, problem, function_table(functions))
+    dom, prob = inputs.domain, inputs.problem
+    for w in inputs.warnings if on_warning else ():
+        on_warning(w)
+    say("planning")
     ws = Workspace.from_problem(dom, prob.instances[0])
     original = ws.plan
     enabled = {t.name: t.enabled for t in fw.transformations}
@@ -81,7 +91,7 @@ def transform(domain, problem, *, rules=None, metric: str = "navigation",
         if rules:
             for t in fw.transformations:
                 t.enabled = t.name in rules
-        fw.apply_all_transformations(ws, metric)
+        fw.apply_all_transformations(ws, metric, on_phase=say)
     finally:          # the registered framework is shared: leave it as it was
         for t in fw.transformations:
             t.enabled = enabled[t.name]

@@ -8,12 +8,14 @@ import os
 import click
 
 from .output import warn
+from .progress import Phase
 
 
 @click.command("evaluate")
 @click.argument("problem", type=click.Path(dir_okay=False))
 @click.option("--domain", type=click.Path(dir_okay=False),
-              help="Domain file [default: ../domains/<domain name>.jshop beside PROBLEM].")
+              help="Domain file [default: <domain name>.jshop beside PROBLEM, in ../domains/ "
+                   "beside it, in ./domains/, or the bundled one].")
 @click.option("--runs", type=click.IntRange(min=1), default=200, show_default=True,
               help="Runs of each plan.")
 @click.option("--seed", type=int, default=0, show_default=True,
@@ -61,22 +63,31 @@ def evaluate(problem, domain, runs, seed, robot, faults, workers, scheduler, rec
     console = Console(stderr=True)
     bar = Progress(console=console, transient=True, disable=not console.is_terminal)
     task = None
+    # what runs before the runs' progress bar (reading, planning, each rule's
+    # projections): a spinner with its name (on a terminal only)
+    phase = Phase("starting")
+    label = f"{robot} runs"
 
     def on_start(n_workers: int, notes: list) -> None:
-        nonlocal task
+        nonlocal label
         for note in notes:
             warn(f"warning: {note}")
-        task = bar.add_task(f"{robot} runs on {n_workers} worker(s)", total=runs)
-        bar.start()
+        label = f"{robot} runs on {n_workers} worker(s)"
 
     def on_batch(new: list, done: float) -> None:
+        nonlocal task
+        if task is None:        # the first runs are in: the bar replaces the spinner
+            phase.end()
+            task = bar.add_task(label, total=runs)
+            bar.start()
         bar.advance(task, done)
 
     try:
-        result = run_evaluation(problem, domain=domain, runs=runs, seed=seed, robot=robot,
-                                faults=faults, workers=workers, scheduler=scheduler,
-                                records=records, plot=plot_dir, on_start=on_start,
-                                on_batch=on_batch)
+        with phase:
+            result = run_evaluation(problem, domain=domain, runs=runs, seed=seed, robot=robot,
+                                    faults=faults, workers=workers, scheduler=scheduler,
+                                    records=records, plot=plot_dir, on_start=on_start,
+                                    on_batch=on_batch, on_warning=warn, on_phase=phase.update)
     except ClusterError as exc:
         raise click.ClickException(str(exc)) from None
     finally:

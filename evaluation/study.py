@@ -26,11 +26,14 @@ from .statistics import Comparison
 BATCHES_PER_WORKER = 4          # at least, to even out batches of uneven length
 
 
-def prepare_study(domain_path, problem_path, robot: str = "projection",
-                  faults: str = "") -> tuple[Study, list]:
+def prepare_study(domain_path, problem_path, robot: str = "projection", faults: str = "",
+                  log: Optional[list] = None,
+                  on_phase: Optional[Callable[[str], None]] = None) -> tuple[Study, list]:
     """Plan the problem, transform the plan with every registered rule, and
     return the study of both plans with the names of the rules applied. The
-    domain and problem are paths, or a Domain and a Problem already read."""
+    domain and problem are paths, or a Domain and a Problem already read.
+    ``log`` (a list) gets the framework's entries ``(rule, status,
+    detail)``; ``on_phase`` a few words as planning and each rule begin."""
     from htn.jshop.language import syntax as S
     from htn.jshop.readers.load import load_inputs
     from htn.transform.framework import Workspace
@@ -41,9 +44,13 @@ def prepare_study(domain_path, problem_path, robot: str = "projection",
     else:
         domain, problem = load_inputs(domain_path, problem_path)
     instance = problem.instances[0]
+    if on_phase:
+        on_phase("planning")
     ws = Workspace.from_problem(domain, instance)
     original = ws.plan
-    default_framework().apply_all_transformations(ws)
+    default_framework().apply_all_transformations(ws, on_phase=on_phase)
+    if log is not None:
+        log.extend(ws.log)
     applied = [rule for rule, status, _ in ws.log if status == "applied"]
     plans = {"original": original.steps, "transformed": ws.plan.steps}
     return Study(domain, instance, plans, load_retries(domain_path, domain.operators), robot,

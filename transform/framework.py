@@ -235,12 +235,15 @@ class Framework:
         raise HtnError(f"{sup.name} before {inf.name} contradicts the other priorities "
                        f"{self.priorities}: they would form a cycle")
 
-    def apply_all_transformations(self, ws: Workspace, metric: str = "navigation") -> Workspace:
+    def apply_all_transformations(self, ws: Workspace, metric: str = "navigation",
+                                  on_phase: Optional[Callable[[str], None]] = None) -> Workspace:
         """Apply every enabled transformation, highest priority first, each as
         often as its rule finds untransformed tasks; keep only those that leave
-        a valid plan that is not costlier on ``metric``."""
+        a valid plan that is not costlier on ``metric``. ``on_phase`` gets a
+        few words as each rule is tried (progress for a caller)."""
         metric_cost = METRICS[metric]
         known: dict = {}      # id(plan) -> (plan, cost): each plan is projected once
+        say = on_phase or (lambda text: None)
 
         def cost(ws, plan):
             if id(plan) not in known:
@@ -249,6 +252,7 @@ class Framework:
         for t in self.transformations:
             if not t.enabled:
                 continue
+            say(f"trying rule {t.name}")
             while True:
                 schemas = self.query(ws, t.rule)
                 if not schemas:
