@@ -14,16 +14,17 @@ with Java's sort algorithm (see :func:`java_sort`).
 """
 from __future__ import annotations
 
-from typing import Callable, Iterator, Optional
+from typing import Callable, Iterator
 
 from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import HtnError, PlanningError
-from htn.jshop.language.terms import (Var, atom_from_term, is_ground, subst, term_str, unify,
-                                      variables)
+from htn.jshop.language.terms import (Var, atom_from_term, is_ground, source_atom, source_str,
+                                      subst, term_str, unify, variables)
 
 from .caches import cache
+from .codegen import described
 from .compile import GENERIC, binder, head_unifier, scanner, term_binder
-from .conjuncts import always
+from .conjuncts import always, arities
 from .java_sort import java_sort
 from .modes import compile_conjunction
 from .scan import scan_atoms
@@ -80,21 +81,29 @@ class Logic:
                 counts[ax.head.args] = counts.get(ax.head.args, 0) + 1
             else:
                 flat = all(type(a) in (str, float, Var) for a in ax.head.args)
-                segments.append((ax, head_unifier(ax.head.args), binder(ax.head.args),
-                                 [self.precondition(b.pre, ax.head.args) for b in ax.branches],
+                head = source_atom(ax.head.pred, ax.head.args)
+                segments.append((ax, head_unifier(ax.head.args, described(
+                                     f"unifier of the axiom head {head}", ax.pos)),
+                                 binder(ax.head.args, described(
+                                     f"binding of the axiom head {head}", ax.pos)),
+                                 [self.precondition(b.pre, ax.head.args,
+                                                    f"precondition of axiom {head} branch {b.label}")
+                                  for b in ax.branches],
                                  flat))
         return segments
 
     # ------------------------------------------------------------ preconditions
-    def precondition(self, pre: S.Precondition, head: tuple = None) -> Sat:
+    def precondition(self, pre: S.Precondition, head: tuple = None, what: str = None) -> Sat:
         """``head``: the arguments of the method's, operator's or axiom's head,
         whose variables are the only ones bound when the precondition is
-        asked (the binding is fresh), so only they decide its binding mode."""
+        asked (the binding is fresh), so only they decide its binding mode.
+        ``what`` names the generated code (``precondition of !grasp``)."""
         e = pre.expr
         if isinstance(e, (S.Atom, S.Not)):   # one literal: compiled as a conjunction of one
             e = _single(e)
-        if head is not None and isinstance(e, S.And) and e.items:
-            sat = compile_conjunction(self, e, head_variables(head))
+        if isinstance(e, S.And) and e.items and (head is not None or what is not None):
+            sat = compile_conjunction(self, e, None if head is None else head_variables(head),
+                                      what)
         else:
             sat = self.expr(e)
         if pre.first:
@@ -197,7 +206,8 @@ class Logic:
         return equal
 
     def _assign(self, e: S.Assign) -> Sat:
-        idx, bind = e.var.index, term_binder(e.term)
+        idx = e.var.index
+        bind = term_binder(e.term, described(f"value of {source_str(e.term)}", e.pos))
 
         def assign(env):
             if env[idx] is not None:  # JSHOP2 merges: an earlier binding wins
@@ -209,7 +219,7 @@ class Logic:
         return assign
 
     def _callexpr(self, e: S.CallExpr) -> Sat:
-        bind = term_binder(e.call)
+        bind = term_binder(e.call, described(f"value of {source_str(e.call)}", e.pos))
 
         def callexpr(env):
             v = bind(env)[1][0]
@@ -235,12 +245,14 @@ class Logic:
         its predicate's atom list and set (the state keeps them for good),
         its axioms, and a cache of scanners per binding key."""
         pred = e.pred
-        return (binder(e.args), self.state.bucket(pred), self.state.members[pred],
-                self._axioms.get(pred), {})
+        shown = source_atom(pred, e.args)
+        return (binder(e.args, described(f"binding of {shown}", e.pos)), self.state.bucket(pred),
+                self.state.members[pred], self._axioms.get(pred),
+                ({}, described(f"atoms matching {shown}", e.pos)))
 
     def _atom(self, e: S.Atom) -> Sat:
         args = e.args
-        bind, lst, members, axioms, scanners = self._lookup(e)
+        bind, lst, members, axioms, (scanners, what) = self._lookup(e)
         prove = self._prove
 
         def atom(env):
@@ -253,7 +265,7 @@ class Logic:
             else:
                 scan = scanners.get(key)
                 if scan is None:
-                    scan = scanners[key] = scanner(args, key)
+                    scan = scanners[key] = scanner(args, key, what)
                 yield from scan(lst, bound, env)
             if axioms:
                 yield from prove(axioms, bound, env, key is None)
@@ -264,7 +276,7 @@ class Logic:
         first satisfier without making generators for it (the most common
         negation, so worth its own code)."""
         args = e.args
-        bind, lst, members, axioms, scanners = self._lookup(e)
+        bind, lst, members, axioms, (scanners, what) = self._lookup(e)
         prove = self._prove
 
         def neg(env):
@@ -278,7 +290,7 @@ class Logic:
             else:
                 scan = scanners.get(key)
                 if scan is None:
-                    scan = scanners[key] = scanner(args, key)
+                    scan = scanners[key] = scanner(args, key, what)
                 if next(scan(lst, bound, env), None) is not None:
                     return
             if axioms and next(prove(axioms, bound, env, key is None), None) is not None:
@@ -359,25 +371,6 @@ class Logic:
                         from None
                 if found:
                     break
-
-
-def arities(domain: S.Domain, state) -> Optional[dict]:
-    """``pred -> {arity}``: the lengths the atoms of each predicate can have
-    in ``state`` from now on (those already there and those of add lists);
-    None when an add list has a variable atom (3.14), which can be anything."""
-    out = {pred: {len(a) for a in lst} for pred, lst in state.atoms.items()}
-    for ops in domain.operators.values():
-        for op in ops:
-            if op.add.var is not None:
-                return None
-            for item in op.add.items:
-                if isinstance(item, S.Protection):
-                    continue         # protects an atom, adds none
-                for a in item.atoms if isinstance(item, S.EffectForAll) else [item]:
-                    if not isinstance(a, S.Atom):
-                        return None
-                    out.setdefault(a.pred, set()).add(len(a.args))
-    return out
 
 
 _SINGLES: dict = cache()

@@ -35,8 +35,10 @@ from typing import Callable
 
 from htn.jshop.language import syntax as S
 from htn.jshop.language.terms import is_ground
+from htn.jshop.language.walk import walk_expr
 
 from .caches import cache
+from .codegen import described, define
 from .compile import conjunction
 from .conjuncts import ATOM, AXIOM, GENERAL, NOT_ATOM, NOT_AXIOM, Literal, flatten
 from .mode_writer import CodeWriter
@@ -48,10 +50,11 @@ _CODE: dict = cache()    # (id(conjunction), mode, sized, entry) -> (conjunction
 _LITERALS: dict = cache()  # id(conjunction) -> (conjunction, conjuncts, _Literals, variables)
 
 
-def compile_conjunction(logic, e: S.And, entry: frozenset = None) -> Callable:
+def compile_conjunction(logic, e: S.And, entry: frozenset = None, what: str = None) -> Callable:
     """``sat(env)`` for the conjunction ``e`` (see the module docstring).
     ``entry``: the only variables that can be bound when it is asked (a
-    precondition's head variables), or None for any."""
+    precondition's head variables), or None for any. ``what`` names the
+    generated code (``precondition of !grasp``; see :mod:`~htn.jshop.logic.codegen`)."""
     hit = _LITERALS.get(id(e))
     if hit is None or hit[0] is not e:     # the same for every planner of the domain
         items = flatten(e.items)
@@ -83,7 +86,8 @@ def compile_conjunction(logic, e: S.And, entry: frozenset = None) -> Callable:
                 met.add(mode)
                 return None
             known = {v for j, v in enumerate(names) if mode >> j & 1}
-            hit = _CODE[key] = (e, CodeWriter(lits, known, sized).factory())
+            hit = _CODE[key] = (e, CodeWriter(lits, known, sized).factory(
+                _mode_name(what, e, known, lits)))
         factory = hit[1]
         f = gen if factory is None else factory(*constants)
         modes[mode] = f
@@ -128,6 +132,15 @@ def _rest(general: list, k: int) -> Callable:
     return rest
 
 
+def _mode_name(what, e: S.And, known: set, lits: list) -> str:
+    """``precondition of !grasp, domestic.jshop:41 (bound: ?r ?o)``."""
+    names: dict = {}
+    for lit in lits:
+        walk_expr(lit.expr, lambda v: names.setdefault(v.index, v.name))
+    bound = " ".join(names.get(v, f"#{v}") for v in sorted(known)) or "none"
+    return f"{described(what or 'conjunction', e.pos)} (bound: {bound})"
+
+
 _ENTRIES: dict = {}
 
 
@@ -157,7 +170,8 @@ def _entry(names: list):
               "        return f(env)",
               "    return sat"]
     ns = {"is_ground": is_ground}
-    exec("\n".join(lines), ns)
+    define("\n".join(lines), f"binding mode of a conjunction over variables "
+           f"{', '.join(map(str, names)) or 'none'}", ns)
     make = _ENTRIES[key] = ns["make"]
     return make
 

@@ -51,9 +51,10 @@ class Node:
         self.loop_key = None   # the active task instance it is, see loops.py
 
 
-def compile_tasks(tl):
-    """Compile a task list into ``env -> [Node]`` (its bound subtasks)."""
-    return task_list_maker(tl, Node, Task)
+def compile_tasks(tl, what: str = "task list"):
+    """Compile a task list into ``env -> [Node]`` (its bound subtasks);
+    ``what`` names the generated code."""
+    return task_list_maker(tl, Node, Task, what)
 
 
 def bind_tasks(tl: S.TaskList, env: list) -> Node:

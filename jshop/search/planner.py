@@ -43,6 +43,7 @@ from typing import Iterator, Optional
 from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import PlanningError
 from htn.jshop.language.terms import subst, term_str, variables
+from htn.jshop.logic.codegen import where
 from htn.jshop.logic.compile import head_unifier, substituter
 from htn.jshop.logic.engine import Logic
 from htn.jshop.logic.operators import Operators
@@ -91,18 +92,11 @@ class Planner:
         if instance.goal is not None:
             self._goal = (self.logic.precondition(instance.goal), instance.goal_nvars)
             self.guard = GoalGuard(domain, instance.goal) or None
-        pre = self.logic.precondition
         # (operator, head unifier, precondition, head substituter, constant cost or None)
-        self._ops = {name: [(op, head_unifier(op.head.args), pre(op.pre, op.head.args),
-                             substituter(op.head.args),
-                             op.cost if type(op.cost) is float else None)
-                            for op in ops]
+        self._ops = {name: [self._operator(op) for op in ops]
                      for name, ops in domain.operators.items()}
-        # (precondition, body, body is ordered) per branch; see the module docstring
-        self._methods = {name: [(m, head_unifier(m.head.args),
-                                 [(pre(b.pre, m.head.args), compile_tasks(b.tasks),
-                                   jshop2_compat or b.tasks.ordered) for b in m.branches])
-                                for m in ms]
+        # (method, head unifier, [(precondition, body, body is ordered)] per branch)
+        self._methods = {name: [self._method(m, jshop2_compat) for m in ms]
                          for name, ms in domain.methods.items()}
         self.stats = Stats()
         # the problem's own variables (if any) stay unbound, like a method's
@@ -111,9 +105,7 @@ class Planner:
         if instance.top is not None:     # HDDL: a root task binds the network's parameters
             from htn.jshop.readers.hddl_domain import top_method
             m = top_method(domain, instance.top)
-            self._methods[m.name] = [(m, head_unifier(m.head.args),
-                                      [(pre(b.pre, m.head.args), compile_tasks(b.tasks), True)
-                                       for b in m.branches])]
+            self._methods[m.name] = [self._method(m, True)]
             self.root = bind_tasks(S.TaskList([m.head]), [])
         else:
             self.root = bind_tasks(instance.tasks, [None] * nvars)
@@ -122,6 +114,21 @@ class Planner:
         self._trail: list = []     # nodes marked done, see first_tasks
         self._cursor: list = []    # where the last walk found its task, see _first
         self._cursor_ok = False
+
+    def _operator(self, op: S.Operator) -> tuple:
+        at = where(op.pos)
+        return (op, head_unifier(op.head.args, f"unifier of the head of {op.name}, {at}"),
+                self.logic.precondition(op.pre, op.head.args, f"precondition of {op.name}"),
+                substituter(op.head.args, f"plan step of {op.name}, {at}"),
+                op.cost if type(op.cost) is float else None)
+
+    def _method(self, m: S.Method, jshop2_compat: bool) -> tuple:
+        """A body is ordered unless ``:unordered`` (see the module docstring)."""
+        at, pre = where(m.pos), self.logic.precondition
+        return (m, head_unifier(m.head.args, f"unifier of the head of {m.name}, {at}"),
+                [(pre(b.pre, m.head.args, f"precondition of {m.name} branch {b.label}"),
+                  compile_tasks(b.tasks, f"subtasks of {m.name} branch {b.label}"),
+                  jshop2_compat or b.tasks.ordered) for b in m.branches])
 
     # ------------------------------------------------------------ driver
     def plans(self, timeout: Optional[float] = None) -> Iterator[Plan]:
