@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import linecache
 import os
+from contextlib import contextmanager
 import traceback
 
 from hypothesis import HealthCheck, given, settings, strategies as st
@@ -24,6 +25,7 @@ from hypothesis import HealthCheck, given, settings, strategies as st
 from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import HtnError
 from htn.jshop.language.functions import FunctionTable
+from htn.jshop.logic import warming
 from htn.jshop.logic.compile import NESTED_CONJUNCTS, _stacked_conjunction, conjunction
 from htn.jshop.logic.engine import Logic
 from htn.jshop.logic.state import State
@@ -97,6 +99,17 @@ def reference(sats: list, env: list):
         yield from reference(sats[1:], e)
 
 
+@contextmanager
+def warm_after(calls: int):
+    """Compile generated code after ``calls`` interpreted calls (the planner
+    waits longer, see htn.jshop.logic.warming), so that a test sees both."""
+    saved, warming.WARM = warming.WARM, calls
+    try:
+        yield
+    finally:
+        warming.WARM = saved
+
+
 def outcome(sat, env: list):
     """The satisfiers in order, or the error raised on the way."""
     try:
@@ -127,13 +140,14 @@ def test_compiled_conjunctions_agree_with_the_general_engine(example):
     expected = outcome(lambda e: reference(general, e), env)
     # the mode-compiled precondition: its first call of a mode takes the
     # general path, the next ones the code written for that mode
-    compiled = logic.precondition(op.pre, op.head.args)
-    for _ in range(3):
-        assert outcome(compiled, env) == expected
-    # the same conjunction with no known entry (any variable may be bound)
-    anywhere = logic.expr(op.pre.expr)
-    for _ in range(3):
-        assert outcome(anywhere, env) == expected
+    with warm_after(2):
+        compiled = logic.precondition(op.pre, op.head.args)
+        for _ in range(3):
+            assert outcome(compiled, env) == expected
+        # the same conjunction with no known entry (any variable may be bound)
+        anywhere = logic.expr(op.pre.expr)
+        for _ in range(3):
+            assert outcome(anywhere, env) == expected
     if len(general) > 1:
         assert outcome(conjunction(general), env) == expected
         assert outcome(_stacked_conjunction(general), env) == expected
@@ -155,7 +169,7 @@ def test_long_conjunctions_backtrack_in_the_same_order():
     assert len(expected) == n + 2
     assert outcome(conjunction(general), env) == expected
     compiled = logic.precondition(op.pre, op.head.args)
-    for _ in range(3):
+    for _ in range(warming.WARM + 1):
         assert outcome(compiled, env) == expected
 
 
@@ -182,7 +196,7 @@ def test_generated_code_has_a_name_and_lines_in_tracebacks(tmp_path):
     op = domain.operators["!go"][0]
     sat = logic.precondition(op.pre, op.head.args, f"precondition of {op.name}")
     frames = table.user["look"].__globals__["FRAMES"]
-    for _ in range(3):         # the third call runs the code written for the mode
+    for _ in range(warming.WARM + 1):    # the last calls run the code written for the mode
         assert len(list(sat(["home"]))) == 1
     names = {f.filename: f for f in frames if f.filename.startswith("<htn: ")}
     mode = [n for n in names if n.startswith("<htn: precondition of !go, d.jshop:3")]
@@ -199,7 +213,9 @@ def test_dump_compiled_writes_each_piece(tmp_path):
     d, p = tmp_path / "d.jshop", tmp_path / "p.jshop"
     d.write_text("(defdomain d (\n  (:operator (!go ?a ?b) ((at ?a)) ((at ?a)) ((at ?b)))\n"
                  "  (:method (travel ?to) ((at ?from)) ((!go ?from ?to)))))\n")
-    p.write_text("(defproblem p d ((at home)) ((travel work) (travel home) (travel work)))\n")
+    # often enough for the pieces to be compiled (htn.jshop.logic.warming)
+    trips = " ".join(["(travel work) (travel home)"] * warming.WARM)
+    p.write_text(f"(defproblem p d ((at home)) ({trips}))\n")
     r = run_htn("plan", d, p, env={**os.environ, "HTN_DUMP_COMPILED": str(dump)})
     assert r.returncode == 0, r.stderr
     files = sorted(f.name for f in dump.iterdir())

@@ -10,6 +10,11 @@ shows the generated lines and ``pdb`` can list and step through them.
 
 ``HTN_DUMP_COMPILED=DIR`` (read once, when this module is imported) also
 writes every piece to a file in ``DIR`` named after what it compiles.
+
+Compiling costs far more than running a piece once (Python compiles about a
+microsecond per character of source), and a small search runs most pieces a
+few times only: see :mod:`~htn.jshop.logic.warming` for when a piece is
+compiled.
 """
 from __future__ import annotations
 

@@ -34,7 +34,7 @@ from __future__ import annotations
 from typing import Callable
 
 from htn.jshop.language import syntax as S
-from htn.jshop.language.terms import is_ground
+from htn.jshop.language.terms import Var, is_ground
 from htn.jshop.language.walk import walk_expr
 
 from .caches import cache
@@ -42,6 +42,7 @@ from .codegen import described, define
 from .compile import conjunction
 from .conjuncts import ATOM, AXIOM, GENERAL, NOT_ATOM, NOT_AXIOM, Literal, flatten
 from .mode_writer import CodeWriter
+from . import warming
 
 MAX_LITERALS = 40     # longer conjunctions stay on the general path (indentation)
 MAX_VARS = 60         # a mode is a bit mask over the conjunction's variables
@@ -72,19 +73,22 @@ def compile_conjunction(logic, e: S.And, entry: frozenset = None, what: str = No
         return gen
     state = logic.state
     modes: dict = {}
-    met: set = set()      # the modes met once, whose code was not written yet
     constants = _constants(logic, lits, general)
+    test = _tester(logic, lits) if len(names) == len(hit[3]) else None
+    full = (1 << len(names)) - 1
 
     def build(mode: int):
-        """This mode's code, or None for the general path: a mode met for
-        the first time is not worth compiling (a tiny search meets it once),
-        unless an earlier planner of the domain compiled it already."""
+        """This mode's code, or None for the general path: a mode is
+        compiled when it is met the ``WARM``-th time in the process (see
+        :mod:`~htn.jshop.logic.warming`), or at once if an earlier planner of
+        the domain compiled it already."""
         key = (id(e), mode, sized, entry)
         hit = _CODE.get(key)
         if hit is None or hit[0] is not e:
-            if mode not in met:
-                met.add(mode)
-                return None
+            met = warming.calls(e, (mode, sized, entry))
+            met[1] += 1
+            if met[1] < warming.WARM:
+                return test if mode == full else None
             known = {v for j, v in enumerate(names) if mode >> j & 1}
             hit = _CODE[key] = (e, CodeWriter(lits, known, sized).factory(
                 _mode_name(what, e, known, lits)))
@@ -94,6 +98,27 @@ def compile_conjunction(logic, e: S.And, entry: frozenset = None, what: str = No
         return f
 
     return _entry(names)(state, gen, modes, build)
+
+
+def _tester(logic, lits: list):
+    """While a conjunction of state atoms and their negations, flat and with
+    every variable bound, is warming: its test, interpreted (a set lookup per
+    conjunct; an operator's precondition is often just that), or None."""
+    plan = []
+    for lit in lits:
+        if lit.kind not in (ATOM, NOT_ATOM) or lit.facts or \
+                not all(type(a) in (str, float, Var) for a in lit.args):
+            return None
+        logic.state.bucket(lit.pred)
+        plan.append((logic.state.members[lit.pred], lit.kind == NOT_ATOM,
+                     tuple((type(a) is Var, a.index if type(a) is Var else a) for a in lit.args)))
+
+    def test(env):
+        for members, negated, parts in plan:
+            if (tuple([env[x] if var else x for var, x in parts]) in members) is negated:
+                return
+        yield env
+    return test
 
 
 def _constants(logic, lits: list, general: list) -> list:

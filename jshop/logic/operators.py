@@ -22,7 +22,7 @@ from htn.jshop.language.errors import PlanningError
 from htn.jshop.language.terms import atom_from_term, source_atom, term_str
 
 from .codegen import described
-from .compile import substituter
+from . import warming as warm
 from .state import Change
 
 _ATOM, _VAR_ATOM, _PROTECT, _FORALL = range(4)
@@ -164,21 +164,29 @@ def _plain_lists(op: S.Operator) -> tuple:
 
 
 def _plain(eff: S.Effects, op: S.Operator) -> Optional[list]:
-    """``[(pred, substituter)]`` for a list of plain atoms, else None (general case)."""
+    """``[[pred, substituter]]`` for a list of plain atoms, else None (general
+    case). The substituters are warming: compiled ones replace them in place."""
     if eff.var is not None or not all(isinstance(i, S.Atom) for i in eff.items):
         return None
-    return [(i.pred, _substituter(i, op)) for i in eff.items]
+    out = []
+    for i in eff.items:
+        entry = [i.pred, None]
+        entry[1] = _substituter(i, op, lambda f, entry=entry: entry.__setitem__(1, f))
+        out.append(entry)
+    return out
 
 
-def _substituter(a: S.Atom, op: S.Operator):
-    return substituter(a.args, described(f"effect {source_atom(a.pred, a.args)} of {op.name}",
-                                         a.pos or op.pos))
+def _substituter(a: S.Atom, op: S.Operator, install):
+    return warm.substituter(a.args, lambda: described(
+        f"effect {source_atom(a.pred, a.args)} of {op.name}", a.pos or op.pos), install)
 
 
-def _atom_program(a, op: S.Operator) -> tuple:
+def _atom_program(a, op: S.Operator) -> list:
     if isinstance(a, S.VarAtom):
-        return (_VAR_ATOM, a, None)
-    return (_ATOM, a.pred, _substituter(a, op))
+        return [_VAR_ATOM, a, None]
+    entry = [_ATOM, a.pred, None]
+    entry[2] = _substituter(a, op, lambda f: entry.__setitem__(2, f))
+    return entry
 
 
 def _ground(atom: tuple, env: list) -> tuple:

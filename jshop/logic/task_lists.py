@@ -5,11 +5,12 @@ from __future__ import annotations
 
 from typing import Callable
 
-from htn.jshop.language.terms import Var, source_atom
+from htn.jshop.language.terms import Var, source_atom, subst
 
 from .caches import cache
 from .codegen import described, define
 from .compile import flat_args, substituter
+from .warming import warming
 
 
 _TASK_LISTS: dict = cache()
@@ -49,3 +50,25 @@ def task_list_maker(tl, node: Callable, task: Callable, what: str = "task list")
         define(src, described(what, tl.pos), ns)
         hit = _TASK_LISTS[id(tl)] = (tl, node, task, ns["make"])
     return hit[3]
+
+
+def task_list_warming(tl, node: Callable, task: Callable, what: str,
+                      install: Callable) -> Callable[[list], list]:
+    """:func:`task_list_maker`, warming (see :mod:`~htn.jshop.logic.warming`):
+    the members are first built term by term, with ``subst``."""
+    hit = _TASK_LISTS.get(id(tl))
+    if hit is not None and hit[0] is tl and hit[1] is node and hit[2] is task:
+        return hit[3]
+    return warming(_interpreted(tl, node, task),
+                   lambda: task_list_maker(tl, node, task, what), install, tl, node)
+
+
+def _interpreted(tl, node: Callable, task: Callable) -> Callable[[list], list]:
+    members = [(None, _interpreted(x, node, task), bool(x.ordered)) if hasattr(x, "items")
+               else (x, None, bool(x.immediate)) for x in tl.items]
+
+    def make(env):
+        return [node(None, inner(env), flag) if x is None
+                else node(task(x.name, subst(x.args, env), flag, x))
+                for x, inner, flag in members]
+    return make

@@ -43,8 +43,6 @@ from typing import Iterator, Optional
 from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import PlanningError
 from htn.jshop.language.terms import subst, term_str, variables
-from htn.jshop.logic.codegen import where
-from htn.jshop.logic.compile import head_unifier, substituter
 from htn.jshop.logic.engine import Logic
 from htn.jshop.logic.operators import Operators
 from htn.jshop.logic.state import Change, HashedState, State
@@ -53,9 +51,9 @@ from htn.jshop.plans.tree import snapshot
 
 from .goals import GoalGuard
 from .limits import DEFAULT_MAX_DEPTH, DepthLimit, MemoryGuard, MemoryLimit
-from .network import (Node, bind_tasks, compile_tasks, deepest_task, first_in_order,
-                      first_tasks, undo_marks)
+from .network import Node, bind_tasks, deepest_task, first_in_order, first_tasks, undo_marks
 from .stats import Stats
+from .steps import method_entry, operator_entry
 from .loops import LoopCheck
 
 _PLAN = object()
@@ -93,10 +91,10 @@ class Planner:
             self._goal = (self.logic.precondition(instance.goal), instance.goal_nvars)
             self.guard = GoalGuard(domain, instance.goal) or None
         # (operator, head unifier, precondition, head substituter, constant cost or None)
-        self._ops = {name: [self._operator(op) for op in ops]
+        self._ops = {name: [operator_entry(self.logic, op) for op in ops]
                      for name, ops in domain.operators.items()}
         # (method, head unifier, [(precondition, body, body is ordered)] per branch)
-        self._methods = {name: [self._method(m, jshop2_compat) for m in ms]
+        self._methods = {name: [method_entry(self.logic, m, jshop2_compat) for m in ms]
                          for name, ms in domain.methods.items()}
         self.stats = Stats()
         # the problem's own variables (if any) stay unbound, like a method's
@@ -105,7 +103,7 @@ class Planner:
         if instance.top is not None:     # HDDL: a root task binds the network's parameters
             from htn.jshop.readers.hddl_domain import top_method
             m = top_method(domain, instance.top)
-            self._methods[m.name] = [self._method(m, True)]
+            self._methods[m.name] = [method_entry(self.logic, m, True)]
             self.root = bind_tasks(S.TaskList([m.head]), [])
         else:
             self.root = bind_tasks(instance.tasks, [None] * nvars)
@@ -114,21 +112,6 @@ class Planner:
         self._trail: list = []     # nodes marked done, see first_tasks
         self._cursor: list = []    # where the last walk found its task, see _first
         self._cursor_ok = False
-
-    def _operator(self, op: S.Operator) -> tuple:
-        at = where(op.pos)
-        return (op, head_unifier(op.head.args, f"unifier of the head of {op.name}, {at}"),
-                self.logic.precondition(op.pre, op.head.args, f"precondition of {op.name}"),
-                substituter(op.head.args, f"plan step of {op.name}, {at}"),
-                op.cost if type(op.cost) is float else None)
-
-    def _method(self, m: S.Method, jshop2_compat: bool) -> tuple:
-        """A body is ordered unless ``:unordered`` (see the module docstring)."""
-        at, pre = where(m.pos), self.logic.precondition
-        return (m, head_unifier(m.head.args, f"unifier of the head of {m.name}, {at}"),
-                [(pre(b.pre, m.head.args, f"precondition of {m.name} branch {b.label}"),
-                  compile_tasks(b.tasks, f"subtasks of {m.name} branch {b.label}"),
-                  jshop2_compat or b.tasks.ordered) for b in m.branches])
 
     # ------------------------------------------------------------ driver
     def plans(self, timeout: Optional[float] = None) -> Iterator[Plan]:
