@@ -5,12 +5,12 @@ from __future__ import annotations
 
 from typing import Callable
 
-from htn.jshop.language.terms import Var, source_atom, subst
+from htn.jshop.language.terms import Var, source_atom
 
 from .caches import cache
 from .codegen import described, define
 from .compile import flat_args, substituter
-from .warming import warming
+from .warming import interpreted_substitution, warming
 
 
 _TASK_LISTS: dict = cache()
@@ -65,10 +65,10 @@ def task_list_warming(tl, node: Callable, task: Callable, what: str,
 
 def _interpreted(tl, node: Callable, task: Callable) -> Callable[[list], list]:
     members = [(None, _interpreted(x, node, task), bool(x.ordered)) if hasattr(x, "items")
-               else (x, None, bool(x.immediate)) for x in tl.items]
+               else (x, interpreted_substitution(x.args), bool(x.immediate)) for x in tl.items]
 
     def make(env):
         return [node(None, inner(env), flag) if x is None
-                else node(task(x.name, subst(x.args, env), flag, x))
+                else node(task(x.name, inner(env), flag, x))
                 for x, inner, flag in members]
     return make
