@@ -13,7 +13,7 @@ from contextlib import contextmanager
 from pathlib import Path
 
 import pytest
-from conftest import run_htn, start_htn, wait_until
+from conftest import run_htn, run_htn_process, start_htn, wait_until
 
 PROBLEM = "problems/transport_four.jshop"
 RUNS, SEED = "600", "5"          # about a second of projected runs on two workers
@@ -81,8 +81,8 @@ def dask_cluster(folder: Path, workers: int = 2):
 def test_a_dask_scheduler_gives_the_numbers_of_one_process(reference, tmp_path):
     records = tmp_path / "runs.jsonl"
     with dask_cluster(tmp_path) as (address, _):
-        r = run_htn("evaluate", PROBLEM, "--runs", RUNS, "--seed", SEED, "--json",
-                    "--records", records, "--scheduler", address)
+        r = run_htn_process("evaluate", PROBLEM, "--runs", RUNS, "--seed", SEED, "--json",
+                            "--records", records, "--scheduler", address)
     assert r.returncode == 0, r.stderr
     doc, (ref, ref_records) = json.loads(r.stdout), reference
     assert doc["metrics"] == ref["metrics"] and doc["applied"] == ref["applied"]
@@ -165,10 +165,11 @@ def test_physics_backed_evaluation(tmp_path):
 
 def test_few_runs_print_na_and_leak_no_warning():
     warn_all = {**os.environ, "PYTHONWARNINGS": "always"}
-    r = run_htn("evaluate", PROBLEM, "--runs", "1", env=warn_all, timeout=120)
+    # a process of its own: PYTHONWARNINGS is read when the interpreter starts
+    r = run_htn_process("evaluate", PROBLEM, "--runs", "1", env=warn_all, timeout=120)
     assert r.returncode == 0 and r.stderr == "", r.stderr
     assert "n/a" in r.stdout and "nan" not in r.stdout
-    r = run_htn("evaluate", PROBLEM, "--runs", "3", "--json", env=warn_all, timeout=120)
+    r = run_htn_process("evaluate", PROBLEM, "--runs", "3", "--json", env=warn_all, timeout=120)
     assert r.returncode == 0 and r.stderr == "", r.stderr
     assert "NaN" not in r.stdout and json.loads(r.stdout)["runs"] == 3
 
@@ -223,8 +224,10 @@ def test_output_options_are_checked_before_any_work(tmp_path):
     records, plots = tmp_path / "runs.jsonl", tmp_path / "plots"
 
     def evaluate(*args, env=None):
-        return run_htn("evaluate", PROBLEM, *args, env={**os.environ, **(env or {})},
-                       timeout=120)
+        if env:     # Dask reads its configuration from the environment when imported
+            return run_htn_process("evaluate", PROBLEM, *args, env={**os.environ, **env},
+                                   timeout=120)
+        return run_htn("evaluate", PROBLEM, *args)
 
     cases = [
         (("--plot", blocker / "plots", "--records", records), f"{blocker}/plots: --plot"),
