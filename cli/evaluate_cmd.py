@@ -122,7 +122,7 @@ def evaluate(problem, domain, runs, seed, robot, faults, workers, scheduler, rec
                     if stream:
                         stream.write(new)
 
-                comp = run_study(study, problem, applied, runs, seed, runner, on_batch)
+                comp = run_study(study, problem, applied, runs, seed, runner, on_batch, say=warn)
     except ClusterError as exc:
         raise click.ClickException(str(exc)) from None
     finally:
