@@ -80,6 +80,8 @@ def dask_cluster(folder: Path, workers: int = 2):
                     p.wait()
 
 
+@pytest.mark.dask
+@pytest.mark.slow
 def test_a_dask_scheduler_gives_the_numbers_of_one_process(reference, tmp_path):
     records = tmp_path / "runs.jsonl"
     with dask_cluster(tmp_path) as (address, _):
@@ -94,6 +96,8 @@ def test_a_dask_scheduler_gives_the_numbers_of_one_process(reference, tmp_path):
     assert len(ref_records.splitlines()) == 2 * int(RUNS)
 
 
+@pytest.mark.dask
+@pytest.mark.slow
 def test_a_worker_killed_mid_evaluation_is_survived(reference, tmp_path):
     records = tmp_path / "runs.jsonl"
     with dask_cluster(tmp_path) as (address, workers):
@@ -113,6 +117,8 @@ def test_a_worker_killed_mid_evaluation_is_survived(reference, tmp_path):
     assert records.read_text() == ref_records
 
 
+@pytest.mark.dask
+@pytest.mark.slow
 def test_local_workers_give_the_numbers_of_one_process(reference):
     from htn.evaluation.cluster import open_runner
     from htn.evaluation.study import prepare_study, run_study
@@ -132,6 +138,8 @@ def _busy(seconds: float) -> None:
         pass
 
 
+@pytest.mark.dask
+@pytest.mark.slow
 def test_the_workers_start_for_a_study_that_outlasts_their_start():
     from htn.evaluation.cluster import DaskRunner, InProcess, LocalWorkers, start_seconds
     from htn.evaluation.placement import place
@@ -178,6 +186,7 @@ def test_the_projection_weighs_the_rest_against_the_start():
     assert Projection(2000, 1975, 0.01, 8, 2.0, cores=2).on_workers == big.on_workers
 
 
+@pytest.mark.slow
 def test_a_study_too_small_for_the_workers_runs_here_and_says_so(tmp_path):
     # 30 projected runs take a fraction of what starting two workers takes
     plots = tmp_path / "plots"
@@ -214,6 +223,8 @@ def test_a_study_too_small_for_the_workers_runs_here_and_says_so(tmp_path):
     assert "SD" in metrics_svg and "Wilson 95% CI" in metrics_svg
 
 
+@pytest.mark.sim
+@pytest.mark.slow
 def test_physics_backed_evaluation(tmp_path):
     records = tmp_path / "runs.jsonl"
     r = run_htn("evaluate", "problems/tray_three.jshop", "--robot", "pybullet", "--runs", "1",
@@ -234,6 +245,7 @@ def test_physics_backed_evaluation(tmp_path):
         [(0, "original", "verified"), (0, "transformed", "verified")]
 
 
+@pytest.mark.slow
 def test_few_runs_print_na_and_leak_no_warning():
     warn_all = {**os.environ, "PYTHONWARNINGS": "always"}
     # a process of its own: PYTHONWARNINGS is read when the interpreter starts
@@ -266,6 +278,7 @@ def test_statistics_edge_cases():
     assert applied_rules([]) == "none"
 
 
+@pytest.mark.slow
 def test_figures_of_runs_that_differ_by_rounding_only(tmp_path):
     from htn.evaluation.figures import plot
     from htn.evaluation.statistics import Comparison

@@ -214,6 +214,7 @@ def _report():
 @pytest.mark.skipif(not CASES, reason="no example files")
 @settings(max_examples=EXAMPLES, deadline=None, derandomize=not RANDOM, database=None,
           suppress_health_check=list(HealthCheck))
+@pytest.mark.slow
 @given(data=st.data())
 def test_every_mutant_gets_a_clean_answer(tmp_path_factory, data):
     domain, problem, functions, plans = data.draw(st.sampled_from(CASES), label="example")

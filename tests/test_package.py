@@ -80,6 +80,7 @@ def elsewhere(tmp_path) -> Path:
     return folder
 
 
+@pytest.mark.slow
 def test_the_wheel_installs_one_import_package(core):
     r = core.run(core.bin / "python", "-c", textwrap.dedent("""
         import json
@@ -91,6 +92,7 @@ def test_the_wheel_installs_one_import_package(core):
     assert json.loads(r.stdout) == ["htn"]
 
 
+@pytest.mark.slow
 def test_the_core_install_plans_runs_and_names_missing_extras(core, elsewhere):
     assert core.run("htn", "stats", "--repeat", "1", cwd=elsewhere).returncode == 0
     r = core.run("htn", "examples", ".", cwd=elsewhere)
@@ -215,6 +217,7 @@ def make_robot(request):
 '''
 
 
+@pytest.mark.slow
 def test_a_plugin_adds_an_action_machine_and_a_robot(core, tmp_path, elsewhere):
     plugin = tmp_path / "toy-plugin"
     (plugin / "toyplug").mkdir(parents=True)
@@ -250,6 +253,7 @@ def test_a_plugin_adds_an_action_machine_and_a_robot(core, tmp_path, elsewhere):
     assert r.returncode == 2 and "toy-keep" in r.stderr     # the known rules include it
 
 
+@pytest.mark.slow
 def test_robot_framework_and_htn_side_by_side(tmp_path_factory, wheel, elsewhere):
     venv = make_venv(tmp_path_factory.mktemp("sim") / "venv")
     venv.pip(f"{wheel}[sim]", "robotframework")
