@@ -174,12 +174,15 @@ class LocalWorkers:
             self._cluster.close()
 
 
-# What starting a local cluster costs on the 2-core machine this was measured on
-# (benchmarks/bench_evaluate.py --startup: the scheduler, the worker processes
-# forked from a server that has imported htn, until the client sees them all,
-# then closing them), in seconds: about START_BASE + START_PER_WORKER x workers.
-START_BASE = 1.0
-START_PER_WORKER = 0.5
+# What starting a local cluster in a fresh process costs on an idle machine, in
+# seconds: about START_BASE + START_PER_WORKER x workers. Measured on 2 cores
+# (benchmarks/bench_evaluate.py --startup, and the CPU time of the processes
+# involved): this process imports Dask (about 1 s of CPU), the server the
+# workers are forked from imports Dask and htn (about 1 s), each worker is
+# forked and registers with the scheduler (a few tenths), and closing them
+# takes 0.1-0.4 s. On a busy machine all of it takes longer, as the runs do.
+START_BASE = 2.0
+START_PER_WORKER = 0.25
 
 
 def start_seconds(workers: int) -> float:

@@ -27,6 +27,9 @@ BASIC_DOMAIN = """(defdomain basic (
 BASIC_PROBLEM = "(defproblem problem basic ((have kiwi)) ((swap banjo kiwi)))\n"
 
 
+# one xdist worker builds the wheel (in the checkout's build/) for all of them
+pytestmark = [pytest.mark.slow, pytest.mark.xdist_group("wheel")]
+
 def sh(*args, cwd, env=None, timeout=600):
     return subprocess.run([str(a) for a in args], cwd=cwd, capture_output=True, text=True,
                           timeout=timeout, env=env)
@@ -80,7 +83,6 @@ def elsewhere(tmp_path) -> Path:
     return folder
 
 
-@pytest.mark.slow
 def test_the_wheel_installs_one_import_package(core):
     r = core.run(core.bin / "python", "-c", textwrap.dedent("""
         import json
@@ -92,7 +94,6 @@ def test_the_wheel_installs_one_import_package(core):
     assert json.loads(r.stdout) == ["htn"]
 
 
-@pytest.mark.slow
 def test_the_core_install_plans_runs_and_names_missing_extras(core, elsewhere):
     assert core.run("htn", "stats", "--repeat", "1", cwd=elsewhere).returncode == 0
     r = core.run("htn", "examples", ".", cwd=elsewhere)
@@ -217,7 +218,6 @@ def make_robot(request):
 '''
 
 
-@pytest.mark.slow
 def test_a_plugin_adds_an_action_machine_and_a_robot(core, tmp_path, elsewhere):
     plugin = tmp_path / "toy-plugin"
     (plugin / "toyplug").mkdir(parents=True)
@@ -253,7 +253,6 @@ def test_a_plugin_adds_an_action_machine_and_a_robot(core, tmp_path, elsewhere):
     assert r.returncode == 2 and "toy-keep" in r.stderr     # the known rules include it
 
 
-@pytest.mark.slow
 def test_robot_framework_and_htn_side_by_side(tmp_path_factory, wheel, elsewhere):
     venv = make_venv(tmp_path_factory.mktemp("sim") / "venv")
     venv.pip(f"{wheel}[sim]", "robotframework")
