@@ -101,6 +101,7 @@ def evaluate(problem, *, domain=None, runs: int = 200, seed: int = 0,
              scheduler: Optional[str] = None, records=None, plot=None,
              on_start: Optional[Callable[[int, list], None]] = None,
              on_batch: Optional[Callable[[list, float], None]] = None,
+             say: Optional[Callable[[str], None]] = None,
              on_warning: Optional[Callable[[str], None]] = None,
              on_phase: Optional[Callable[[str], None]] = None) -> Evaluation:
     """Plan ``problem`` (a path), transform the plan with every registered
@@ -118,9 +119,11 @@ def evaluate(problem, *, domain=None, runs: int = 200, seed: int = 0,
     then put in run order); ``plot``: a folder for the figures.
     ``on_start(workers, notes)`` is called once the runner is ready, before
     planning; ``on_batch(records, runs)`` with each batch's new records and
-    the number of runs of every plan they complete; ``on_warning`` with each
-    located warning (the inputs' check, and rewrites all rolled back);
-    ``on_phase`` with a few words as each phase before the runs begins.
+    the number of runs of every plan they complete; ``say`` gets the line
+    that says why a study too small for local workers stays in this process
+    (:func:`htn.evaluation.placement.place`); ``on_warning`` each located
+    warning (the inputs' check, and rewrites all rolled back); ``on_phase``
+    a few words as each phase before the runs begins.
 
     A study that cannot give a comparison is an input error, raised before
     any run: no registered transformation applies to the plan (the two
@@ -134,8 +137,8 @@ def evaluate(problem, *, domain=None, runs: int = 200, seed: int = 0,
     records = None if records is None else os.fspath(records)
     plot = None if plot is None else os.fspath(plot)
     check_evaluation(problem, domain, robot, faults, workers, scheduler, plot, records)
-    say = on_phase or (lambda text: None)
-    say("reading the problem and its domain")
+    phase = on_phase or (lambda text: None)
+    phase("reading the problem and its domain")
     # each file is read once: the problem names its domain when none is given
     prob = load_problem(problem)
     inputs = read_inputs(domain or domain_for(prob), prob, FunctionTable())
@@ -155,14 +158,14 @@ def evaluate(problem, *, domain=None, runs: int = 200, seed: int = 0,
             if on_start:
                 on_start(runner.workers, notes)
             log: list = []
-            study, applied = prepare_study(dom, prob, robot, faults, log=log, on_phase=say)
+            study, applied = prepare_study(dom, prob, robot, faults, log=log, on_phase=phase)
             check_study(study, log, problem)
             if log and not applied and on_warning:
                 on_warning(f"{problem}: warning: every rewrite was rolled back ("
                            + "; ".join(f"{rule}: {detail}" for rule, _, detail in log)
                            + "): both plans are the same")
             stream = RecordsFile(records) if records else None
-            say(f"{runs} runs of each plan on the {robot} robot")
+            phase(f"{runs} runs of each plan on the {robot} robot")
 
             def batch(new: list) -> None:
                 if stream:
@@ -170,7 +173,7 @@ def evaluate(problem, *, domain=None, runs: int = 200, seed: int = 0,
                 if on_batch:
                     on_batch(new, len(new) / len(study.plans))
 
-            comp = run_study(study, problem, applied, runs, seed, runner, batch)
+            comp = run_study(study, problem, applied, runs, seed, runner, batch, say)
     finally:
         if stream:
             stream.close()
