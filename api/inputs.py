@@ -91,16 +91,18 @@ def domain_for(problem) -> str:
         problem = load_problem(os.fspath(problem))
     name = problem.domain_name
     files = [f"{name}.hddl", "domain.hddl"] if problem.language == "hddl" else [f"{name}.jshop"]
-    here = os.path.dirname(os.path.abspath(problem.file))
+    # the places as the user wrote the problem's path (a message shows the
+    # path they gave), each looked in once
+    here = os.path.dirname(problem.file or "")
     places = [here, os.path.join(here, "..", "domains"), "domains", str(EXAMPLES / "domains")]
     looked: list = []
     for base in places:
-        base = os.path.abspath(base)
-        if base in looked:
+        base = os.path.normpath(base)
+        if any(os.path.abspath(base) == os.path.abspath(b) for b in looked):
             continue
         looked.append(base)
         for file in files:
-            path = os.path.join(base, file)
+            path = os.path.normpath(os.path.join(base, file))
             if os.path.isfile(path):
                 return path
     shown = [os.path.join(p, "") for p in looked]
