@@ -227,8 +227,9 @@ class _Renderer:
             sys.stdout.write(p.to_jshop())
             sys.stdout.flush()
             if self.show_tree and p.tree is not None:
+                # asked for, so on stdout (piped too), after the plan it explains
                 from .tree_view import rich_tree
-                console(stderr=True, highlight=False).print(rich_tree(p.tree))
+                self.console.print(rich_tree(p.tree))
         elif self.fmt == "text":
             self._text_plan(p)
         elif self.fmt == "ipc":

@@ -11,6 +11,7 @@ from htn.api.files import atomic_write, check_output_file, check_output_folder, 
 
 from .output import stdout_is_terminal, warn
 from .run_checks import check_display
+from .run_lines import event_line
 from .signals import Signals, held, interrupt_exit, silence_stdout
 from .view_cmd import keep_up, start_run_view, view_options, wait_for_page
 
@@ -232,24 +233,11 @@ class _PlainView:
     def __exit__(self, *exc) -> None:
         pass
 
-    SHOWN = ("verified", "failed", "aborted", "retrying", "replanned", "replan_failed",
-             "interrupted", "fault")
-
     def event(self, rec) -> None:
+        line = event_line(rec)
+        if line is None:
+            return
         try:
-            self._show(rec)
+            click.echo(line)
         except BrokenPipeError:
             silence_stdout()
-
-    def _show(self, rec) -> None:
-        if rec["event"] in self.SHOWN:
-            step = "" if rec["step"] is None else f"{rec['step']:>2} "
-            what = rec["action"] or ""
-            if rec["event"] == "fault":
-                what = f"{rec['kind']}: {rec['detail']}"
-                click.echo(f"{step}{'fault':<11} {what}  [t={rec['sim_t']:.2f}s]")
-                return
-            if rec["event"] == "replanned":
-                what = rec["path"]
-            click.echo(f"{step}{rec['event']:<11} {what}  "
-                       f"[try {rec['attempt'] or '-'}, t={rec['sim_t']:.1f}s] {rec['detail']}")

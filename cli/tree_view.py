@@ -10,7 +10,12 @@ from rich.markup import escape
 from rich.text import Text
 from rich.tree import Tree
 
+from .run_lines import event_line
+
 STATUS_STYLE = {"✓": "green", "✕": "bold red", "*": "yellow", "-": "dim"}
+LINE_STYLE = {"verified": "green", "failed": "red", "aborted": "bold red", "fault": "yellow",
+              "retrying": "yellow", "replanned": "cyan", "replan_failed": "bold red",
+              "interrupted": "bold red"}
 
 
 def rich_tree(tree):
@@ -57,9 +62,51 @@ def _mark(ctxs, running, failed) -> str:
     return "-"
 
 
-def behaviour_rows(root, running, failed, events: dict) -> list[Row]:
+class GraftedSteps:
+    """Verified steps that a repair grafted out of the behaviour tree (their
+    task was re-planned after them), counted by the tasks above them that
+    remain, as the run's summary counts them: ``plan 4/4 steps`` beside ``4
+    of 4 steps verified``, not the 3 still in the tree. A task is known by
+    its node path, which a re-planned task's new subtree keeps (repair
+    rebases it on the old one's), the root by the empty path."""
+
+    def __init__(self):
+        self.above: dict = {}         # id(action context) -> (context, the paths above it)
+
+    def counts(self, root, done) -> dict:
+        """``task path -> verified steps below it that are gone`` (``done``:
+        the dispatcher's verified contexts)."""
+        present = set()
+        for b in root.iterate():
+            ctx = getattr(b, "htn_action", None)
+            if ctx is None:
+                continue
+            present.add(id(ctx))
+            paths, up = [], b.parent
+            while up is not None:
+                paths.append(task_path(up))
+                up = up.parent
+            self.above[id(ctx)] = (ctx, paths)
+        gone: dict = {}
+        for ctx in done:
+            if id(ctx) not in present and id(ctx) in self.above:
+                for path in self.above[id(ctx)][1]:
+                    gone[path] = gone.get(path, 0) + 1
+        return gone
+
+
+def task_path(b) -> str:
+    """The node path of a task's behaviour ('' for the root)."""
+    task = getattr(b, "htn_task", None)
+    return "" if b.parent is None or task is None else task.path
+
+
+def behaviour_rows(root, running, failed, events: dict, gone: dict | None = None) -> list[Row]:
     """The rows of the view: every ancestor of the running (or failed) action
-    expanded, with its children; other tasks collapsed to one row each."""
+    expanded, with its children; other tasks collapsed to one row each.
+    ``gone``: verified steps grafted away below a task (:class:`GraftedSteps`),
+    counted in its ``done/total steps``."""
+    gone = gone or {}
     focus = running if running is not None and not running.done else failed
     path_ids = set()
     if focus is not None:
@@ -86,8 +133,9 @@ def behaviour_rows(root, running, failed, events: dict) -> list[Row]:
         ctxs = _actions(b)
         mark = _mark(ctxs, focus if focus is running else None, failed)
         on_path = id(b) in path_ids
-        done = sum(c.done for c in ctxs)
-        rows.append(Row(depth, mark, b.name, f"{done}/{len(ctxs)} steps", on_path))
+        extra = gone.get(task_path(b), 0)
+        done = sum(c.done for c in ctxs) + extra
+        rows.append(Row(depth, mark, b.name, f"{done}/{len(ctxs) + extra} steps", on_path))
         if on_path or depth == 0:
             stack.extend((c, depth + 1) for c in reversed(b.children))
     return rows
@@ -130,13 +178,17 @@ def render_rows(shown: list[tuple[Row, bool]], more_below: bool = False):
 
 
 class LiveTreeView:
-    """The behaviour tree around the running action, redrawn on every event."""
+    """The behaviour tree around the running action, redrawn on every event,
+    below a scrolling log of what happened (the lines a pipe gets: each
+    outcome with its monitor's detail, faults, retries, repairs), which stays
+    in the terminal after the run."""
 
-    def __init__(self, dispatcher_ref):
+    def __init__(self, dispatcher_ref, console=None):
         self.dispatcher = dispatcher_ref      # a callable returning the dispatcher
-        self.console = Console()
+        self.console = console or Console()
         self.last: dict = {}                  # id(action context) -> last event text
         self.header = ""
+        self.grafted = GraftedSteps()
         self.live = Live(console=self.console, auto_refresh=False, transient=False,
                          vertical_overflow="crop")
 
@@ -152,6 +204,9 @@ class LiveTreeView:
         d = self.dispatcher()
         if d is None or rec["event"] in ("header", "summary", "tree"):
             return
+        line = event_line(rec)
+        if line is not None:        # printed above the live part, which is redrawn below
+            self.console.print(Text(line, style=LINE_STYLE.get(rec["event"], "")))
         ctx = d.running
         if ctx is not None and rec["event"] not in ("feedback",):
             self.last[id(ctx)] = f"{rec['event']} {rec['detail']}"[:60]
@@ -164,7 +219,8 @@ class LiveTreeView:
         if d is None:
             return
         height = max(3, self.console.size.height - 3)
-        rows = behaviour_rows(d.root, d.running, d.failed, self.last)
+        rows = behaviour_rows(d.root, d.running, d.failed, self.last,
+                              self.grafted.counts(d.root, d.done))
         shown = fit(rows, height)
         below = bool(shown) and shown[-1][0] is not rows[-1]
         self.live.update(Group(Text(self.header, style="bold"), render_rows(shown, below)),

@@ -138,7 +138,8 @@ def test_small_domain_every_format(tmp_path):
     assert ipc.stdout == ("==>\n0 go box home shop\n1 go box shop home\nroot 2 3\n"
                           "2 move box shop -> m-move 0\n3 move box home -> m-move 1\n<==\n")
     tree = run_htn("plan", d, p, "-f", "jshop", "--tree")
-    assert "branch m-move" in tree.stderr
+    assert "branch m-move" in tree.stdout and tree.stderr == ""     # piped: still stdout
+    assert tree.stdout.startswith(jshop.stdout)
     as_json = run_htn("plan", d, p, "-f", "json")
     plan_line = json.loads(as_json.stdout.splitlines()[0])
     assert {n.get("branch") for n in plan_line["tree"]["nodes"]} >= {"m-move"}
