@@ -17,6 +17,7 @@ from htn.api.files import AtomicFile
 from htn.jshop.search.limits import DEFAULT_MAX_DEPTH
 
 from .output import console, stdout_is_terminal, warn
+from .progress import Phase
 from .signals import DeadlineExceeded, deadline, held, interrupt_exit, raise_again
 
 FORMATS = ["text", "jshop", "json", "ipc"]
@@ -91,12 +92,17 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
         sinks.append(out)
         dot_out = _DotFile(AtomicFile(dot, "--dot")) if dot else None
         sinks.append(dot_out)
-        plans = find_plans(domain, problem, plans=None if all_plans else n_plans,
-                           timeout=timeout, functions=functions, jshop2_compat=jshop2_compat,
-                           max_depth=max_depth, max_memory=max_memory,
-                           explain=explain or explain_all, explain_all=explain_all,
-                           trees=show_tree or bool(dot) or bool(output) or fmt in ("json", "ipc"),
-                           tree_paths=show_tree or bool(dot) or fmt == "json")
+        # reading a large HDDL instance, and the search before the first
+        # plan, can take seconds: a spinner says which (on a terminal, after
+        # a second; it is gone before anything is printed)
+        with Phase("reading the domain and the problem"):
+            plans = find_plans(domain, problem, plans=None if all_plans else n_plans,
+                               timeout=timeout, functions=functions, jshop2_compat=jshop2_compat,
+                               max_depth=max_depth, max_memory=max_memory,
+                               explain=explain or explain_all, explain_all=explain_all,
+                               trees=(show_tree or bool(dot) or bool(output)
+                                      or fmt in ("json", "ipc")),
+                               tree_paths=show_tree or bool(dot) or fmt == "json")
         if not quiet:
             for w in plans.warnings:
                 warn(w)
@@ -106,8 +112,9 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
         render.spelling = {**plans.problem.spelling, **plans.domain.spelling}
         stop = None
         try:
-            with deadline(timeout, started), plans:
+            with deadline(timeout, started), plans, Phase("planning") as phase:
                 for p in plans:
+                    phase.end()
                     with held():    # the files first: they outlive a closed stdout
                         if out:
                             out.write(plan_text(p))

@@ -10,6 +10,7 @@ from htn.api.extras import require_robot_extra
 from htn.api.files import atomic_write, check_output_file, check_output_folder, make_output_folder
 
 from .output import stdout_is_terminal, warn
+from .progress import Phase
 from .run_checks import check_display
 from .run_lines import event_line
 from .signals import Signals, held, interrupt_exit, silence_stdout
@@ -140,9 +141,12 @@ def _run(ctx, signals, plan_file, robot_name, sim, gui, snapshots, faults, seed,
             check_output_file(path, option)
     if snapshots:
         check_output_folder(snapshots, "--snapshots")
-    execution = prepare(plan, robot=robot_name, domain=domain, problem=problem,
-                        functions=functions, plan_index=plan_index, faults=faults or "",
-                        seed=seed, retries=retries, replan=replan, log=log_path, gui=gui)
+    # reading and checking everything, and building a simulated world, can
+    # take seconds: a spinner says so (on a terminal, after a second)
+    with Phase(f"reading the plan and building the {robot_name} robot"):
+        execution = prepare(plan, robot=robot_name, domain=domain, problem=problem,
+                            functions=functions, plan_index=plan_index, faults=faults or "",
+                            seed=seed, retries=retries, replan=replan, log=log_path, gui=gui)
     if not quiet:
         for note in execution.notes:
             warn(note)

@@ -9,6 +9,9 @@ import click
 
 from htn.api.files import atomic_write
 
+from .output import warn
+from .progress import Phase
+
 
 @click.command("transform")
 @click.argument("domain", type=click.Path(dir_okay=False))
@@ -39,7 +42,11 @@ def transform(domain, problem, rules, metric, output, as_json):
     # a bad -o fails before the work; the file is replaced once all is done
     with atomic_write(output, "-o") if output else contextlib.nullcontext() as out:
         try:
-            done = transform_plan(domain, problem, rules=rules, metric=metric)
+            # planning and each rule's projected runs take seconds: a spinner
+            # says which (on a terminal, after a second)
+            with Phase("reading the domain and the problem") as phase:
+                done = transform_plan(domain, problem, rules=rules, metric=metric,
+                                      on_warning=warn, on_phase=phase.update)
         except UnknownRules as exc:
             raise click.BadParameter(exc.message, param_hint="--rules") from None
         if out:

@@ -22,7 +22,8 @@ SYSTEM_PYTHON = Path("/usr/bin/python3")
 def quick_start() -> list[str]:
     """The two commands of the README's quick start."""
     text = (ROOT / "README.md").read_text()
-    section = text[text.index("## Quick start"):text.index("\n## ", text.index("## Quick start") + 1)]
+    start = text.index("## Quick start")
+    section = text[start:text.index("\n## ", start + 1)]
     block = re.search(r"```sh\n(.*?)```", section, re.S).group(1)
     return [line for line in block.splitlines() if line.strip()]
 
