@@ -63,7 +63,7 @@ def test_the_quick_start_installs_with_the_system_python(tmp_path):
     probe = subprocess.run([SYSTEM_PYTHON, "-c", "import ensurepip, venv"], capture_output=True)
     if probe.returncode != 0:
         pytest.skip("the system python3 has no venv module (Debian: apt install python3-venv)")
-    src = tmp_path / "htn"
+    src = tmp_path / "checkout"     # not "htn": a folder of that name would be imported
     src.mkdir()
     copy_checkout(src)
     bin_ = tmp_path / "bin"
