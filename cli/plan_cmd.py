@@ -14,6 +14,7 @@ import time
 import click
 
 from htn.jshop.search.limits import DEFAULT_MAX_DEPTH
+from htn.jshop.search.searches import SEARCHES
 
 from .output import AtomicFile, console, stdout_is_terminal, warn
 from .signals import DeadlineExceeded, deadline, held, interrupt_exit, raise_again
@@ -64,8 +65,13 @@ FORMATS = ["text", "jshop", "json", "ipc"]
                    "dead end of the search, each operator or method tried and the precondition "
                    "literal that failed, with file:line:col.")
 @click.option("--explain-all", is_flag=True, help="Like --explain, listing every dead end.")
+@click.option("--search", "search_name", type=click.Choice(list(SEARCHES)), default="dfs",
+              show_default=True,
+              help="How to search: " + "; ".join(f"{k}: {v}" for k, v in SEARCHES.items())
+                   + ". See the README (HDDL).")
 def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
-         show_tree, dot, quiet, jshop2_compat, max_depth, max_memory, explain, explain_all):
+         show_tree, dot, quiet, jshop2_compat, max_depth, max_memory, explain, explain_all,
+         search_name):
     """Find plans for PROBLEM in DOMAIN (JSHOP2 files).
 
     \b
@@ -96,6 +102,10 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
         if functions:
             table.load_file(functions)
         dom, prob = load_inputs(domain, problem, table)
+        from htn.jshop.search.searches import refusal
+        why = refusal(search_name, dom, all_plans)
+        if why:
+            raise click.UsageError(why)
         warnings = check_domain(dom) + check_problem(dom, prob)
         if jshop2_compat:
             warnings += filter(None, [compat_warning(dom)])
@@ -105,12 +115,13 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
         if out:
             out.write(header(output, domain, problem, functions))
         render = _Renderer(fmt, show_tree, domain, problem)
-        render.spelling = {**prob.spelling, **dom.spelling}
+        render.spelling = {**dom.spelling, **prob.spelling}   # objects as the problem spells them
         search = _Search(dom, prob, table, jshop2_compat=jshop2_compat, max_depth=max_depth,
                          max_memory=max_memory << 20 if max_memory else None,
                          explain=explain or explain_all, explain_all=explain_all,
                          record_trees=show_tree or bool(dot) or fmt in ("json", "ipc"),
-                         tree_paths=show_tree or bool(dot) or fmt == "json")
+                         tree_paths=show_tree or bool(dot) or fmt == "json",
+                         search_name=search_name)
         totals, stop = search.run(render, out, dot_out, started, timeout,
                                   None if all_plans else n_plans)
         found = totals["plans_found"]
@@ -150,8 +161,9 @@ class _Search:
     files, with the planner options of the command line."""
 
     def __init__(self, dom, prob, table, jshop2_compat, max_depth, max_memory, explain,
-                 explain_all, record_trees, tree_paths):
+                 explain_all, record_trees, tree_paths, search_name="dfs"):
         self.dom, self.prob, self.table = dom, prob, table
+        self.search_name = search_name
         self.options = dict(jshop2_compat=jshop2_compat, max_depth=max_depth,
                             max_memory=max_memory)
         self.explain, self.explain_all = explain, explain_all
@@ -162,7 +174,7 @@ class _Search:
     def run(self, render, out, dot_out, started, timeout, limit):
         """Returns the summed statistics and what stopped the stream early
         (Ctrl-C, SIGTERM or a closed stdout), if anything."""
-        from htn.jshop.search.planner import Planner
+        from htn.jshop.search.searches import make_search
 
         totals = {"plans_found": 0, "search_ms": 0.0, "expansions": 0,
                   "operator_applications": 0, "backtracks": 0, "timed_out": False,
@@ -183,9 +195,10 @@ class _Search:
                         from htn.jshop.plans.explain import Explainer
                         explainer = Explainer(keep_all=self.explain_all)
                         self.explainers.append(explainer)
-                    planner = Planner(self.dom, inst, self.table, record_trees=self.record_trees,
-                                      tree_paths=self.tree_paths, explain=explainer,
-                                      **self.options)
+                    planner = make_search(self.search_name, self.dom, inst, self.table,
+                                          record_trees=self.record_trees,
+                                          tree_paths=self.tree_paths, explain=explainer,
+                                          **self.options)
                     try:
                         for p in planner.plans(remaining):
                             p.instance = k
@@ -241,6 +254,8 @@ def _add_stats(totals: dict, s: dict) -> None:
     for key in ("expansions", "operator_applications", "backtracks"):
         totals[key] += s[key]
     totals["search_ms"] += s["search_ms"]
+    if "found_by" in s:       # --search auto: which search found the plans
+        totals["found_by"] = s["found_by"]
 
 
 class _DotFile:
@@ -342,6 +357,8 @@ class _Renderer:
         elif self.fmt == "text":
             shortest = totals["shortest_plan"]
             extra = f", shortest plan {shortest} steps" if shortest is not None else ""
+            if "found_by" in totals:
+                extra += f", found by {totals['found_by']}"
             self.console.print(
                 f"[bold]{totals['plans_found']}[/bold] plan(s) found; search "
                 f"{totals['search_ms']:.1f} ms{extra}; {totals['expansions']} expansions, "

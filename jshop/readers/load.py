@@ -69,6 +69,9 @@ def load_inputs(domain_path: str, problem_path: str,
     dom = load_domain(domain_path, functions)
     prob = load_problem(problem_path, functions)
     check_domain_name(dom, prob)
+    if dom.hddl is not None:
+        from .hddl_domain import for_problem
+        dom = for_problem(dom, prob)
     return dom, prob
 
 

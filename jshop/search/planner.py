@@ -55,7 +55,7 @@ from .limits import DEFAULT_MAX_DEPTH, DepthLimit, MemoryGuard, MemoryLimit
 from .network import (Node, bind_tasks, compile_tasks, deepest_task, first_in_order,
                       first_tasks, undo_marks)
 from .stats import Stats
-from .loops import LoopCheck
+from .ancestry import loop_check_for
 
 _PLAN = object()
 
@@ -78,7 +78,7 @@ class Planner:
         if loop_check is None:           # on for HDDL, off for JSHOP2 (its own semantics)
             loop_check = domain.language == "hddl"
         self.state = HashedState() if loop_check else State()
-        self.loops = LoopCheck(self.state) if loop_check else None
+        self.loops = loop_check_for(domain, instance, self.state) if loop_check else None
         implied = domain.implied
         for atom in (*domain.facts, *instance.state):
             self.state.add(atom.pred, atom.args)
@@ -101,7 +101,7 @@ class Planner:
         # (precondition, body, body is ordered) per branch; see the module docstring
         self._methods = {name: [(m, head_unifier(m.head.args),
                                  [(pre(b.pre, m.head.args), compile_tasks(b.tasks),
-                                   jshop2_compat or b.tasks.ordered) for b in m.branches])
+                                   jshop2_compat or b.tasks.order_flag) for b in m.branches])
                                 for m in ms]
                          for name, ms in domain.methods.items()}
         self.stats = Stats()
@@ -112,8 +112,8 @@ class Planner:
             from htn.jshop.readers.hddl_domain import top_method
             m = top_method(domain, instance.top)
             self._methods[m.name] = [(m, head_unifier(m.head.args),
-                                      [(pre(b.pre, m.head.args), compile_tasks(b.tasks), True)
-                                       for b in m.branches])]
+                                      [(pre(b.pre, m.head.args), compile_tasks(b.tasks),
+                                        b.tasks.order_flag) for b in m.branches])]
             self.root = bind_tasks(S.TaskList([m.head]), [])
         else:
             self.root = bind_tasks(instance.tasks, [None] * nvars)
@@ -122,6 +122,7 @@ class Planner:
         self._trail: list = []     # nodes marked done, see first_tasks
         self._cursor: list = []    # where the last walk found its task, see _first
         self._cursor_ok = False
+        self.slice_s: Optional[float] = None    # CPU s between pauses: see plans()
 
     # ------------------------------------------------------------ driver
     def plans(self, timeout: Optional[float] = None) -> Iterator[Plan]:
@@ -129,6 +130,7 @@ class Planner:
 
         ``stats.elapsed`` counts search time only, not the time the consumer
         spends between plans; ``timeout`` is wall-clock time since the start.
+        With ``slice_s`` set, None is yielded after each such slice of CPU time.
         """
         stats = self.stats
         clock = time.perf_counter
@@ -149,6 +151,7 @@ class Planner:
         dpush, dpop = depths.append, depths.pop
         max_depth = self.max_depth
         guard = None       # made at the first check: tiny searches never pay for it
+        pause_at = None if self.slice_s is None else time.process_time() + self.slice_s
         ticks = stats.expansions
         stats.expansions += 1
         try:
@@ -188,6 +191,10 @@ class Planner:
                     if timeout is not None and clock() - stats.started > timeout:
                         stats.timed_out = True       # wall clock, output included
                         return
+                    if pause_at is not None and time.process_time() >= pause_at:
+                        spent += clock() - t0
+                        yield None                   # see slice_s: another search's turn
+                        t0, pause_at = clock(), time.process_time() + self.slice_s
                     if not ticks & 4095:
                         if guard is None:
                             guard = MemoryGuard(self.max_memory)
@@ -274,7 +281,7 @@ class Planner:
                 key = None
                 if loops is not None:
                     key = loops.key(task)
-                    if key in loops.active:     # see loops.py
+                    if key in loops.active and loops.is_loop(node, key):   # see loops.py
                         loops.cut += 1
                         methods = ()
                 for index, (m, unify_head, branches) in enumerate(methods):
