@@ -30,7 +30,7 @@ from htn.jshop.plans.plan import Plan, Step
 from htn.jshop.plans.tree import TaskTree
 
 from .ground_formulas import holds, satisfied
-from .grounding import ground
+from .grounding import ground, grounding_steps
 from .heuristics import HEURISTICS, INF
 from .limits import MemoryGuard, MemoryLimit
 from .stats import Stats
@@ -59,8 +59,11 @@ class BestFirst:
         """Ground the problem and build the heuristic (the first call of
         :meth:`plans` does it otherwise)."""
         if self.model is None:
-            self.model = ground(self.domain, self.instance)
-            self.h = HEURISTICS[self.heuristic_name](self.model)
+            self._prepared(ground(self.domain, self.instance))
+
+    def _prepared(self, model) -> None:
+        self.model = model
+        self.h = HEURISTICS[self.heuristic_name](model)
 
     # ------------------------------------------------------------ search
     def plans(self, timeout: Optional[float] = None) -> Iterator[Optional[Plan]]:
@@ -70,7 +73,20 @@ class BestFirst:
         stats.started = time.perf_counter()
         cpu = time.process_time
         pause_at = cpu() + self.slice_s if self.slice_s is not None else None
-        self.prepare()
+        if self.model is None:         # grounding pauses and times out like the search
+            steps = grounding_steps(self.domain, self.instance)
+            while True:
+                try:
+                    next(steps)
+                except StopIteration as done:
+                    self._prepared(done.value)
+                    break
+                if pause_at is not None and cpu() >= pause_at:
+                    yield None
+                    pause_at = cpu() + self.slice_s
+                if timeout is not None and time.perf_counter() - stats.started > timeout:
+                    stats.timed_out = True
+                    return
         model, h, w = self.model, self.h, self.weight
         actions, methods_of = model.actions, model.methods_of
         net0 = body_items(model.roots, model.root_order)

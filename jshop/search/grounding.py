@@ -82,6 +82,17 @@ class GroundModel:
 def ground(domain: S.Domain, instance: S.ProblemInstance) -> GroundModel:
     """The grounded problem (see the module docstring); raises
     :class:`NotGroundable` for what this search does not handle."""
+    steps = grounding_steps(domain, instance)
+    while True:
+        try:
+            next(steps)
+        except StopIteration as done:
+            return done.value
+
+
+def grounding_steps(domain: S.Domain, instance: S.ProblemInstance):
+    """:func:`ground` as a generator that yields None between small steps
+    (so that a portfolio can pause it) and returns the model."""
     return _Grounder(domain, instance).run()
 
 
@@ -106,7 +117,7 @@ class _Grounder:
             self.roots, self.root_order = [m.head], True
 
     # ------------------------------------------------------------ 1. facts
-    def reachable_facts(self) -> State:
+    def reachable_facts(self):
         state = State()
         implied = self.domain.implied
         for atom in (*self.domain.facts, *self.instance.state):
@@ -132,6 +143,7 @@ class _Grounder:
         while changed:
             changed = False
             for op, sat, adds, foralls in programs:
+                yield
                 new = []
                 for env in sat([None] * op.nvars):
                     for pred, args in adds:
@@ -145,9 +157,9 @@ class _Grounder:
         return state
 
     # ------------------------------------------------------------ 2. top down
-    def run(self) -> GroundModel:
+    def run(self):
         model = self.model
-        reach = self.reachable_facts()
+        reach = yield from self.reachable_facts()
         static = {}
         for pred, lst in reach.atoms.items():
             if pred not in self.dynamic:
@@ -168,6 +180,7 @@ class _Grounder:
                       for name, ms in self.methods.items()}
         todo, seen = list(roots), set(roots)
         while todo:
+            yield
             t = todo.pop()
             name, args = model.tasks[t]
             if name.startswith("!"):

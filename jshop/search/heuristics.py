@@ -31,6 +31,7 @@ from .ground_formulas import positive_bits
 from .task_networks import tasks
 
 INF = float("inf")
+CACHED_STATES = 256
 
 
 class _Relaxation:
@@ -122,16 +123,28 @@ class RelaxedComposition:
     def __init__(self, model):
         self.relaxation = _Relaxation(model)
         self.goal = _bits(model.goal[0]) if model.goal is not None and model.goal[0] > 0 else []
+        self.everything = set(range(self.relaxation.nodes))
+        self._costs: dict = {}      # state -> its costs, for the latest states
 
     def __call__(self, state: int, net: tuple) -> float:
+        """The costs depend on the state only: the successors that apply a
+        method (all but one, in a totally ordered network) share them with
+        their parent, so each state's costs are computed once, completely."""
         r = self.relaxation
-        needed = [r.nfacts + t for t in tasks(net)] + self.goal
-        if not needed:
-            return 0
-        cost = r.costs(_bits(state), set(needed))
+        cost = self._costs.get(state)
+        if cost is None:
+            if len(self._costs) >= CACHED_STATES:
+                self._costs.pop(next(iter(self._costs)))
+            cost = self._costs[state] = r.costs(_bits(state), self.everything)
         total = 0
-        for n in needed:
+        for n in self.goal:
             c = cost.get(n)
+            if c is None:
+                return INF
+            total += c
+        nfacts = r.nfacts
+        for t in tasks(net):
+            c = cost.get(nfacts + t)
             if c is None:
                 return INF
             total += c
