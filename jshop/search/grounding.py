@@ -22,7 +22,7 @@ ones: they only cut method instances that have no plan below them.
 from __future__ import annotations
 
 from htn.jshop.language import syntax as S
-from htn.jshop.language.terms import Var, subst
+from htn.jshop.language.terms import Var, subst, variables
 from htn.jshop.logic.compile import head_unifier
 from htn.jshop.logic.engine import Logic
 from htn.jshop.logic.state import State
@@ -178,13 +178,15 @@ class _Grounder:
                     for name, ops in self.domain.operators.items()}
         self.heads = {name: [(m, head_unifier(m.head.args)) for m in ms]
                       for name, ms in self.methods.items()}
+        self.executable: dict = {}      # (name, args) -> GroundAction or None
+        self.head_bound: dict = {}
         todo, seen = list(roots), set(roots)
         while todo:
             yield
             t = todo.pop()
             name, args = model.tasks[t]
             if name.startswith("!"):
-                a = self._action(name, args)
+                a = self.executable.get((name, args)) or self._action(name, args)
                 if a is not None:
                     model.actions[t] = a
                 continue
@@ -214,13 +216,26 @@ class _Grounder:
             env = [None] * op.nvars
             if not unify(args, env):
                 continue
-            pre = compile_residual(self._residual(op.pre.expr, env))
-            if pre is None:
+            if self._bound_by_head(op):     # the common case: no exists to enumerate
+                witness = env
+                pre = compile_residual(self.formulas.ground(op.pre.expr, env))
+            else:
+                pre = compile_residual(self._residual(op.pre.expr, env))
+                witness = next(self.formulas.satisfiers(op.pre.expr, env), None)
+            if pre is None or witness is None:
                 continue
-            witness = next(self.formulas.satisfiers(op.pre.expr, env))
             dels, adds, effects = self._effects(op, witness)
             return GroundAction(name, args, op, pre, dels, adds, effects, op.cost)
         return None
+
+    def _bound_by_head(self, op: S.Operator) -> bool:
+        """Whether the head binds every variable of the precondition outside
+        its ``forall`` s (which the formula grounder expands itself)."""
+        hit = self.head_bound.get(id(op))
+        if hit is None:
+            head = {v.index for v in variables(op.head.args, [])}
+            hit = self.head_bound[id(op)] = _top_variables(op.pre.expr) <= head
+        return hit
 
     def _effects(self, op: S.Operator, env: list):
         masks = [0, 0]
@@ -261,14 +276,38 @@ class _Grounder:
             raise NotGroundable(f"method {m.name}: a nested task list")
         groups: dict = {}
         for nb in self.formulas.satisfiers(branch.pre.expr, env):
-            body = tuple(model.task_id(x.name, subst(x.args, nb)) for x in items)
-            if any(None in model.tasks[s][1] for s in body):
-                raise NotGroundable(f"method {m.name}: a subtask argument no condition binds")
-            groups.setdefault(body, []).append(self.formulas.ground(branch.pre.expr, nb))
+            residual = self.formulas.ground(branch.pre.expr, nb)
+            if residual is False:
+                continue
+            body = tuple((x.name, subst(x.args, nb)) for x in items)
+            if body not in groups:
+                if any(None in args for _, args in body):
+                    raise NotGroundable(f"method {m.name}: a subtask argument no condition "
+                                        "binds")
+                # an action that can never apply kills the method at once, before
+                # its compound subtasks are grounded (PANDA prunes them bottom-up)
+                if not all(self._executable(name, args) for name, args in body
+                           if name.startswith("!")):
+                    groups[body] = None
+                    continue
+                groups[body] = []
+            if groups[body] is not None:
+                groups[body].append(residual)
         for body, residuals in groups.items():
+            if residuals is None:
+                continue
             pre = compile_residual(disj(residuals))
             if pre is not None:
-                yield GroundMethod(t, m, pre, body, branch.tasks.order_flag)
+                ids = tuple(model.task_id(name, args) for name, args in body)
+                yield GroundMethod(t, m, pre, ids, branch.tasks.order_flag)
+
+    def _executable(self, name: str, args: tuple) -> bool:
+        """Whether the ground action can apply in some reachable state (kept
+        for the action's task, which the top-down pass reads later)."""
+        key = (name, args)
+        if key not in self.executable:
+            self.executable[key] = self._action(name, args)
+        return self.executable[key] is not None
 
     # ------------------------------------------------------------ 3. bottom up
     def _prune(self) -> None:
@@ -284,3 +323,22 @@ class _Grounder:
         for t, ms in model.methods_of.items():
             ms[:] = [gm for gm in ms if all(s in alive for s in gm.body)] if t in alive else []
         self.alive = alive
+
+
+def _top_variables(e) -> set:
+    """The variable slots of a formula outside its ``forall`` s."""
+    out: set = set()
+    stack = [e]
+    while stack:
+        x = stack.pop()
+        if isinstance(x, S.Atom):
+            out.update(v.index for v in variables(x.args, []))
+        elif isinstance(x, (S.And, S.Or)):
+            stack.extend(x.items)
+        elif isinstance(x, S.Not):
+            stack.append(x.expr)
+        elif isinstance(x, S.Equal):
+            out.update(v.index for v in variables((x.left, x.right), []))
+        elif not isinstance(x, S.ForAll):
+            raise NotGroundable(f"{type(x).__name__} in a precondition")
+    return out
