@@ -1,11 +1,14 @@
 """``--search auto``: depth-first and heuristic search as a portfolio.
 
 The two searches of :mod:`htn.jshop.search.searches` run in turns in one
-process, each for a slice of CPU time (half a second at first, doubling to
-at most four), so that together they stay within the time limit: JSHOP2's
+process, each for a slice of CPU time (depth-first search half a second
+at first, doubling to at most four, the heuristic search three times as
+long), so that together they stay within the time limit: JSHOP2's
 depth-first search is fast where the written method order leads to a plan
-(most IPC total-order domains), the greedy best-first search with the
-relaxed composition heuristic where depth-first search is stuck. The first
+(most IPC total-order domains: within a second on the shared sample, so it
+goes first), the greedy best-first search with the relaxed composition
+heuristic where depth-first search is stuck, and it needs the time to
+ground the problem first. The first
 plan found wins and ``stats.found_by`` says by which. Depth-first search
 with its loop check may give up; the heuristic search, with duplicate
 detection on a finite grounded space, says "no plan" only when there is
@@ -26,6 +29,7 @@ from .planner import Planner
 from .stats import Stats
 
 FIRST_SLICE, LAST_SLICE = 0.5, 4.0
+HEURISTIC_SHARE = 3     # CPU slices of the heuristic search per depth-first slice
 
 
 class Portfolio:
@@ -51,7 +55,7 @@ class Portfolio:
         try:
             while live:
                 search = live[turn % len(live)]
-                search.slice_s = slice_s
+                search.slice_s = slice_s * (HEURISTIC_SHARE if search is self.gbfs else 1)
                 stream = streams[id(search)]
                 if stream is None:
                     stream = streams[id(search)] = search.plans(timeout)
