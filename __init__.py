@@ -8,35 +8,68 @@ One import package. Its parts are the repository's top-level folders:
 * :mod:`htn.robot` - robot back ends: PyBullet (``sim`` extra), projection, symbolic;
 * :mod:`htn.transform` - plan transformations over task trees;
 * :mod:`htn.evaluation` - their evaluation over many runs (``eval`` extra);
+* :mod:`htn.view` - the browser view of a run or a log (``view`` extra);
 * :mod:`htn.api` - the use cases, one function each (what the command line calls);
 * :mod:`htn.cli` - the ``htn`` command line (also ``python -m htn``).
+
+The use cases are callable from here (each imported on first use, so that
+``import htn`` stays fast)::
+
+    import htn
+    plans = htn.plan("domains/domestic.jshop", "problems/bring_object.jshop", plans=3)
+    for p in plans: ...                         # plans with their task trees
+    result = htn.run(p, domain=plans.domain, problem=plans.problem, robot="symbolic")
+
+:func:`plan`, :func:`run`, :func:`validate`, :func:`transform`,
+:func:`evaluate` and :func:`stats` (see :mod:`htn.api` for their
+signatures). ``htn.transform`` is also the package of the transformation
+framework (``htn.transform.framework``); calling it runs the use case.
 
 The bundled example domains and problems are in :data:`EXAMPLES`; the
 install extras and the modules each brings are in :data:`EXTRAS`.
 """
-from pathlib import Path
+import types
 
-EXAMPLES = Path(__file__).resolve().parent
-"""Folder holding the bundled ``domains/`` and ``problems/``."""
+from . import transform as _transform_package
+from .installation import EXAMPLES, EXTRAS, missing_modules
 
-EXTRAS = {
-    "sim": ("pybullet", "numpy", "PIL"),       # PyBullet robots, snapshots
-    "eval": ("scipy", "matplotlib", "distributed"),   # htn evaluate: statistics, plots, Dask
-}
+__all__ = ["EXAMPLES", "EXTRAS", "missing_modules", "plan", "run", "validate", "transform",
+           "evaluate", "stats"]
+
+# the use cases by name: the module of htn.api that holds each (imported on first use)
+USE_CASES = {"plan": "htn.api.plan", "run": "htn.api.run", "validate": "htn.api.validate",
+             "transform": "htn.api.transform", "evaluate": "htn.api.evaluate",
+             "stats": "htn.api.stats"}
 
 
-def missing_modules(extra: str) -> list[str]:
-    """The modules of an install extra that cannot be imported here."""
-    from importlib.util import find_spec
-    return [m for m in EXTRAS[extra] if find_spec(m) is None]
+def _use_case(name: str):
+    from importlib import import_module
+    return getattr(import_module(USE_CASES[name]), name)
+
+
+class _CallablePackage(types.ModuleType):
+    """The class of ``htn.transform``: the package of the transformation
+    framework, which, called, runs the transform use case
+    (:func:`htn.api.transform.transform`)."""
+
+    def __call__(self, *args, **kwargs):
+        return _use_case("transform")(*args, **kwargs)
+
+
+_transform_package.__class__ = _CallablePackage
 
 
 def __getattr__(name):
+    if name in USE_CASES:
+        value = _use_case(name)
+        globals()[name] = value
+        return value
     # the version is read from the installed metadata only when asked for
     if name == "__version__":
-        from importlib.metadata import PackageNotFoundError, version
-        try:
-            return version("htn")
-        except PackageNotFoundError:
-            return "0+unknown"
+        from .installation import version
+        return version()
     raise AttributeError(f"module 'htn' has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted({*globals(), *USE_CASES})

@@ -1,4 +1,5 @@
-"""Planning statistics for a scenario, as in Table 1 of the planning paper.
+"""The stats use case: planning statistics for scenarios, as in Table 1 of
+the planning paper (``htn stats``).
 
 For one domain and problem: how many plans the planner returns (and how many
 distinct action sequences), how long finding all of them takes, the shortest
@@ -6,13 +7,23 @@ plan's length, and the size of the domain (methods and operators).
 """
 from __future__ import annotations
 
+import os
 import statistics
 import time
 from dataclasses import asdict, dataclass
+from pathlib import Path
 from typing import Optional
 
+from htn.installation import EXAMPLES
+from htn.jshop.language.errors import HtnError
 from htn.jshop.readers.load import load_domain, load_problem
 from htn.jshop.search.planner import Planner
+
+from .inputs import function_table
+
+# the paper's two scenarios, as bundled examples
+SCENARIOS = [("domains/domestic.jshop", "problems/bring_object.jshop"),
+             ("domains/domestic.jshop", "problems/guide_robot.jshop")]
 
 # Table 1 of Shpieva & Awaad: the paper's own figures for its two scenarios.
 PAPER = {
@@ -39,9 +50,43 @@ class ScenarioStats:
         return asdict(self)
 
 
+def bundled_file(rel: str) -> str:
+    """A bundled example (``domains/...``, ``problems/...``), shown relative
+    to the current folder when it lies below it."""
+    path = EXAMPLES / rel
+    if not path.is_file():
+        raise HtnError(f"the bundled example {rel} is missing from this installation", str(path))
+    try:
+        return str(path.relative_to(Path.cwd()))
+    except ValueError:
+        return str(path)
+
+
+def scenarios(files=()) -> list[tuple[str, str]]:
+    """The (domain, problem) pairs of ``files``: a DOMAIN and then PROBLEMs in
+    it; without files, the paper's two scenarios (bring an object, guide a
+    robot; the bundled examples)."""
+    files = [os.fspath(f) for f in files]
+    if len(files) == 1:
+        raise HtnError("give a domain and at least one problem (or no files)")
+    if not files:
+        return [(bundled_file(d), bundled_file(p)) for d, p in SCENARIOS]
+    return [(files[0], p) for p in files[1:]]
+
+
+def stats(files=(), *, repeat: int = 1, functions=None,
+          timeout: Optional[float] = None) -> list[ScenarioStats]:
+    """The statistics of each scenario of ``files`` (see :func:`scenarios`):
+    every plan enumerated ``repeat`` times, the median time reported;
+    ``timeout`` bounds each enumeration (checked between expansions)."""
+    table = function_table(functions)
+    return [scenario_stats(d, p, table, repeat, timeout) for d, p in scenarios(files)]
+
+
 def scenario_stats(domain_path: str, problem_path: str, functions=None, repeat: int = 1,
                    timeout: Optional[float] = None) -> ScenarioStats:
     """Enumerate every plan ``repeat`` times; report the median wall time."""
+    functions = function_table(functions)
     domain = load_domain(domain_path, functions)
     problem = load_problem(problem_path, functions)
     times = []

@@ -7,49 +7,7 @@ import os
 
 import click
 
-from htn.jshop.language.errors import HtnError
-
-from .extras import require_extra, require_robot_extra
-from .output import check_output_file, check_output_folder, make_output_folder, warn
-
-
-def _domain_for(problem: str) -> str:
-    """The problem's domain file: ../domains/NAME.jshop beside it, domains/
-    here, or the bundled one of that name."""
-    from htn import EXAMPLES
-    from htn.jshop.readers.load import load_problem
-    name = load_problem(problem).domain_name
-    for base in (os.path.join(os.path.dirname(os.path.abspath(problem)), "..", "domains"),
-                 "domains", str(EXAMPLES / "domains")):
-        path = os.path.normpath(os.path.join(base, f"{name}.jshop"))
-        if os.path.isfile(path):
-            return path
-    raise HtnError(f"cannot find the domain file {name}.jshop; give it with --domain", problem)
-
-
-def _check_options(problem, domain, robot, faults, workers, scheduler, plot_dir, records):
-    """Every input and output option, before any work starts (the scheduler's
-    address is checked where it is used, by ``open_runner``; nothing is
-    written before that)."""
-    require_extra("eval", "htn evaluate")
-    if not os.path.isfile(problem):
-        raise HtnError("no such file", problem)
-    if domain is not None and not os.path.isfile(domain):
-        raise HtnError("no such file", domain)
-    from htn.evaluation.runs import MEASURES
-    if robot not in MEASURES:
-        raise HtnError(f"--robot {robot}: this robot cannot be evaluated (choose from "
-                       f"{', '.join(MEASURES)})")
-    require_robot_extra(robot, f"htn evaluate --robot {robot}")
-    if scheduler is not None and workers is not None:
-        raise HtnError("--workers starts a local cluster, --scheduler uses an existing "
-                       "one and its workers: give one of them")
-    from htn.robot.faults import parse_faults
-    parse_faults(faults, MEASURES[robot].fault_kinds)
-    if plot_dir is not None:
-        check_output_folder(plot_dir, "--plot")
-    if records is not None:
-        check_output_file(records, "--records")
+from .output import warn
 
 
 @click.command("evaluate")
@@ -94,52 +52,40 @@ def evaluate(problem, domain, runs, seed, robot, faults, workers, scheduler, rec
       htn evaluate problems/tray_three.jshop --robot pybullet --faults slip=0.1 --runs 20
       htn evaluate problems/tray_three.jshop --scheduler tcp://10.0.0.5:8786
     """
-    _check_options(problem, domain, robot, faults, workers, scheduler, plot_dir, records)
-    domain = domain or _domain_for(problem)
-
     from rich.console import Console
     from rich.progress import Progress
 
-    from htn.evaluation.cluster import ClusterError, open_runner
-    from htn.evaluation.study import RecordsFile, plot, prepare_study, run_study
+    from htn.api.evaluate import evaluate as run_evaluation
+    from htn.evaluation.cluster import ClusterError
 
     console = Console(stderr=True)
-    stream = None
+    bar = Progress(console=console, transient=True, disable=not console.is_terminal)
+    task = None
+
+    def on_start(n_workers: int, notes: list) -> None:
+        nonlocal task
+        for note in notes:
+            warn(f"warning: {note}")
+        task = bar.add_task(f"{robot} runs on {n_workers} worker(s)", total=runs)
+        bar.start()
+
+    def on_batch(new: list, done: float) -> None:
+        bar.advance(task, done)
+
     try:
-        with open_runner(workers or 1, scheduler) as runner:
-            if plot_dir is not None:    # all options are checked now (the scheduler last)
-                make_output_folder(plot_dir, "--plot")
-            for note in runner.notes:
-                warn(f"warning: {note}")
-            study, applied = prepare_study(domain, problem, robot, faults)
-            stream = RecordsFile(records) if records else None
-            with Progress(console=console, transient=True,
-                          disable=not console.is_terminal) as bar:
-                task = bar.add_task(f"{robot} runs on {runner.workers} worker(s)", total=runs)
-
-                def on_batch(new: list) -> None:
-                    bar.advance(task, len(new) / len(study.plans))
-                    if stream:
-                        stream.write(new)
-
-                comp = run_study(study, problem, applied, runs, seed, runner, on_batch)
+        result = run_evaluation(problem, domain=domain, runs=runs, seed=seed, robot=robot,
+                                faults=faults, workers=workers, scheduler=scheduler,
+                                records=records, plot=plot_dir, on_start=on_start,
+                                on_batch=on_batch, say=warn)
     except ClusterError as exc:
         raise click.ClickException(str(exc)) from None
     finally:
-        if stream:
-            stream.close()
-    if stream:
-        stream.finish(comp)
-    stats = comp.metrics()
-    plots = plot(comp, plot_dir) if plot_dir else []
+        bar.stop()
     if as_json:
-        click.echo(json.dumps({"problem": problem, "runs": runs, "applied": comp.applied,
-                               "metrics": stats, "plots": plots, "robot": robot,
-                               "results": comp.results(), "workers": comp.workers,
-                               "runs_per_s": round(comp.runs_per_s, 3)}, indent=1))
+        click.echo(json.dumps(result.document(), indent=1))
         return
-    _print_table(comp, stats, problem)
-    for path in plots:
+    _print_table(result.comparison, result.metrics, problem)
+    for path in result.plots:
         click.echo(f"plot: {path}")
 
 

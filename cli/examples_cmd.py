@@ -7,6 +7,7 @@ from pathlib import Path
 
 import click
 
+from htn.installation import EXAMPLES
 from htn.jshop.language.errors import HtnError
 
 from .output import stdout_is_terminal
@@ -16,7 +17,6 @@ FOLDERS = {"domains": ("*.jshop", "*.toml"), "problems": ("*.jshop",)}
 
 def bundled() -> list[Path]:
     """The bundled example files, domains first (retry limits beside them)."""
-    from htn import EXAMPLES
     out: list[Path] = []
     for folder, patterns in FOLDERS.items():
         for pattern in patterns:
@@ -50,7 +50,6 @@ def examples(dest, force):
       htn examples my-robot && cd my-robot
       htn plan domains/domestic.jshop problems/bring_object.jshop -o plan.txt
     """
-    from htn import EXAMPLES
     files = bundled()
     if not files:
         raise HtnError("no bundled examples found in this installation", str(EXAMPLES))

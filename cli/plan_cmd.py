@@ -13,10 +13,11 @@ import time
 
 import click
 
+from htn.api.files import AtomicFile
 from htn.jshop.search.limits import DEFAULT_MAX_DEPTH
 from htn.jshop.search.searches import SEARCHES
 
-from .output import AtomicFile, console, stdout_is_terminal, warn
+from .output import console, stdout_is_terminal, warn
 from .signals import DeadlineExceeded, deadline, held, interrupt_exit, raise_again
 
 FORMATS = ["text", "jshop", "json", "ipc"]
@@ -37,7 +38,8 @@ FORMATS = ["text", "jshop", "json", "ipc"]
                    "competition's verifier reads.")
 @click.option("-o", "--output", type=click.Path(dir_okay=False),
               help="Also write the plans (jshop format, with a header naming the domain and "
-                   "problem files) to this file, for 'htn run'.")
+                   "problem files, and each plan's task tree as comment lines) to this file, "
+                   "for 'htn run'.")
 @click.option("--timeout", type=click.FloatRange(min=0, min_open=True), metavar="SECONDS",
               help="Stop searching after this many seconds (wall clock, user functions "
                    "included) and keep what was found.")
@@ -80,11 +82,8 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
       htn plan DOMAIN PROBLEM --all --format jshop
       htn plan DOMAIN PROBLEM -o plan.txt && htn run plan.txt --sim
     """
-    from htn.jshop.language.functions import FunctionTable
-    from htn.jshop.plans.planfile import header
-    from htn.jshop.readers.checks import check_domain, check_problem
-    from htn.jshop.readers.load import load_inputs
-    from htn.jshop.readers.checks import compat_warning
+    from htn.api.plan import UnsupportedSearch, plan as find_plans
+    from htn.jshop.plans.planfile import header, plan_text
 
     started = time.perf_counter()
     fmt = fmt or ("text" if stdout_is_terminal() else "jshop")
@@ -92,54 +91,69 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
     # complete new result: at least one whole plan (also after a timeout,
     # Ctrl-C, SIGTERM or a closed stdout); otherwise an earlier file stays
     sinks: list = []
-    found = 0
+    written = _Written()
     try:
         out = AtomicFile(output, "-o") if output else None
         sinks.append(out)
         dot_out = _DotFile(AtomicFile(dot, "--dot")) if dot else None
         sinks.append(dot_out)
-        table = FunctionTable()
-        if functions:
-            table.load_file(functions)
-        dom, prob = load_inputs(domain, problem, table)
-        from htn.jshop.search.searches import refusal
-        why = refusal(search_name, dom, all_plans)
-        if why:
-            raise click.UsageError(why)
-        warnings = check_domain(dom) + check_problem(dom, prob)
-        if jshop2_compat:
-            warnings += filter(None, [compat_warning(dom)])
+        try:
+            plans = find_plans(domain, problem, plans=None if all_plans else n_plans,
+                               timeout=timeout, functions=functions,
+                               jshop2_compat=jshop2_compat, max_depth=max_depth,
+                               max_memory=max_memory, explain=explain or explain_all,
+                               explain_all=explain_all, search=search_name,
+                               trees=show_tree or bool(dot) or bool(output)
+                               or fmt in ("json", "ipc"),
+                               tree_paths=show_tree or bool(dot) or fmt == "json")
+        except UnsupportedSearch as exc:
+            raise click.UsageError(exc.message) from None
         if not quiet:
-            for w in warnings:
+            for w in plans.warnings:
                 warn(w)
         if out:
             out.write(header(output, domain, problem, functions))
         render = _Renderer(fmt, show_tree, domain, problem)
-        render.spelling = {**dom.spelling, **prob.spelling}   # objects as the problem spells them
-        search = _Search(dom, prob, table, jshop2_compat=jshop2_compat, max_depth=max_depth,
-                         max_memory=max_memory << 20 if max_memory else None,
-                         explain=explain or explain_all, explain_all=explain_all,
-                         record_trees=show_tree or bool(dot) or fmt in ("json", "ipc"),
-                         tree_paths=show_tree or bool(dot) or fmt == "json",
-                         search_name=search_name)
-        totals, stop = search.run(render, out, dot_out, started, timeout,
-                                  None if all_plans else n_plans)
-        found = totals["plans_found"]
+        # objects as the problem spells them (HDDL names are case-insensitive)
+        render.spelling = {**plans.domain.spelling, **plans.problem.spelling}
+        stop = None
+        try:
+            with deadline(timeout, started), plans:
+                for p in plans:
+                    with held():    # the files first: they outlive a closed stdout
+                        if out:
+                            out.write(plan_text(p))
+                            out.flush()
+                        if dot_out and p.tree is not None:
+                            dot_out.add(p.tree)
+                        written.count(p)
+                        render.plan(p)
+                    raise_again()       # a Ctrl-C a finalizer swallowed
+        except DeadlineExceeded:
+            plans.stats["timed_out"] = True
+        except (KeyboardInterrupt, BrokenPipeError) as exc:
+            plans.stats["interrupted"] = isinstance(exc, KeyboardInterrupt)
+            stop = exc
+        # what the streams and files hold: a plan counts once it is wholly written
+        totals = {**plans.stats, "plans_found": written.plans, "shortest_plan": written.shortest}
+        found = written.plans
     finally:
         for sink in filter(None, sinks):
-            if found:
+            if written.plans:
                 sink.commit()
             else:
                 sink.discard()
+    if plans.bound is not None:
+        warn(plans.bound)
     if isinstance(stop, BrokenPipeError):
         raise stop          # the reader went away: main() exits quietly
     if not found and not quiet and stop is None and not totals["timed_out"] \
             and not totals["depth_limit_reached"] and not totals["memory_limit_reached"]:
-        search.explain_no_plan()
-    if search.explainers:
-        totals["explain"] = [e.to_dict(full=explain_all) for e in search.explainers]
+        plans.explain()
+    if plans.explanations:
+        totals["explain"] = [e.to_dict(full=explain_all) for e in plans.explanations]
         if fmt != "json":
-            for e in search.explainers:
+            for e in plans.explanations:
                 for line in e.lines(full=explain_all):
                     warn(line)
     render.finish(totals)
@@ -156,106 +170,17 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
         sys.exit(1)
 
 
-class _Search:
-    """The plans of every problem instance, streamed to the renderer and the
-    files, with the planner options of the command line."""
+class _Written:
+    """The plans written so far (to the files and the output stream)."""
 
-    def __init__(self, dom, prob, table, jshop2_compat, max_depth, max_memory, explain,
-                 explain_all, record_trees, tree_paths, search_name="dfs"):
-        self.dom, self.prob, self.table = dom, prob, table
-        self.search_name = search_name
-        self.options = dict(jshop2_compat=jshop2_compat, max_depth=max_depth,
-                            max_memory=max_memory)
-        self.explain, self.explain_all = explain, explain_all
-        self.record_trees = record_trees
-        self.tree_paths = tree_paths      # the IPC format needs no node paths
-        self.explainers: list = []     # one per problem instance, see --explain
+    def __init__(self):
+        self.plans = 0
+        self.shortest = None
 
-    def run(self, render, out, dot_out, started, timeout, limit):
-        """Returns the summed statistics and what stopped the stream early
-        (Ctrl-C, SIGTERM or a closed stdout), if anything."""
-        from htn.jshop.search.searches import make_search
-
-        totals = {"plans_found": 0, "search_ms": 0.0, "expansions": 0,
-                  "operator_applications": 0, "backtracks": 0, "timed_out": False,
-                  "interrupted": False, "depth_limit_reached": False,
-                  "memory_limit_reached": False, "shortest_plan": None}
-        stop = None
-        try:
-            with deadline(timeout, started):
-                for k, inst in enumerate(self.prob.instances):
-                    remaining = None
-                    if timeout is not None:
-                        remaining = timeout - (time.perf_counter() - started)
-                        if remaining <= 0:
-                            totals["timed_out"] = True
-                            break
-                    explainer = None
-                    if self.explain:
-                        from htn.jshop.plans.explain import Explainer
-                        explainer = Explainer(keep_all=self.explain_all)
-                        self.explainers.append(explainer)
-                    planner = make_search(self.search_name, self.dom, inst, self.table,
-                                          record_trees=self.record_trees,
-                                          tree_paths=self.tree_paths, explain=explainer,
-                                          **self.options)
-                    try:
-                        for p in planner.plans(remaining):
-                            p.instance = k
-                            with held():    # the files first: they outlive a closed stdout
-                                if out:
-                                    out.write(p.to_jshop())
-                                    out.flush()
-                                if dot_out and p.tree is not None:
-                                    dot_out.add(p.tree)
-                                _count(totals, p)
-                                render.plan(p)
-                            raise_again()       # a Ctrl-C a finalizer swallowed
-                            if limit is not None and planner.stats.plans_found >= limit:
-                                break
-                    finally:
-                        _add_stats(totals, planner.stats.as_dict())
-                    if planner.stats.timed_out:
-                        totals["timed_out"] = True
-                        break
-                    if planner.stats.bound is not None:
-                        reached = planner.stats.as_dict()
-                        for key in ("depth_limit_reached", "memory_limit_reached"):
-                            totals[key] = reached[key]
-                        warn(planner.stats.bound)
-                        break
-        except DeadlineExceeded:
-            totals["timed_out"] = True
-        except (KeyboardInterrupt, BrokenPipeError) as exc:
-            totals["interrupted"] = isinstance(exc, KeyboardInterrupt)
-            stop = exc
-        totals["search_ms"] = round(totals["search_ms"], 3)
-        return totals, stop
-
-    def explain_no_plan(self) -> None:
-        """No plan: search again, recording dead ends this time (planning
-        without --explain pays nothing for them)."""
-        if self.explainers:
-            return
-        from htn.jshop.plans.explain import explain_search
-        self.explainers = [explain_search(self.dom, inst, self.table, **self.options)
-                           for inst in self.prob.instances]
-
-
-def _count(totals: dict, p) -> None:
-    """Count a plan once it is wholly written (what the files and streams hold)."""
-    totals["plans_found"] += 1
-    shortest = totals["shortest_plan"]
-    if shortest is None or len(p.steps) < shortest:
-        totals["shortest_plan"] = len(p.steps)
-
-
-def _add_stats(totals: dict, s: dict) -> None:
-    for key in ("expansions", "operator_applications", "backtracks"):
-        totals[key] += s[key]
-    totals["search_ms"] += s["search_ms"]
-    if "found_by" in s:       # --search auto: which search found the plans
-        totals["found_by"] = s["found_by"]
+    def count(self, p) -> None:
+        self.plans += 1
+        if self.shortest is None or len(p.steps) < self.shortest:
+            self.shortest = len(p.steps)
 
 
 class _DotFile:

@@ -12,7 +12,7 @@ from htn.jshop.language.errors import HtnError
 def check_display() -> None:
     """--gui needs an X server PyBullet can open a window on: check it answers
     (PyBullet itself exits without a word when it cannot)."""
-    import socket
+    import socket       # only for --gui: not at start-up
     disp = os.environ.get("DISPLAY")
     if not disp:
         raise click.UsageError("--gui needs a display (DISPLAY is not set); run headless without it")

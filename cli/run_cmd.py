@@ -2,17 +2,17 @@
 from __future__ import annotations
 
 import contextlib
-import os
 import sys
 
 import click
 
-from htn.jshop.language.errors import HtnError
+from htn.api.extras import require_robot_extra
+from htn.api.files import atomic_write, check_output_file, check_output_folder, make_output_folder
 
-from .extras import require_robot_extra
-from .output import check_output_file, check_output_folder, make_output_folder, stdout_is_terminal
+from .output import stdout_is_terminal, warn
 from .run_checks import check_display
 from .signals import Signals, held, interrupt_exit, silence_stdout
+from .view_cmd import keep_up, start_run_view, view_options, wait_for_page
 
 RUN_OPTIONS = ("plan_file", "robot_name", "sim", "faults", "seed", "retries", "replan",
                "plan_index", "domain", "problem", "functions")
@@ -55,13 +55,16 @@ RUN_OPTIONS = ("plan_file", "robot_name", "sim", "faults", "seed", "retries", "r
               help="Write the behaviour tree (py_trees' DOT export) before the run, and "
                    "again after it if it was repaired.")
 @click.option("-q", "--quiet", is_flag=True, help="Print only the summary.")
+@view_options
 @click.pass_context
 def run(ctx, plan_file, robot_name, sim, gui, snapshots, faults, seed, retries, replan,
-        log_path, from_log, plan_index, domain, problem, functions, bt_dot, quiet):
+        log_path, from_log, plan_index, domain, problem, functions, bt_dot, quiet,
+        view, view_host, view_port, view_wait):
     """Execute PLAN_FILE (written by 'htn plan -o') with per-action monitoring.
 
-    The plan's task tree runs as a behaviour tree (py_trees) of the same
-    shape; each step is an action state machine: execute (with hold-monitors
+    The plan's task tree (the one the plan file holds; planned again if it
+    holds none) runs as a behaviour tree (py_trees) of the same shape; each
+    step is an action state machine: execute (with hold-monitors
     on every tick), monitor, report (finished / verified / failed / aborted /
     retrying). With --replan a failed or aborted action is repaired in the
     task tree: the smallest enclosing task that has a plan from the observed
@@ -85,11 +88,15 @@ def run(ctx, plan_file, robot_name, sim, gui, snapshots, faults, seed, retries, 
       htn run --from-log run.jsonl          # the same run again
       htn run plan.txt --sim --faults moved=1 --replan
       htn run plan.txt --robot symbolic --faults effect=0.2
+      htn run plan.txt --sim --view          # watch it in a browser (prints the URL)
     """
+    if view_wait and not view:
+        raise click.UsageError("--view-wait waits for the page of --view: give --view too")
     signals = Signals()
     try:
         _run(ctx, signals, plan_file, robot_name, sim, gui, snapshots, faults, seed, retries,
-             replan, log_path, from_log, plan_index, domain, problem, functions, bt_dot, quiet)
+             replan, log_path, from_log, plan_index, domain, problem, functions, bt_dot, quiet,
+             web=(view_host, view_port, view_wait) if view else None)
     except KeyboardInterrupt as exc:        # before the robot runs: nothing to stop
         interrupt_exit(exc, now=True)       # now: PyBullet may have been interrupted
     finally:
@@ -97,19 +104,13 @@ def run(ctx, plan_file, robot_name, sim, gui, snapshots, faults, seed, retries, 
 
 
 def _run(ctx, signals, plan_file, robot_name, sim, gui, snapshots, faults, seed, retries,
-         replan, log_path, from_log, plan_index, domain, problem, functions, bt_dot, quiet):
-    from htn.executor.config import load_retries, parse_overrides
-    from htn.executor.dispatcher import TaskDispatcher
-    from htn.executor.log import EventLog, check_plan_digest, read_header, run_header
-    from htn.executor.machines import machine_for
-    from htn.executor.plan_tree import check_runnable, recover_tree
-    from htn.jshop.language.functions import FunctionTable
-    from htn.jshop.plans.planfile import read_plan_file
-    from htn.jshop.plans.validate import check_steps
-    from htn.jshop.readers.load import load_inputs
-    from htn.robot.backends import RobotRequest, backends, make_robot
+         replan, log_path, from_log, plan_index, domain, problem, functions, bt_dot, quiet,
+         web=None):
+    from htn.api.run import prepare, read_run_log
+    from htn.robot.backends import backends
     from htn.robot.interface import Robot
 
+    plan = plan_file
     if from_log:
         given = [max(p.opts, key=len) if isinstance(p, click.Option) else p.human_readable_name
                  for p in ctx.command.params if p.name in RUN_OPTIONS and
@@ -117,21 +118,19 @@ def _run(ctx, signals, plan_file, robot_name, sim, gui, snapshots, faults, seed,
         if given:
             raise click.UsageError(f"--from-log takes the run from the log; do not give "
                                    f"{', '.join(given)} as well")
-        rec = read_header(from_log)
-        plan_file, robot_name, seed, replan = rec["plan"], rec["robot"], rec["seed"], rec["replan"]
-        faults, plan_index = rec["faults"], rec["plan_index"]
-        domain, problem, functions = rec["domain"], rec["problem"], rec.get("functions")
-        retries = [",".join(f"{k}={v}" for k, v in rec["retries"].items())] if rec["retries"] else []
-        check_plan_digest(plan_file, rec.get("plan_sha256"), from_log)
+        logged = read_run_log(from_log)     # the plan file too, checked to be unchanged
+        plan, plan_file = logged.plan, logged.plan.path
+        robot_name, seed, replan = logged.robot, logged.seed, logged.replan
+        faults, plan_index, retries = logged.faults, logged.plan_index, logged.retries
+        domain, problem, functions = logged.domain, logged.problem, logged.functions
     if plan_file is None:
         raise click.UsageError("give a PLAN_FILE (or --from-log FILE.jsonl)")
     if sim and robot_name not in (None, "pybullet"):
         raise click.UsageError(f"--sim is --robot pybullet; it contradicts --robot {robot_name}")
     robot_name = robot_name or ("pybullet" if sim else None)
-    known = backends()
     if robot_name is None:
         raise click.UsageError("choose a robot: --sim (PyBullet) or --robot NAME "
-                               f"(known: {', '.join(sorted(known))})")
+                               f"(known: {', '.join(sorted(backends()))})")
     require_robot_extra(robot_name, "htn run --sim" if sim else f"htn run --robot {robot_name}")
     if gui:
         check_display()
@@ -140,42 +139,15 @@ def _run(ctx, signals, plan_file, robot_name, sim, gui, snapshots, faults, seed,
             check_output_file(path, option)
     if snapshots:
         check_output_folder(snapshots, "--snapshots")
-    pf = read_plan_file(plan_file)
-    domain = domain or pf.domain
-    problem = problem or pf.problem
-    functions = functions or pf.file("functions")
-    if not domain or not problem:
-        raise HtnError("the plan file names no domain or problem (write it with 'htn plan -o', "
-                       "or give --domain and --problem)", plan_file)
-    if plan_index > len(pf.plans):
-        raise HtnError(f"--plan-index {plan_index}: the file holds {len(pf.plans)} plan(s)",
-                       plan_file)
-    table = FunctionTable()
-    if functions:
-        table.load_file(functions)
-    dom, prob = load_inputs(domain, problem, table)
-    instance = prob.instances[0]
-    plan = pf.plans[plan_index - 1]
-    steps = plan.steps
-    check_steps(dom, steps, plan_file)
-    limits = load_retries(domain)
-    overrides = parse_overrides(retries)
-    unknown = sorted(op for op in overrides if op not in dom.operators)
-    if unknown:
-        raise HtnError(f"--retries: the domain {dom.name} has no operator "
-                       f"{', '.join(unknown)}")
-    limits.update(overrides)
-    check_runnable(dom, instance, plan, plan_file, table)
-    tree = recover_tree(dom, instance, steps, table, tasks=pf.notes.get("tasks", (None,))[0])
-
-    robot = make_robot(robot_name, RobotRequest(dom, instance, faults or "", seed, gui, table))
-    log = dispatcher = None
+    execution = prepare(plan, robot=robot_name, domain=domain, problem=problem,
+                        functions=functions, plan_index=plan_index, faults=faults or "",
+                        seed=seed, retries=retries, replan=replan, log=log_path, gui=gui)
+    if not quiet:
+        for note in execution.notes:
+            warn(note)
+    viewer = start_run_view(web[0], web[1]) if web else None    # a port in use: input error
+    robot = execution.robot
     try:
-        for s in steps:
-            if not s.internal and machine_for(s.name, dom.name, robot) is None:
-                raise HtnError(f"no action state machine is registered for {s.name} "
-                               f"(try --robot symbolic, or add one: entry points 'htn.actions')",
-                               plan_file, s.line, 1)
         if snapshots and type(robot).snapshot is Robot.snapshot:
             raise click.UsageError(f"--snapshots: the {robot_name} robot has no camera")
         if snapshots:   # only once the world could be built from the problem
@@ -183,12 +155,7 @@ def _run(ctx, signals, plan_file, robot_name, sim, gui, snapshots, faults, seed,
         # the log begins only together with the dispatcher that will end it
         # (an interrupt meanwhile arrives right after, see below)
         with held():
-            log = EventLog(log_path, clock=lambda: robot.sim_time)
-            log.emit(None, None, "header", None, "", **run_header(
-                plan_file, plan_index, domain, problem, functions, robot_name, seed,
-                faults or "", limits, replan, argv=["htn", *sys.argv[1:]]))
-            dispatcher = TaskDispatcher(robot, dom, instance, steps, limits, log,
-                                        replan=replan, functions=table, tree=tree)
+            dispatcher = execution.begin(argv=["htn", *sys.argv[1:]])
         if bt_dot:
             _write_dot(dispatcher.root, bt_dot)
         view = None
@@ -198,74 +165,58 @@ def _run(ctx, signals, plan_file, robot_name, sim, gui, snapshots, faults, seed,
                 view = LiveTreeView(lambda: dispatcher)
             else:
                 view = _PlainView()
-            log.listeners.append(view.event)
+            execution.listen(view.event)
         if snapshots:
-            log.listeners.append(_snapshotter(robot, snapshots))
+            execution.listen(_snapshotter(robot, snapshots))
+        if viewer:
+            viewer.attach(execution.log, dispatcher, robot)
+            if web[2]:
+                wait_for_page(viewer)
         signals.watch(dispatcher)
         with view or contextlib.nullcontext():
-            summary = dispatcher.run()
+            summary = execution.execute().summary
         signals.ignore()       # the robot holds and the log is complete: shut down in order
         if bt_dot and summary.replans:
             _write_dot(dispatcher.root, bt_dot)
     except KeyboardInterrupt as exc:
-        if dispatcher is None:     # no log yet: nothing to end
+        if execution.dispatcher is None:     # no log yet: nothing to end
             raise
         # outside dispatcher.run() (e.g. while --bt-dot is written): the log
         # still ends with the outcome and a summary
         signals.ignore()
-        summary = dispatcher.interrupted(str(exc))
+        summary = execution.interrupted(str(exc)).summary
     except BaseException as exc:
-        if log is not None:
-            log.emit(None, None, "summary", None, f"error: {type(exc).__name__}: {exc}",
-                     result="error")
+        execution.fail(exc)
         raise
     finally:
-        if log is not None:
-            log.close()
-        robot.close()
+        execution.close()
     try:
         click.echo(summary_line(summary))
     except BrokenPipeError:      # the reader went away: the exit code still tells
         silence_stdout()
     if summary.result == "interrupted":     # log closed, robot disconnected
         interrupt_exit(signals.received, now=True)
+    if viewer:                   # Ctrl-C ends the view; the exit code is the run's
+        keep_up(viewer, listen=signals.restore)
     sys.exit(0 if summary.result == "verified" else 1)
 
 
 def summary_line(summary) -> str:
     """``aborted: 3 of 8 steps verified, ...; aborted at step 4: (!grasp ...)``."""
-    line = (f"{summary.result}: {summary.verified} of {summary.steps} steps verified, "
-            f"{summary.retries} retries, {summary.replans} replans, "
-            f"{summary.sim_time:.1f} s simulated")
-    if summary.failed_step:
-        line += f"; {summary.result} at step {summary.failed_at}: {summary.failed_step}"
-    return line
+    return summary.line()
 
 
 def _write_dot(root, path: str) -> None:
-    """py_trees' DOT export of the tree. Node paths hold ':' (``:call 2``),
-    which pydot would read as a port: it is written as U+2236 (looks alike)."""
-    import py_trees
+    """py_trees' DOT export of the tree, with readable names (executor/bt_dot.py)."""
+    from htn.executor.bt_dot import behaviour_tree_dot
 
-    from .output import atomic_write
-    names = {b: b.name for b in root.iterate()}
-    for b in names:
-        b.name = b.name.replace(":", "\u2236")
-    try:
-        text = py_trees.display.dot_tree(root).to_string()
-    finally:
-        for b, name in names.items():
-            b.name = name
     with atomic_write(path, "--bt-dot") as fh:
-        fh.write(text)
+        fh.write(behaviour_tree_dot(root))
 
 
 def _snapshotter(robot, folder):
-    def on_event(rec):
-        if rec["event"] in ("verified", "failed", "aborted") and rec["step"] is not None:
-            name = f"step{rec['step']:02d}_try{rec['attempt'] or 1}_{rec['event']}.png"
-            robot.snapshot(os.path.join(folder, name))
-    return on_event
+    from htn.executor.snapshots import snapshot_listener
+    return snapshot_listener(robot, folder)
 
 
 class _PlainView:

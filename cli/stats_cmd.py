@@ -6,26 +6,8 @@ from pathlib import Path
 
 import click
 
-from htn.jshop.language.errors import HtnError
-
 from .output import console
 from .signals import DeadlineExceeded, deadline
-
-SCENARIOS = [("domains/domestic.jshop", "problems/bring_object.jshop"),
-             ("domains/domestic.jshop", "problems/guide_robot.jshop")]
-
-
-def bundled_file(rel: str) -> str:
-    """A bundled example (``domains/...``, ``problems/...``), shown relative
-    to the current folder when it lies below it."""
-    from htn import EXAMPLES
-    path = EXAMPLES / rel
-    if not path.is_file():
-        raise HtnError(f"the bundled example {rel} is missing from this installation", str(path))
-    try:
-        return str(path.relative_to(Path.cwd()))
-    except ValueError:
-        return str(path)
 
 
 @click.command("stats")
@@ -48,17 +30,13 @@ def stats(files, repeat, as_json, functions, timeout):
       htn stats
       htn stats domains/domestic.jshop problems/bring_coke.jshop problems/bring_two.jshop
     """
-    from htn.api.stats import PAPER, scenario_stats
-    from htn.jshop.language.functions import FunctionTable
+    from htn.api.inputs import function_table
+    from htn.api.stats import PAPER, scenario_stats, scenarios
 
     if len(files) == 1:
         raise click.UsageError("give a DOMAIN and at least one PROBLEM (or no arguments)")
-    pairs = SCENARIOS if not files else [(files[0], p) for p in files[1:]]
-    if not files:
-        pairs = [(bundled_file(d), bundled_file(p)) for d, p in pairs]
-    table = FunctionTable()
-    if functions:
-        table.load_file(functions)
+    pairs = scenarios(files)
+    table = function_table(functions)
     rows = []
     for d, p in pairs:
         # --timeout bounds each enumeration; the deadline catches a user

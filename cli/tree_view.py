@@ -2,13 +2,19 @@
 (display only; the trees live in ``jshop.tree`` and ``executor.task_bt``)."""
 from __future__ import annotations
 
+from collections import deque
+
+from rich.console import Console, Group
+from rich.live import Live
+from rich.markup import escape
+from rich.text import Text
+from rich.tree import Tree
+
 STATUS_STYLE = {"✓": "green", "✕": "bold red", "*": "yellow", "-": "dim"}
 
 
 def rich_tree(tree):
     """A rich ``Tree`` of the task tree, built breadth-first (no recursion)."""
-    from collections import deque
-    from rich.tree import Tree
     root = Tree("[bold]task tree[/bold]")
     queue = deque((root, c) for c in tree.children)
     while queue:
@@ -19,7 +25,6 @@ def rich_tree(tree):
 
 
 def _label(node) -> str:
-    from rich.markup import escape
     text = escape(node.task)
     if node.step is not None:
         return f"[cyan]{text}[/cyan] [dim]step {node.step + 1}[/dim]"
@@ -108,7 +113,6 @@ def fit(rows: list[Row], height: int) -> list[tuple[Row, bool]]:
 
 
 def render_rows(shown: list[tuple[Row, bool]], more_below: bool = False):
-    from rich.text import Text
     text = Text(no_wrap=True, overflow="ellipsis")
     for k, (r, gap) in enumerate(shown):
         if k:
@@ -129,8 +133,6 @@ class LiveTreeView:
     """The behaviour tree around the running action, redrawn on every event."""
 
     def __init__(self, dispatcher_ref):
-        from rich.console import Console
-        from rich.live import Live
         self.dispatcher = dispatcher_ref      # a callable returning the dispatcher
         self.console = Console()
         self.last: dict = {}                  # id(action context) -> last event text
@@ -148,7 +150,7 @@ class LiveTreeView:
 
     def event(self, rec) -> None:
         d = self.dispatcher()
-        if d is None or rec["event"] in ("header", "summary"):
+        if d is None or rec["event"] in ("header", "summary", "tree"):
             return
         ctx = d.running
         if ctx is not None and rec["event"] not in ("feedback",):
@@ -161,8 +163,6 @@ class LiveTreeView:
         d = self.dispatcher()
         if d is None:
             return
-        from rich.console import Group
-        from rich.text import Text
         height = max(3, self.console.size.height - 3)
         rows = behaviour_rows(d.root, d.running, d.failed, self.last)
         shown = fit(rows, height)

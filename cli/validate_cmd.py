@@ -29,39 +29,20 @@ def validate(domain, problem, plan_file, plan_index, functions, quiet):
       htn plan DOMAIN PROBLEM -o plan.txt && htn validate DOMAIN PROBLEM plan.txt
       htn validate basic problem plans-all.txt
     """
-    from htn.jshop.language.errors import HtnError
-    from htn.jshop.language.functions import FunctionTable
-    from htn.jshop.plans.planfile import read_plan_file
-    from htn.jshop.plans.validate import check_steps, validate_plan
-    from htn.jshop.readers.load import load_inputs
+    from htn.api.validate import validate as validate_plans
 
-    table = FunctionTable()
-    if functions:
-        table.load_file(functions)
-    dom, prob = load_inputs(domain, problem, table)
-    pf = read_plan_file(plan_file)
-    plans = pf.plans
-    if plan_index is not None:
-        if plan_index > len(plans):
-            raise HtnError(f"--plan-index {plan_index}: the file holds {len(plans)} plan(s)",
-                           plan_file)
-        plans = [plans[plan_index - 1]]
-    instance = prob.instances[0]
-    for p in plans:
-        check_steps(dom, p.steps, plan_file)
+    checked = validate_plans(domain, problem, plan_file, plan_index=plan_index,
+                             functions=functions)
     bad = 0
-    for p in plans:
-        verdict = validate_plan(dom, instance, p, table)
-        label = f"plan {p.index + 1}"
-        if verdict.valid:
+    for c in checked:
+        label = f"plan {c.plan.index + 1}"
+        if c.valid:
             if not quiet:
-                click.echo(f"{label}: valid, {verdict.steps} steps, cost {p.cost:g}")
+                click.echo(f"{label}: valid, {c.verdict.steps} steps, cost {c.plan.cost:g}")
             continue
         bad += 1
-        where = f"{plan_file}:{verdict.line}:1" if verdict.line else plan_file
-        step = (f", step {verdict.failed_step + 1}" if verdict.failed_step is not None
-                and verdict.failed_step < verdict.steps else "")
-        click.echo(f"{where}: {label}{step}: {verdict.reason}", err=True)
-    if len(plans) > 1 and not quiet:
-        click.echo(f"{len(plans) - bad} of {len(plans)} plans valid")
+        step = f", step {c.failed_step}" if c.failed_step is not None else ""
+        click.echo(f"{c.where}: {label}{step}: {c.verdict.reason}", err=True)
+    if len(checked) > 1 and not quiet:
+        click.echo(f"{len(checked) - bad} of {len(checked)} plans valid")
     sys.exit(1 if bad else 0)

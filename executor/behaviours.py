@@ -139,15 +139,36 @@ class Monitor(ActionBehaviour):
     """The monitoring action: did the world show the expected effect?"""
 
     def update(self) -> Status:
-        seen = self.ctx.machine.monitor(self.executor.robot, *self.ctx.step.args)
-        self.ctx.outcome = Outcome.VERIFIED if seen.ok else Outcome.ABORTED
-        self.emit(self.ctx.outcome.value, seen.detail)
+        ctx = self.ctx
+        seen = ctx.machine.monitor(self.executor.robot, *ctx.step.args)
+        ctx.outcome = Outcome.VERIFIED if seen.ok else Outcome.ABORTED
+        detail = seen.detail if seen.ok or retries_left(ctx) else \
+            f"{seen.detail}; {out_of_retries(ctx)}"
+        self.emit(ctx.outcome.value, detail)
         return Status.SUCCESS if seen.ok else Status.FAILURE
+
+
+def retries_left(ctx: ActionContext) -> bool:
+    """May the action be tried again? ``limit`` retries after the first
+    attempt, however they came (its retry decorator, or repair)."""
+    return ctx.attempt <= ctx.limit
+
+
+def out_of_retries(ctx: ActionContext) -> str:
+    """What an action whose retries are used up could have had, in the
+    command line's words: ``1 retry used up (--retries hand=2 allows one more)``."""
+    name = ctx.step.name.lstrip("!")
+    if ctx.limit == 0:
+        return f"no retries for {ctx.step.name} (--retries {name}=1 allows one)"
+    used = f"{ctx.limit} retr{'y' if ctx.limit == 1 else 'ies'}"
+    return f"{used} used up (--retries {name}={ctx.limit + 1} allows one more)"
 
 
 class RetryAborted(py_trees.decorators.Retry):
     """Retry an attempt the monitor did not verify, up to the operator's
-    limit; a failed attempt (internal error) or a preempted one is final."""
+    limit (counted over the action's attempts, so a retry that repair made
+    counts too); a failed attempt (internal error) or a preempted one is
+    final here (repair may retry it, see the task dispatcher)."""
 
     def __init__(self, child, ctx: ActionContext, executor):
         super().__init__(f"retry <= {ctx.limit}", child, ctx.limit + 1)
@@ -157,10 +178,10 @@ class RetryAborted(py_trees.decorators.Retry):
         ctx = self.ctx
         if self.decorated.status != Status.FAILURE:
             return self.decorated.status
-        if ctx.outcome is Outcome.ABORTED and not ctx.preempted and self.failures < ctx.limit:
+        if ctx.outcome is Outcome.ABORTED and not ctx.preempted and retries_left(ctx):
             self.failures += 1
             self.executor.retries += 1
-            self.executor.emit(ctx, Outcome.RETRYING.value, f"retry {self.failures} of {ctx.limit}")
+            self.executor.emit(ctx, Outcome.RETRYING.value, f"retry {ctx.attempt} of {ctx.limit}")
             return Status.RUNNING
         return Status.FAILURE
 

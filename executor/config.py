@@ -1,10 +1,17 @@
 """Execution settings: per-operator retry limits from a TOML file next to the
 domain (``domains/domestic.jshop`` -> ``domains/domestic.toml``), overridable
-on the command line."""
+on the command line (``--retries grasp=3``).
+
+A domain without such a file gets :data:`DEFAULT_RETRIES` for every operator:
+an action whose monitor did not verify it is tried once more before the run
+(or ``--replan``) gives up on it, as a robot operator would. A file states
+its limits itself: an operator it does not name gets no retry.
+"""
 from __future__ import annotations
 
 import os
 import tomllib
+from typing import Optional
 
 from htn.jshop.language.errors import HtnError
 
@@ -13,11 +20,17 @@ def config_path(domain_path: str) -> str:
     return os.path.splitext(domain_path)[0] + ".toml"
 
 
-def load_retries(domain_path: str) -> dict[str, int]:
-    """Retry limits by operator name ('!grasp'); missing file -> no retries."""
-    path = config_path(domain_path)
-    if not os.path.isfile(path):
-        return {}
+DEFAULT_RETRIES = 1      # per operator, for a domain without a .toml
+
+
+def load_retries(domain_path: Optional[str], operators=()) -> dict[str, int]:
+    """Retry limits by operator name ('!grasp'). Without a file beside the
+    domain (or without a domain file: a domain built in memory):
+    :data:`DEFAULT_RETRIES` for each of ``operators`` (names; the internal
+    ``!!`` ones, which are never retried, left out)."""
+    path = config_path(domain_path) if domain_path else None
+    if path is None or not os.path.isfile(path):
+        return {op: DEFAULT_RETRIES for op in operators if not op.startswith("!!")}
     try:
         with open(path, "rb") as fh:
             data = tomllib.load(fh)

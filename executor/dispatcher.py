@@ -10,8 +10,10 @@ belief state (the verified effects) and the plan's progress. Internal
 operators (``!!``) are applied to the belief state only.
 
 When an action ends failed or aborted, the robot stops and holds its pose (as
-in the paper). With ``replan=True`` the dispatcher repairs the task tree
-instead (:mod:`htn.executor.repair`) and goes on. :meth:`TaskDispatcher.halt`
+in the paper). With ``replan=True`` the dispatcher repairs instead and goes
+on: first by trying the step again, if its retry limit allows and it still
+applies in the observed state, else by re-planning in the task tree
+(:mod:`htn.executor.repair`). :meth:`TaskDispatcher.halt`
 (Ctrl-C, SIGTERM) stops the tree between two ticks.
 
 Events go to an :class:`~htn.executor.log.EventLog`; ``step`` is the action's
@@ -28,13 +30,14 @@ from py_trees.common import Status
 from htn.jshop.language import syntax as S
 from htn.jshop.search.planner import Planner
 
-from .behaviours import ActionContext, action_subtree
+from .behaviours import ActionContext, action_subtree, out_of_retries, retries_left
 from .log import EventLog
 from .machines import all_of, machine_for
 from .machines.base import carry_predicate
 from .outcome import Outcome
-from .repair import find_repair, graft, observed_instance
+from .repair import find_repair, graft, observed_instance, retry_applies
 from .task_bt import actions, build, flat_tree
+from .tree_events import NodeNumbers, tree_detail, tree_nodes
 
 STOPPED_BY_USER = "stopped by the user"     # why a run halted, unless told otherwise
 
@@ -50,9 +53,22 @@ class RunSummary:
     failed_step: Optional[str] = None    # the action that ended the run
     failed_at: Optional[int] = None      # its 1-based step
     executed: int = 0                    # steps started (each once, however many attempts)
+    advice: Optional[str] = None         # what might have saved it (retries used up)
 
     def as_dict(self) -> dict:
         return dict(self.__dict__)
+
+    def line(self) -> str:
+        """``aborted: 3 of 8 steps verified, ...; aborted at step 4: (!grasp ...)``,
+        and the advice, if any."""
+        line = (f"{self.result}: {self.verified} of {self.steps} steps verified, "
+                f"{self.retries} retries, {self.replans} replans, "
+                f"{self.sim_time:.1f} s simulated")
+        if self.failed_step:
+            line += f"; {self.result} at step {self.failed_at}: {self.failed_step}"
+        if self.advice:
+            line += f"; {self.advice}"
+        return line
 
 
 class TaskDispatcher:
@@ -86,7 +102,11 @@ class TaskDispatcher:
         self.carry = carry_predicate(domain.name)    # the domain's word for carrying
         self.carry_checks = self.carry is not None and "still_held" in robot.check_names()
         steps = list(steps)
-        self.root = build(tree if tree is not None else flat_tree(steps), steps, self._action)
+        tree = tree if tree is not None else flat_tree(steps)
+        self.root = build(tree, steps, self._action)
+        self.nodes = NodeNumbers()          # the task-tree nodes as the log numbers them
+        self.tick_listeners: list = []      # called between two ticks (e.g. a camera view)
+        self._log_tree([tree], None, lambda n: n.step + 1)
 
     # ------------------------------------------------------------ building
     def _action(self, step, node):
@@ -106,8 +126,19 @@ class TaskDispatcher:
 
     def emit(self, ctx: Optional[ActionContext], event: str, detail: str = "", **extra) -> None:
         self._flush_faults()
+        if ctx is not None:
+            extra = {"node": self.nodes.of(ctx.node), **extra}
         self.log.emit(self.number(ctx) if ctx else None, ctx.text if ctx else None, event,
                       ctx.attempt if ctx else None, detail, **extra)
+
+    def _log_tree(self, tops, parent, step_of, replaces=()) -> None:
+        """A ``tree`` event with the nodes of the subtrees ``tops``, each
+        under ``parent`` (see :mod:`htn.executor.tree_events`)."""
+        ctxs = {id(a.node): a for a in actions(self.root)}
+        nodes = [n for top in tops for n in
+                 tree_nodes(top, self.nodes, parent, step_of, lambda n: ctxs.get(id(n)))]
+        self.log.emit(None, None, "tree", None, tree_detail(nodes, len(replaces)),
+                      nodes=nodes, parent=parent, replaces=list(replaces))
 
     def report(self, ctx: ActionContext, ok: bool) -> None:
         """The final outcome of an action (the paper's status report)."""
@@ -153,8 +184,9 @@ class TaskDispatcher:
         for f in self.robot.injected_faults()[self._faults_seen:]:
             self._faults_seen += 1
             ctx = self.running
+            where = {"node": self.nodes.of(ctx.node)} if ctx else {}
             self.log.emit(self.number(ctx) if ctx else None, ctx.text if ctx else None, "fault",
-                          None, f["detail"], kind=f["kind"], sim_t=f["sim_t"])
+                          None, f["detail"], kind=f["kind"], sim_t=f["sim_t"], **where)
 
     # ------------------------------------------------------------ the tick loop
     def halt(self, why: str = "") -> None:
@@ -175,6 +207,8 @@ class TaskDispatcher:
                 finally:
                     self.in_tick = False
                 self._flush_faults()
+                for listener in self.tick_listeners:
+                    listener()
                 status = self.root.status
                 if status == Status.SUCCESS:
                     return self._summary(Outcome.VERIFIED.value)
@@ -183,7 +217,9 @@ class TaskDispatcher:
                     if self.replan and self.replans < self.max_replans and self._repair(ctx):
                         continue
                     self.robot.hold()
-                    return self._summary(ctx.outcome.value, ctx)
+                    advice = None if ctx.outcome is not Outcome.ABORTED or ctx.preempted \
+                        or retries_left(ctx) else out_of_retries(ctx)
+                    return self._summary(ctx.outcome.value, ctx, advice)
         except KeyboardInterrupt as exc:
             # an interrupt between two ticks (e.g. while repair plans) halts
             # the same way; its message, if any, says why (SIGTERM's does:
@@ -211,19 +247,31 @@ class TaskDispatcher:
         """The plan as executed and repaired: verified steps, then the pending ones."""
         return [c.text for c in self.done] + [a.text for a in actions(self.root) if not a.done]
 
-    def _summary(self, result: str, ctx: Optional[ActionContext] = None) -> RunSummary:
+    def _summary(self, result: str, ctx: Optional[ActionContext] = None,
+                 advice: Optional[str] = None) -> RunSummary:
         pending = sum(1 for a in actions(self.root) if not a.done)
         summary = RunSummary(result, len(self.done) + pending, len(self.done), self.retries,
                              self.replans, round(self.robot.sim_time, 3),
                              ctx.text if ctx else None, self.number(ctx) if ctx else None,
-                             self.started)
+                             self.started, advice)
         self.log.emit(None, None, "summary", None, result, **summary.as_dict())
         return summary
 
     # ------------------------------------------------------------ repair
     def _repair(self, ctx: ActionContext) -> bool:
-        shot = next(b for b in self.root.iterate() if getattr(b, "htn_action", None) is ctx)
+        """Repair after ``ctx`` failed or was aborted: try the step again if
+        its retry limit allows and it still applies in the observed state
+        (with the rest of the plan after it), else re-plan its enclosing tasks."""
         observed = observed_instance(self.domain, self.instance, self.robot)
+        if retries_left(ctx) and ctx.machine is not None and retry_applies(
+                ctx, self.root, self.domain, observed, self.functions):
+            self.retries += 1
+            self.belief = Planner.for_state(self.domain, observed.state, self.functions)
+            self.failed = None
+            self.emit(ctx, "retrying", f"retry {ctx.attempt} of {ctx.limit}, by repair: the "
+                      "step still applies in the observed state")
+            return True
+        shot = next(b for b in self.root.iterate() if getattr(b, "htn_action", None) is ctx)
         repair, tried = find_repair(shot, self.root, self.tree_known, self.domain, observed,
                                     self.instance.tasks, self.functions)
         if repair is None:
@@ -233,11 +281,22 @@ class TaskDispatcher:
         self.replans += 1
         self.tree_known = True
         paths = repair.paths
-        graft(repair, self.root, self._action)
+        replaced = [self.nodes.of(_task_node(b)) for b in repair.replaced]
+        holder = self.root if repair.target is self.root else repair.target.parent
+        added = graft(repair, self.root, self._action)
         self.belief = Planner.for_state(self.domain, observed.state, self.functions)
         self.failed = None
         self.emit(ctx, "replanned", f"re-planned {tried[-1]} from the observed state: "
                   f"{len(repair.plan.steps)} new steps", path=repair.path, paths=paths,
                   tasks=repair.tasks, steps=repair.plan.lines(), tried=tried,
                   plan=self.plan_lines())
+        pending = [a for a in actions(self.root) if not a.done]
+        number = {id(a.node): len(self.done) + 1 + k for k, a in enumerate(pending)}
+        self._log_tree([_task_node(b) for b in added], self.nodes.of(holder.htn_task),
+                       lambda n: number.get(id(n)), replaced)
         return True
+
+
+def _task_node(behaviour):
+    """The task-tree node of a task's sequence or of an action subtree."""
+    return behaviour.htn_task if hasattr(behaviour, "htn_task") else behaviour.htn_action.node

@@ -7,7 +7,6 @@ again (:func:`run_header`; ``htn run --from-log`` reads it back with
 """
 from __future__ import annotations
 
-import hashlib
 import json
 import os
 import time
@@ -53,15 +52,16 @@ class EventLog:
             self._fh = None
 
 
-def run_header(plan_file, plan_index, domain, problem, functions, robot, seed, faults,
-               retries, replan, argv: list[str]) -> dict:
+def run_header(plan_file, plan_sha256, plan_index, domain, problem, functions, robot, seed,
+               faults, retries, replan, argv) -> dict:
     """What a log's header records: enough to run the same thing again
-    (``argv``: the command line as given), with the plan file's SHA-256 and
-    the versions it ran with."""
+    (``argv``: the command line as given, None for a program's call), with
+    the plan file's SHA-256 (of the bytes the run read) and the versions it
+    ran with."""
     import platform
     from importlib.metadata import PackageNotFoundError, version
 
-    import htn
+    from htn.installation import version as htn_version
 
     def installed(name):
         try:
@@ -69,8 +69,8 @@ def run_header(plan_file, plan_index, domain, problem, functions, robot, seed, f
         except PackageNotFoundError:
             return None
     absolute = lambda p: os.path.abspath(p) if p else None  # noqa: E731
-    return {"htn": htn.__version__, "argv": list(argv),
-            "plan": absolute(plan_file), "plan_sha256": _sha256(plan_file),
+    return {"htn": htn_version(), "argv": None if argv is None else list(argv),
+            "plan": absolute(plan_file), "plan_sha256": plan_sha256,
             "plan_index": plan_index, "domain": absolute(domain), "problem": absolute(problem),
             "functions": absolute(functions), "robot": robot, "seed": seed, "faults": faults,
             "retries": dict(sorted(retries.items())), "replan": replan,
@@ -100,17 +100,20 @@ def read_header(path: str) -> dict:
     return rec
 
 
-def check_plan_digest(plan_file: str, digest: Optional[str], log_path: str) -> None:
-    """The plan file a header names is there and unchanged (when the header
-    has its SHA-256); otherwise an input error at the log's first line."""
+def check_plan_present(plan_file: Optional[str], log_path: str) -> None:
+    """The plan file a header names is there; otherwise an input error at the
+    log's first line."""
+    if not plan_file:
+        raise HtnError("the log records no plan file (its run was of a plan a program "
+                       "passed in)", log_path, 1, 1)
     if not os.path.isfile(plan_file):
         raise HtnError(f"the plan file of this run is missing: {plan_file}", log_path, 1, 1)
-    now = _sha256(plan_file)
-    if digest and now != digest:
+
+
+def check_plan_digest(plan_file: str, recorded: Optional[str], actual: str,
+                      log_path: str) -> None:
+    """The plan file is unchanged since the logged run (when the header has
+    its SHA-256): ``actual`` is the digest of the bytes read now."""
+    if recorded and actual != recorded:
         raise HtnError(f"the plan file {plan_file} has changed since this run (SHA-256 "
-                       f"{now[:12]}..., the log says {digest[:12]}...)", log_path, 1, 1)
-
-
-def _sha256(path: str) -> str:
-    with open(path, "rb") as fh:
-        return hashlib.sha256(fh.read()).hexdigest()
+                       f"{actual[:12]}..., the log says {recorded[:12]}...)", log_path, 1, 1)

@@ -1,12 +1,14 @@
-"""The task tree behind a plan read from a file, and checks before it runs.
+"""The task tree behind a plan that lacks one, and checks before a plan runs.
 
-A plan file holds only the plan's steps. Its task tree (which the behaviour
-tree mirrors, and which repair re-plans in) is recovered by planning the
-problem again with trees recorded and taking the first plan whose steps are
-the file's: ``htn plan -o`` writes the planner's plans in that order.
-A transformed plan's file notes its task list (``; tasks:``), which is planned
-instead. A plan no decomposition gives (a hand-written one) has no
-recoverable tree; it runs as one sequence.
+``htn plan -o`` writes each plan's task tree into the plan file
+(:mod:`htn.jshop.plans.planfile`), and ``htn run`` executes that tree. A plan
+file without one (hand-written, from JSHOP2, or from an htn before task trees
+were written) gets its tree (which the behaviour tree mirrors, and which
+repair re-plans in) by planning the problem again with trees recorded and
+taking the first plan whose steps are the file's: ``htn plan`` writes the
+planner's plans in that order. An older transformed plan's file notes its
+task list (``; tasks:``), which is planned instead. A plan no decomposition
+gives (a hand-written one) has no recoverable tree; it runs as one sequence.
 """
 from __future__ import annotations
 
@@ -56,14 +58,14 @@ def _variable(term) -> Optional[Var]:
     return None
 
 
-def check_runnable(domain: S.Domain, instance: S.ProblemInstance, plan, plan_file: str,
-                   functions=None) -> None:
+def check_runnable(domain: S.Domain, instance: S.ProblemInstance, plan,
+                   plan_file: Optional[str], functions=None, lines=()) -> None:
     """Before the robot moves: every step is ground, and the steps apply in
     sequence from the problem's initial state (manual 5.2.1; the plan's cost
-    is not checked). A bad step is an input error at its line of the plan file."""
+    is not checked). A bad step is an input error at its line of the plan
+    file (``lines``: the file's text, which locates a variable's column)."""
     from htn.jshop.plans.plan import Plan
     from htn.jshop.plans.validate import validate_plan
-    lines = _read_lines(plan_file)
     for s in plan.steps:
         var = next((v for v in map(_variable, s.args) if v is not None), None)
         if var is not None:
@@ -77,11 +79,3 @@ def check_runnable(domain: S.Domain, instance: S.ProblemInstance, plan, plan_fil
         where = verdict.line or None
         raise HtnError(f"step {verdict.failed_step + 1} cannot run: {verdict.reason}",
                        plan_file, where, 1 if where else None)
-
-
-def _read_lines(path: str) -> list[str]:
-    try:
-        with open(path, encoding="utf-8") as fh:
-            return fh.read().splitlines()
-    except (OSError, UnicodeDecodeError):
-        return []

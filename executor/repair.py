@@ -1,6 +1,9 @@
 """Repair in the task tree: re-plan the smallest enclosing task that can be
 re-planned from what the robot observes, and graft it into the behaviour tree.
 
+(Before re-planning, the task dispatcher tries the failed step itself again
+when its retry limit allows and :func:`retry_applies`.)
+
 When an action ends failed or aborted, the tasks that enclose it are tried
 from the nearest up: each is planned again (JSHOP2's search, this planner's
 :class:`~htn.jshop.search.planner.Planner`, on that one task atom) from the
@@ -102,6 +105,14 @@ def find_repair(shot, root, tree_known: bool, domain, observed: S.ProblemInstanc
         if _applies(domain, observed, functions, [*plan.steps, *rest]):
             return Repair(path, [str(t) for t in _atoms(tasks)], plan, seq, replaced), tried
     return None, tried
+
+
+def retry_applies(ctx, root, domain, observed: S.ProblemInstance, functions=None) -> bool:
+    """Does the failed step ``ctx`` apply again in the observed state, and the
+    steps still to come after it? Then trying it again is the smallest repair:
+    nothing is re-planned."""
+    rest = [a.step for a in actions(root) if not a.done and a is not ctx]
+    return _applies(domain, observed, functions, [ctx.step, *rest])
 
 
 def _atoms(tasks: S.TaskList) -> list:

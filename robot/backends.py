@@ -72,7 +72,7 @@ BUILTIN = {
     "pybullet": Backend("pybullet", _pybullet, "PyBullet physics: the domestic robot, or the "
                         "two-armed kitchen robot for (area ...) problems", "sim"),
     "symbolic": Backend("symbolic", _symbolic, "the domain's own operators on a symbolic "
-                        "world; any domain (faults: effect=P)"),
+                        "world; any domain (faults: effect=P, fail=P)"),
     "projection": Backend("projection", _projection, "the fast kinematic projection of the "
                           "plan-transformations paper (kitchen and domestic problems)"),
 }

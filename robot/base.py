@@ -1,12 +1,14 @@
 """The mobile base both simulated robots stand on: a Husky that turns and
-drives kinematically, carrying what is mounted on it (one arm or two).
+drives, carrying what is mounted on it (one arm or two).
 
-Motion is a sequence of poses, one per physics step, at the base's speeds
-(``_speeds``) along a speed profile (``_ramp``). Collisions do not stop the
-base by themselves: the task executor's hold-monitor ``no_collision`` watches
-every drive and preempts it at the first contact. Two faults live here: a
-navigation that stops short of its goal (``nav``) and an object that slips
-out of a gripper while the base drives with it (``slip``, see
+Motion is velocity-controlled (:mod:`htn.robot.drive`): the base's speeds
+(``_speeds``) and accelerations (``_accelerations``) bound a trapezoidal
+profile, and a motion ends within the controller's goal tolerance, not on
+the goal: the monitors measure the pose it ends in. Collisions do not stop
+the base by themselves: the task executor's hold-monitor ``no_collision``
+watches every drive and preempts it at the first contact. Two faults live
+here: a navigation that stops short of its goal (``nav``) and an object that
+slips out of a gripper while the base drives with it (``slip``, see
 :meth:`MobileBase._carry_slip`).
 """
 from __future__ import annotations
@@ -15,17 +17,16 @@ import math
 from typing import Optional
 
 from .interface import Check, check
+from .drive import Limits, angle_diff, drive_steps, turn_steps
 from .physics import DT, yaw_quat
 
 BASE_SPEED = 1.0          # m/s
 TURN_SPEED = 2.0          # rad/s
+BASE_ACCEL = 1.0          # m/s^2
+TURN_ACCEL = 4.0          # rad/s^2
 POSE_TOLERANCE = 0.05     # m
 YAW_TOLERANCE = 0.05      # rad
 BASE_Z = 0.14             # husky base height
-
-
-def angle_diff(a: float, b: float) -> float:
-    return (a - b + math.pi) % (2 * math.pi) - math.pi
 
 
 class MobileBase:
@@ -53,32 +54,29 @@ class MobileBase:
         """Base speed (m/s) and turning speed (rad/s)."""
         return BASE_SPEED, TURN_SPEED
 
-    @staticmethod
-    def _ramp(k: float) -> float:
-        """Fraction of a base motion done after fraction ``k`` of its time."""
-        return k
+    def _accelerations(self) -> tuple[float, float]:
+        """Base acceleration (m/s^2) and turning acceleration (rad/s^2)."""
+        return BASE_ACCEL, TURN_ACCEL
+
+    def _limits(self) -> Limits:
+        return Limits(*self._speeds(), *self._accelerations())
 
     def _turn_to(self, yaw: float):
         x, y, start = self.base
-        delta = angle_diff(yaw, start)
-        n = max(1, int(abs(delta) / (self._speeds()[1] * DT)))
-        for i in range(1, n + 1):
-            self._put_base(x, y, start + delta * self._ramp(i / n))
+        for heading in turn_steps(start, yaw, self._limits(), DT):
+            self._put_base(x, y, heading)
             yield from self._step()
 
     def _drive(self, gx: float, gy: float, fraction: float = 1.0, slip: Optional[float] = None):
-        """Drive straight to (gx, gy), or ``fraction`` of the way; an object
-        scheduled to slip (``slip``: fraction of the drive) falls there."""
-        x0, y0, yaw = self.base
-        dist = math.hypot(gx - x0, gy - y0) * fraction
-        n = max(1, int(dist / (self._speeds()[0] * DT)))
-        ux, uy = (gx - x0), (gy - y0)
-        norm = math.hypot(ux, uy) or 1.0
-        ux, uy = ux / norm, uy / norm
-        for i in range(1, n + 1):
-            d = dist * self._ramp(i / n)
-            self._put_base(x0 + ux * d, y0 + uy * d, yaw)
-            if slip is not None and i / n >= slip:
+        """Drive straight to (gx, gy), forwards or backwards, or ``fraction``
+        of the way; an object scheduled to slip (``slip``: fraction of the
+        drive) falls there."""
+        x0, y0, _ = self.base
+        goal = (x0 + (gx - x0) * fraction, y0 + (gy - y0) * fraction)
+        total = math.hypot(goal[0] - x0, goal[1] - y0)
+        for x, y, yaw, travelled in drive_steps(tuple(self.base), goal, self._limits(), DT):
+            self._put_base(x, y, yaw)
+            if slip is not None and travelled >= slip * total:
                 self._drop_while_carrying()
                 slip = None
             yield from self._step()
@@ -126,14 +124,27 @@ class MobileBase:
         return None
 
     # ------------------------------------------------------------ checks
+    def _measured_pose(self) -> tuple[float, float, float]:
+        """The base's pose as PyBullet has it (x, y, yaw)."""
+        p, c = self.p, self.cid
+        (x, y, _), q = p.getBasePositionAndOrientation(self.husky, physicsClientId=c)
+        return x, y, p.getEulerFromQuaternion(q)[2]
+
+    def _stopped_at(self) -> str:
+        x, y, yaw = self._measured_pose()
+        return f"stopped at x {x:.3f} m, y {y:.3f} m, heading {yaw:.3f} rad"
+
     @check("base_at")
     def check_base_at(self, place: str) -> Check:
+        """Is the base at ``place``'s pose, within the tolerances? Measured:
+        the distance and heading error of the base's pose in the world."""
         goal = self.world.place(place)
-        x, y, _ = self.p.getBasePositionAndOrientation(self.husky, physicsClientId=self.cid)[0]
+        x, y, yaw = self._measured_pose()
         err = math.hypot(goal.x - x, goal.y - y)
-        yaw_err = abs(angle_diff(goal.theta, self.base[2]))
+        yaw_err = abs(angle_diff(goal.theta, yaw))
         ok = err <= POSE_TOLERANCE and yaw_err <= YAW_TOLERANCE
-        return Check(ok, f"{err:.3f} m, {yaw_err:.3f} rad from {place}")
+        return Check(ok, f"base measured {err:.4f} m, {yaw_err:.4f} rad from {place} "
+                         f"(tolerance {POSE_TOLERANCE} m, {YAW_TOLERANCE} rad)")
 
     @check("no_collision")
     def check_no_collision(self) -> Check:

@@ -34,6 +34,23 @@ class SkillResult:
 
 
 @dataclass
+class Caption:
+    """What a snapshot shows happened: the step (1-based), its action, the
+    attempt, the outcome and the simulated time, and the monitor's detail."""
+    step: int
+    action: str
+    attempt: int
+    outcome: str
+    sim_time: float
+    detail: str = ""
+
+    def lines(self) -> list[str]:
+        return [f"step {self.step}  {self.action}",
+                f"attempt {self.attempt}  {self.outcome}  t = {self.sim_time:.2f} s (simulated)",
+                *([self.detail] if self.detail else [])]
+
+
+@dataclass
 class Check:
     """A monitor's observation: did the world show the expected effect?"""
     ok: bool
@@ -150,5 +167,12 @@ class Robot:
     def close(self) -> None:
         pass
 
-    def snapshot(self, path: str) -> Optional[str]:
+    def snapshot(self, path: str, label: Optional[Caption] = None) -> Optional[str]:
+        """Save a picture of the world as PNG at ``path``, with ``label``
+        drawn on it; the path, or None for a robot without a camera."""
+        return None
+
+    def camera_frame(self, width: int = 320, height: int = 240) -> Optional[bytes]:
+        """A camera image of the world now, as JPEG bytes (None: no camera).
+        Called between two ticks, in the thread that runs the robot."""
         return None

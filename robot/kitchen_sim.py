@@ -24,6 +24,7 @@ from htn.jshop.language.errors import HtnError
 from .arm import ARM_JOINTS, FINGERS
 from .base import BASE_SPEED, POSE_TOLERANCE, TURN_SPEED
 from .drawer import DRAWER_OPEN, Drawers
+from .drive import XY_TOL
 from .interface import Check, SkillResult, check, skill
 from .physics import quiet_fds, yaw_quat
 from .pybullet_sim import PyBulletRobot
@@ -38,6 +39,7 @@ SHAPES = {   # kind -> (radius, height, colour)
 }
 DEFAULT_SHAPE = (0.033, 0.12, (0.9, 0.2, 0.1, 1))
 TRAY_BASE_SPEED, TRAY_TURN_SPEED = 0.35, 0.6
+TRAY_ACCEL, TRAY_TURN_ACCEL = 0.3, 0.6     # m/s^2, rad/s^2
 ARM_AND_FINGERS = [*ARM_JOINTS, *FINGERS]
 DOCK = 0.35                         # backing away from a table before turning
 
@@ -120,10 +122,9 @@ class KitchenRobot(Drawers, Trays, TableSpots, TwoArms, PyBulletRobot):
         """Slower with the tray, so what stands on it does not slide."""
         return (TRAY_BASE_SPEED, TRAY_TURN_SPEED) if self.hold_tray else (BASE_SPEED, TURN_SPEED)
 
-    @staticmethod
-    def _ramp(k: float) -> float:
-        """A smooth (cosine) speed profile: no jerk at start and stop."""
-        return 0.5 - 0.5 * math.cos(math.pi * k)
+    def _accelerations(self) -> tuple[float, float]:
+        """Gentler with the tray: what stands on it is held by friction only."""
+        return (TRAY_ACCEL, TRAY_TURN_ACCEL) if self.hold_tray else super()._accelerations()
 
     def _carried_objects(self) -> list[str]:
         return [o for o in self.arm_held.values() if o]
@@ -183,12 +184,12 @@ class KitchenRobot(Drawers, Trays, TableSpots, TwoArms, PyBulletRobot):
             yield from self._face(px, py)
             yield from self._drive(px, py, fraction, slip)
             if fraction < 1.0:
-                return SkillResult(True, f"stopped at {self.base[0]:.2f} {self.base[1]:.2f}")
+                return SkillResult(True, self._stopped_at())
         yield from self._turn_to(goal.theta)
-        if math.hypot(goal.x - self.base[0], goal.y - self.base[1]) > 1e-4:
+        if math.hypot(goal.x - self.base[0], goal.y - self.base[1]) > XY_TOL:
             yield from self._drive(goal.x, goal.y)
         yield from self._step(12)
-        return SkillResult(True, f"stopped at {self.base[0]:.2f} {self.base[1]:.2f}")
+        return SkillResult(True, self._stopped_at())
 
     @skill("detect_object")
     def detect_object(self, obj: str, where: str):

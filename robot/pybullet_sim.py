@@ -6,7 +6,8 @@ upright capsules with a hand point, the robot at its start location. The robot
 is made of the parts in :mod:`~htn.robot.base`, :mod:`~htn.robot.arm` and
 :mod:`~htn.robot.perception`, which the kitchen robot shares.
 
-Motion is kinematic and deterministic; everything else is physics: objects
+Motion is deterministic (the base under its motion controller,
+:mod:`~htn.robot.drive`; the arm placed joint by joint); everything else is physics: objects
 fall, rest on surfaces and collide. Every skill is a generator advancing the
 simulation one physics step at a time (see :mod:`htn.robot.interface`). A
 person takes an object the same way a gripper holds one, when the gripper
@@ -21,10 +22,10 @@ import math
 import random
 from typing import Optional
 
-import numpy as np
-
 from .arm import ARM_JOINTS, Arm
 from .base import MobileBase
+from .camera import OverviewCamera
+from .drive import XY_TOL
 from .faults import Faults
 from .interface import Check, Robot, SkillResult, check, skill
 from .odometry import Odometry
@@ -39,7 +40,7 @@ PERSON_RADIUS, PERSON_HEIGHT = 0.2, 1.6
 HAND_REACH = 0.7          # a person takes an object within this distance of their axis
 
 
-class PyBulletRobot(Physics, MobileBase, Arm, Perception, Robot):
+class PyBulletRobot(Physics, MobileBase, Arm, Perception, OverviewCamera, Robot):
     """The simulated domestic robot; ``gui=True`` opens a window (needs a display)."""
 
     def __init__(self, world: World, gui: bool = False, faults: Optional[Faults] = None,
@@ -139,13 +140,13 @@ class PyBulletRobot(Physics, MobileBase, Arm, Perception, Robot):
         goal = self.world.place(place)
         fraction = self._nav_fault(place)
         slip = self._carry_slip()
-        if math.hypot(goal.x - self.base[0], goal.y - self.base[1]) > 1e-3:
+        if math.hypot(goal.x - self.base[0], goal.y - self.base[1]) > XY_TOL:
             yield from self._face(goal.x, goal.y)
             yield from self._drive(goal.x, goal.y, fraction, slip)
         if fraction == 1.0:
             yield from self._turn_to(goal.theta)
         yield from self._step(12)
-        return SkillResult(True, f"stopped at {self.base[0]:.2f} {self.base[1]:.2f}")
+        return SkillResult(True, self._stopped_at())
 
     @skill("detect_object")
     def detect_object(self, obj: str, furniture: str):
@@ -375,22 +376,6 @@ class PyBulletRobot(Physics, MobileBase, Arm, Perception, Robot):
             facts.append(("has", (person, obj)))
         return [(p, tuple(float(a) if isinstance(a, (int, float)) else a for a in args))
                 for p, args in facts]
-
-    # ------------------------------------------------------------ output
-    def snapshot(self, path: str) -> Optional[str]:
-        """Save a PNG from an overview camera following the robot."""
-        p, c = self.p, self.cid
-        x, y, yaw = self.base
-        eye = [x - 2.2 * math.cos(yaw) + 0.8, y - 2.2 * math.sin(yaw) - 0.8, 2.6]
-        view = p.computeViewMatrix(eye, [x + 0.6 * math.cos(yaw), y + 0.6 * math.sin(yaw), 0.5],
-                                   [0, 0, 1], physicsClientId=c)
-        proj = p.computeProjectionMatrixFOV(60, 4 / 3, 0.1, 20, physicsClientId=c)
-        w_, h_, rgb, _, _ = p.getCameraImage(480, 360, view, proj, renderer=p.ER_TINY_RENDERER,
-                                             physicsClientId=c)
-        from PIL import Image
-        arr = np.asarray(rgb, dtype=np.uint8).reshape(h_, w_, 4)[:, :, :3]
-        Image.fromarray(arr).save(path)
-        return path
 
 
 __all__ = ["PyBulletRobot", "Faults", "ARM_JOINTS"]

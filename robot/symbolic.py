@@ -8,9 +8,12 @@ add and delete lists against the world: every added atom holds, every deleted
 one (that the operator does not add back) is gone. A step whose precondition
 does not hold in the world fails.
 
-The injected fault ``effect=P``: with probability P an execution's effects
-do not happen at all (an actuator that reports success but did nothing), so
-monitors, retries, replanning and the log can be exercised with any domain.
+The injected faults, so that monitors, retries, repair and the log can be
+exercised with any domain: ``effect=P``, with probability P an execution's
+effects do not happen at all (an actuator that reports success but did
+nothing: the monitor catches it, the action is ``aborted``); ``fail=P``, an
+execution reports an internal failure and does nothing (a driver error: the
+action is ``failed``, which only repair may try again).
 Each action takes one second of simulated time.
 """
 from __future__ import annotations
@@ -29,7 +32,7 @@ ACTION_TIME = 1.0
 class SymbolicRobot(Robot):
     """Executes operators on a symbolic world: the domain's operator model."""
 
-    FAULTS = ("effect",)
+    FAULTS = ("effect", "fail")
     executes_operator_model = True
     instantaneous = True
 
@@ -40,6 +43,7 @@ class SymbolicRobot(Robot):
         self.world = self.model.state
         self.dynamic = domain.dynamic_predicates()
         self.effect_fault = (faults or {}).get("effect", 0.0)
+        self.fail_fault = (faults or {}).get("fail", 0.0)
         self.rng = random.Random(seed)
         self.sim_time = 0.0
         self.injected: list[dict] = []
@@ -50,6 +54,10 @@ class SymbolicRobot(Robot):
         args = tuple(args)
         self.sim_time += ACTION_TIME
         step = atom_str(name, args)
+        if self.fail_fault and self.rng.random() < self.fail_fault:
+            self.inject("fail", f"{step} reports an internal failure")
+            return SkillResult(False, f"internal failure: the skill for {step} stopped "
+                                      "with an error and did nothing")
         for op, env in self.model.step_options(name, args):
             deleted, added = self.model.effects(op, env)
             change = self.model.apply(op, env)

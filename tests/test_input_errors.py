@@ -42,18 +42,22 @@ def test_the_valid_files_plan(tmp_path):
 
 
 def test_missing_closing_parenthesis(tmp_path):
+    # the parser only sees the end of the file; the message names the '('
+    # left open (issue 19: plain words instead of "unexpected end of file")
     d, p = write(tmp_path, domain=DOMAIN.rstrip()[:-1])
-    check_error(run_htn("plan", d, p), f"{d}:", "unexpected end of file")
+    check_error(run_htn("plan", d, p), f"{d}:1:1:", "this '(' is never closed: the file ends first")
 
 
 def test_unexpected_token_points_at_it(tmp_path):
     d, p = write(tmp_path, domain=DOMAIN.replace("(!go ?from ?to)", "(!go ?from ?to) )"))
-    check_error(run_htn("plan", d, p), f"{d}:3:", "unexpected")
+    check_error(run_htn("plan", d, p), f"{d}:3:59:", "this ')' closes nothing")
 
 
 def test_unexpected_character(tmp_path):
     d, p = write(tmp_path, domain=DOMAIN.replace("?to)))", "?to #)))"))
-    check_error(run_htn("plan", d, p), f"{d}:3:", "unexpected character")
+    check_error(run_htn("plan", d, p), f"{d}:3:54:", "unexpected '#': comments start with ';'")
+    d, p = write(tmp_path, domain=DOMAIN.replace("?to)))", "?to %)))"))
+    check_error(run_htn("plan", d, p), f"{d}:3:54:", "unexpected character '%'")
 
 
 def test_unknown_task_in_the_problem(tmp_path):

@@ -55,6 +55,7 @@ def test_a_step_with_an_unknown_location_is_found_before_the_robot_moves(plan, t
     assert log.read_text() == "an earlier log\n"
 
 
+@pytest.mark.sim
 def test_a_step_with_a_variable_is_an_input_error_at_its_column(plan):
     plan.write_text(plan.read_text().replace("(!say jenny here_you_are)", "(!say jenny ?x)"))
     r = run_htn("run", plan, "--sim")
@@ -68,6 +69,7 @@ def test_retry_limits_of_operators_the_domain_lacks_are_rejected(plan):
     assert one_error_line(r) == "--retries: the domain domestic has no operator !bogus"
 
 
+@pytest.mark.sim
 def test_output_folders_are_checked_before_work_starts(plan, tmp_path):
     r = run_htn("run", plan, "--sim", "--log", tmp_path / "missing" / "x.jsonl")
     assert one_error_line(r) == (f"{tmp_path / 'missing' / 'x.jsonl'}: --log: no such folder "
@@ -84,6 +86,7 @@ def test_output_folders_are_checked_before_work_starts(plan, tmp_path):
     assert sorted(os.listdir(tmp_path)) == ["a-file", "plan.txt"]     # nothing written
 
 
+@pytest.mark.sim
 def test_gui_without_a_display_says_so(plan):
     env_none = {k: v for k, v in os.environ.items() if k != "DISPLAY"}
     for env, message in ((env_none, "--gui needs a display (DISPLAY is not set)"),
@@ -104,6 +107,7 @@ def catches(pid: int, sig: int) -> bool:
     return bool(int(mask, 16) >> (sig - 1) & 1)
 
 
+@pytest.mark.sim
 def test_sigterm_halts_the_tree_like_ctrl_c(plan, tmp_path):
     log = tmp_path / "run.jsonl"
     proc = start_htn("run", plan, "--sim", "--log", log, "-q")
@@ -114,17 +118,15 @@ def test_sigterm_halts_the_tree_like_ctrl_c(plan, tmp_path):
     assert out.startswith("interrupted: ")
 
 
-# (push-it ?x) calls a user function. In one process its first call is quick
-# (planning, or recovering the task tree before the run); the second one is
-# repair planning, between two ticks: it leaves a marker and takes long.
+# (push-it ?x) calls a user function. Once the test arms it (after planning:
+# the run executes the plan file's task tree without planning again), its
+# next call is repair planning, between two ticks: it leaves a marker and
+# takes long.
 PUSHING = """(defdomain pushing ((:operator (!push ?x) () () ((pushed ?x)))
   (:method (push-it ?x) ((call slow ?x)) ((!push ?x)))))"""
-SLOW_SECOND = """import time
-calls = 0
+SLOW_WHEN_ARMED = """import os, time
 def slow(x):
-    global calls
-    calls += 1
-    if calls > 1:
+    if os.path.exists(__file__ + ".armed"):
         open(__file__ + ".repairing", "w").close()
         time.sleep(30)
     return 1
@@ -135,21 +137,24 @@ def test_sigterm_while_repair_plans_between_ticks_is_logged_as_sigterm(tmp_path)
     domain, problem, fns = tmp_path / "d.jshop", tmp_path / "p.jshop", tmp_path / "slow.py"
     domain.write_text(PUSHING)
     problem.write_text("(defproblem one pushing () ((push-it box)))")
-    fns.write_text(SLOW_SECOND)
+    fns.write_text(SLOW_WHEN_ARMED)
     plan, log = tmp_path / "plan.txt", tmp_path / "run.jsonl"
     assert run_htn("plan", domain, problem, "--functions", fns, "-o", plan).returncode == 0
-    # the push never has its effect: aborted, and repair re-plans (push-it box)
+    (tmp_path / "slow.py.armed").touch()
+    # the push never has its effect: aborted, retried once (the default for a
+    # domain without a .toml) and aborted again; then repair re-plans (push-it box)
     proc = start_htn("run", plan, "--robot", "symbolic", "--faults", "effect=1", "--replan",
                      "--log", log, "-q")
     wait_until((tmp_path / "slow.py.repairing").exists, "repair planning", proc)
     out, err, evs = interrupt_run(proc, signal.SIGTERM, log)
-    assert [e["event"] for e in evs if e["event"] in ("aborted", "replanned")] == ["aborted"]
+    assert [e["event"] for e in evs if e["event"] in ("aborted", "replanned")] == ["aborted"] * 2
     assert evs[-2]["detail"] == "stopped by SIGTERM; the robot holds its pose"
     assert out.startswith("interrupted: 0 of 1 steps verified") and err == "terminated\n"
 
 
 # counted from the moment htn's entry point has its handlers (before that,
 # the interpreter itself is starting up and a Ctrl-C is Python's to report)
+@pytest.mark.sim
 @pytest.mark.parametrize("delay", [0.0, 0.1, 0.3, 0.7])
 def test_ctrl_c_during_start_up_exits_130_without_a_traceback(plan, tmp_path, delay):
     log = tmp_path / "run.jsonl"

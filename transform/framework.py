@@ -161,7 +161,7 @@ def projected(metric: str) -> Callable:
         from htn.executor.config import load_retries
 
         from .projection import project
-        retries = load_retries(ws.domain.file) if ws.domain.file else {}
+        retries = load_retries(ws.domain.file, ws.domain.operators)
         runs = [project(ws.domain, ws.instance, plan.steps, seed, retries=retries)
                 for seed in PROJECTION_SEEDS]
         return statistics.fmean(r[metric] for r in runs)

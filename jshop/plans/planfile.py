@@ -1,35 +1,75 @@
-"""Plan files: what ``htn plan -o`` writes and ``htn run`` reads.
+"""Plan files: what ``htn plan -o`` (and ``htn transform -o``) writes and
+``htn run`` and ``htn validate`` read.
 
-A plan file is JSHOP2's plan output preceded by comment lines naming the
-domain and problem files, relative to the plan file and, as a fallback when
-the plan file is moved, absolute (and the ``--functions`` file, if any)::
+A plan file is JSHOP2's plan output (manual 3.13: ``Plan cost:``, the steps,
+a line of dashes), preceded by comment lines naming the domain and problem
+files, relative to the plan file and, as a fallback when the plan file is
+moved, absolute (and the ``--functions`` file, if any). Before each plan come
+comment lines with its **task tree** (the decomposition the planner found)::
 
     ; htn plan file: JSHOP2 plan format
     ; domain: ../domains/domestic.jshop
     ; problem: ../problems/bring_object.jshop
     ; domain (absolute): /home/me/htn/domains/domestic.jshop
     ; problem (absolute): /home/me/htn/problems/bring_object.jshop
+    ; task tree: 17 nodes
+    ; 1 (bring_object jenny pringles guest) method 1 Method0Branch0
+    ; 2 (inform jenny task_accepted) method 1 Method12Branch0
+    ; 3 step 1
+    ; 2 (fetch_object jenny pringles) method 1 Method1Branch0
+    ...
     Plan cost: 8.0
 
     (!say jenny task_accepted)
     ...
     --------------------
 
-Plain JSHOP2 output (no header) is a plan file too; its domain and problem
-are then given on the command line. Other ``; key: value`` lines are kept as
-notes: ``htn transform -o`` writes the transformed task list as ``; tasks:``.
+Every line htn adds starts with ``;``, a comment to any reader of JSHOP2's
+format, and the plan text itself is byte for byte what JSHOP2 prints.
+
+**Task trees.** ``; task tree: N nodes`` is followed by exactly N node lines,
+the nodes in depth-first order, each ``; DEPTH WHAT``: DEPTH is 1 for the
+problem's top-level tasks and one more for each level below (a node's
+children are the lines after it one level deeper, in order); WHAT is
+
+* ``step S``: the primitive task done by step S (1-based) of the plan below;
+  the steps appear in plan order, each once, so the leaves are the plan;
+* ``(TASK ARGS) method K LABEL``: a compound task reduced by the K-th method
+  of that task (1-based, in the domain's order) through its branch LABEL;
+* ``(TASK ARGS) unreduced``: a compound task left as it is (no children).
+
+A task is written as JSHOP2 prints it, except that a variable a method left
+unbound in it is ``?NAME?SLOT`` (its name and its slot in the bindings), so
+that it reads back as the same variable: a repair re-plans the task with it.
+
+Depths (rather than indentation) keep a tree thousands of levels deep linear
+in size. Node paths (``bring_object/fetch_object``, ``:call N`` among
+siblings of one name; :mod:`htn.jshop.plans.tree`) are not written: they
+follow from the names. A tree is read only when a plan is run
+(:meth:`PlanFile.tree`); a corrupted one (a count, depth, step or method
+that does not fit) is an input error at its ``file:line:col``. ``htn
+validate`` and the plan steps ignore these lines. A file without them
+(hand-written, from JSHOP2, or from an htn before task trees were written)
+is a plan file too: ``htn run`` then recovers a tree by planning again.
+
+Other ``; key: value`` lines are kept as notes: ``htn transform -o`` writes
+the transformed task list as ``; tasks:``. Plain JSHOP2 output (no header)
+is a plan file too; its domain and problem are then given on the command line.
 """
 from __future__ import annotations
 
+import hashlib
 import os
 from dataclasses import dataclass, field
 from typing import Optional
 
 from htn.jshop.language.errors import HtnError
 from htn.jshop.readers.jshop2 import parse_step
-from htn.jshop.readers.source import read_source
+from htn.jshop.readers.source import decode_source
 
 from .plan import Plan, Step
+from .tree import TaskTree
+from .tree_text import TREE_HEAD, TREE_NODE, read_tree, tree_text
 
 NAMED = ("domain", "problem", "functions")
 
@@ -48,12 +88,21 @@ def header(out_path: str, domain: str, problem: str, functions: Optional[str] = 
     return "".join(lines)
 
 
+def plan_text(plan: Plan) -> str:
+    """One plan as a plan file holds it: its task tree (if it has one), then
+    exactly what JSHOP2 prints for it."""
+    return (tree_text(plan.tree) if plan.tree is not None else "") + plan.to_jshop()
+
+
 @dataclass
 class PlanFile:
     path: str
     plans: list = field(default_factory=list)
     named: dict = field(default_factory=dict)    # "domain" -> [(candidate path, line)]
     notes: dict = field(default_factory=dict)    # other "; key: value" lines -> (value, line)
+    lines: list = field(default_factory=list)    # the file's text, line by line
+    sha256: str = ""                             # of the file's bytes, as read
+    trees: list = field(default_factory=list)    # per plan: its tree's [(line, text)] or None
 
     def file(self, kind: str) -> Optional[str]:
         """The ``kind`` ("domain", "problem", "functions") file the header
@@ -78,21 +127,51 @@ class PlanFile:
     def problem(self) -> Optional[str]:
         return self.file("problem")
 
+    def tree(self, index: int, methods: Optional[dict] = None) -> Optional[TaskTree]:
+        """The task tree written before plan ``index`` (0-based), or None if
+        the file holds none for it. ``methods`` (task name -> the domain's
+        methods for it) also checks that each method and branch exists and
+        takes the task's arguments. A tree that does not fit its plan is an
+        input error at its line and column."""
+        lines = self.trees[index]
+        if lines is None:
+            return None
+        return read_tree(lines, self.path, self.plans[index].steps, methods)
+
 
 def read_plan_file(path: str) -> PlanFile:
+    """Read a plan file (the file is opened once: its text, lines and
+    SHA-256 are kept on the :class:`PlanFile`)."""
     if not os.path.isfile(path):
         raise HtnError("no such plan file", path)
-    lines = read_source(path).splitlines()     # UTF-8, BOM or not; bad bytes at line:col
+    try:
+        with open(path, "rb") as fh:
+            data = fh.read()
+    except OSError as exc:
+        raise HtnError(f"cannot read: {exc.strerror}", path)
+    lines = decode_source(data, path).splitlines()    # UTF-8, BOM or not; bad bytes at line:col
     base = os.path.dirname(os.path.abspath(path))
-    pf = PlanFile(path)
+    pf = PlanFile(path, lines=lines, sha256=hashlib.sha256(data).hexdigest())
     steps: list = []
     cost = None
     cost_line = 0
+    tree: Optional[list] = None      # the task tree lines before the next plan
+    in_tree = False
     for n, line in enumerate(lines, 1):
         text = line.strip()
         if not text:
+            in_tree = False
             continue
         if text.startswith(";"):
+            if TREE_HEAD.match(text):
+                if tree is not None:
+                    raise HtnError("a second task tree before one plan", path, n, 1)
+                tree, in_tree = [(n, text)], True
+                continue
+            if in_tree and TREE_NODE.match(text):
+                tree.append((n, text))
+                continue
+            in_tree = False
             key, _, value = text.lstrip("; ").partition(":")
             key, value = key.strip(), value.strip()
             kind = key.removesuffix(" (absolute)")
@@ -102,6 +181,7 @@ def read_plan_file(path: str) -> PlanFile:
             elif key and value:
                 pf.notes.setdefault(key, (value, n))
             continue
+        in_tree = False
         if text.startswith("Plan cost:"):
             try:
                 cost = float(text.split(":", 1)[1])
@@ -114,6 +194,8 @@ def read_plan_file(path: str) -> PlanFile:
             if cost is None:
                 raise HtnError("plan separator without a 'Plan cost:' line", path, n, 1)
             pf.plans.append(Plan(steps, cost, index=len(pf.plans), line=cost_line))
+            pf.trees.append(tree)
+            tree = None
             cost = None
             continue
         if text.startswith("("):

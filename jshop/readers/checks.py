@@ -16,6 +16,7 @@ manual 5.1.2; such an atom would carry an unbound variable into the state).
 """
 from __future__ import annotations
 
+from collections import Counter
 from dataclasses import dataclass
 
 from htn.jshop.language import syntax as S
@@ -66,11 +67,21 @@ def check_problem(domain: S.Domain, problem: S.Problem) -> list[Warning_]:
                                   f"the domain has no {kind} for it")
             if len(t.args) not in known:
                 raise HtnError.at(t.pos, f"'{t.name}' takes {_plural(known)}, "
-                                  f"given {len(t.args)}")
+                                  f"given {len(t.args)}{_heads(domain, t.name)}")
     for name, open_ in _open_positions(domain, problem).items():
         for op in domain.operators.get(name, ()):
             _unbound_effect_vars(op, open_)
     return warnings
+
+
+def _heads(domain: S.Domain, name: str) -> str:
+    """`` (it is (!brew ?robot ?cup) at coffee.jshop:8:14)``: the heads a
+    task's arguments must match (the first two, if there are more)."""
+    heads = [x.head for x in (*domain.operators.get(name, ()), *domain.methods.get(name, ()))]
+    shown = {source_atom(h.name, h.args) + (f" at {h.pos}" if h.pos else ""): None
+             for h in heads}
+    text = " or ".join(list(shown)[:2]) + (" or ..." if len(shown) > 2 else "")
+    return f" (it is {text})" if text else ""
 
 
 def _plural(arities: set[int]) -> str:
@@ -95,11 +106,81 @@ def check_domain(domain: S.Domain) -> list[Warning_]:
                     elif len(t.args) not in known:
                         warnings.append(Warning_(t.pos, f"'{t.name}' takes {_plural(known)}, "
                                                  f"given {len(t.args)}; branch {b.label} of "
-                                                 f"{m.name} can never succeed"))
+                                                 f"{m.name} can never succeed"
+                                                 f"{_heads(domain, t.name)}"))
+    elements = []
     for ops in domain.operators.values():
         for op in ops:
             warnings.extend(_unbound_effect_vars(op))
+            elements.append(("operator", op.name, _operator_atoms(op)))
+    for ms in domain.methods.values():
+        elements.extend(("method", m.name, _method_atoms(m)) for m in ms)
+    used = Counter(c for *_, atoms in elements for c in
+                   {a for x in atoms for a in x.args if isinstance(a, str)})
+    for kind, name, atoms in elements:
+        warnings.extend(_constants_like_variables(kind, name, atoms, used))
     return warnings
+
+
+def _expr_atoms(e, out: list) -> list:
+    """The atoms of a logical expression, in textual order."""
+    stack = [e]
+    while stack:
+        x = stack.pop()
+        if isinstance(x, S.Atom):
+            out.append(x)
+        elif isinstance(x, (S.And, S.Or)):
+            stack.extend(reversed(x.items))
+        elif isinstance(x, S.Not):
+            stack.append(x.expr)
+        elif isinstance(x, S.ForAll):
+            stack.extend((x.then, x.cond))
+    return out
+
+
+def _operator_atoms(op: S.Operator) -> list:
+    out = [op.head]
+    _expr_atoms(op.pre.expr, out)
+    for eff in (op.delete, op.add):
+        for item in eff.items:
+            if isinstance(item, S.EffectForAll):
+                _expr_atoms(item.cond, out)
+                for a in item.atoms:
+                    _expr_atoms(a, out)
+            else:
+                _expr_atoms(item.atom if isinstance(item, S.Protection) else item, out)
+    return out
+
+
+def _method_atoms(m: S.Method) -> list:
+    out = [m.head]
+    for b in m.branches:
+        _expr_atoms(b.pre.expr, out)
+        out.extend(S.task_atoms(b.tasks))
+    return out
+
+
+def _constants_like_variables(kind: str, name: str, atoms: list, used: Counter) -> list[Warning_]:
+    """A symbol ``cup`` where the same element has the variable ``?cup`` is
+    most likely a variable written without its '?' (manual 3.1): legal, but
+    it matches only the constant ``cup``. Not when the atom holds both (a
+    type tag: ``(furniture ?table table)``) or other elements use the
+    constant too (``used``: in how many elements each constant appears)."""
+    names: set = set()
+    for a in atoms:
+        walk_term(a.args, lambda v: names.add(v.name))
+    out, seen = [], set()
+    for a in atoms:
+        for arg in a.args:
+            if isinstance(arg, str) and f"?{arg}" in names and (id(a), arg) not in seen \
+                    and used[arg] < 2 and not any(getattr(x, "name", None) == f"?{arg}"
+                                                  for x in a.args):
+                seen.add((id(a), arg))
+                text = source_atom(getattr(a, "pred", None) or a.name, a.args)
+                out.append(Warning_(a.pos, f"{kind} {name}: '{arg}' in {text} is a constant, "
+                                    f"while ?{arg} is a variable of this {kind}; did you mean "
+                                    f"?{arg}? (variables start with '?', manual 3.1)"))
+    return out
 
 
 def _binds(e, out: set) -> set:

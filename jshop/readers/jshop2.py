@@ -23,7 +23,7 @@ from htn.jshop.language.functions import STDLIB_JAVA_NAMES, FunctionTable, arity
 from htn.jshop.language.terms import NIL, CallTerm, Var, make_list, variables
 from htn.jshop.language.walk import walk_tasks
 
-from . import lark_errors
+from . import jshop2_hints, lark_errors
 from .numbering import index_var, number_axiom, number_method, number_operator
 from .source import check_nesting
 
@@ -298,7 +298,8 @@ def parse_jshop2(text: str, file: str = "<string>", functions: FunctionTable | N
     """Parse a JSHOP2 domain or problem from text (nesting checked by the
     caller, :func:`htn.jshop.readers.load.parse_text`)."""
     functions = functions or FunctionTable()
-    tree = lark_errors.parse(_lark(), text, file, _TOKEN_NAMES, start="start")
+    tree = lark_errors.parse(_lark(), text, file, _TOKEN_NAMES, hints=jshop2_hints.hint,
+                             start="start")
     try:
         return Builder(file, functions).transform(tree)
     except VisitError as e:

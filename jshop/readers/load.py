@@ -15,7 +15,7 @@ from htn.jshop.language.errors import HtnError
 from htn.jshop.language.functions import FunctionTable
 
 from .jshop2 import parse_jshop2
-from .source import check_nesting, read_source
+from .source import check_nesting, check_not_empty, read_source
 
 _HDDL_HEAD = re.compile(r"\A(?:\s|;[^\n]*\n)*\(\s*define\s*\(\s*(domain|problem)\b", re.I)
 
@@ -26,9 +26,11 @@ def is_hddl(text: str) -> bool:
     return _HDDL_HEAD.match(text) is not None
 
 
-def parse_text(text: str, file: str = "<string>", functions: FunctionTable | None = None):
-    """Parse a domain or problem from text, JSHOP2 or HDDL; raise
-    :class:`HtnError` on bad input."""
+def parse_text(text: str, file: str = "<string>", functions: FunctionTable | None = None,
+               expect: str | None = None):
+    """Parse a domain or problem (``expect``, if known) from text, JSHOP2 or
+    HDDL; raise :class:`HtnError` on bad input."""
+    check_not_empty(text, file, expect)
     check_nesting(text, file)
     if is_hddl(text):
         from . import hddl, hddl_domain
@@ -37,16 +39,16 @@ def parse_text(text: str, file: str = "<string>", functions: FunctionTable | Non
     return parse_jshop2(text, file, functions or FunctionTable())
 
 
-def parse_file(path: str, functions: FunctionTable | None = None):
+def parse_file(path: str, functions: FunctionTable | None = None, expect: str | None = None):
     if not os.path.exists(path):
         raise HtnError("no such file", path)
     if os.path.isdir(path):
         raise HtnError("is a directory, not a JSHOP2 file", path)
-    return parse_text(read_source(path), path, functions)
+    return parse_text(read_source(path), path, functions, expect)
 
 
 def load_domain(path: str, functions: FunctionTable | None = None) -> S.Domain:
-    d = parse_file(path, functions)
+    d = parse_file(path, functions, "domain")
     if not isinstance(d, S.Domain):
         wanted = "(define (domain ...))" if d.language == "hddl" else "(defdomain ...)"
         raise HtnError.at(d.pos, f"expected a {wanted} here, found a problem")
@@ -54,7 +56,7 @@ def load_domain(path: str, functions: FunctionTable | None = None) -> S.Domain:
 
 
 def load_problem(path: str, functions: FunctionTable | None = None) -> S.Problem:
-    p = parse_file(path, functions)
+    p = parse_file(path, functions, "problem")
     if not isinstance(p, S.Problem):
         wanted = "(define (problem ...))" if p.language == "hddl" else "(defproblem ...)"
         raise HtnError.at(p.pos, f"expected a {wanted} here, found a domain")

@@ -21,6 +21,12 @@ def read_source(path: str) -> str:
             data = fh.read()
     except OSError as exc:
         raise HtnError(f"cannot read: {exc.strerror}", path)
+    return decode_source(data, path)
+
+
+def decode_source(data: bytes, path: str) -> str:
+    """The text of a file's bytes, as :func:`read_source` reads it (for a
+    reader that also needs the bytes, e.g. to take their SHA-256)."""
     try:
         return data.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
@@ -50,6 +56,29 @@ def check_nesting(text: str, file: str) -> None:
                 raise HtnError(f"parentheses nested more than {MAX_NESTING} deep", file, line, col)
         elif c == ")":
             depth -= 1
+
+
+_EMPTY = re.compile(r"(?:\s|;[^\n\r]*)*")
+
+EXPECTED_FORM = {     # (language, what) -> the form an empty file should hold
+    ("jshop2", "domain"): "(defdomain NAME (...))",
+    ("jshop2", "problem"): "(defproblem NAME DOMAIN (ATOM ...) (TASK ...))",
+    ("jshop2", None): "(defdomain NAME (...)) or (defproblem NAME DOMAIN (...) (...))",
+    ("hddl", "domain"): "(define (domain NAME) ...)",
+    ("hddl", "problem"): "(define (problem NAME) (:domain DOMAIN) ...)",
+    ("hddl", None): "(define (domain NAME) ...) or (define (problem NAME) ...)",
+}
+
+
+def check_not_empty(text: str, file: str, expect: str | None = None) -> None:
+    """Refuse a file with nothing but blanks and comments, saying what it
+    should hold: a domain or a problem (``expect``), JSHOP2 or HDDL (by the
+    file name's ending ``.hddl``)."""
+    if _EMPTY.fullmatch(text) is None:
+        return
+    language = "hddl" if file.lower().endswith(".hddl") else "jshop2"
+    what = "empty file" if not text.strip() else "nothing but comments in this file"
+    raise HtnError(f"{what}, expected {EXPECTED_FORM[language, expect]}", file, 1, 1)
 
 
 def position(text: str, offset: int) -> tuple[int, int]:

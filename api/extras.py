@@ -1,12 +1,13 @@
-"""Optional parts of the install: a command that needs one says so, in one line."""
+"""Optional parts of the install: a use case that needs one says so, in one line."""
 from __future__ import annotations
 
-from htn import missing_modules
+from htn.installation import missing_modules
 from htn.jshop.language.errors import HtnError
 
 
 def require_extra(extra: str, what: str) -> None:
-    """Raise an input error (exit 2) naming the extra if its modules are absent."""
+    """Raise an input error (exit 2 on the command line) naming the extra if
+    its modules are absent; ``what`` names what needs it (``htn evaluate``)."""
     if missing_modules(extra):
         raise HtnError(f"{what} needs the {extra} extra: pip install 'htn[{extra}]'")
 

@@ -1,0 +1,133 @@
+"""The evaluate use case: execute a problem's plan and its transformed plan
+many times each and compare them (``htn evaluate``; the plan-transformations
+paper, Section IV-A: :mod:`htn.evaluation`).
+
+Run ``i`` uses seed ``seed + i`` for both plans, on the fast projection or
+the PyBullet robot, in this process, on a local Dask cluster of ``workers``
+processes or on an existing cluster (``scheduler``); the metrics for a seed
+are the same on any number of workers. Needs the ``eval`` extra.
+"""
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+from typing import Callable, Optional
+
+from htn.jshop.language.errors import HtnError
+from htn.jshop.readers.load import check_domain_name, load_domain, load_problem
+
+from .extras import require_extra, require_robot_extra
+from .files import check_output_file, check_output_folder, make_output_folder
+from .inputs import domain_for
+
+
+@dataclass
+class Evaluation:
+    """What an evaluation found: the runs and their comparison
+    (``comparison``: a :class:`htn.evaluation.statistics.Comparison`), its
+    ``metrics``, the figures written (``plots``), and the cluster's one-line
+    ``notes``."""
+    problem: str
+    comparison: object
+    metrics: dict
+    plots: list = field(default_factory=list)
+    notes: list = field(default_factory=list)
+
+    def document(self) -> dict:
+        """The ``htn evaluate --json`` object."""
+        c = self.comparison
+        return {"problem": self.problem, "runs": c.runs, "applied": c.applied,
+                "metrics": self.metrics, "plots": self.plots, "robot": c.robot,
+                "results": c.results(), "workers": c.workers,
+                "runs_per_s": round(c.runs_per_s, 3)}
+
+
+def check_evaluation(problem, domain, robot, faults, workers, scheduler, plot, records) -> None:
+    """Every input and output of an evaluation, before any work starts (the
+    scheduler's address is checked where it is used, by ``open_runner``;
+    nothing is written before that)."""
+    require_extra("eval", "htn evaluate")
+    if not os.path.isfile(problem):
+        raise HtnError("no such file", problem)
+    if domain is not None and not os.path.isfile(domain):
+        raise HtnError("no such file", domain)
+    from htn.evaluation.runs import MEASURES
+    if robot not in MEASURES:
+        raise HtnError(f"--robot {robot}: this robot cannot be evaluated (choose from "
+                       f"{', '.join(MEASURES)})")
+    require_robot_extra(robot, f"htn evaluate --robot {robot}")
+    if scheduler is not None and workers is not None:
+        raise HtnError("--workers starts a local cluster, --scheduler uses an existing "
+                       "one and its workers: give one of them")
+    from htn.robot.faults import parse_faults
+    parse_faults(faults, MEASURES[robot].fault_kinds)
+    if plot is not None:
+        check_output_folder(plot, "--plot")
+    if records is not None:
+        check_output_file(records, "--records")
+
+
+def evaluate(problem, *, domain=None, runs: int = 200, seed: int = 0,
+             robot: str = "projection", faults: str = "", workers: Optional[int] = None,
+             scheduler: Optional[str] = None, records=None, plot=None,
+             on_start: Optional[Callable[[int, list], None]] = None,
+             on_batch: Optional[Callable[[list, float], None]] = None,
+             say: Optional[Callable[[str], None]] = None) -> Evaluation:
+    """Plan ``problem`` (a path), transform the plan with every registered
+    rule, execute both ``runs`` times and compare navigation, manipulation,
+    actions and failures (Welch's t-test; pooled failure proportions with a
+    Wilson 95% interval).
+
+    ``domain``: its domain file (default: ``../domains/NAME.jshop`` beside
+    the problem, ``domains/`` here, or the bundled one). ``robot``:
+    ``projection`` or ``pybullet``; ``faults``: failure probabilities
+    (``"grasp=0.1"``). ``workers``: processes of a local Dask cluster (None
+    or 1: this process); ``scheduler``: the address of an existing cluster.
+    ``records``: a file for one JSON line per run of each plan (streamed,
+    then put in run order); ``plot``: a folder for the figures.
+    ``on_start(workers, notes)`` is called once the runner is ready, before
+    planning; ``on_batch(records, runs)`` with each batch's new records and
+    the number of runs of every plan they complete; ``say`` gets the line
+    that says why a study too small for local workers stays in this process
+    (:func:`htn.evaluation.placement.place`). A cluster that cannot
+    complete the runs raises :class:`htn.evaluation.cluster.ClusterError`.
+    """
+    problem = os.fspath(problem)
+    domain = None if domain is None else os.fspath(domain)
+    records = None if records is None else os.fspath(records)
+    plot = None if plot is None else os.fspath(plot)
+    check_evaluation(problem, domain, robot, faults, workers, scheduler, plot, records)
+    # each file is read once: the problem names its domain when none is given
+    prob = load_problem(problem)
+    dom = load_domain(domain or domain_for(prob))
+    check_domain_name(dom, prob)
+
+    from htn.evaluation.cluster import open_runner
+    from htn.evaluation.study import RecordsFile, plot as figures, prepare_study, run_study
+
+    stream = None
+    try:
+        with open_runner(workers or 1, scheduler) as runner:
+            if plot is not None:    # all options are checked now (the scheduler last)
+                make_output_folder(plot, "--plot")
+            notes = list(runner.notes)
+            if on_start:
+                on_start(runner.workers, notes)
+            study, applied = prepare_study(dom, prob, robot, faults)
+            stream = RecordsFile(records) if records else None
+
+            def batch(new: list) -> None:
+                if stream:
+                    stream.write(new)
+                if on_batch:
+                    on_batch(new, len(new) / len(study.plans))
+
+            comp = run_study(study, problem, applied, runs, seed, runner, batch, say)
+    finally:
+        if stream:
+            stream.close()
+    if stream:
+        stream.finish(comp)
+    metrics = comp.metrics()
+    plots = figures(comp, plot) if plot else []
+    return Evaluation(problem, comp, metrics, plots, notes)

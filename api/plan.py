@@ -1,0 +1,195 @@
+"""The plan use case: the plans of a problem, with their task trees and the
+search's statistics, and why there is no plan (``htn plan``).
+
+:func:`plan` reads and checks the inputs at once (an input error is raised
+there, with its ``file:line:col``) and returns a :class:`PlanStream`; the
+search runs as the stream is iterated, one plan at a time, so a program (or
+``htn plan --all``) holds one plan at a time however many there are. The
+planner follows the JSHOP2 manual, sections 4 and 5 (:mod:`htn.jshop.search.planner`).
+"""
+from __future__ import annotations
+
+import time
+from typing import Iterator, Optional
+
+from htn.jshop.language.errors import HtnError
+from htn.jshop.plans.plan import Plan
+from htn.jshop.readers.checks import check_domain, check_problem, compat_warning
+from htn.jshop.search.limits import DEFAULT_MAX_DEPTH
+from htn.jshop.search.searches import make_search, refusal
+
+from .inputs import domain_and_problem, function_table, path_of
+
+
+def plan(domain, problem, *, plans: Optional[int] = 1, timeout: Optional[float] = None,
+         functions=None, jshop2_compat: bool = False, max_depth: int = DEFAULT_MAX_DEPTH,
+         max_memory: Optional[int] = None, explain: bool = False, explain_all: bool = False,
+         trees: bool = True, tree_paths: bool = True, search: str = "dfs") -> "PlanStream":
+    """The plans of ``problem`` in ``domain`` (paths or loaded objects, see
+    :mod:`htn.api.inputs`), as a stream in JSHOP2's order.
+
+    ``plans``: at most this many per problem instance (None: every plan,
+    JSHOP2's ``-ra``). ``timeout``: seconds of wall clock from this call
+    (reading included) after which the search stops, keeping what it found;
+    the planner checks it between expansions (the command line also stops a
+    user function that never returns). ``functions``: a Python file or a
+    :class:`~htn.jshop.language.functions.FunctionTable` for ``(call ...)``.
+    ``jshop2_compat``: run ``(:unordered ...)`` method bodies in order, as
+    JSHOP2 1.0.3 does. ``max_depth``: nested method reductions without an
+    operator in between before the search stops; ``max_memory``: megabytes
+    of resident memory (None: 80% of what is available). ``explain``
+    records the search's dead ends (``explain_all``: every one, not only the
+    deepest; see :meth:`PlanStream.explain`). ``trees``: record each plan's
+    task tree (``Plan.tree``); ``tree_paths``: with node paths. ``search``:
+    one of :data:`htn.jshop.search.searches.SEARCHES` (``dfs``, the default,
+    is JSHOP2's depth-first search; the others read HDDL and find plans one
+    at a time, :class:`UnsupportedSearch` otherwise).
+    """
+    started = time.perf_counter()
+    table = function_table(functions)
+    dom, prob = domain_and_problem(domain, problem, table)
+    why = refusal(search, dom, plans is None)
+    if why:
+        raise UnsupportedSearch(why)
+    warnings = [str(w) for w in check_domain(dom) + check_problem(dom, prob)]
+    if jshop2_compat:
+        warnings += [str(w) for w in filter(None, [compat_warning(dom)])]
+    options = dict(jshop2_compat=jshop2_compat, max_depth=max_depth,
+                   max_memory=max_memory << 20 if max_memory else None)
+    return PlanStream(dom, prob, table, warnings, options, started, timeout, plans,
+                      explain or explain_all, explain_all, trees, tree_paths, search)
+
+
+class UnsupportedSearch(HtnError):
+    """The search asked for cannot run on this input (``--search gbfs`` on
+    JSHOP2 input, or with every plan asked for)."""
+
+
+def new_stats() -> dict:
+    """The statistics of a search over a problem's instances, before it starts
+    (their keys are those of ``htn plan -f json``'s statistics line)."""
+    return {"plans_found": 0, "search_ms": 0.0, "expansions": 0, "operator_applications": 0,
+            "backtracks": 0, "timed_out": False, "interrupted": False,
+            "depth_limit_reached": False, "memory_limit_reached": False,
+            "shortest_plan": None}
+
+
+class PlanStream:
+    """The plans of every instance of a problem (a ``defproblem`` may hold
+    several), streamed by iterating (once). Each plan is a
+    :class:`~htn.jshop.plans.plan.Plan` with ``instance`` (the instance's
+    0-based index), ``index`` (its place in that instance's stream) and,
+    when recorded, ``tree``.
+
+    ``domain``, ``problem`` and ``functions`` are the inputs as read (pass
+    them on to :func:`htn.run`); ``warnings`` the domain's and problem's
+    located warnings; ``stats`` the statistics so far (final once the stream
+    ends or is closed); ``bound`` the message of the bound (``max_depth``,
+    ``max_memory``) that stopped the search, if one did.
+    """
+
+    def __init__(self, domain, problem, functions, warnings, options, started, timeout,
+                 limit, explain, explain_all, trees, tree_paths, search="dfs"):
+        self.domain, self.problem, self.functions = domain, problem, functions
+        self.warnings: list[str] = warnings
+        self.options = options
+        self.started, self.timeout, self.limit = started, timeout, limit
+        self.explain_all = explain_all
+        self.record = explain
+        self.trees, self.tree_paths = trees, tree_paths
+        self.stats = new_stats()
+        self.bound: Optional[str] = None
+        self.explanations: list = []     # one Explainer per instance searched (explain=True)
+        self.search = search              # its name (see plan())
+        self._plans = self._search()
+
+    @property
+    def domain_file(self) -> Optional[str]:
+        return path_of(self.domain)
+
+    @property
+    def problem_file(self) -> Optional[str]:
+        return path_of(self.problem)
+
+    def __iter__(self) -> Iterator[Plan]:
+        return self._plans
+
+    def __next__(self) -> Plan:
+        return next(self._plans)
+
+    def close(self) -> None:
+        """End the search now (its statistics are then final)."""
+        self._plans.close()
+
+    def __enter__(self) -> "PlanStream":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def _search(self) -> Iterator[Plan]:
+        stats = self.stats
+        try:
+            for k, inst in enumerate(self.problem.instances):
+                remaining = None
+                if self.timeout is not None:
+                    remaining = self.timeout - (time.perf_counter() - self.started)
+                    if remaining <= 0:
+                        stats["timed_out"] = True
+                        break
+                explainer = None
+                if self.record:
+                    from htn.jshop.plans.explain import Explainer
+                    explainer = Explainer(keep_all=self.explain_all)
+                    self.explanations.append(explainer)
+                planner = make_search(self.search, self.domain, inst, self.functions,
+                                      record_trees=self.trees, tree_paths=self.tree_paths,
+                                      explain=explainer, **self.options)
+                found = planner.plans(remaining)
+                try:
+                    for p in found:
+                        p.instance = k
+                        stats["plans_found"] += 1
+                        if stats["shortest_plan"] is None or len(p.steps) < stats["shortest_plan"]:
+                            stats["shortest_plan"] = len(p.steps)
+                        yield p
+                        if self.limit is not None and planner.stats.plans_found >= self.limit:
+                            break
+                finally:
+                    found.close()
+                    _add(stats, planner.stats.as_dict())
+                if planner.stats.timed_out:
+                    stats["timed_out"] = True
+                    break
+                if planner.stats.bound is not None:
+                    reached = planner.stats.as_dict()
+                    for key in ("depth_limit_reached", "memory_limit_reached"):
+                        stats[key] = reached[key]
+                    self.bound = str(planner.stats.bound)
+                    break
+        except KeyboardInterrupt:
+            stats["interrupted"] = True
+            raise
+        finally:
+            stats["search_ms"] = round(stats["search_ms"], 3)
+
+    def explain(self) -> list:
+        """Why the search found what it found: one
+        :class:`~htn.jshop.plans.explain.Explainer` per problem instance, its
+        dead ends with the precondition literal that failed and its
+        ``file:line:col``. Without ``explain=True`` the search is run again,
+        recording them this time (planning without it pays nothing for them)."""
+        if not self.explanations:
+            from htn.jshop.plans.explain import explain_search
+            self.explanations = [explain_search(self.domain, inst, self.functions,
+                                                keep_all=self.explain_all, **self.options)
+                                 for inst in self.problem.instances]
+        return self.explanations
+
+
+def _add(totals: dict, s: dict) -> None:
+    for key in ("expansions", "operator_applications", "backtracks"):
+        totals[key] += s[key]
+    totals["search_ms"] += s["search_ms"]
+    if "found_by" in s:       # --search auto: which search found the plans
+        totals["found_by"] = s["found_by"]

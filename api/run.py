@@ -1,0 +1,246 @@
+"""The run use case: execute a plan's task tree with per-action monitoring on
+a robot (``htn run``; the paper's task management, section 4).
+
+:func:`run` does it in one call. A program that must act between the checks
+and the first tick (show the behaviour tree, take snapshots, stop the run
+from a signal handler or another thread) uses :func:`prepare`, which reads
+and checks everything and builds the robot, and then :meth:`Execution.begin`
+(the log and its header, the task dispatcher) and :meth:`Execution.execute`.
+
+The plan's task tree is the one its plan file holds (:mod:`htn.jshop.plans.planfile`),
+or ``Plan.tree`` for a plan object; a plan without one gets one by planning
+again (:func:`htn.executor.plan_tree.recover_tree`), which
+:attr:`Execution.notes` says. Nothing here prints, exits or handles signals:
+Ctrl-C (a ``KeyboardInterrupt``) during the run halts it, and the result
+says ``interrupted``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable, Optional
+
+from htn.executor.dispatcher import RunSummary, TaskDispatcher
+from htn.executor.log import EventLog, run_header
+from htn.executor.machines import machine_for
+from htn.jshop.language.errors import HtnError
+from htn.robot.backends import RobotRequest, make_robot
+from htn.robot.interface import Robot
+
+from .extras import require_robot_extra
+from .files import check_output_file
+from .run_inputs import LoggedRun, RunInputs, read_run_log, run_inputs
+
+__all__ = ["run", "prepare", "Execution", "RunResult", "read_run_log", "LoggedRun"]
+
+Listener = Callable[[dict], None]
+
+
+@dataclass
+class RunResult:
+    """How a run ended: ``summary`` (result, steps verified, retries, replans,
+    simulated time, the step that ended it), every event as logged, the plan
+    as executed (repairs included), and the notes of :attr:`Execution.notes`."""
+    summary: RunSummary
+    events: list = field(default_factory=list)
+    plan: list = field(default_factory=list)
+    notes: list = field(default_factory=list)
+
+    @property
+    def result(self) -> str:
+        """``verified``, ``failed``, ``aborted`` or ``interrupted``."""
+        return self.summary.result
+
+    @property
+    def ok(self) -> bool:
+        return self.summary.result == "verified"
+
+
+def run(plan, *, robot, domain=None, problem=None, functions=None, plan_index: int = 1,
+        faults: str = "", seed: int = 0, retries=None, replan: bool = False,
+        log=None, on_event: Optional[Listener] = None, gui: bool = False,
+        argv: Optional[list] = None) -> RunResult:
+    """Execute ``plan`` on ``robot`` and return how it ended.
+
+    ``plan``: a plan file's path (as ``htn plan -o`` writes it), a
+    :class:`~htn.jshop.plans.planfile.PlanFile`, or a
+    :class:`~htn.jshop.plans.plan.Plan` (e.g. from :func:`htn.plan`; then
+    ``domain`` and ``problem`` are required). ``domain``, ``problem``,
+    ``functions``: paths or loaded objects (default: those the plan file
+    names). ``plan_index``: which plan of the file (1-based).
+
+    ``robot``: a registered back end's name (``"symbolic"``, ``"projection"``,
+    ``"pybullet"``, or a plugin's), built for the problem with ``faults``
+    (``"effect=0.2"``), ``seed`` and ``gui``; or a program's own
+    :class:`~htn.robot.interface.Robot` object, used as it is (it injects its
+    own faults, and is not closed here).
+
+    ``retries``: retry limits by operator (``{"grasp": 3}`` or ``"grasp=3"``)
+    over those of the domain's ``.toml``. ``replan``: repair a failed or
+    aborted action by re-planning the smallest enclosing task from the
+    observed state. ``log``: a path for the event log (JSON lines, the
+    ``header`` first; ``htn run --from-log`` repeats the run from it).
+    ``on_event``: called with every event (a dict, as logged) as it happens.
+    ``argv``: the command line the header records (None: a program's call).
+    """
+    execution = prepare(plan, robot=robot, domain=domain, problem=problem,
+                        functions=functions, plan_index=plan_index, faults=faults, seed=seed,
+                        retries=retries, replan=replan, log=log, on_event=on_event, gui=gui)
+    with execution:
+        execution.begin(argv)
+        try:
+            return execution.execute()
+        except KeyboardInterrupt as exc:    # outside the ticks: end the log in order
+            return execution.interrupted(str(exc))
+
+
+def prepare(plan, *, robot, domain=None, problem=None, functions=None, plan_index: int = 1,
+            faults: str = "", seed: int = 0, retries=None, replan: bool = False, log=None,
+            on_event: Optional[Listener] = None, gui: bool = False) -> "Execution":
+    """Everything :func:`run` does before the log begins: read and check the
+    inputs (every step ground and applicable in turn, the retry limits, the
+    task tree, the log's path), build the robot and check that every step has
+    an action state machine on it. Nothing has moved yet; the caller then
+    calls :meth:`Execution.begin` and :meth:`Execution.execute` (or closes
+    it), best in a ``with`` block."""
+    if log is not None:
+        log = str(log)
+        check_output_file(log, "--log")
+    if isinstance(robot, str):
+        require_robot_extra(robot, f"the {robot} robot")
+    elif isinstance(robot, Robot):
+        if faults or gui:
+            raise HtnError("faults and gui are for a robot built by name; a robot object "
+                           "injects its own faults")
+    else:
+        raise HtnError(f"robot: give a robot's name or a Robot object, not "
+                       f"{type(robot).__name__}")
+    inputs = run_inputs(plan, domain, problem, functions, plan_index, retries)
+    if isinstance(robot, str):
+        name = robot
+        robot = make_robot(name, RobotRequest(inputs.domain, inputs.instance, faults or "",
+                                              seed, gui, inputs.functions))
+        owned = True
+    else:
+        name, owned = type(robot).__name__, False
+    execution = Execution(inputs, robot, name, owned, faults or "", seed, replan, log,
+                          on_event)
+    try:
+        execution.check_machines()
+    except BaseException:
+        execution.close()
+        raise
+    return execution
+
+
+class Execution:
+    """A run, prepared: :meth:`begin`, :meth:`execute`, then :meth:`close`
+    (or use it as a context manager, which closes it and logs an error that
+    ended it). :meth:`halt` stops it between two ticks, from anywhere."""
+
+    def __init__(self, inputs: RunInputs, robot, robot_name: str, owned: bool, faults: str,
+                 seed: int, replan: bool, log_path: Optional[str],
+                 on_event: Optional[Listener]):
+        self.inputs = inputs
+        self.robot = robot
+        self.robot_name = robot_name
+        self.owned = owned              # built here, so closed here
+        self.faults, self.seed, self.replan = faults, seed, replan
+        self.log_path = log_path
+        self.listeners: list = [on_event] if on_event else []
+        self.log: Optional[EventLog] = None
+        self.dispatcher: Optional[TaskDispatcher] = None
+        self._halt: Optional[str] = None
+        self._closed = False
+
+    @property
+    def notes(self) -> list[str]:
+        """One line each: what the run had to do that its input did not say
+        (a task tree recovered by planning again)."""
+        return self.inputs.notes
+
+    @property
+    def steps(self) -> list:
+        return self.inputs.plan.steps
+
+    def check_machines(self) -> None:
+        """Every step that is not internal has an action state machine for
+        this robot (or the robot runs the operator model)."""
+        where = self.inputs.plan_file
+        for s in self.steps:
+            if not s.internal and machine_for(s.name, self.inputs.domain.name,
+                                              self.robot) is None:
+                raise HtnError(f"no action state machine is registered for {s.name} "
+                               f"(try --robot symbolic, or add one: entry points "
+                               f"'htn.actions')", where, s.line or None, 1 if s.line else None)
+
+    def listen(self, listener: Listener) -> None:
+        """Call ``listener`` with every event from now on."""
+        if self.log is not None:
+            self.log.listeners.append(listener)
+        else:
+            self.listeners.append(listener)
+
+    def begin(self, argv: Optional[list] = None) -> TaskDispatcher:
+        """Open the log, write its header (``argv``: the command line it
+        records) and build the task dispatcher on the plan's tree."""
+        i = self.inputs
+        robot = self.robot
+        self.log = EventLog(self.log_path, clock=lambda: robot.sim_time)
+        self.log.listeners.extend(self.listeners)
+        self.log.emit(None, None, "header", None, "", **run_header(
+            i.plan_file, i.plan_sha256, i.plan_index, i.files["domain"], i.files["problem"],
+            i.files["functions"], self.robot_name, self.seed, self.faults, i.limits,
+            self.replan, argv=argv))
+        self.dispatcher = TaskDispatcher(robot, i.domain, i.instance, i.plan.steps, i.limits,
+                                         self.log, replan=self.replan, functions=i.functions,
+                                         tree=i.tree)
+        if self._halt:
+            self.dispatcher.halt(self._halt)
+        return self.dispatcher
+
+    def execute(self) -> RunResult:
+        """Tick the behaviour tree until the plan is verified, an action fails
+        or is aborted (and cannot be repaired), or the run is halted."""
+        if self.dispatcher is None:
+            self.begin()
+        return self._result(self.dispatcher.run())
+
+    def halt(self, why: str = "") -> None:
+        """Stop the run before its next tick (safe from a signal handler or
+        another thread); ``why`` is logged with the ``interrupted`` event."""
+        if self.dispatcher is not None:
+            self.dispatcher.halt(why)
+        else:
+            self._halt = why or "stopped by the user"
+
+    def interrupted(self, why: str = "") -> RunResult:
+        """End the run as interrupted now (outside :meth:`execute`): the robot
+        holds its pose, the log gets the ``interrupted`` event and the summary."""
+        return self._result(self.dispatcher.interrupted(why))
+
+    def _result(self, summary: RunSummary) -> RunResult:
+        return RunResult(summary, self.log.events, self.dispatcher.plan_lines(), self.notes)
+
+    def fail(self, exc: BaseException) -> None:
+        """End the log with an ``error`` summary: ``exc`` stopped the run."""
+        if self.log is not None and not self._closed:
+            self.log.emit(None, None, "summary", None, f"error: {type(exc).__name__}: {exc}",
+                          result="error")
+
+    def close(self) -> None:
+        """Close the log and (if it was built here) the robot."""
+        if self._closed:
+            return
+        self._closed = True
+        if self.log is not None:
+            self.log.close()
+        if self.owned:
+            self.robot.close()
+
+    def __enter__(self) -> "Execution":
+        return self
+
+    def __exit__(self, kind, exc, tb) -> None:
+        if exc is not None:
+            self.fail(exc)
+        self.close()

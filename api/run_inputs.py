@@ -1,0 +1,167 @@
+"""What a run needs before the robot moves, read once and checked: the plan
+(a plan file, one already read, or a plan object), its domain and problem,
+the user functions, the retry limits, and the plan's task tree.
+
+The plan file is opened once: its text gives the steps, the task trees
+(:mod:`htn.jshop.plans.planfile`), the lines that locate a bad step, and
+the SHA-256 the log's header records. ``htn run --from-log`` reads the log's
+header and the plan file it names (:func:`read_run_log`), once each.
+"""
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from typing import Optional
+
+from htn.executor.config import load_retries, parse_overrides
+from htn.executor.log import check_plan_digest, check_plan_present, read_header
+from htn.executor.plan_tree import RECOVER_PLANS, RECOVER_TIMEOUT, check_runnable, recover_tree
+from htn.jshop.language.errors import HtnError
+from htn.jshop.plans.plan import Plan
+from htn.jshop.plans.planfile import PlanFile, read_plan_file
+from htn.jshop.plans.validate import check_steps
+
+from .inputs import domain_and_problem, function_table, is_path, path_of
+
+
+@dataclass
+class RunInputs:
+    """A plan ready to run: everything read and checked."""
+    domain: object               # S.Domain
+    problem: object              # S.Problem
+    instance: object             # the S.ProblemInstance whose state is the world
+    plan: Plan
+    functions: object            # FunctionTable
+    limits: dict                 # retry limits by operator ('!grasp': 2)
+    tree: object                 # the TaskTree to execute, or None (one sequence)
+    plan_file: Optional[str]     # where the plan was read from (None: a plan object)
+    plan_sha256: Optional[str]
+    plan_index: int
+    files: dict                  # "domain", "problem", "functions" -> path or None
+    notes: list                  # one line each, e.g. how the tree was found
+
+
+def load_plan(plan) -> tuple[Optional[PlanFile], Optional[Plan]]:
+    """A plan file (read from a path, or as given) or a plan object."""
+    if is_path(plan):
+        return read_plan_file(os.fspath(plan)), None
+    if isinstance(plan, PlanFile):
+        return plan, None
+    if isinstance(plan, Plan):
+        return None, plan
+    raise HtnError(f"expected a plan (a plan file's path, a PlanFile or a Plan), got "
+                   f"{type(plan).__name__}")
+
+
+def run_inputs(plan, domain=None, problem=None, functions=None, plan_index: int = 1,
+               retries=None) -> RunInputs:
+    """Read and check everything a run of ``plan`` needs (see :func:`htn.api.run.run`)."""
+    pf, given = load_plan(plan)
+    where = pf.path if pf else None
+    if pf is not None:
+        domain = domain or pf.domain
+        problem = problem or pf.problem
+        functions = functions or pf.file("functions")
+        if not domain or not problem:
+            raise HtnError("the plan file names no domain or problem (write it with 'htn plan "
+                           "-o', or give --domain and --problem)", where)
+        if plan_index > len(pf.plans):
+            raise HtnError(f"--plan-index {plan_index}: the file holds {len(pf.plans)} "
+                           "plan(s)", where)
+        chosen = pf.plans[plan_index - 1]
+    else:
+        if domain is None or problem is None:
+            raise HtnError("a plan object runs with a domain and a problem: give both")
+        chosen = given
+    table = function_table(functions)
+    dom, prob = domain_and_problem(domain, problem, table)
+    number = getattr(chosen, "instance", 0) if pf is None else 0
+    instance = prob.instances[number if number < len(prob.instances) else 0]
+    check_steps(dom, chosen.steps, where)
+    domain_file = path_of(dom) or path_of(domain)
+    limits = load_retries(domain_file, dom.operators)
+    overrides = _overrides(retries)
+    unknown = sorted(op for op in overrides if op not in dom.operators)
+    if unknown:
+        raise HtnError(f"--retries: the domain {dom.name} has no operator "
+                       f"{', '.join(unknown)}")
+    limits.update(overrides)
+    check_runnable(dom, instance, chosen, where, table, pf.lines if pf else ())
+    notes: list = []
+    if pf is not None:
+        tree = pf.tree(plan_index - 1, methods_of(dom, instance))
+        source = f"{where}: plan {plan_index}"
+    else:
+        tree = chosen.tree
+        source = "the plan"
+    if tree is None:
+        tasks = pf.notes.get("tasks", (None,))[0] if pf else None
+        tree = recover_tree(dom, instance, chosen.steps, table, tasks=tasks)
+        notes.append(f"{source} has no task tree: "
+                     + ("recovered one by planning again" if tree is not None else
+                        f"planning again found none ({RECOVER_PLANS} plans, "
+                        f"{RECOVER_TIMEOUT:g} s), so it runs as one sequence of actions"))
+    files = {"domain": path_of(domain) or path_of(dom), "problem": path_of(problem) or
+             path_of(prob), "functions": path_of(functions) if is_path(functions) else None}
+    return RunInputs(dom, prob, instance, chosen, table, limits, tree, where,
+                     pf.sha256 if pf else None, plan_index, files, notes)
+
+
+def _overrides(retries) -> dict:
+    """Retry limits given as a mapping (``{"grasp": 3}``) or as ``--retries``
+    texts (``["grasp=3,place=1"]``), by operator name (``!grasp``)."""
+    if retries is None:
+        return {}
+    if isinstance(retries, dict):
+        return parse_overrides([f"{k}={v}" for k, v in retries.items()])
+    if isinstance(retries, str):
+        return parse_overrides([retries])
+    return parse_overrides(list(retries))
+
+
+def methods_of(domain, instance) -> dict:
+    """The methods a task tree of ``instance`` may use: the domain's, and for
+    an HDDL problem with parameters the artificial root task's."""
+    if getattr(instance, "top", None) is None:
+        return domain.methods
+    from htn.jshop.readers.hddl_domain import top_method
+    top = top_method(domain, instance.top)
+    return {**domain.methods, top.name: [top]}
+
+
+@dataclass
+class LoggedRun:
+    """What a log's header records of its run (``htn run --log``), with the
+    plan file it names, read and checked to be unchanged."""
+    log: str
+    plan: PlanFile
+    plan_index: int
+    domain: Optional[str]
+    problem: Optional[str]
+    functions: Optional[str]
+    robot: str
+    seed: int
+    faults: str
+    retries: dict
+    replan: bool
+
+    def options(self) -> dict:
+        """The keyword arguments of :func:`htn.api.run.run` for the same run."""
+        return dict(plan=self.plan, plan_index=self.plan_index, domain=self.domain,
+                    problem=self.problem, functions=self.functions, robot=self.robot,
+                    seed=self.seed, faults=self.faults, retries=self.retries,
+                    replan=self.replan)
+
+
+def read_run_log(path) -> LoggedRun:
+    """The run a log records (its first event, the header): the plan file it
+    ran must be there and unchanged (its SHA-256), else an input error at the
+    log's first line."""
+    path = os.fspath(path)
+    rec = read_header(path)
+    check_plan_present(rec["plan"], path)
+    pf = read_plan_file(rec["plan"])
+    check_plan_digest(rec["plan"], rec.get("plan_sha256"), pf.sha256, path)
+    return LoggedRun(path, pf, rec["plan_index"], rec["domain"], rec["problem"],
+                     rec.get("functions"), rec["robot"], rec["seed"], rec["faults"],
+                     dict(rec["retries"] or {}), rec["replan"])

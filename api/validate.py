@@ -1,0 +1,79 @@
+"""The validate use case: replay plans from a problem's initial state with a
+domain's operators (``htn validate``; JSHOP2 manual 5.2.1).
+
+A plan is valid when every step's precondition holds in the state its
+predecessors reach, no step deletes a protected atom, the plan's cost is the
+sum of its steps' costs and (HDDL) the problem's goal holds at the end
+(:mod:`htn.jshop.plans.validate`). A step that names no operator of the
+domain, or with the wrong arity, is bad input (an :class:`HtnError`), not an
+invalid plan. Task trees in a plan file are not read: a plan file is
+validated as the JSHOP2 plan text it holds.
+"""
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from typing import Optional
+
+from htn.jshop.language.errors import HtnError
+from htn.jshop.plans.plan import Plan
+from htn.jshop.plans.planfile import PlanFile, read_plan_file
+from htn.jshop.plans.validate import Verdict, check_steps, validate_plan
+
+from .inputs import domain_and_problem, function_table, is_path
+
+
+@dataclass
+class PlanVerdict:
+    """One plan and its verdict; ``file`` is the plan file it was read from."""
+    plan: Plan
+    verdict: Verdict
+    file: Optional[str] = None
+
+    @property
+    def valid(self) -> bool:
+        return self.verdict.valid
+
+    @property
+    def where(self) -> Optional[str]:
+        """``FILE:LINE:1`` of the step (or cost) that fails, or the file."""
+        if self.verdict.line and self.file:
+            return f"{self.file}:{self.verdict.line}:1"
+        return self.file
+
+    @property
+    def failed_step(self) -> Optional[int]:
+        """The 1-based step that fails (None: the plan as a whole, e.g. its cost)."""
+        v = self.verdict
+        if v.failed_step is not None and v.failed_step < v.steps:
+            return v.failed_step + 1
+        return None
+
+
+def validate(domain, problem, plan, *, plan_index: Optional[int] = None,
+             functions=None) -> list[PlanVerdict]:
+    """The verdict on each plan of ``plan`` (a plan file's path, a
+    :class:`~htn.jshop.plans.planfile.PlanFile`, a
+    :class:`~htn.jshop.plans.plan.Plan` or a list of them), in order;
+    ``plan_index`` (1-based) picks one plan of a file. ``domain``,
+    ``problem``, ``functions``: paths or loaded objects (:mod:`htn.api.inputs`)."""
+    table = function_table(functions)
+    dom, prob = domain_and_problem(domain, problem, table)
+    file = None
+    if is_path(plan):
+        plan = read_plan_file(os.fspath(plan))
+    if isinstance(plan, PlanFile):
+        file, plans = plan.path, plan.plans
+    elif isinstance(plan, Plan):
+        plans = [plan]
+    else:
+        plans = list(plan)
+    if plan_index is not None:
+        if plan_index > len(plans):
+            raise HtnError(f"--plan-index {plan_index}: the file holds {len(plans)} plan(s)",
+                           file)
+        plans = [plans[plan_index - 1]]
+    instance = prob.instances[0]
+    for p in plans:
+        check_steps(dom, p.steps, file)
+    return [PlanVerdict(p, validate_plan(dom, instance, p, table), file) for p in plans]

@@ -1,0 +1,124 @@
+"""``htn view run.jsonl``, and the ``--view`` options of ``htn run``: the browser view.
+
+The page (served by :mod:`htn.view.server` on 127.0.0.1 unless told otherwise)
+shows the task tree with each node's outcome, the running action, the camera
+of a PyBullet robot and every event; ``htn view`` shows a finished log the
+same way, with a scrubber. Its URL, with the run's token, is printed on
+stderr as one line ``view: http://127.0.0.1:PORT/?token=...``.
+"""
+from __future__ import annotations
+
+import time
+
+import click
+
+from htn.api.extras import require_extra
+
+HOST_HELP = ("Address to serve the view on (default 127.0.0.1: this machine only; any "
+             "other address lets other machines reach it, with the token, and is warned of)")
+
+
+def view_options(command):
+    """The ``--view`` options of ``htn run``."""
+    for option in reversed([
+        click.option("--view", is_flag=True,
+                     help="Watch the run in a browser: serve a live page (task tree, running "
+                          "action, camera, events) and print its URL; the page stays up "
+                          "after the run until Ctrl-C (the 'view' extra)."),
+        click.option("--view-host", metavar="HOST", default="127.0.0.1", help=HOST_HELP + "."),
+        click.option("--view-port", metavar="PORT", type=click.IntRange(0, 65535), default=0,
+                     help="Port of the view (default: a free one)."),
+        click.option("--view-wait", is_flag=True,
+                     help="With --view: start the robot only once a page has connected, so "
+                          "the whole run is watched live."),
+    ]):
+        command = option(command)
+    return command
+
+
+def start_run_view(host: str, port: int, what: str = "htn run --view"):
+    """Start the view of a run (before the robot moves) and print its URL."""
+    require_extra("view", what)
+    from htn.view.live import RunView
+    view = RunView(host, port).start()
+    _announce(view.url, host)
+    return view
+
+
+def wait_for_page(view) -> None:
+    click.echo("view: waiting for a page to connect before the robot starts (Ctrl-C to stop)",
+               err=True)
+    view.wait_for_page()
+
+
+def keep_up(view, listen=None) -> None:
+    """After the run: the page stays until Ctrl-C (or SIGTERM). ``listen``
+    turns those signals on again (they were held off while the run ended)."""
+    try:
+        if listen is not None:
+            listen()
+        click.echo(f"view: the run is over; the page stays at {view.url} until Ctrl-C",
+                   err=True)
+        _serve_until_interrupted()
+    except KeyboardInterrupt:
+        pass
+    view.close()
+
+
+def _announce(url: str, host: str) -> None:
+    from htn.view.server import is_loopback
+    if not is_loopback(host):
+        click.echo(f"warning: the view is served on {host}, reachable from other machines: "
+                   f"anyone with its URL (the token) can watch", err=True)
+    click.echo(f"view: {url}", err=True)
+
+
+def _serve_until_interrupted() -> None:
+    try:
+        while True:
+            time.sleep(3600)
+    except KeyboardInterrupt:
+        pass
+
+
+@click.command("view")
+@click.argument("log_file", type=click.Path(dir_okay=False))
+@click.option("--host", default="127.0.0.1", metavar="HOST", help=HOST_HELP + ".")
+@click.option("--port", type=click.IntRange(0, 65535), default=0, metavar="PORT",
+              help="Port to serve on (default: a free one).")
+def view(log_file, host, port):
+    """Show the log of a run (htn run --log FILE.jsonl) in a browser.
+
+    Serves a page, on this machine only unless --host says otherwise, and
+    prints its URL (with a random token: requests without it get 403). The
+    page shows the task tree with each node's outcome (retries and faults
+    marked on their nodes, repaired subtrees shown replaced beside the
+    grafted ones), the action at each event and every event; the scrubber
+    plays the run, steps one event back or forward, jumps to the next fault,
+    and shows the tree as it was at that event. Ctrl-C stops the server
+    (exit code 0).
+
+    \b
+    Examples:
+      htn run plan.txt --sim --faults slip=0.3 --log run.jsonl
+      htn view run.jsonl
+      htn view run.jsonl --host 0.0.0.0 --port 8765   # from another machine
+    """
+    require_extra("view", "htn view")
+    from htn.view.hub import Hub
+    from htn.view.model import page_records, read_log, title_of
+    from htn.view.server import ViewServer
+    records, warning = read_log(log_file)
+    if warning:
+        click.echo(f"warning: {warning}", err=True)
+    hub = Hub("log", page_records(records), title=title_of(records[0]))
+    server = ViewServer(hub, host, port).start()
+    try:
+        _announce(server.url, host)
+        click.echo(f"view: {len(records)} events of {log_file}; Ctrl-C stops the server",
+                   err=True)
+        _serve_until_interrupted()
+    except KeyboardInterrupt:       # Ctrl-C is how a server stops: not an error
+        pass
+    finally:
+        server.close()
