@@ -69,6 +69,9 @@ def load_inputs(domain_path: str, problem_path: str,
     dom = load_domain(domain_path, functions)
     prob = load_problem(problem_path, functions)
     check_domain_name(dom, prob)
+    if dom.language == "hddl" and prob.language == "hddl":
+        from .hddl_domain import resolve_problem_tasks
+        resolve_problem_tasks(dom, prob)
     return dom, prob
 
 
