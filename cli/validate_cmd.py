@@ -21,6 +21,13 @@ def validate(domain, problem, plan_file, plan_index, functions, quiet):
     state its predecessors reach, no step deletes a protected atom, and the
     plan's cost is the sum of its steps' costs.
 
+    A plan in the IPC 2020 format (`htn plan -f ipc`, `==>` ... `<==`) is
+    checked as the competition's verifier does: also every decomposition
+    line (the method exists for its task, its parameters and precondition
+    hold where it is applied, its subtasks are the listed ids in an order it
+    allows), every action reached from the root exactly once, the root tasks
+    the problem's initial task network, and the goal.
+
     Exit code 0 when every plan is valid, 1 when one is not (the first step
     that fails is printed as PLAN:line:col), 2 for bad input.
 
@@ -39,6 +46,9 @@ def validate(domain, problem, plan_file, plan_index, functions, quiet):
     if functions:
         table.load_file(functions)
     dom, prob = load_inputs(domain, problem, table)
+    ipc = _ipc_text(plan_file)
+    if ipc is not None:
+        sys.exit(_validate_ipc(dom, prob, plan_file, ipc, plan_index, table, quiet))
     pf = read_plan_file(plan_file)
     plans = pf.plans
     if plan_index is not None:
@@ -65,3 +75,37 @@ def validate(domain, problem, plan_file, plan_index, functions, quiet):
     if len(plans) > 1 and not quiet:
         click.echo(f"{len(plans) - bad} of {len(plans)} plans valid")
     sys.exit(1 if bad else 0)
+
+
+def _ipc_text(path: str):
+    """The plan file's text if it holds IPC plans, else None."""
+    import os
+
+    from htn.jshop.plans.ipc import is_ipc_text
+    from htn.jshop.readers.source import read_source
+    if not os.path.isfile(path):
+        return None
+    text = read_source(path)
+    return text if is_ipc_text(text) else None
+
+
+def _validate_ipc(dom, prob, plan_file, text, plan_index, table, quiet) -> int:
+    from htn.jshop.plans.ipc_verify import verify_ipc_text
+    results = verify_ipc_text(dom, prob, text, plan_file, plan_index, table)
+    bad = 0
+    for p, verdict in results:
+        label = f"plan {p.index + 1}"
+        if verdict.valid:
+            if not quiet:
+                click.echo(f"{label}: valid, {verdict.actions} actions, "
+                           f"{verdict.decompositions} decompositions")
+            continue
+        bad += 1
+        for f in verdict.findings[:10]:
+            click.echo(f"{plan_file}:{f.line}:{f.col}: {label}: {f.message}", err=True)
+        if len(verdict.findings) > 10:
+            click.echo(f"{plan_file}: {label}: ... and {len(verdict.findings) - 10} more",
+                       err=True)
+    if len(results) > 1 and not quiet:
+        click.echo(f"{len(results) - bad} of {len(results)} plans valid")
+    return 1 if bad else 0

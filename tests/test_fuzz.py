@@ -22,8 +22,6 @@ also prints the first line of each error, to see what the mutants provoke.)
 """
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 import os
 import re
@@ -33,7 +31,7 @@ from collections import Counter
 from pathlib import Path
 
 import pytest
-from conftest import CORPUS, FUNCTIONS, ROOT, SHARED, corpus_available
+from conftest import CORPUS, FUNCTIONS, ROOT, SHARED, corpus_available, run_cli
 from hypothesis import HealthCheck, given, settings, strategies as st
 
 sys.setrecursionlimit(max(sys.getrecursionlimit(), 20000))   # as htn's main() does
@@ -197,19 +195,6 @@ def _balanced_mutation(text: str):
     return st.one_of(span.map(delete), span.map(duplicate), st.tuples(span, span).map(replace),
                      st.tuples(span, st.sampled_from(words), st.sampled_from(words + TOKENS))
                      .map(reword))
-
-
-def run_cli(*argv) -> tuple[int, str, str]:
-    """``htn ARGV`` through the real entry point, in this process."""
-    from htn.cli.main import main
-    out, err = io.StringIO(), io.StringIO()
-    code = 0
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        try:
-            main([str(a) for a in argv])
-        except SystemExit as exc:
-            code = exc.code if isinstance(exc.code, int) else 1
-    return code, out.getvalue(), err.getvalue()
 
 
 TALLY: Counter = Counter()
