@@ -224,7 +224,7 @@ def domain_from_model(h: HDomain) -> S.Domain:
         d.methods.setdefault(m.task.name, []).append(t.method(m, pulled.get(id(m), [])))
     for c in h.constants:
         if len(c.types) != 1:
-            raise HtnError.at(c.type_pos or c.pos, f"constant {c.name} must have one type, "
+            raise HtnError.at(c.pos, f"constant {c.name} must have one type, "
                               "not (either ...)")
     d.facts = [S.Atom(type_predicate(c.types[0]), (c.name,), c.pos) for c in h.constants]
     d.implied = {type_predicate(ty): [type_predicate(a) for a in anc]
