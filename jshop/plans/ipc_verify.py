@@ -198,36 +198,14 @@ class _Check:
 
     # ------------------------------------------------------------ 4. order
     def order(self) -> None:
-        position = {a.id: k for k, a in enumerate(self.plan.actions)}
-        span: dict = {}
-
-        def actions_below(ident: int) -> tuple:
-            if ident in span:
-                return span[ident]
-            if ident in position:
-                span[ident] = (position[ident], position[ident])
-                return span[ident]
-            stack, out = [ident], []
-            while stack:       # iteratively: a decomposition may be deep
-                x = stack.pop()
-                if x in position:
-                    out.append(position[x])
-                elif x in span:
-                    if span[x]:
-                        out += list(span[x])
-                else:
-                    stack.extend(self._decomposition(x).children)
-            span[ident] = (min(out), max(out)) if out else ()
-            return span[ident]
-
+        span = self._spans()
         for ident, found in self.choices.items():
             d, sh = self._decomposition(ident), self.shape_of[ident]
             kept, first_bad = [], None
             for match in found:
                 child = {i: d.children[k] for k, i in enumerate(match.order)}
-                bad = next(((i, j) for i, j in sh.pairs if _after(actions_below(child[i]),
-                                                                  actions_below(child[j]))),
-                           None)
+                bad = next(((i, j) for i, j in sh.pairs
+                            if _after(span[child[i]], span[child[j]])), None)
                 if bad is None:
                     kept.append(match)
                 elif first_bad is None:
@@ -236,13 +214,31 @@ class _Check:
                 self.choices[ident] = kept
                 continue
             (i, j), child = first_bad
-            a = self.plan.actions[actions_below(child[i])[1]]
-            b = self.plan.actions[actions_below(child[j])[0]]
-            label = lambda k: sh.subtasks[k][2] or f"subtask {k + 1}"
+            a = self.plan.actions[span[child[i]][1]]
+            b = self.plan.actions[span[child[j]][0]]
             self.add(d.line, d.child_cols[d.children.index(child[j])],
-                     f"method {sh.name} orders {label(i)} (id {child[i]}) before {label(j)} "
+                     f"method {sh.name} orders {_label(sh, i)} (id {child[i]}) before "
+                     f"{_label(sh, j)} "
                      f"(id {child[j]}), but action id {a.id} (line {a.line}) comes after action "
                      f"id {b.id} (line {b.line})")
+
+    def _spans(self) -> dict:
+        """id -> (first, last) position of the actions below it, () if none;
+        bottom-up over the tree (steps 1-3 made it one), without recursion."""
+        span = {a.id: (k, k) for k, a in enumerate(self.plan.actions)}
+        stack = [(self.top.id, False)]
+        while stack:
+            ident, expanded = stack.pop()
+            if ident in span:
+                continue
+            children = self._decomposition(ident).children
+            if not expanded:
+                stack.append((ident, True))
+                stack.extend((c, False) for c in children)
+                continue
+            below = [span[c] for c in children if span[c]]
+            span[ident] = (min(b[0] for b in below), max(b[1] for b in below)) if below else ()
+        return span
 
     # ------------------------------------------------------------ 5. execution
     def execution(self) -> None:
@@ -259,6 +255,10 @@ class _Check:
                 return
             first = first or findings
         self.findings += first
+
+
+def _label(sh, k: int) -> str:
+    return sh.subtasks[k][2] or f"subtask {k + 1}"
 
 
 def _after(before: tuple, after: tuple) -> bool:
