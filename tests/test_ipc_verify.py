@@ -9,11 +9,14 @@ from __future__ import annotations
 
 import csv
 import re
+import sys
 
 import pytest
 from conftest import SHARED, run_cli, run_htn
+from hypothesis import HealthCheck, given, settings, strategies as st
 
 VERDICTS = SHARED / "corpus" / "ipc-verdicts"
+sys.setrecursionlimit(max(sys.getrecursionlimit(), 20000))   # as htn's main() does (run_cli)
 
 
 def _verdict_rows():
@@ -253,3 +256,26 @@ def test_an_ipc_plan_needs_an_hddl_domain(tmp_path):
     result = run_htn("validate", domain, problem, f)
     assert result.returncode == 2 and "Traceback" not in result.stderr
     assert "an IPC plan is checked against an HDDL domain and problem" in result.stderr
+
+
+PLAN_LINES = st.lists(st.sampled_from(PLAN.splitlines()) | st.text(
+    alphabet=st.sampled_from(list("0123 ->()<=\n\tabgo")), max_size=12), max_size=8)
+
+
+@settings(max_examples=150, deadline=None, derandomize=True, database=None,
+          suppress_health_check=list(HealthCheck))
+@given(edit=st.data())
+def test_a_mutated_ipc_plan_gets_a_clean_answer(tmp_path_factory, edit):
+    """Lines dropped, repeated, moved and replaced by noise: exit 0, 1 or 2,
+    never a traceback, every message located in the plan file."""
+    lines = PLAN.splitlines()
+    k = edit.draw(st.integers(0, len(lines)), label="at")
+    cut = edit.draw(st.integers(0, 3), label="cut")
+    lines[k:k + cut] = edit.draw(PLAN_LINES, label="new lines")
+    folder = tmp_path_factory.mktemp("ipc")
+    d, p, f = _files(folder, "\n".join(lines) + "\n")
+    code, out, err = run_cli("validate", d, p, f)
+    assert code in (0, 1, 2), (code, err)
+    assert "Traceback" not in err, err
+    if code:
+        assert re.match(re.escape(str(f)) + r"(:\d+:\d+)?: ", err), err
