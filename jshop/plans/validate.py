@@ -10,10 +10,10 @@ several satisfiers may give different effects or costs), every distinct
 choice is tried, with backtracking, as the planner would have.
 
 An HDDL problem's goal must also hold in the final state (HDDL, Höller et
-al. 2020). Validation does not check that the plan is a decomposition of the
-problem's tasks: any applicable operator sequence with the right cost (and
-reaching the goal) is valid; for HDDL, the IPC 2020 verifier checks the
-decomposition that ``htn plan -f ipc`` prints.
+al. 2020). A plan in this (JSHOP2) format has no decomposition, so any
+applicable operator sequence with the right cost (and reaching the goal) is
+valid; a plan in the IPC 2020 format (``htn plan -f ipc``) carries its
+decomposition, which :mod:`htn.jshop.plans.ipc_verify` checks as well.
 """
 from __future__ import annotations
 
