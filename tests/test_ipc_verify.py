@@ -68,6 +68,10 @@ DOMAIN = """(define (domain w)
     :task (check ?t ?p)
     :precondition (at ?t ?p)
     :subtasks ())
+  (:method m-again
+    :parameters (?t - thing ?p - place)
+    :task (check ?t ?p)
+    :ordered-subtasks (check ?t ?p))
   (:method m-both
     :parameters (?t - thing)
     :task (both ?t)
@@ -182,6 +186,21 @@ BOTH = """(define (problem wp) (:domain w)
   (:htn :subtasks (both box))
   (:init (at box home)))
 """
+
+
+def test_lines_that_list_each_other_apart_from_the_root(tmp_path):
+    # pandaPIparser accepts this plan: its check for orphans only asks that
+    # every id be listed somewhere, and nothing else visits 3 and 4
+    cycle = PLAN.replace("<==\n", "3 check box shop -> m-again 4\n"
+                                   "4 check box shop -> m-again 3\n<==\n")
+    d, p, f = _files(tmp_path, cycle)
+    result = run_htn("validate", d, p, f)
+    assert result.returncode == 1
+    assert result.stderr.splitlines() == [
+        f"{f}:6:1: plan 1: id 3 (check box shop) is not reached from the root: it is a subtask "
+        "of id 4 (line 7), which is not reached either",
+        f"{f}:7:1: plan 1: id 4 (check box shop) is not reached from the root: it is a subtask "
+        "of id 3 (line 6), which is not reached either"]
 
 
 def test_unordered_subtasks_may_come_in_any_executable_order(tmp_path, ipc_oracle):

@@ -27,7 +27,9 @@ pandaPIparser's ``--verify``), in this order:
 A plan that fails a step is invalid; the findings of the first failing step
 are its reasons, each at ``line:col`` of the plan file. Names compare
 case-insensitively (HDDL's names are), where the verifier compares them as
-the files write them.
+the files write them; lines that list each other in a cycle apart from the
+root are not reached from it, where the verifier only asks that every id be
+listed by some line.
 """
 from __future__ import annotations
 
@@ -116,10 +118,18 @@ class _Check:
         for d in plan.decompositions:
             self._refer(f"id {d.id} (line {d.line})", d.id, d.children, d.child_cols, d.line,
                         parent)
+        reached, stack = set(), [i for i in plan.root if i in self.lines]
+        while stack:          # from the root: a cycle of lines that list each other is not
+            i = stack.pop()
+            if i not in reached:
+                reached.add(i)
+                stack.extend(c for c in self.lines[i].children if c in self.lines)
         for e in (*plan.actions, *plan.decompositions):
-            if e.id not in parent and self.lines.get(e.id) is e:
+            if e.id not in reached and self.lines.get(e.id) is e:
+                why = ("no line lists it as a subtask" if e.id not in parent else
+                       f"it is a subtask of {parent[e.id]}, which is not reached either")
                 self.add(e.line, e.col, f"id {e.id} ({e.text}) is not reached from the root: "
-                                        "no line lists it as a subtask")
+                                        + why)
 
     def _refer(self, owner: str, own, ids, cols, line: int, parent: dict) -> None:
         for i, col in zip(ids, cols):
