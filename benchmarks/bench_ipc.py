@@ -251,10 +251,9 @@ def main(samples, search, only, limit, runs, pin, as_json):
         for dname, domain, problem in instances(folder, only):
             row = measure(dname, domain, problem, search, flag, limit, runs, verifier, pin, ref)
             rows.append(row)
-            if not as_json:
-                click.echo(f"{name} {dname} {problem.name}: "
-                           f"{'solved' if row['solved'] else row['result']} "
-                           f"{row['cpu_median_s']:.2f} s CPU", err=True)
+            click.echo(f"{name} {dname} {problem.name}: "                  # progress
+                       f"{'solved' if row['solved'] else row['result']} "
+                       f"{row['cpu_median_s']:.2f} s CPU", err=True)
         report["samples"].append({"summary": summary(rows, name), "instances": rows})
     if as_json:
         click.echo(json.dumps(report, indent=1))
