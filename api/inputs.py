@@ -18,7 +18,7 @@ from htn.installation import EXAMPLES
 from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import HtnError
 from htn.jshop.language.functions import FunctionTable
-from htn.jshop.readers.load import check_domain_name, load_domain, load_problem
+from htn.jshop.readers.load import load_domain, load_problem, paired
 
 def is_path(x) -> bool:
     return isinstance(x, (str, os.PathLike))
@@ -46,7 +46,8 @@ def function_table(functions) -> FunctionTable:
 
 def domain_and_problem(domain, problem, table: FunctionTable) -> tuple[S.Domain, S.Problem]:
     """The domain and the problem, read if given as paths, and checked to
-    belong together (a problem names its domain: manual 3.12)."""
+    belong together (a problem names its domain: manual 3.12); for HDDL the
+    domain as that problem needs it (:func:`~htn.jshop.readers.load.paired`)."""
     if domain is None or problem is None:
         raise HtnError("give a domain and a problem")
     dom = load_domain(os.fspath(domain), table) if is_path(domain) else domain
@@ -55,8 +56,7 @@ def domain_and_problem(domain, problem, table: FunctionTable) -> tuple[S.Domain,
         raise HtnError(f"expected a domain (a path or a Domain), got {type(dom).__name__}")
     if not isinstance(prob, S.Problem):
         raise HtnError(f"expected a problem (a path or a Problem), got {type(prob).__name__}")
-    check_domain_name(dom, prob)
-    return dom, prob
+    return paired(dom, prob)
 
 
 def domain_for(problem) -> str:

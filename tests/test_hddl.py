@@ -75,7 +75,7 @@ def check_ipc_decomposition(text: str, domain: Path, problem: Path, steps: list)
 
 
 @pytest.mark.parametrize("domain,problem", _instances())
-def test_sample_instance_plans_validates_and_replays(tmp_path, domain, problem):
+def test_sample_instance_plans_validates_and_replays(tmp_path, ipc_oracle, domain, problem):
     plan_file = tmp_path / "plan.txt"
     result = run_htn("plan", domain, problem, "-f", "ipc", "-o", plan_file, "--timeout", "60")
     assert result.returncode == 0, result.stderr
@@ -83,6 +83,8 @@ def test_sample_instance_plans_validates_and_replays(tmp_path, domain, problem):
              for line in plan_file.read_text().splitlines() if line.startswith("(")]
     assert steps
     check_ipc_decomposition(result.stdout, domain, problem, steps)
+    (tmp_path / "plan.ipc").write_text(result.stdout)
+    ipc_oracle.check(domain, problem, tmp_path / "plan.ipc")
     valid = run_htn("validate", domain, problem, plan_file)
     assert valid.returncode == 0, valid.stdout + valid.stderr
     assert f"valid, {len(steps)} steps" in valid.stdout
@@ -128,7 +130,7 @@ def _write(tmp_path, domain=DOMAIN, problem=PROBLEM):
     return tmp_path / "d.hddl", tmp_path / "p.hddl"
 
 
-def test_small_domain_every_format(tmp_path):
+def test_small_domain_every_format(tmp_path, ipc_oracle):
     d, p = _write(tmp_path)
     jshop = run_htn("plan", d, p, "-f", "jshop")
     assert jshop.returncode == 0, jshop.stderr
@@ -137,6 +139,8 @@ def test_small_domain_every_format(tmp_path):
     ipc = run_htn("plan", d, p, "-f", "ipc")
     assert ipc.stdout == ("==>\n0 go box home shop\n1 go box shop home\nroot 2 3\n"
                           "2 move box shop -> m-move 0\n3 move box home -> m-move 1\n<==\n")
+    (tmp_path / "plan.ipc").write_text(ipc.stdout)
+    ipc_oracle.check(d, p, tmp_path / "plan.ipc")
     tree = run_htn("plan", d, p, "-f", "jshop", "--tree")
     assert "branch m-move" in tree.stderr
     as_json = run_htn("plan", d, p, "-f", "json")

@@ -315,3 +315,4 @@ class Problem:
     domain_pos: Optional[Pos] = None   # where the domain's name is written
     language: str = "jshop2"
     spelling: dict = field(default_factory=dict)    # lower-case name -> as written
+    hddl: Any = None                                # the HDDL model it was read from

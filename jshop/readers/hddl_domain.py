@@ -235,6 +235,10 @@ def domain_from_model(h: HDomain, pullup: bool | None = None) -> S.Domain:
     d.pullup = pullup
     for m in h.methods:
         d.methods.setdefault(m.task.name, []).append(t.method(m, pulled.get(id(m), [])))
+    for c in h.constants:
+        if len(c.types) != 1:
+            raise HtnError.at(c.pos, f"constant {c.name} must have one type, "
+                              "not (either ...)")
     d.facts = [S.Atom(type_predicate(c.types[0]), (c.name,), c.pos) for c in h.constants]
     d.implied = {type_predicate(ty): [type_predicate(a) for a in anc]
                  for ty, anc in t.ancestors.items() if anc}
@@ -287,7 +291,9 @@ def problem_from_model(h: HProblem) -> S.Problem:
                                   "initial task network")
         items.append(S.TaskAtom(st.name, st.args, False, st.pos))
     top = None
-    if h.params:
+    if h.params or _has_constraints(h.network):
+        # the network's :constraints are a precondition of its artificial
+        # root method, like its parameters' types
         top = MethodDef(TOP_METHOD, h.params, Subtask(None, TOP, (), h.pos), None, h.network,
                         h.pos)
     goal, nvars = None, 0
@@ -300,7 +306,27 @@ def problem_from_model(h: HProblem) -> S.Problem:
     instance = S.ProblemInstance(state, _task_list(items, order, pos), h.pos, goal=goal,
                                  goal_nvars=nvars, top=top)
     return S.Problem(h.name, h.domain_name, [instance], file=h.file, pos=h.pos,
-                     language="hddl", spelling=h.spelling)
+                     language="hddl", spelling=h.spelling, hddl=h)
+
+
+def _has_constraints(net) -> bool:
+    c = net.constraints if net is not None else None
+    return c is not None and not (isinstance(c, S.And) and not c.items)
+
+
+def resolve_problem_tasks(domain: S.Domain, problem: S.Problem) -> None:
+    """An HDDL initial task network may name actions as well as compound
+    tasks (Höller et al. 2020, the problem's task network is any task
+    network); the problem file alone cannot tell which, so once the domain
+    is known an action's name becomes its operator ``!name``. A network with
+    a root method (``top``) is resolved by that method already."""
+    h = domain.hddl
+    if h is None or problem.language != "hddl":
+        return
+    for inst in problem.instances:
+        for t in S.task_atoms(inst.tasks):
+            if t.name in h.actions and t.name not in h.tasks:
+                t.name = "!" + t.name
 
 
 def from_model(h):

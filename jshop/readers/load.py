@@ -68,11 +68,19 @@ def load_inputs(domain_path: str, problem_path: str,
     """Load a domain and a problem for it: every command that reads the pair
     (``plan``, ``run``, ``validate``, ``transform``, ``evaluate``) goes
     through here, so each refuses another domain's problem the same way."""
-    dom = load_domain(domain_path, functions)
-    prob = load_problem(problem_path, functions)
+    return paired(load_domain(domain_path, functions), load_problem(problem_path, functions))
+
+
+def paired(dom: S.Domain, prob: S.Problem) -> tuple[S.Domain, S.Problem]:
+    """A domain and a problem checked to belong together, and the domain
+    to plan that problem with: for HDDL, the problem's tasks that are
+    actions become operators, and a problem whose initial task network is
+    not totally ordered gets the domain without pulled-up conditions
+    (:func:`~htn.jshop.readers.hddl_domain.for_problem`)."""
     check_domain_name(dom, prob)
     if dom.hddl is not None:
-        from .hddl_domain import for_problem
+        from .hddl_domain import for_problem, resolve_problem_tasks
+        resolve_problem_tasks(dom, prob)
         dom = for_problem(dom, prob)
     return dom, prob
 
