@@ -71,38 +71,45 @@ class _Relaxation:
                 consumers[n].append(i)
         self.consumers = consumers
 
-    def costs(self, sources: list, targets: set) -> dict:
-        """h_add costs (unit operator costs) from ``sources`` (cost 0) of
-        the nodes in ``targets``; a target missing from the result is
-        unreachable. Stops when every target is known."""
-        cost = {}
+    def costs(self, sources: list, targets=None) -> list:
+        """h_add costs (unit operator costs) from ``sources`` (cost 0): a list
+        by node, None where a node is unreachable. With ``targets`` (a set of
+        nodes) it stops once every target is known.
+
+        Costs are whole numbers and every operator's cost exceeds those of
+        its preconditions, so nodes are settled by buckets of equal cost
+        (a heap of the distinct costs pending, not of the nodes): the same
+        order as Dijkstra's, at a fraction of the heap operations."""
+        cost: list = [None] * self.nodes
         acc = [0] * len(self.npre)
         left = self.npre[:]
-        heap = [(0, n) for n in sources]
-        for i in self.free:
-            for e in self.effects[i]:
-                heap.append((1, e))
-        heapq.heapify(heap)
-        pending = len(targets)
+        buckets: dict = {0: list(sources)}
+        if self.free:
+            buckets[1] = [e for i in self.free for e in self.effects[i]]
+        keys = sorted(buckets)
+        pending = len(targets) if targets is not None else -1
         consumers, effects = self.consumers, self.effects
         push, pop = heapq.heappush, heapq.heappop
-        while heap:
-            c, n = pop(heap)
-            if n in cost:
-                continue
-            cost[n] = c
-            if n in targets:
-                pending -= 1
-                if not pending:
-                    break
-            for i in consumers[n]:
-                acc[i] += c
-                left[i] -= 1
-                if not left[i]:
-                    ci = acc[i] + 1
-                    for e in effects[i]:
-                        if e not in cost:
-                            push(heap, (ci, e))
+        while keys:
+            c = pop(keys)
+            for n in buckets.pop(c):
+                if cost[n] is not None:
+                    continue
+                cost[n] = c
+                if pending > 0 and n in targets:
+                    pending -= 1
+                    if not pending:
+                        return cost
+                for i in consumers[n]:
+                    acc[i] += c
+                    left[i] -= 1
+                    if not left[i]:
+                        ci = acc[i] + 1           # > c: c is one of the summands
+                        bucket = buckets.get(ci)
+                        if bucket is None:
+                            buckets[ci] = bucket = []
+                            push(keys, ci)
+                        bucket.extend(effects[i])
         return cost
 
 
@@ -123,7 +130,6 @@ class RelaxedComposition:
     def __init__(self, model):
         self.relaxation = _Relaxation(model)
         self.goal = _bits(model.goal[0]) if model.goal is not None and model.goal[0] > 0 else []
-        self.everything = set(range(self.relaxation.nodes))
         self._costs: dict = {}      # state -> its costs, for the latest states
 
     def __call__(self, state: int, net: tuple) -> float:
@@ -135,16 +141,16 @@ class RelaxedComposition:
         if cost is None:
             if len(self._costs) >= CACHED_STATES:
                 self._costs.pop(next(iter(self._costs)))
-            cost = self._costs[state] = r.costs(_bits(state), self.everything)
+            cost = self._costs[state] = r.costs(_bits(state))
         total = 0
         for n in self.goal:
-            c = cost.get(n)
+            c = cost[n]
             if c is None:
                 return INF
             total += c
         nfacts = r.nfacts
         for t in tasks(net):
-            c = cost.get(nfacts + t)
+            c = cost[nfacts + t]
             if c is None:
                 return INF
             total += c
@@ -158,8 +164,8 @@ class TaskDecompositionGraph:
 
     def __init__(self, model):
         r = _Relaxation(model, with_state=False)
-        cost = r.costs([], set(range(r.nodes)))
-        self.cost = [cost.get(t, INF) for t in range(len(model.tasks))]
+        cost = r.costs([])
+        self.cost = [INF if cost[t] is None else cost[t] for t in range(len(model.tasks))]
 
     def __call__(self, state: int, net: tuple) -> float:
         cost = self.cost
