@@ -136,14 +136,27 @@ class _Grounder:
                                          op.head.args)
                 adds = [(item.pred, item.args) for item in op.add.items
                         if isinstance(item, S.Atom)]
-                foralls = [(logic.expr(flat_and([relax(item.cond)])), item.atoms) for item in op.add.items
-                           if isinstance(item, S.EffectForAll)]
-                programs.append((op, sat, adds, foralls))
+                raw = [item for item in op.add.items if isinstance(item, S.EffectForAll)]
+                foralls = [(logic.expr(flat_and([relax(item.cond)])), item.atoms) for item in raw]
+                programs.append((op, sat, adds, foralls, [item.cond for item in raw]))
+        # semi-naive: an operator is enumerated again only when a predicate
+        # its relaxed precondition reads has gained a fact since its last turn
+        # (a derived predicate could depend on any: then every turn, as before)
+        changed_at: dict = {}           # predicate -> tick of its latest new fact
+        tick = 0
+        every = bool(self.domain.axioms)
+        reads = [None if every else _predicates([op.pre.expr, *conds])
+                 for op, _sat, _adds, _fa, conds in programs]
+        last = [-1] * len(programs)
         changed = True
         while changed:
             changed = False
-            for op, sat, adds, foralls in programs:
+            for k, (op, sat, adds, foralls, _conds) in enumerate(programs):
+                if last[k] >= 0 and reads[k] is not None and \
+                        all(changed_at.get(p, -1) <= last[k] for p in reads[k]):
+                    continue
                 yield
+                last[k] = tick
                 new = []
                 for env in sat([None] * op.nvars):
                     for pred, args in adds:
@@ -153,6 +166,8 @@ class _Grounder:
                             new.extend((a.pred, subst(a.args, nb)) for a in atoms)
                 for pred, args in new:
                     if state.add(pred, args):
+                        tick += 1
+                        changed_at[pred] = tick
                         changed = True
         return state
 
@@ -341,4 +356,16 @@ def _top_variables(e) -> set:
             out.update(v.index for v in variables((x.left, x.right), []))
         elif not isinstance(x, S.ForAll):
             raise NotGroundable(f"{type(x).__name__} in a precondition")
+    return out
+
+
+def _predicates(exprs: list) -> set:
+    """The predicates the delete relaxations of ``exprs`` read."""
+    out, stack = set(), [relax(e) for e in exprs]
+    while stack:
+        e = stack.pop()
+        if isinstance(e, S.Atom):
+            out.add(e.pred)
+        elif isinstance(e, (S.And, S.Or)):
+            stack.extend(e.items)
     return out
