@@ -193,3 +193,5 @@ def _add(totals: dict, s: dict) -> None:
     totals["search_ms"] += s["search_ms"]
     if "found_by" in s:       # --search auto: which search found the plans
         totals["found_by"] = s["found_by"]
+    if "loop_cuts" in s:
+        totals["loop_cuts"] = totals.get("loop_cuts", 0) + s["loop_cuts"]

@@ -164,6 +164,9 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
     if not found:
         if fmt == "text":
             warn("no plan found")
+        if totals.get("loop_cuts") and not quiet and not totals["timed_out"] and stop is None:
+            warn(f"the loop check cut {totals['loop_cuts']} reduction(s) that revisit a state: "
+                 "a plan that needs them may exist (--search auto searches without it)")
         for path in (output, dot):
             if path:
                 warn(f"{path}: not written (no plan)")

@@ -143,3 +143,22 @@ def test_heuristic_search_refuses_jshop2_and_all(tmp_path):
     if jd.is_file():
         result = run_htn("plan", jd, jp, "--search", "auto")
         assert result.returncode == 2 and "reads HDDL" in result.stderr
+
+
+@pytest.mark.corpus
+def test_a_no_plan_the_loop_check_may_have_caused_says_so(tmp_path):
+    """PCP interleaves two recursive grammars whose actions flip a turn back
+    and forth: the state repeats while the plan makes progress, so the loop
+    check cuts every plan; depth-first search says so beside "no plan", and
+    the heuristic search (no loop check) finds one."""
+    folder = SHARED / "corpus" / "ipc-po" / "PCP"
+    d, p = folder / "p-pcp11-domain.hddl", folder / "p-pcp11.hddl"
+    if not d.is_file():
+        pytest.skip(f"{folder} not found")
+    result = run_htn("plan", d, p)
+    assert result.returncode == 1
+    assert "the loop check cut" in result.stderr and "--search auto" in result.stderr
+    stats = json.loads(run_htn("plan", d, p, "-f", "json", "-q").stdout.splitlines()[-1])
+    assert stats["loop_cuts"] > 0
+    result = run_htn("plan", d, p, "--search", "auto", "-f", "ipc")
+    assert result.returncode == 0 and result.stdout.startswith("==>"), result.stderr

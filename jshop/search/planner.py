@@ -197,6 +197,8 @@ class Planner:
         finally:
             stats.elapsed = spent + (clock() - t0 if t0 is not None else 0.0)
             stats.expansions = ticks + 1
+            if self.loops is not None:
+                stats.loop_cuts = self.loops.cut
             for frame in reversed(stack):
                 frame.close()
             if gc_was_enabled:

@@ -1,6 +1,8 @@
 """What a search did: plans found, expansions, operator applications,
 backtracks, time, what ended it early (``--timeout``, Ctrl-C, a bound), and
-in a portfolio which search found the plans."""
+in a portfolio which search found the plans, and how many reductions the
+loop check refused (a search that ends with none found a "no plan" it can
+stand by; with some, a plan that revisits a state may have been cut)."""
 from __future__ import annotations
 
 from .limits import DepthLimit, MemoryLimit
@@ -9,7 +11,7 @@ from .limits import DepthLimit, MemoryLimit
 class Stats:
     __slots__ = ("plans_found", "expansions", "operator_applications",
                  "backtracks", "started", "elapsed", "timed_out", "interrupted",
-                 "bound", "found_by")
+                 "bound", "found_by", "loop_cuts")
 
     def __init__(self):
         self.plans_found = 0
@@ -22,6 +24,7 @@ class Stats:
         self.interrupted = False
         self.bound = None      # the SearchBound (depth or memory) that stopped the search
         self.found_by = None   # which search of a portfolio found the plans (--search auto)
+        self.loop_cuts = 0     # reductions the loop check refused (loops.py): 0 = complete
 
     def as_dict(self) -> dict:
         out = {
@@ -37,4 +40,6 @@ class Stats:
         }
         if self.found_by is not None:
             out["found_by"] = self.found_by
+        if self.loop_cuts:
+            out["loop_cuts"] = self.loop_cuts
         return out
