@@ -37,6 +37,8 @@ from .stats import Stats
 from .task_networks import body_items, firsts, item_at, replace
 
 
+WASTAR_WEIGHT = 2.0      # --search wastar: f = g + 2 h
+
 class BestFirst:
     """GBFS (``weight=None``) or weighted A* on one problem instance."""
 
@@ -53,6 +55,7 @@ class BestFirst:
         self.stats = Stats()
         self.slice_s: Optional[float] = None   # CPU seconds between pauses, see plans()
         self.model = None
+        self.h = None              # the heuristic, once grounded
         self.generated = 0
 
     def prepare(self) -> None:

@@ -22,8 +22,6 @@ SEARCHES = {
     "auto": "dfs and gbfs interleaved (HDDL)",
 }
 
-WASTAR_WEIGHT = 2.0
-
 
 def make_search(name: str, domain, instance, functions=None, **options):
     """A planner-like object for one problem instance: ``plans(timeout)``
@@ -32,7 +30,7 @@ def make_search(name: str, domain, instance, functions=None, **options):
         from .planner import Planner
         return Planner(domain, instance, functions, **options)
     if name in ("gbfs", "wastar"):
-        from .best_first import BestFirst
+        from .best_first import WASTAR_WEIGHT, BestFirst
         return BestFirst(domain, instance, weight=WASTAR_WEIGHT if name == "wastar" else None,
                          label=name, **options)
     if name == "auto":
