@@ -23,7 +23,7 @@ from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import HtnError
 from htn.jshop.language.functions import FunctionTable
 from htn.jshop.readers.checks import check_inputs
-from htn.jshop.readers.load import load_domain, load_problem
+from htn.jshop.readers.load import load_domain, load_problem, paired
 
 def is_path(x) -> bool:
     return isinstance(x, (str, os.PathLike))
@@ -78,6 +78,9 @@ def read_inputs(domain, problem, table: FunctionTable) -> Inputs:
         raise HtnError(f"expected a domain (a path or a Domain), got {type(dom).__name__}")
     if not isinstance(prob, S.Problem):
         raise HtnError(f"expected a problem (a path or a Problem), got {type(prob).__name__}")
+    # paired first: for HDDL it makes the problem's action tasks operators,
+    # which the check then finds
+    dom, prob = paired(dom, prob)
     return Inputs(dom, prob, [str(w) for w in check_inputs(dom, prob)])
 
 

@@ -12,10 +12,11 @@ from __future__ import annotations
 import time
 from typing import Iterator, Optional
 
+from htn.jshop.language.errors import HtnError
 from htn.jshop.plans.plan import Plan
 from htn.jshop.readers.checks import compat_warning
 from htn.jshop.search.limits import DEFAULT_MAX_DEPTH
-from htn.jshop.search.planner import Planner
+from htn.jshop.search.searches import make_search, refusal
 
 from .inputs import function_table, path_of, read_inputs
 
@@ -23,7 +24,7 @@ from .inputs import function_table, path_of, read_inputs
 def plan(domain, problem, *, plans: Optional[int] = 1, timeout: Optional[float] = None,
          functions=None, jshop2_compat: bool = False, max_depth: int = DEFAULT_MAX_DEPTH,
          max_memory: Optional[int] = None, explain: bool = False, explain_all: bool = False,
-         trees: bool = True, tree_paths: bool = True) -> "PlanStream":
+         trees: bool = True, tree_paths: bool = True, search: str = "dfs") -> "PlanStream":
     """The plans of ``problem`` in ``domain`` (paths or loaded objects, see
     :mod:`htn.api.inputs`), as a stream in JSHOP2's order.
 
@@ -39,18 +40,29 @@ def plan(domain, problem, *, plans: Optional[int] = 1, timeout: Optional[float] 
     of resident memory (None: 80% of what is available). ``explain``
     records the search's dead ends (``explain_all``: every one, not only the
     deepest; see :meth:`PlanStream.explain`). ``trees``: record each plan's
-    task tree (``Plan.tree``); ``tree_paths``: with node paths.
+    task tree (``Plan.tree``); ``tree_paths``: with node paths. ``search``:
+    one of :data:`htn.jshop.search.searches.SEARCHES` (``dfs``, the default,
+    is JSHOP2's depth-first search; the others read HDDL and find plans one
+    at a time, :class:`UnsupportedSearch` otherwise).
     """
     started = time.perf_counter()
     table = function_table(functions)
     inputs = read_inputs(domain, problem, table)
     dom, prob, warnings = inputs.domain, inputs.problem, list(inputs.warnings)
+    why = refusal(search, dom, plans is None)
+    if why:
+        raise UnsupportedSearch(why)
     if jshop2_compat:
         warnings += [str(w) for w in filter(None, [compat_warning(dom)])]
     options = dict(jshop2_compat=jshop2_compat, max_depth=max_depth,
                    max_memory=max_memory << 20 if max_memory else None)
     return PlanStream(dom, prob, table, warnings, options, started, timeout, plans,
-                      explain or explain_all, explain_all, trees, tree_paths)
+                      explain or explain_all, explain_all, trees, tree_paths, search)
+
+
+class UnsupportedSearch(HtnError):
+    """The search asked for cannot run on this input (``--search gbfs`` on
+    JSHOP2 input, or with every plan asked for)."""
 
 
 def new_stats() -> dict:
@@ -77,7 +89,7 @@ class PlanStream:
     """
 
     def __init__(self, domain, problem, functions, warnings, options, started, timeout,
-                 limit, explain, explain_all, trees, tree_paths):
+                 limit, explain, explain_all, trees, tree_paths, search="dfs"):
         self.domain, self.problem, self.functions = domain, problem, functions
         self.warnings: list[str] = warnings
         self.options = options
@@ -88,6 +100,7 @@ class PlanStream:
         self.stats = new_stats()
         self.bound: Optional[str] = None
         self.explanations: list = []     # one Explainer per instance searched (explain=True)
+        self.search = search              # its name (see plan())
         self._plans = self._search()
 
     @property
@@ -129,8 +142,9 @@ class PlanStream:
                     from htn.jshop.plans.explain import Explainer
                     explainer = Explainer(keep_all=self.explain_all)
                     self.explanations.append(explainer)
-                planner = Planner(self.domain, inst, self.functions, record_trees=self.trees,
-                                  tree_paths=self.tree_paths, explain=explainer, **self.options)
+                planner = make_search(self.search, self.domain, inst, self.functions,
+                                      record_trees=self.trees, tree_paths=self.tree_paths,
+                                      explain=explainer, **self.options)
                 found = planner.plans(remaining)
                 try:
                     for p in found:
@@ -177,3 +191,7 @@ def _add(totals: dict, s: dict) -> None:
     for key in ("expansions", "operator_applications", "backtracks"):
         totals[key] += s[key]
     totals["search_ms"] += s["search_ms"]
+    if "found_by" in s:       # --search auto: which search found the plans
+        totals["found_by"] = s["found_by"]
+    if "loop_cuts" in s:
+        totals["loop_cuts"] = totals.get("loop_cuts", 0) + s["loop_cuts"]

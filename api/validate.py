@@ -8,6 +8,10 @@ sum of its steps' costs and (HDDL) the problem's goal holds at the end
 domain, or with the wrong arity, is bad input (an :class:`HtnError`), not an
 invalid plan. Task trees in a plan file are not read: a plan file is
 validated as the JSHOP2 plan text it holds.
+
+A plan file in the IPC 2020 format (``htn plan -f ipc``) is checked as the
+competition's verifier does, decompositions included
+(:func:`validate_ipc`, :mod:`htn.jshop.plans.ipc_verify`).
 """
 from __future__ import annotations
 
@@ -77,3 +81,31 @@ def validate(domain, problem, plan, *, plan_index: Optional[int] = None,
     for p in plans:
         check_steps(dom, p.steps, file)
     return [PlanVerdict(p, validate_plan(dom, instance, p, table), file) for p in plans]
+
+
+def ipc_text(path) -> Optional[str]:
+    """The text of the plan file ``path`` if it holds IPC-format plans
+    (``==>`` ... ``<==``), else None."""
+    from htn.jshop.plans.ipc import is_ipc_text
+    from htn.jshop.readers.source import read_source
+    if not is_path(path) or not os.path.isfile(path):
+        return None
+    text = read_source(os.fspath(path))
+    return text if is_ipc_text(text) else None
+
+
+def validate_ipc(domain, problem, plan, *, plan_index: Optional[int] = None,
+                 functions=None, text: Optional[str] = None) -> list:
+    """``[(IpcPlan, IpcVerdict)]`` for each IPC plan of the file ``plan``
+    (``text``: its text, if read already): the actions replayed, every
+    decomposition line checked against the domain's methods, every action
+    reached from the root exactly once, and the goal, as pandaPIparser
+    ``--verify`` checks them (:func:`~htn.jshop.plans.ipc_verify.verify_ipc_plan`)."""
+    from htn.jshop.plans.ipc_verify import verify_ipc_text
+    from htn.jshop.readers.source import read_source
+    table = function_table(functions)
+    dom, prob = domain_and_problem(domain, problem, table)
+    file = os.fspath(plan)
+    if text is None:
+        text = read_source(file)
+    return verify_ipc_text(dom, prob, text, file, plan_index, table)

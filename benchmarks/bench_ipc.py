@@ -1,165 +1,302 @@
-"""Benchmark: the IPC 2020 total-order HDDL sample, beside HyperTensioN.
+"""Benchmark: the IPC HDDL samples under the competition's limit, every plan verified.
 
-For every instance of ``shared/corpus/ipc2020-to`` (domain folders with a
-``domain.hddl`` and problem files), measures
+For every instance of the shared samples ``ipc2020-to``, ``ipc2020-to-hard``,
+``ipc2023-to`` and ``ipc-po`` (domain folders under ``shared/corpus``), runs
 
-* the whole ``htn plan DOMAIN PROBLEM -f ipc`` process (parse, plan, print),
-  wall time, with the competition's limit (30 s here, as in the folder's
-  README), median of ``--runs`` runs;
-* the search alone, in-process and cold (the first search of the process,
-  like HyperTensioN's own "plan ms"), in CPU time so that other work on the
-  machine does not count, and the plan's length; beside it (``init_ms``,
-  JSON only) the planner's set-up before the search (building its state and
-  tables);
-* whether the plan is valid (replayed from the initial state, goal checked).
+* ``htn plan DOMAIN PROBLEM -f ipc [--search S]`` as a process under a CPU
+  limit (``RLIMIT_CPU``, 30 s as at the competition), and takes its CPU time
+  (user + system, from ``wait4``): median and max over ``--runs`` runs;
+* checks the plan it printed twice: ``htn validate`` (actions, decomposition,
+  goal) and the competition's verifier, pandaPIparser ``--verify``, when
+  ``shared/tools/pandaPIparser`` is there (or ``HTN_PANDAPI``). An instance
+  counts as solved only when every check that ran accepted its plan;
+* for ``ipc2020-to``, the search alone beside HyperTensioN's "plan ms" from
+  that folder's README: with ``--search dfs`` the CPU time of the first
+  search in a fresh process (``Planner.plans``, the public API), otherwise
+  the ``search_ms`` that ``htn plan -f json --search S`` reports.
 
-and prints them beside HyperTensioN's figures from the folder's README, with
-solved counts and time ratios (ours / HyperTensioN; geometric means)::
+``--search`` is passed through to ``htn plan --search``; an ``htn`` without
+that option runs ``dfs`` (its only search) without the flag, and reports the
+other searches as not available. Per sample it prints solved, median and max
+CPU time (of the solved instances), and for ``ipc2020-to`` the ratios::
 
-    python benchmarks/bench_ipc.py
-    python benchmarks/bench_ipc.py --only Towers --runs 3
-    python benchmarks/bench_ipc.py --json
+    python benchmarks/bench_ipc.py                      # all four samples, dfs
+    python benchmarks/bench_ipc.py --sample ipc2020-to --runs 3
+    python benchmarks/bench_ipc.py --search gbfs --json
 """
 from __future__ import annotations
 
 import json
 import math
-import re
+import os
+import resource
 import statistics
 import subprocess
 import sys
-import time
+import tempfile
+import threading
 from pathlib import Path
 
 import click
 
 ROOT = Path(__file__).resolve().parent.parent
-DEFAULT_CORPUS = ROOT.parent / "shared" / "corpus" / "ipc2020-to"
+SHARED = Path(os.environ.get("HTN_SHARED", ROOT.parent / "shared"))
+SAMPLES = ("ipc2020-to", "ipc2020-to-hard", "ipc2023-to", "ipc-po")
+SEARCHES = ("dfs", "gbfs", "auto")
+WALL_GUARD = 40
+
+# the search alone, in a fresh process (dfs: the planner's public API)
+SEARCH_CPU = """
+import json, sys, time
+from htn.jshop import Planner
+from htn.jshop.readers.load import load_inputs
+dom, prob = load_inputs(sys.argv[1], sys.argv[2])
+start = time.process_time()
+planner = Planner(dom, prob.instances[0])
+t = time.process_time()
+plan = next(planner.plans(), None)
+print(json.dumps({"search_ms": (time.process_time() - t) * 1000, "init_ms": (t - start) * 1000,
+                  "found": plan is not None}))
+"""
 
 
-def reference(corpus: Path) -> dict:
-    """HyperTensioN's figures: (domain, instance) -> row of the README table."""
-    rows = {}
-    for line in (corpus / "README.md").read_text().splitlines():
-        cells = [c.strip() for c in line.strip().strip("|").split("|")]
-        if len(cells) == 6 and cells[2] in ("yes", "no"):
-            domain, inst, solved, proc, plan_ms, length = cells
-            rows[(domain, inst)] = {"solved": solved == "yes", "process_s": float(proc),
-                                    "plan_ms": float(plan_ms), "length": int(length)}
-    return rows
-
-
-def instances(corpus: Path, only) -> list:
+def instances(sample: Path, only) -> list:
+    """(domain folder, domain file, problem file) of each instance: the
+    folder's ``domain.hddl`` (or its one other ``*domain*.hddl``), or the
+    problem's own ``<problem>-domain.hddl`` where each has one."""
     out = []
-    for folder in sorted(p for p in corpus.iterdir() if (p / "domain.hddl").is_file()):
+    for folder in sorted(p for p in sample.iterdir() if p.is_dir()):
         if only and folder.name not in only:
             continue
-        for problem in sorted(folder.glob("*.hddl")):
-            if problem.name != "domain.hddl":
-                out.append((folder.name, problem.stem, folder / "domain.hddl", problem))
+        files = sorted(p for p in folder.iterdir() if p.suffix in (".hddl", ".pddl"))
+        domains = [f for f in files if "domain" in f.name.lower()]
+        for problem in (f for f in files if f not in domains):
+            stem = problem.name.rsplit(".", 1)[0]
+            own = [d for d in domains if d.name == f"{stem}-domain.hddl"]
+            if own or domains:
+                out.append((folder.name, (own or domains)[0], problem))
     return out
 
 
-def process_time(domain: Path, problem: Path, limit: float) -> tuple[float, bool]:
-    t = time.perf_counter()
+def hypertension(sample: Path) -> dict:
+    """HyperTensioN's "plan ms" per (domain, instance) from ipc2020-to's README."""
+    rows = {}
+    readme = sample / "README.md"
+    for line in readme.read_text().splitlines() if readme.is_file() else []:
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if len(cells) == 6 and cells[2] in ("yes", "no"):
+            rows[(cells[0], cells[1])] = float(cells[4]) if cells[2] == "yes" else None
+    return rows
+
+
+def run_limited(argv: list, limit: float, pin=None) -> dict:
+    """Run ``argv`` under ``RLIMIT_CPU`` = ``limit`` s; its CPU time, exit
+    status (negative: the signal), stdout and stderr. A wall-clock guard
+    (``WALL_GUARD`` times the limit: the machine may be shared) kills a
+    process that waits instead of computing."""
+    if pin is not None:
+        argv = ["taskset", "-c", str(pin), *argv]
+    soft = max(1, math.ceil(limit))
+
+    def cap():
+        resource.setrlimit(resource.RLIMIT_CPU, (soft, soft + 1))
+
+    with tempfile.TemporaryFile("w+") as out, tempfile.TemporaryFile("w+") as err:
+        proc = subprocess.Popen(argv, stdout=out, stderr=err, cwd=ROOT, preexec_fn=cap,
+                                text=True)
+        fired: list = []
+
+        def kill():
+            fired.append(True)
+            proc.kill()
+        guard = threading.Timer(WALL_GUARD * limit, kill)
+        guard.start()
+        try:
+            _, status, usage = os.wait4(proc.pid, 0)
+        finally:
+            guard.cancel()
+        proc.returncode = os.waitstatus_to_exitcode(status)
+        out.seek(0)
+        err.seek(0)
+        return {"cpu_s": usage.ru_utime + usage.ru_stime, "rc": proc.returncode,
+                "stdout": out.read(), "stderr": err.read(), "guard": bool(fired)}
+
+
+def htn(*args) -> list:
+    return [sys.executable, "-m", "htn", *map(str, args)]
+
+
+def has_search_option() -> bool:
+    r = subprocess.run(htn("plan", "--help"), capture_output=True, text=True, cwd=ROOT)
+    return "--search" in r.stdout
+
+
+def pandapi() -> Path | None:
+    path = Path(os.environ.get("HTN_PANDAPI",
+                               SHARED / "tools" / "pandaPIparser" / "pandaPIparser"))
+    return path if path.is_file() else None
+
+
+def verify(domain: Path, problem: Path, text: str, verifier) -> dict:
+    """``htn validate`` and pandaPIparser (if any) on an IPC plan text."""
+    with tempfile.NamedTemporaryFile("w", suffix=".plan", delete=False) as fh:
+        fh.write(text)
     try:
-        r = subprocess.run([sys.executable, "-m", "htn", "plan", str(domain), str(problem),
-                            "-f", "ipc", "--quiet"], capture_output=True, text=True,
-                           timeout=limit, cwd=ROOT)
-    except subprocess.TimeoutExpired:
-        return limit, False
-    return time.perf_counter() - t, r.returncode == 0 and r.stdout.startswith("==>")
+        ours = subprocess.run(htn("validate", domain, problem, fh.name), capture_output=True,
+                              text=True, cwd=ROOT)
+        out = {"htn_validate": ours.returncode == 0,
+               "htn_validate_message": (ours.stderr.splitlines() or [""])[0]}
+        if verifier is not None:
+            theirs = subprocess.run([str(verifier), "-C", "--verify", str(domain), str(problem),
+                                     fh.name], capture_output=True, text=True, timeout=600)
+            out["pandapi"] = (theirs.returncode == 0
+                              and "Plan verification result: true" in theirs.stdout)
+        return out
+    finally:
+        os.unlink(fh.name)
 
 
-def search(domain: Path, problem: Path, limit: float) -> dict:
-    from htn.jshop import Planner, load_domain, load_problem
-    from htn.jshop.plans.validate import validate_plan
-    dom = load_domain(str(domain))
-    inst = load_problem(str(problem)).instances[0]
-    start = time.process_time()
-    planner = Planner(dom, inst)
-    cpu = time.process_time()
-    plan = next(planner.plans(timeout=limit), None)
-    init, cpu = cpu - start, time.process_time() - cpu
-    valid = plan is not None and validate_plan(dom, inst, plan).valid
-    return {"search_ms": cpu * 1000, "init_ms": init * 1000, "length": len(plan) if plan else None,
-            "valid": valid, "timed_out": planner.stats.timed_out}
+def outcome(run: dict, limit: float) -> str:
+    if run["rc"] == 0 and run["stdout"].startswith("==>"):
+        return "plan"
+    if run.get("guard"):
+        return f"killed by the wall-clock guard ({WALL_GUARD:g} x the limit)"
+    if run["rc"] < 0 or run["cpu_s"] >= limit:
+        return "CPU limit"
+    if run["rc"] == 1:
+        return "timed out" if "timed out" in run["stderr"] else "no plan"
+    first = (run["stderr"].strip().splitlines() or [f"exit {run['rc']}"])[0]
+    return f"error: {first[:160]}"
 
 
-def _geomean(xs: list) -> float:
-    return math.exp(sum(math.log(x) for x in xs) / len(xs)) if xs else float("nan")
+def measure(dname, domain, problem, search, flag, limit, runs, verifier, pin, ref) -> dict:
+    argv = htn("plan", domain, problem, "-f", "ipc", "--quiet",
+               *(["--search", search] if flag else []))
+    done = [run_limited(argv, limit, pin) for _ in range(runs)]
+    first = done[0]
+    cpus = [r["cpu_s"] for r in done]
+    row = {"domain": dname, "instance": problem.name, "result": outcome(first, limit),
+           "cpu_median_s": round(statistics.median(cpus), 3), "cpu_max_s": round(max(cpus), 3)}
+    if row["result"] == "plan":
+        row["actions"] = sum(1 for line in first["stdout"].splitlines()[1:]
+                             if line[:1].isdigit() and " -> " not in line)
+        row.update(verify(domain, problem, first["stdout"], verifier))
+    row["solved"] = row["result"] == "plan" and row["htn_validate"] and row.get("pandapi", True)
+    if ref is not None and row["solved"]:
+        row["search_ms"] = search_time(domain, problem, search, flag, limit, runs, pin)
+        row["ht_plan_ms"] = ht = ref.get((dname, problem.stem))
+        if ht:
+            row["search_ratio"] = round(row["search_ms"] / ht, 2)
+    return row
+
+
+def search_time(domain, problem, search, flag, limit, runs, pin) -> float:
+    times = []
+    for _ in range(runs):
+        if search == "dfs":
+            r = run_limited([sys.executable, "-c", SEARCH_CPU, str(domain), str(problem)],
+                            limit, pin)
+            times.append(json.loads(r["stdout"])["search_ms"])
+        else:
+            r = run_limited(htn("plan", domain, problem, "-f", "json", "--quiet",
+                                *(["--search", search] if flag else [])), limit, pin)
+            times.append(json.loads(r["stdout"].splitlines()[-1])["search_ms"])
+    return round(statistics.median(times), 2)
+
+
+def summary(rows: list, sample: str) -> dict:
+    solved = [r for r in rows if r["solved"]]
+    cpus = [r["cpu_median_s"] for r in solved]
+    out = {"sample": sample, "instances": len(rows), "solved": len(solved),
+           "plan_rejected": sum(r["result"] == "plan" and not r["solved"] for r in rows),
+           "cpu_median_s": round(statistics.median(cpus), 3) if cpus else None,
+           "cpu_max_s": round(max(cpus), 3) if cpus else None}
+    ratios = [r["search_ratio"] for r in rows if "search_ratio" in r]
+    if ratios:
+        slow = [r["search_ratio"] for r in rows if "search_ratio" in r and r["ht_plan_ms"] > 10]
+        out["search_ratio_geomean"] = round(math.exp(sum(map(math.log, ratios)) / len(ratios)),
+                                            2)
+        out["search_ratio_max"] = max(ratios)
+        out["over_10ms_at_most_1"] = f"{sum(x <= 1.0 for x in slow)} of {len(slow)}"
+    return out
 
 
 @click.command()
-@click.option("--corpus", type=click.Path(file_okay=False), default=str(DEFAULT_CORPUS),
-              show_default=True, help="The shared/corpus/ipc2020-to folder.")
-@click.option("--only", multiple=True, help="Run only these domains (repeatable).")
-@click.option("--limit", default=30.0, show_default=True, help="Seconds per instance.")
-@click.option("--runs", default=1, show_default=True, help="Whole-process runs per instance.")
-@click.option("--json", "as_json", is_flag=True, help="Print JSON instead of a table.")
-def main(corpus, only, limit, runs, as_json):
-    """Solve the IPC 2020 sample with a time limit, beside HyperTensioN's figures."""
-    corpus = Path(corpus)
-    if not (corpus / "README.md").is_file():
-        raise click.ClickException(f"no IPC sample at {corpus}")
-    ref = reference(corpus)
-    rows = []
-    for dname, inst, domain, problem in instances(corpus, only):
-        times, ok = [], True
-        for _ in range(runs):
-            t, solved = process_time(domain, problem, limit)
-            times.append(t)
-            ok &= solved
-        s = search(domain, problem, limit)
-        h = ref.get((dname, re.sub(r"\.hddl$", "", inst)), {})
-        row = {"domain": dname, "instance": inst, "solved": ok and s["valid"],
-               "process_s": round(statistics.median(times), 3),
-               "search_ms": round(s["search_ms"], 2), "init_ms": round(s["init_ms"], 2),
-               "length": s["length"],
-               "ht_solved": h.get("solved"), "ht_process_s": h.get("process_s"),
-               "ht_plan_ms": h.get("plan_ms"), "ht_length": h.get("length")}
-        if row["solved"] and h.get("solved"):
-            row["process_ratio"] = round(row["process_s"] / h["process_s"], 2)
-            row["search_ratio"] = round(row["search_ms"] / h["plan_ms"], 2)
-        rows.append(row)
-        if not as_json:
-            click.echo(f"{dname} {inst}: {'solved' if row['solved'] else 'NOT solved'} "
-                       f"{row['process_s']:.2f} s, search {row['search_ms']:.1f} ms", err=True)
-    summary = {
-        "instances": len(rows),
-        "solved": sum(r["solved"] for r in rows),
-        "hypertension_solved": sum(bool(r["ht_solved"]) for r in rows),
-        "process_ratio_geomean": round(_geomean([r["process_ratio"] for r in rows
-                                                 if "process_ratio" in r]), 2),
-        "search_ratio_geomean": round(_geomean([r["search_ratio"] for r in rows
-                                                if "search_ratio" in r]), 2),
-        "limit_s": limit,
-    }
-    if as_json:
-        click.echo(json.dumps({"instances": rows, "summary": summary}, indent=1))
+@click.option("--sample", "samples", multiple=True, type=click.Choice(SAMPLES),
+              help="Run only these samples (repeatable) [default: all four].")
+@click.option("--search", type=click.Choice(SEARCHES), default="dfs", show_default=True,
+              help="Passed to 'htn plan --search'.")
+@click.option("--only", multiple=True, metavar="DOMAIN", help="Only these domain folders.")
+@click.option("--limit", default=30.0, show_default=True, help="CPU seconds per run.")
+@click.option("--runs", default=1, show_default=True, type=click.IntRange(min=1),
+              help="Runs per instance (median and max CPU time).")
+@click.option("--pin", type=int, metavar="CPU", help="Pin every run to this core (taskset).")
+@click.option("--json", "as_json", is_flag=True, help="Print JSON instead of tables.")
+def main(samples, search, only, limit, runs, pin, as_json):
+    """Solve the IPC samples under a CPU limit; every plan verified twice."""
+    flag = has_search_option()
+    if not flag and search != "dfs":
+        message = (f"--search {search}: not available (this htn plan has no --search option; "
+                   "its only search is dfs)")
+        click.echo(json.dumps({"search": search, "available": False, "message": message})
+                   if as_json else message)
         return
+    verifier = pandapi()
+    report = {"search": search, "limit_s": limit, "runs": runs,
+              "pandapiparser": str(verifier) if verifier else None, "samples": []}
+    for name in samples or SAMPLES:
+        folder = SHARED / "corpus" / name
+        if not folder.is_dir():
+            raise click.ClickException(f"no sample at {folder} (set HTN_SHARED)")
+        ref = hypertension(folder) if name == "ipc2020-to" else None
+        rows = []
+        for dname, domain, problem in instances(folder, only):
+            row = measure(dname, domain, problem, search, flag, limit, runs, verifier, pin, ref)
+            rows.append(row)
+            click.echo(f"{name} {dname} {problem.name}: "                  # progress
+                       f"{'solved' if row['solved'] else row['result']} "
+                       f"{row['cpu_median_s']:.2f} s CPU", err=True)
+        report["samples"].append({"summary": summary(rows, name), "instances": rows})
+    if as_json:
+        click.echo(json.dumps(report, indent=1))
+    else:
+        _print(report)
+
+
+def _print(report: dict) -> None:
     from rich.console import Console
     from rich.table import Table
-    t = Table(title=f"IPC 2020 total-order sample, {limit:g} s limit: htn vs HyperTensioN")
-    for col in ("domain", "instance", "solved", "process s", "HT process s", "ratio",
-                "search ms", "HT plan ms", "ratio ", "length", "HT length"):
-        t.add_column(col, justify="left" if col in ("domain", "instance") else "right")
-    for r in rows:
-        t.add_row(r["domain"], r["instance"], "yes" if r["solved"] else "[red]no[/red]",
-                  f"{r['process_s']:.2f}", _fmt(r["ht_process_s"]),
-                  _fmt(r.get("process_ratio")), f"{r['search_ms']:.1f}", _fmt(r["ht_plan_ms"]),
-                  _fmt(r.get("search_ratio")), _fmt(r["length"]), _fmt(r["ht_length"]))
-    Console().print(t)
-    Console().print(f"solved {summary['solved']} of {summary['instances']} "
-                    f"(HyperTensioN {summary['hypertension_solved']}); geometric mean of "
-                    f"ratios ours/HyperTensioN: process {summary['process_ratio_geomean']}, "
-                    f"search {summary['search_ratio_geomean']}")
+    console = Console(width=None if sys.stdout.isatty() else 120)
+    checks = "htn validate" + (" + pandaPIparser" if report["pandapiparser"] else "")
+    t = Table(title=f"IPC samples, --search {report['search']}, {report['limit_s']:g} s CPU "
+                    f"per run; plans checked by {checks}")
+    for col in ("sample", "instances", "solved", "plan rejected", "CPU s median",
+                "CPU s max", "search/HT geo. mean, max", "HT > 10 ms: ratio <= 1"):
+        t.add_column(col, justify="left" if col == "sample" else "right")
+    for s in report["samples"]:
+        m = s["summary"]
+        ratio = (f"{m['search_ratio_geomean']}, {m['search_ratio_max']}"
+                 if "search_ratio_geomean" in m else "-")
+        t.add_row(m["sample"], str(m["instances"]), str(m["solved"]), str(m["plan_rejected"]),
+                  _fmt(m["cpu_median_s"]), _fmt(m["cpu_max_s"]), ratio,
+                  m.get("over_10ms_at_most_1", "-"))
+    console.print(t)
+    for s in report["samples"]:
+        d = Table(title=s["summary"]["sample"])
+        for col in ("domain", "instance", "result", "CPU s", "search ms", "HT plan ms", "ratio"):
+            d.add_column(col, justify="left" if col in ("domain", "instance", "result")
+                         else "right")
+        for r in s["instances"]:
+            result = "solved" if r["solved"] else (
+                "[red]plan rejected[/red]" if r["result"] == "plan" else r["result"])
+            d.add_row(r["domain"], r["instance"], result, f"{r['cpu_median_s']:.2f}",
+                      _fmt(r.get("search_ms")), _fmt(r.get("ht_plan_ms")),
+                      _fmt(r.get("search_ratio")))
+        console.print(d)
 
 
 def _fmt(x) -> str:
-    if x is None:
-        return "-"
-    return f"{x:g}" if isinstance(x, float) else str(x)
+    return "-" if x is None else (f"{x:g}" if isinstance(x, float) else str(x))
 
 
 if __name__ == "__main__":

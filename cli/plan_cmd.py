@@ -15,6 +15,7 @@ import click
 
 from htn.api.files import AtomicFile
 from htn.jshop.search.limits import DEFAULT_MAX_DEPTH
+from htn.jshop.search.searches import SEARCHES
 
 from .output import console, stdout_is_terminal, warn
 from .progress import Phase
@@ -67,8 +68,13 @@ FORMATS = ["text", "jshop", "json", "ipc"]
                    "dead end of the search, each operator or method tried and the precondition "
                    "literal that failed, with file:line:col.")
 @click.option("--explain-all", is_flag=True, help="Like --explain, listing every dead end.")
+@click.option("--search", "search_name", type=click.Choice(list(SEARCHES)), default="dfs",
+              show_default=True,
+              help="How to search: " + "; ".join(f"{k}: {v}" for k, v in SEARCHES.items())
+                   + ". See the README (HDDL).")
 def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
-         show_tree, dot, quiet, jshop2_compat, max_depth, max_memory, explain, explain_all):
+         show_tree, dot, quiet, jshop2_compat, max_depth, max_memory, explain, explain_all,
+         search_name):
     """Find plans for PROBLEM in DOMAIN (JSHOP2 files).
 
     \b
@@ -77,7 +83,7 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
       htn plan DOMAIN PROBLEM --all --format jshop
       htn plan DOMAIN PROBLEM -o plan.txt && htn run plan.txt --sim
     """
-    from htn.api.plan import plan as find_plans
+    from htn.api.plan import UnsupportedSearch, plan as find_plans
     from htn.jshop.plans.planfile import header, plan_text
 
     started = time.perf_counter()
@@ -95,21 +101,26 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
         # reading a large HDDL instance, and the search before the first
         # plan, can take seconds: a spinner says which (on a terminal, after
         # a second; it is gone before anything is printed)
-        with Phase("reading the domain and the problem"):
-            plans = find_plans(domain, problem, plans=None if all_plans else n_plans,
-                               timeout=timeout, functions=functions, jshop2_compat=jshop2_compat,
-                               max_depth=max_depth, max_memory=max_memory,
-                               explain=explain or explain_all, explain_all=explain_all,
-                               trees=(show_tree or bool(dot) or bool(output)
-                                      or fmt in ("json", "ipc")),
-                               tree_paths=show_tree or bool(dot) or fmt == "json")
+        try:
+            with Phase("reading the domain and the problem"):
+                plans = find_plans(domain, problem, plans=None if all_plans else n_plans,
+                                   timeout=timeout, functions=functions,
+                                   jshop2_compat=jshop2_compat, max_depth=max_depth,
+                                   max_memory=max_memory, explain=explain or explain_all,
+                                   explain_all=explain_all, search=search_name,
+                                   trees=(show_tree or bool(dot) or bool(output)
+                                          or fmt in ("json", "ipc")),
+                                   tree_paths=show_tree or bool(dot) or fmt == "json")
+        except UnsupportedSearch as exc:
+            raise click.UsageError(exc.message) from None
         if not quiet:
             for w in plans.warnings:
                 warn(w)
         if out:
             out.write(header(output, domain, problem, functions))
         render = _Renderer(fmt, show_tree, domain, problem)
-        render.spelling = {**plans.problem.spelling, **plans.domain.spelling}
+        # objects as the problem spells them (HDDL names are case-insensitive)
+        render.spelling = {**plans.domain.spelling, **plans.problem.spelling}
         stop = None
         try:
             with deadline(timeout, started), plans, Phase("planning") as phase:
@@ -159,6 +170,9 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
     if not found:
         if fmt == "text":
             warn("no plan found")
+        if totals.get("loop_cuts") and not quiet and not totals["timed_out"] and stop is None:
+            warn(f"the loop check cut {totals['loop_cuts']} reduction(s) that revisit a state: "
+                 "a plan that needs them may exist (--search auto searches without it)")
         for path in (output, dot):
             if path:
                 warn(f"{path}: not written (no plan)")
@@ -278,6 +292,8 @@ class _Renderer:
         elif self.fmt == "text":
             shortest = totals["shortest_plan"]
             extra = f", shortest plan {shortest} steps" if shortest is not None else ""
+            if "found_by" in totals:
+                extra += f", found by {totals['found_by']}"
             self.console.print(
                 f"[bold]{totals['plans_found']}[/bold] plan(s) found; search "
                 f"{totals['search_ms']:.1f} ms{extra}; {totals['expansions']} expansions, "

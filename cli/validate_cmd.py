@@ -21,6 +21,13 @@ def validate(domain, problem, plan_file, plan_index, functions, quiet):
     state its predecessors reach, no step deletes a protected atom, and the
     plan's cost is the sum of its steps' costs.
 
+    A plan in the IPC 2020 format (`htn plan -f ipc`, `==>` ... `<==`) is
+    checked as the competition's verifier does: also every decomposition
+    line (the method exists for its task, its parameters and precondition
+    hold where it is applied, its subtasks are the listed ids in an order it
+    allows), every action reached from the root exactly once, the root tasks
+    the problem's initial task network, and the goal.
+
     Exit code 0 when every plan is valid, 1 when one is not (the first step
     that fails is printed as PLAN:line:col), 2 for bad input.
 
@@ -29,8 +36,11 @@ def validate(domain, problem, plan_file, plan_index, functions, quiet):
       htn plan DOMAIN PROBLEM -o plan.txt && htn validate DOMAIN PROBLEM plan.txt
       htn validate basic problem plans-all.txt
     """
-    from htn.api.validate import validate as validate_plans
+    from htn.api.validate import ipc_text, validate as validate_plans
 
+    text = ipc_text(plan_file)
+    if text is not None:
+        sys.exit(_validate_ipc(domain, problem, plan_file, text, plan_index, functions, quiet))
     checked = validate_plans(domain, problem, plan_file, plan_index=plan_index,
                              functions=functions)
     bad = 0
@@ -46,3 +56,26 @@ def validate(domain, problem, plan_file, plan_index, functions, quiet):
     if len(checked) > 1 and not quiet:
         click.echo(f"{len(checked) - bad} of {len(checked)} plans valid")
     sys.exit(1 if bad else 0)
+
+
+def _validate_ipc(domain, problem, plan_file, text, plan_index, functions, quiet) -> int:
+    from htn.api.validate import validate_ipc
+    results = validate_ipc(domain, problem, plan_file, plan_index=plan_index,
+                           functions=functions, text=text)
+    bad = 0
+    for p, verdict in results:
+        label = f"plan {p.index + 1}"
+        if verdict.valid:
+            if not quiet:
+                click.echo(f"{label}: valid, {verdict.actions} actions, "
+                           f"{verdict.decompositions} decompositions")
+            continue
+        bad += 1
+        for f in verdict.findings[:10]:
+            click.echo(f"{plan_file}:{f.line}:{f.col}: {label}: {f.message}", err=True)
+        if len(verdict.findings) > 10:
+            click.echo(f"{plan_file}: {label}: ... and {len(verdict.findings) - 10} more",
+                       err=True)
+    if len(results) > 1 and not quiet:
+        click.echo(f"{len(results) - bad} of {len(results)} plans valid")
+    return 1 if bad else 0

@@ -86,6 +86,52 @@ def interrupt_run(proc, sig: int, log: Path):
     assert events[-1]["event"] == "summary" and events[-1]["result"] == "interrupted"
     return out, err, events
 
+# The IPC 2020 competition's plan verifier (see shared/tools/pandaPIparser/README.md)
+PANDA_PI = Path(os.environ.get("HTN_PANDAPI",
+                               SHARED / "tools" / "pandaPIparser" / "pandaPIparser"))
+
+
+def pandapi_verify(domain, problem, plan) -> tuple:
+    """The competition verifier's verdict on the IPC plan file ``plan``:
+    ``(True or False, its output)``, or ``(None, why)`` without the binary.
+    Any exit status but 0 is "not verified" (it crashes on some bad plans)."""
+    if not PANDA_PI.is_file():
+        return None, f"pandaPIparser not found at {PANDA_PI}"
+    r = subprocess.run([str(PANDA_PI), "-C", "--verify", str(domain), str(problem), str(plan)],
+                       capture_output=True, text=True, timeout=600)
+    return r.returncode == 0 and "Plan verification result: true" in r.stdout, r.stdout
+
+
+class IpcOracle:
+    """Checks an IPC plan file with ``htn validate`` and, where the binary is
+    there, with pandaPIparser as a second oracle: both must give ``valid``."""
+
+    def __init__(self):
+        self.missing = ""
+
+    def check(self, domain, problem, plan, valid: bool = True):
+        """Returns ``htn validate``'s CompletedProcess."""
+        result = run_htn("validate", domain, problem, plan)
+        assert "Traceback" not in result.stderr, result.stderr
+        assert result.returncode == (0 if valid else 1), result.stdout + result.stderr
+        verdict, out = pandapi_verify(domain, problem, plan)
+        if verdict is None:
+            self.missing = out
+        else:
+            assert verdict == valid, f"pandaPIparser's verdict is {verdict}:\n{out}"
+        return result
+
+
+@pytest.fixture
+def ipc_oracle():
+    """An :class:`IpcOracle`; without pandaPIparser the test is reported as
+    skipped too (after its own checks have run), with the reason."""
+    oracle = IpcOracle()
+    yield oracle
+    if oracle.missing:
+        pytest.skip(f"{oracle.missing}: IPC plans checked by htn validate only")
+
+
 GOLDEN = Path(__file__).resolve().parent / "golden"
 
 

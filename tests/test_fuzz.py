@@ -41,6 +41,7 @@ sys.setrecursionlimit(max(sys.getrecursionlimit(), 20000))   # as htn's main() d
 EXAMPLES = int(os.environ.get("HTN_FUZZ_EXAMPLES", "500"))
 RANDOM = bool(os.environ.get("HTN_FUZZ_RANDOM"))
 IPC = SHARED / "corpus" / "ipc2020-to"
+VERDICTS = SHARED / "corpus" / "ipc-verdicts" / "ipc2020-to"
 LOCATED = re.compile(r"^[^\n]+:\d+:\d+: ")
 
 FUNCTION_FILES = {"freecell": FUNCTIONS / "freecell.py", "test": FUNCTIONS / "test.py"}
@@ -62,7 +63,9 @@ def _cases() -> list[tuple[Path, Path, Path | None, Path | None]]:
                           FUNCTION_FILES.get(folder.name), plans))
     if IPC.is_dir():
         for folder in sorted(p for p in IPC.iterdir() if p.is_dir()):
-            cases.append((folder / "domain.hddl", sorted(folder.glob("p*.hddl"))[0], None, None))
+            problem = sorted(folder.glob("p*.hddl"))[0]
+            plan = VERDICTS / folder.name / f"{problem.stem}.plan"     # IPC format
+            cases.append((folder / "domain.hddl", problem, None, plan if plan.is_file() else None))
     for problem in sorted((ROOT / "problems").glob("*.jshop")):
         domain = re.search(r"\(defproblem\s+\S+\s+(\S+)", problem.read_text()).group(1)
         cases.append((ROOT / "domains" / f"{domain}.jshop", problem, None, None))

@@ -4,7 +4,8 @@ on small hand-made files, one construct each: infix ordering constraints
 naming another domain (Barman-BDI), keywords glued to parentheses
 (Satellite, AssemblyHierarchical), and left recursion through a free
 variable (Entertainment), which the loop check must bound. Every plan is
-checked with ``htn validate``."""
+checked with ``htn validate``, in both formats, and with the competition's
+verifier where it is installed."""
 from __future__ import annotations
 
 import json
@@ -14,7 +15,7 @@ from conftest import run_htn
 from test_hddl import check_ipc_decomposition
 
 
-def _plan(tmp_path, domain: str, problem: str, *extra):
+def _plan(tmp_path, oracle, domain: str, problem: str, *extra):
     d, p = tmp_path / "d.hddl", tmp_path / "p.hddl"
     d.write_text(domain)
     p.write_text(problem)
@@ -26,6 +27,8 @@ def _plan(tmp_path, domain: str, problem: str, *extra):
     check_ipc_decomposition(result.stdout, d, p, steps)
     valid = run_htn("validate", d, p, plan_file)
     assert valid.returncode == 0, valid.stdout + valid.stderr
+    (tmp_path / "plan.ipc").write_text(result.stdout)
+    oracle.check(d, p, tmp_path / "plan.ipc")
     return result, steps
 
 
@@ -52,31 +55,31 @@ STEPS_PROBLEM = """(define (problem p) (:domain steps)
 """
 
 
-def test_infix_ordering_constraints_order_the_subtasks(tmp_path):
-    _, steps = _plan(tmp_path, STEPS, STEPS_PROBLEM)
+def test_infix_ordering_constraints_order_the_subtasks(tmp_path, ipc_oracle):
+    _, steps = _plan(tmp_path, ipc_oracle, STEPS, STEPS_PROBLEM)
     assert steps == [("mark", "a"), ("mark", "b"), ("mark", "c")]
 
 
-def test_subtasks_without_ordering_are_taken_as_written(tmp_path):
+def test_subtasks_without_ordering_are_taken_as_written(tmp_path, ipc_oracle):
     domain = STEPS.replace("(:method m-all", "(:method m-unused").replace(
         "(:task all :parameters ())", "(:task all :parameters ()) (:task none :parameters ())"
     ).replace(":task (all)\n    :subtasks (and (c", ":task (none)\n    :subtasks (and (c")
-    _, steps = _plan(tmp_path, domain, STEPS_PROBLEM)
+    _, steps = _plan(tmp_path, ipc_oracle, domain, STEPS_PROBLEM)
     assert steps == [("mark", "b"), ("mark", "a")]
 
 
-def test_a_problem_naming_another_domain_is_a_warning(tmp_path):
-    result, steps = _plan(tmp_path, STEPS, STEPS_PROBLEM.replace("(:domain steps)",
-                                                                 "(:domain steps_htn)"))
+def test_a_problem_naming_another_domain_is_a_warning(tmp_path, ipc_oracle):
+    problem = STEPS_PROBLEM.replace("(:domain steps)", "(:domain steps_htn)")
+    result, steps = _plan(tmp_path, ipc_oracle, STEPS, problem)
     assert "p.hddl:1:" in result.stderr
     assert "problem 'p' names domain 'steps_htn', not 'steps'" in result.stderr
     assert len(steps) == 3
 
 
-def test_keywords_glued_to_parentheses(tmp_path):
+def test_keywords_glued_to_parentheses(tmp_path, ipc_oracle):
     domain = STEPS.replace(":precondition (not (done ?i))", ":precondition (not(done ?i))")
     problem = STEPS_PROBLEM.replace("(define (problem p)", "(define(problem p)")
-    _, steps = _plan(tmp_path, domain, problem)
+    _, steps = _plan(tmp_path, ipc_oracle, domain, problem)
     assert len(steps) == 3
 
 
@@ -121,9 +124,9 @@ def _chain_problem(n: int, wires: list, tasks: str) -> str:
             f"  (:init {' '.join(f'(wire n{a} n{b})' for a, b in wires)}))\n")
 
 
-def test_left_recursion_through_a_free_variable_plans(tmp_path):
+def test_left_recursion_through_a_free_variable_plans(tmp_path, ipc_oracle):
     problem = _chain_problem(8, [(i, i + 1) for i in range(7)], "(link n0 n7)")
-    _, steps = _plan(tmp_path, CHAIN, problem)
+    _, steps = _plan(tmp_path, ipc_oracle, CHAIN, problem)
     assert steps == [("plug", f"n{i}", f"n{i + 1}") for i in range(7)]
 
 

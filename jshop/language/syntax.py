@@ -136,12 +136,41 @@ class TaskAtom:
         return self.name.startswith("!")
 
 
+class PartialOrder(tuple):
+    """A partial order on the members of a task list (HDDL ``:ordering``):
+    entry ``i`` is the tuple of the indices of the members that must be
+    finished before member ``i`` may start (its direct predecessors, each
+    smaller than ``i``: members are kept in a topological order).
+
+    It is falsy, like the ``ordered`` flag of an unordered list, so that
+    every test "is this list totally ordered?" stays a truth test; JSHOP2's
+    ``:unordered`` is the partial order with no pair ordered."""
+    __slots__ = ()
+
+    def __bool__(self) -> bool:
+        return False
+
+    def __repr__(self) -> str:
+        return f"PartialOrder({tuple(self)!r})"
+
+
 @dataclass
 class TaskList:
-    """A task list (3.8): ``items`` are TaskAtoms and nested TaskLists."""
+    """A task list (3.8): ``items`` are TaskAtoms and nested TaskLists.
+
+    ``ordered`` lists run in order, others interleave (``:unordered``);
+    ``order``, set by the HDDL reader only, is the partial order of an
+    unordered list's members (None: no two members are ordered)."""
     items: list
     ordered: bool = True
     pos: Optional[Pos] = None
+    order: Optional[PartialOrder] = None
+
+    @property
+    def order_flag(self):
+        """What the search keeps for this list: True (in order), False
+        (interleaved) or its :class:`PartialOrder`."""
+        return self.order if self.order is not None else self.ordered
 
 
 def task_atoms(tl):
@@ -231,6 +260,7 @@ class Domain:
     implied: dict = field(default_factory=dict)     # pred -> [pred]
     spelling: dict = field(default_factory=dict)    # lower-case name -> as written
     hddl: Any = None                                # the HDDL model it was read from
+    pullup: bool = False                            # HDDL: methods test pulled-up conditions
 
     def elements(self):
         for ops in self.operators.values():
@@ -285,3 +315,4 @@ class Problem:
     domain_pos: Optional[Pos] = None   # where the domain's name is written
     language: str = "jshop2"
     spelling: dict = field(default_factory=dict)    # lower-case name -> as written
+    hddl: Any = None                                # the HDDL model it was read from

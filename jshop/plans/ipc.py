@@ -18,9 +18,17 @@ the subtasks it produced in the method's order. Ids are unique across actions
 and tasks (actions take 0..n-1, compound tasks the ids after). Names are
 printed as the HDDL files spell them (the verifier compares names exactly).
 Needs the plan's task tree (the planner records it with ``record_trees``).
+
+:func:`read_ipc_plans` reads the format back (``htn validate``); what it
+means for such a plan to be valid is :mod:`htn.jshop.plans.ipc_verify`'s.
 """
 from __future__ import annotations
 
+import re
+from dataclasses import dataclass, field
+from typing import Optional
+
+from htn.jshop.language.errors import HtnError
 from htn.jshop.language.terms import term_str
 
 
@@ -54,3 +62,124 @@ def ipc_text(plan, spelling: dict) -> str:
                        .rstrip())
     out.append("<==")
     return "\n".join(out) + "\n"
+
+
+# ------------------------------------------------------------------ reading
+
+@dataclass
+class IpcLine:
+    """One line of an IPC plan: an action (``method`` None) or a
+    decomposition. Names are lower-cased (HDDL names are case-insensitive);
+    ``cols`` are the 1-based columns of the name and of each argument."""
+    id: int
+    name: str
+    args: tuple
+    line: int
+    col: int                        # column of the id
+    cols: tuple                     # columns of the name and the arguments
+    method: Optional[str] = None
+    method_col: int = 0
+    children: tuple = ()
+    child_cols: tuple = ()
+
+    @property
+    def text(self) -> str:
+        return " ".join((self.name, *self.args))
+
+
+@dataclass
+class IpcPlan:
+    """One ``==>`` ... ``<==`` block of a plan file."""
+    actions: list = field(default_factory=list)        # [IpcLine], in execution order
+    root: tuple = ()
+    root_cols: tuple = ()
+    root_line: int = 0
+    decompositions: list = field(default_factory=list)  # [IpcLine]
+    line: int = 0                   # the line of its ``==>``
+    end_line: int = 0               # the line of its ``<==``
+    index: int = 0
+
+
+_TOKEN = re.compile(r"[^\s()]+")    # parentheses separate, as in the verifier's reader
+
+
+def is_ipc_text(text: str) -> bool:
+    """True if the text holds an IPC plan: a line that is ``==>``."""
+    return any(line.strip() == "==>" for line in text.splitlines())
+
+
+def read_ipc_plans(text: str, file: str) -> list:
+    """The ``==>`` ... ``<==`` blocks of a plan file (text before, between and
+    after them is ignored, as the competition's verifier ignores a planner's
+    log). Raises :class:`HtnError` (``file:line:col``) for a block that
+    cannot be read."""
+    plans: list = []
+    current: Optional[IpcPlan] = None
+    section = ""
+    for n, raw in enumerate(text.splitlines(), 1):
+        tokens = [(m.group(), m.start() + 1) for m in _TOKEN.finditer(raw)]
+        if current is None:
+            if raw.strip() == "==>":
+                current = IpcPlan(line=n, index=len(plans))
+                section = "actions"
+            continue
+        if not tokens:
+            continue
+        head, col = tokens[0]
+        if head == "<==":
+            current.end_line = n
+            plans.append(current)
+            current = None
+            continue
+        if head == "==>":
+            raise HtnError(f"a new plan starts before the plan of line {current.line} ends "
+                           "with '<=='", file, n, col)
+        if head == "root":
+            if section != "actions":
+                raise HtnError(f"a second 'root' line (the first is line {current.root_line})",
+                               file, n, col)
+            current.root = tuple(_ident(t, c, file, n) for t, c in tokens[1:])
+            current.root_cols = tuple(c for _, c in tokens[1:])
+            current.root_line = n
+            section = "methods"
+            continue
+        ident = _ident(head, col, file, n)
+        if len(tokens) < 2 or tokens[1][0] == "->":
+            raise HtnError(f"line {ident}: an action or task name must follow the id",
+                           file, n, tokens[1][1] if len(tokens) > 1 else col)
+        arrow = next((i for i, (t, _) in enumerate(tokens) if t == "->"), None)
+        if section == "actions":
+            if arrow is not None:
+                raise HtnError("a decomposition line ('->') before the 'root' line", file, n,
+                               tokens[arrow][1])
+            current.actions.append(_line(ident, col, tokens[1:], n))
+            continue
+        if arrow is None:
+            raise HtnError("a decomposition line needs '-> METHOD SUBTASK-IDS' after the "
+                           "task", file, n, tokens[-1][1] + len(tokens[-1][0]))
+        if arrow + 1 >= len(tokens):
+            raise HtnError("a method name must follow '->'", file, n, tokens[arrow][1])
+        entry = _line(ident, col, tokens[1:arrow], n)
+        entry.method, entry.method_col = tokens[arrow + 1][0].lower(), tokens[arrow + 1][1]
+        rest = tokens[arrow + 2:]
+        entry.children = tuple(_ident(t, c, file, n) for t, c in rest)
+        entry.child_cols = tuple(c for _, c in rest)
+        current.decompositions.append(entry)
+    if current is not None:
+        raise HtnError(f"the plan of line {current.line} does not end with '<=='", file,
+                       current.line, 1)
+    if not plans:
+        raise HtnError("the file holds no IPC plan (a '==>' ... '<==' block)", file)
+    return plans
+
+
+def _ident(token: str, col: int, file: str, line: int) -> int:
+    if not token.isdigit():
+        raise HtnError(f"expected a task id (a number 0, 1, ...), found {token!r}", file,
+                       line, col)
+    return int(token)
+
+
+def _line(ident: int, col: int, tokens: list, line: int) -> IpcLine:
+    return IpcLine(ident, tokens[0][0].lower(), tuple(t.lower() for t, _ in tokens[1:]), line,
+                   col, tuple(c for _, c in tokens))

@@ -10,10 +10,10 @@ several satisfiers may give different effects or costs), every distinct
 choice is tried, with backtracking, as the planner would have.
 
 An HDDL problem's goal must also hold in the final state (HDDL, Höller et
-al. 2020). Validation does not check that the plan is a decomposition of the
-problem's tasks: any applicable operator sequence with the right cost (and
-reaching the goal) is valid; for HDDL, the IPC 2020 verifier checks the
-decomposition that ``htn plan -f ipc`` prints.
+al. 2020). A plan in this (JSHOP2) format has no decomposition, so any
+applicable operator sequence with the right cost (and reaching the goal) is
+valid; a plan in the IPC 2020 format (``htn plan -f ipc``) carries its
+decomposition, which :mod:`htn.jshop.plans.ipc_verify` checks as well.
 """
 from __future__ import annotations
 
@@ -73,7 +73,7 @@ def validate_plan(domain: S.Domain, instance: S.ProblemInstance, plan,
                 return Verdict(True, n, total)
             if not goal_ok:
                 if deepest.failed_step is None or deepest.failed_step < n:
-                    deepest = Verdict(False, n, total, n, _why_goal(planner, instance),
+                    deepest = Verdict(False, n, total, n, why_goal(planner, instance),
                                       getattr(plan, "line", 0))
             elif deepest.failed_step is None:
                 deepest = Verdict(False, n, total, n, f"the plan's cost is "
@@ -85,7 +85,7 @@ def validate_plan(domain: S.Domain, instance: S.ProblemInstance, plan,
         option = next(frames[-1], None)
         if option is None:
             if deepest.failed_step is None or k > deepest.failed_step:
-                deepest = Verdict(False, n, sum(costs), k, _why(planner, steps[k]),
+                deepest = Verdict(False, n, sum(costs), k, why_step(planner, steps[k]),
                                   steps[k].line)
             frames.pop()
             if not frames or not _undo_last(planner, changes, costs):
@@ -128,7 +128,7 @@ def _options(planner, step):
         yield op, env, cost
 
 
-def _why(planner, step) -> str:
+def why_step(planner, step) -> str:
     """Why no operator applies to ``step``: the first literal of a
     precondition that has no satisfier, under the step's bindings."""
     from htn.jshop.logic.compile import head_unifier
@@ -147,7 +147,7 @@ def _why(planner, step) -> str:
     return "; ".join(reasons) or f"no operator applies to {step}"
 
 
-def _why_goal(planner, instance) -> str:
+def why_goal(planner, instance) -> str:
     """The first conjunct of the goal that does not hold in the final state."""
     env = [None] * instance.goal_nvars
     item, bound = failing_literal(planner.logic, instance.goal.expr, env)

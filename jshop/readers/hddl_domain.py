@@ -24,12 +24,15 @@ How HDDL's semantics (Höller et al., AAAI 2020) map onto JSHOP2's:
   disjunction, ``forall`` or equality needs its variables bound to mean what
   PDDL says). JSHOP2's if-then-else
   between branches does not arise: HDDL methods are independent alternatives.
-* Subtasks come in their total order: ``:ordered-subtasks`` as written, or
-  ``:subtasks`` sorted by ``:ordering``; an ``:ordering`` that leaves two
-  subtasks unordered is an error (the planner is a total-order planner).
-  ``:subtasks`` with no ``:ordering`` at all are taken in the written order,
-  as the IPC 2020 total-order planners do (some of the track's domains write
-  a sequence so); this is one of its linearisations, not all of them.
+* Subtasks keep HDDL's partial order (:mod:`htn.jshop.readers.hddl_order`):
+  ``:ordered-subtasks`` and chains of ``:ordering`` make an ordered task
+  list, ``:subtasks`` with no ``:ordering`` an unordered one, and any other
+  ``:ordering`` a list with a :class:`~htn.jshop.language.syntax.PartialOrder`.
+  Pulled-up conditions (:mod:`htn.jshop.readers.pullup`) are tested when a
+  method is applied, which is only sound when nothing can interleave with
+  its subtasks: a domain with any method that is not totally ordered, or a
+  problem whose initial task network is not, is read without them
+  (:func:`for_problem`).
 * The **problem**'s objects become type atoms, its initial task network the
   task list, its goal ``ProblemInstance.goal`` (checked on the final state).
 
@@ -44,7 +47,7 @@ from htn.jshop.language.terms import Var, variables
 from .hddl_formulas import Formulas, Scope, order_conjuncts, type_condition, type_predicate
 from .hddl_model import (ActionDef, EffectCost, EffectForall, EffectWhen, HDomain, HProblem,
                          MethodDef, Subtask, TaskDef)
-from .hddl_order import linearise
+from .hddl_order import is_total, subtask_order
 from .pullup import pulled_conditions
 
 # An initial task network with parameters is the body of this task's one
@@ -150,11 +153,11 @@ class _Domain:
                                for v, p in zip(params, m.params)]
         bound = {v.index for v in variables(head, [])}
         pre = order_conjuncts(conds, types, bound, f.outer)
-        subtasks = linearise(m.network, f"method {m.name}", m.pos)
+        subtasks, order = subtask_order(m.network, f"method {m.name}", m.pos)
         items = [S.TaskAtom(self.task_name(st), tuple(f.term(x, names, st.pos) for x in st.args),
                             False, st.pos) for st in subtasks]
         branch = S.Branch(m.name, S.Precondition(_and(pre), pos=m.pos),
-                          S.TaskList(items, True, m.network.pos), m.pos)
+                          _task_list(items, order, m.network.pos), m.pos)
         method = S.Method(S.TaskAtom(m.task.name, head, False, m.task.pos), [branch],
                           nvars=scope.size, index=self.method_count, pos=m.pos)
         self.method_count += 1
@@ -202,12 +205,21 @@ class _Effects:
             group.atoms.append(atom)
 
 
+def _task_list(items: list, order, pos) -> S.TaskList:
+    if order is True or order is False:
+        return S.TaskList(items, order, pos)
+    return S.TaskList(items, False, pos, order=order)
+
+
 def _and(items: list):
     return items[0] if len(items) == 1 else S.And(items)
 
 
-def domain_from_model(h: HDomain) -> S.Domain:
-    """The syntax objects of an HDDL domain (see the module docstring)."""
+def domain_from_model(h: HDomain, pullup: bool | None = None) -> S.Domain:
+    """The syntax objects of an HDDL domain (see the module docstring);
+    ``pullup`` None: pull conditions up when every method is totally ordered."""
+    if pullup is None:
+        pullup = all(is_total(m.network) for m in h.methods)
     t = _Domain(h)
     for c in h.constants:
         t.check_types([c])
@@ -218,10 +230,15 @@ def domain_from_model(h: HDomain) -> S.Domain:
     d = S.Domain(h.name, file=h.file, pos=h.pos, language="hddl", spelling=h.spelling)
     for a in h.actions.values():
         d.operators["!" + a.name] = [t.operator(a)]
-    pulled = pulled_conditions(h, t.ancestors)
+    pulled = pulled_conditions(h, t.ancestors) if pullup else {}
     d.hddl = h
+    d.pullup = pullup
     for m in h.methods:
         d.methods.setdefault(m.task.name, []).append(t.method(m, pulled.get(id(m), [])))
+    for c in h.constants:
+        if len(c.types) != 1:
+            raise HtnError.at(c.pos, f"constant {c.name} must have one type, "
+                              "not (either ...)")
     d.facts = [S.Atom(type_predicate(c.types[0]), (c.name,), c.pos) for c in h.constants]
     d.implied = {type_predicate(ty): [type_predicate(a) for a in anc]
                  for ty, anc in t.ancestors.items() if anc}
@@ -235,8 +252,20 @@ def top_method(domain: S.Domain, top: MethodDef) -> S.Method:
     if domain.hddl is None:
         raise HtnError.at(top.pos, "an HDDL problem with parameters needs an HDDL domain")
     t = _Domain(domain.hddl)
-    pulled = pulled_conditions(domain.hddl, t.ancestors, extra=[top])
+    pulled = {}
+    if domain.pullup:
+        pulled = pulled_conditions(domain.hddl, t.ancestors, extra=[top])
     return t.method(top, pulled.get(id(top), []))
+
+
+def for_problem(domain: S.Domain, problem: S.Problem) -> S.Domain:
+    """The domain to plan ``problem`` with: read again without pulled-up
+    conditions when the problem's initial task network is not totally
+    ordered (its tasks interleave with every method's subtasks)."""
+    if domain.hddl is None or not domain.pullup or \
+            all(inst.tasks.ordered for inst in problem.instances):
+        return domain
+    return domain_from_model(domain.hddl, pullup=False)
 
 
 # ------------------------------------------------------------------ problem
@@ -254,14 +283,17 @@ def problem_from_model(h: HProblem) -> S.Problem:
         state.append(a)
     declared = {p.name for p in h.params}
     items = []
-    for st in linearise(h.network, "the initial task network", h.pos):
+    subtasks, order = subtask_order(h.network, "the initial task network", h.pos)
+    for st in subtasks:
         for x in st.args:
             if isinstance(x, Var) and x.name not in declared:
                 raise HtnError.at(st.pos, f"variable {x.name} is not a parameter of the "
                                   "initial task network")
         items.append(S.TaskAtom(st.name, st.args, False, st.pos))
     top = None
-    if h.params:
+    if h.params or _has_constraints(h.network):
+        # the network's :constraints are a precondition of its artificial
+        # root method, like its parameters' types
         top = MethodDef(TOP_METHOD, h.params, Subtask(None, TOP, (), h.pos), None, h.network,
                         h.pos)
     goal, nvars = None, 0
@@ -271,10 +303,30 @@ def problem_from_model(h: HProblem) -> S.Problem:
         goal = S.Precondition(f.expr(h.goal, {}), pos=getattr(h.goal, "pos", None))
         nvars = scope.size
     pos = h.network.pos if h.network is not None else h.pos
-    instance = S.ProblemInstance(state, S.TaskList(items, True, pos), h.pos, goal=goal,
+    instance = S.ProblemInstance(state, _task_list(items, order, pos), h.pos, goal=goal,
                                  goal_nvars=nvars, top=top)
     return S.Problem(h.name, h.domain_name, [instance], file=h.file, pos=h.pos,
-                     language="hddl", spelling=h.spelling)
+                     language="hddl", spelling=h.spelling, hddl=h)
+
+
+def _has_constraints(net) -> bool:
+    c = net.constraints if net is not None else None
+    return c is not None and not (isinstance(c, S.And) and not c.items)
+
+
+def resolve_problem_tasks(domain: S.Domain, problem: S.Problem) -> None:
+    """An HDDL initial task network may name actions as well as compound
+    tasks (Höller et al. 2020, the problem's task network is any task
+    network); the problem file alone cannot tell which, so once the domain
+    is known an action's name becomes its operator ``!name``. A network with
+    a root method (``top``) is resolved by that method already."""
+    h = domain.hddl
+    if h is None or problem.language != "hddl":
+        return
+    for inst in problem.instances:
+        for t in S.task_atoms(inst.tasks):
+            if t.name in h.actions and t.name not in h.tasks:
+                t.name = "!" + t.name
 
 
 def from_model(h):

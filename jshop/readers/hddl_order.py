@@ -1,57 +1,95 @@
 """The order of a task network's subtasks (HDDL ``:ordered-subtasks``,
-``:subtasks`` with ``:ordering``).
+``:subtasks`` with or without ``:ordering``; Höller et al., AAAI 2020).
 
-This is a total-order planner: an ``:ordering`` must order every pair of
-subtasks; ``:subtasks`` with no ``:ordering`` at all are taken in the written
-order (one linearisation of the empty partial order, as HyperTensioN and the
-other IPC 2020 total-order planners take them).
+HDDL's ordering is a partial order: a subtask may start when every subtask
+ordered before it is finished, and subtasks with no constraint between them
+interleave. :func:`subtask_order` gives the subtasks in a topological order
+(ties in written order) and says how they are ordered:
+
+* ``:ordered-subtasks``, a single subtask, or an ``:ordering`` that orders
+  every pair (a chain): a total order, the list runs in order;
+* ``:subtasks`` with no ``:ordering`` (or an empty one) and several subtasks:
+  no pair is ordered, the list is unordered (JSHOP2's ``:unordered``);
+* any other ``:ordering``: a :class:`~htn.jshop.language.syntax.PartialOrder`
+  over the sorted subtasks (each one's direct predecessors).
 """
 from __future__ import annotations
 
 from typing import Optional
 
 from htn.jshop.language.errors import HtnError
+from htn.jshop.language.syntax import PartialOrder
 
 from .hddl_model import Network
 
 
-def linearise(net: Optional[Network], owner: str, pos) -> list:
-    """The subtasks of a network in its total order (see the module docstring)."""
+def subtask_order(net: Optional[Network], owner: str, pos) -> tuple[list, object]:
+    """``(subtasks, order)``: the subtasks in a topological order and
+    ``True`` (total order), ``False`` (no two ordered) or a
+    :class:`PartialOrder` (see the module docstring)."""
     if net is None:
-        return []
+        return [], True
     subs = net.subtasks
-    if net.ordered or len(subs) <= 1 or not net.ordering:
-        # no ordering constraint at all: the written order, one linearisation
-        # of the (empty) partial order, as HyperTensioN and the other IPC 2020
-        # total-order planners take it (Minecraft's place-block-abstract-3)
-        return list(subs)
+    if net.ordered or len(subs) <= 1:
+        return list(subs), True
+    if not net.ordering:
+        return list(subs), False
     labels = {}
     for s in subs:
         if s.label is None:
-            raise HtnError.at(s.pos, f"{owner}: an unordered subtask needs a label to be "
-                              "ordered (or write :ordered-subtasks)")
+            raise HtnError.at(s.pos, f"{owner}: a subtask needs a label to be ordered "
+                              "(or write :ordered-subtasks)")
         labels[s.label] = s
+    written = {label: i for i, label in enumerate(labels)}
     after: dict = {label: set() for label in labels}
-    before_count = dict.fromkeys(labels, 0)
+    preds: dict = {label: set() for label in labels}
     for a, b, opos in net.ordering:
         for x in (a, b):
             if x not in labels:
                 raise HtnError.at(opos, f"{owner}: no subtask is labelled {x}")
-        if b not in after[a]:
-            after[a].add(b)
-            before_count[b] += 1
-    order = []
-    ready = [label for label in labels if before_count[label] == 0]
-    while ready:
-        if len(ready) > 1:
-            raise HtnError.at(net.pos or pos, f"{owner}: subtasks {ready[0]} and {ready[1]} "
-                              "are not ordered; the planner needs a total order")
-        label = ready.pop()
-        order.append(labels[label])
-        for b in sorted(after[label], key=list(labels).index):
-            before_count[b] -= 1
-            if before_count[b] == 0:
-                ready.append(b)
+        if a == b:
+            raise HtnError.at(opos, f"{owner}: subtask {a} is ordered before itself")
+        after[a].add(b)
+        preds[b].add(a)
+    order, total = _topological(labels, after, preds, written)
     if len(order) != len(labels):
         raise HtnError.at(net.pos or pos, f"{owner}: the ordering constraints form a cycle")
-    return order
+    tasks = [labels[label] for label in order]
+    if total:
+        return tasks, True
+    index = {label: i for i, label in enumerate(order)}
+    return tasks, PartialOrder(tuple(sorted(index[p] for p in preds[label]))
+                               for label in order)
+
+
+def _topological(labels: dict, after: dict, preds: dict, written: dict) -> tuple[list, bool]:
+    """Kahn's algorithm, ready subtasks taken in written order; the order is
+    total when exactly one subtask is ready at every step."""
+    count = {label: len(preds[label]) for label in labels}
+    ready = sorted((label for label in labels if count[label] == 0), key=written.get)
+    order, total = [], True
+    while ready:
+        if len(ready) > 1:
+            total = False
+        label = ready.pop(0)
+        order.append(label)
+        for b in after[label]:
+            count[b] -= 1
+            if count[b] == 0:
+                ready.append(b)
+        ready.sort(key=written.get)
+    return order, total
+
+
+def linearise(net: Optional[Network], owner: str, pos) -> list:
+    """The subtasks of a network in a topological order (one linearisation)."""
+    return subtask_order(net, owner, pos)[0]
+
+
+def is_total(net: Optional[Network]) -> bool:
+    """Whether a network's subtasks are totally ordered (see :func:`subtask_order`);
+    the caller reports malformed orderings where it reads them."""
+    try:
+        return subtask_order(net, "", None)[1] is True
+    except HtnError:
+        return True

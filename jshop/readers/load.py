@@ -66,12 +66,26 @@ def load_problem(path: str, functions: FunctionTable | None = None) -> S.Problem
 
 def load_inputs(domain_path: str, problem_path: str,
                 functions: FunctionTable | None = None) -> tuple[S.Domain, S.Problem]:
-    """Load a domain and a problem for it, checked together
-    (:func:`htn.jshop.readers.checks.check_inputs`, the check every command
-    runs; its warnings are not returned: :mod:`htn.api.inputs` has them)."""
-    dom = load_domain(domain_path, functions)
-    prob = load_problem(problem_path, functions)
+    """Load a domain and a problem for it, paired (:func:`paired`) and
+    checked together (:func:`htn.jshop.readers.checks.check_inputs`, the
+    check every command runs; its warnings are not returned:
+    :mod:`htn.api.inputs` has them)."""
+    dom, prob = paired(load_domain(domain_path, functions), load_problem(problem_path, functions))
     check_inputs(dom, prob)
+    return dom, prob
+
+
+def paired(dom: S.Domain, prob: S.Problem) -> tuple[S.Domain, S.Problem]:
+    """A domain and a problem checked to belong together, and the domain
+    to plan that problem with: for HDDL, the problem's tasks that are
+    actions become operators, and a problem whose initial task network is
+    not totally ordered gets the domain without pulled-up conditions
+    (:func:`~htn.jshop.readers.hddl_domain.for_problem`)."""
+    check_domain_name(dom, prob)
+    if dom.hddl is not None:
+        from .hddl_domain import for_problem, resolve_problem_tasks
+        resolve_problem_tasks(dom, prob)
+        dom = for_problem(dom, prob)
     return dom, prob
 
 

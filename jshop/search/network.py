@@ -6,7 +6,10 @@ backtracking, and which of its tasks may be done next.
   atomic node holding one task until a method or operator reduces it;
 * :func:`first_tasks` are the tasks with no unfinished predecessor in an
   ordered list (any task of an unordered one, in the manual's ``getFirst``
-  order); an ``:immediate`` one among them is the only option. Nodes marked
+  order; in a partially ordered one (HDDL, ``Node.ordered`` a
+  :class:`~htn.jshop.language.syntax.PartialOrder`), those of every member
+  whose predecessors are all finished, in member order); an ``:immediate``
+  one among them is the only option. Nodes marked
   done go on a trail, undone on backtracking (:func:`undo_marks`).
 """
 from __future__ import annotations
@@ -14,6 +17,7 @@ from __future__ import annotations
 from typing import Optional
 
 from htn.jshop.language import syntax as S
+from htn.jshop.language.syntax import PartialOrder
 from htn.jshop.language.terms import atom_str, subst
 from htn.jshop.logic.task_lists import task_list_maker, task_list_warming
 
@@ -66,7 +70,7 @@ def bind_tasks(tl: S.TaskList, env: list) -> Node:
     cost more than it saves)."""
     return Node(None, [bind_tasks(x, env) if isinstance(x, S.TaskList)
                        else Node(Task(x.name, subst(x.args, env), x.immediate, x))
-                       for x in tl.items], tl.ordered)
+                       for x in tl.items], tl.order_flag)
 
 
 def first_tasks(root: Node, trail: Optional[list] = None, path: Optional[list] = None) -> list:
@@ -139,8 +143,14 @@ def first_in_order(root: Node, trail: list, path: Optional[list] = None,
 
 def _first_tasks(root: Node, trail: Optional[list]) -> list:
     res: list = []
-    stack: list = []       # (list, next member, len(res) on entry) of each ancestor
+    # (list, next member, len(res) on entry, open members) of each ancestor;
+    # ``open_`` is the set of unfinished members of a partially ordered list
+    # seen so far (None for other lists): a member may start when none of
+    # its predecessors is open (members are in a topological order)
+    stack: list = []
     node, i, n0 = root, root.start, 0
+    order = node.ordered
+    open_ = set() if type(order) is PartialOrder else None
     while True:
         subs = node.subtasks
         n = len(subs)
@@ -149,15 +159,23 @@ def _first_tasks(root: Node, trail: Optional[list]) -> list:
             child = subs[i]
             i += 1
             cs = child.subtasks
+            if open_ is not None and not open_.isdisjoint(order[i - 1]):
+                if cs is None or (cs and not child.done):
+                    open_.add(i - 1)          # waits for a predecessor
+                continue
             if cs is None:
                 if child.task.immediate:
                     return [child]
                 res.append(child)
-                if node.ordered:
+                if open_ is not None:
+                    open_.add(i - 1)
+                elif order:
                     break
             elif cs and not child.done:
-                stack.append((node, i, n0))
+                stack.append((node, i, n0, open_))
                 node, i, n0 = child, child.start, len(res)
+                order = child.ordered
+                open_ = set() if type(order) is PartialOrder else None
                 down = True
                 break
             elif trail is not None and i - 1 == node.start:
@@ -172,8 +190,14 @@ def _first_tasks(root: Node, trail: Optional[list]) -> list:
                 trail.append(node)
             if not stack:
                 return res
-            node, i, n0 = stack.pop()
-            if not (node.ordered and len(res) != n0):
+            child_n0 = n0
+            node, i, n0, open_ = stack.pop()
+            order = node.ordered
+            if open_ is not None:
+                if len(res) != child_n0:
+                    open_.add(i - 1)
+                break
+            if not (order and len(res) != n0):
                 break
 
 

@@ -54,7 +54,7 @@ from .limits import DEFAULT_MAX_DEPTH, DepthLimit, MemoryGuard, MemoryLimit
 from .network import Node, bind_tasks, deepest_task, first_in_order, first_tasks, undo_marks
 from .stats import Stats
 from .steps import method_entry, operator_entry
-from .loops import LoopCheck
+from .ancestry import loop_check_for
 
 _PLAN = object()
 
@@ -77,7 +77,7 @@ class Planner:
         if loop_check is None:           # on for HDDL, off for JSHOP2 (its own semantics)
             loop_check = domain.language == "hddl"
         self.state = HashedState() if loop_check else State()
-        self.loops = LoopCheck(self.state) if loop_check else None
+        self.loops = loop_check_for(domain, instance, self.state) if loop_check else None
         implied = domain.implied
         for atom in (*domain.facts, *instance.state):
             self.state.add(atom.pred, atom.args)
@@ -103,7 +103,7 @@ class Planner:
         if instance.top is not None:     # HDDL: a root task binds the network's parameters
             from htn.jshop.readers.hddl_domain import top_method
             m = top_method(domain, instance.top)
-            self._methods[m.name] = [method_entry(self.logic, m, True)]
+            self._methods[m.name] = [method_entry(self.logic, m, False)]   # its own order
             self.root = bind_tasks(S.TaskList([m.head]), [])
         else:
             self.root = bind_tasks(instance.tasks, [None] * nvars)
@@ -112,6 +112,7 @@ class Planner:
         self._trail: list = []     # nodes marked done, see first_tasks
         self._cursor: list = []    # where the last walk found its task, see _first
         self._cursor_ok = False
+        self.slice_s: Optional[float] = None    # CPU s between pauses: see plans()
 
     # ------------------------------------------------------------ driver
     def plans(self, timeout: Optional[float] = None) -> Iterator[Plan]:
@@ -119,6 +120,7 @@ class Planner:
 
         ``stats.elapsed`` counts search time only, not the time the consumer
         spends between plans; ``timeout`` is wall-clock time since the start.
+        With ``slice_s`` set, None is yielded after each such slice of CPU time.
         """
         stats = self.stats
         clock = time.perf_counter
@@ -139,6 +141,7 @@ class Planner:
         dpush, dpop = depths.append, depths.pop
         max_depth = self.max_depth
         guard = None       # made at the first check: tiny searches never pay for it
+        pause_at = None if self.slice_s is None else time.process_time() + self.slice_s
         ticks = stats.expansions
         stats.expansions += 1
         try:
@@ -178,6 +181,10 @@ class Planner:
                     if timeout is not None and clock() - stats.started > timeout:
                         stats.timed_out = True       # wall clock, output included
                         return
+                    if pause_at is not None and time.process_time() >= pause_at:
+                        spent += clock() - t0
+                        yield None                   # see slice_s: another search's turn
+                        t0, pause_at = clock(), time.process_time() + self.slice_s
                     if not ticks & 4095:
                         if guard is None:
                             guard = MemoryGuard(self.max_memory)
@@ -190,6 +197,8 @@ class Planner:
         finally:
             stats.elapsed = spent + (clock() - t0 if t0 is not None else 0.0)
             stats.expansions = ticks + 1
+            if self.loops is not None:
+                stats.loop_cuts = self.loops.cut
             for frame in reversed(stack):
                 frame.close()
             if gc_was_enabled:
@@ -264,7 +273,7 @@ class Planner:
                 key = None
                 if loops is not None:
                     key = loops.key(task)
-                    if key in loops.active:     # see loops.py
+                    if key in loops.active and loops.is_loop(node, key):   # see loops.py
                         loops.cut += 1
                         methods = ()
                 for index, (m, unify_head, branches) in enumerate(methods):

@@ -1,5 +1,8 @@
 """What a search did: plans found, expansions, operator applications,
-backtracks, time, and what ended it early (``--timeout``, Ctrl-C, a bound)."""
+backtracks, time, what ended it early (``--timeout``, Ctrl-C, a bound), and
+in a portfolio which search found the plans, and how many reductions the
+loop check refused (a search that ends with none found a "no plan" it can
+stand by; with some, a plan that revisits a state may have been cut)."""
 from __future__ import annotations
 
 from .limits import DepthLimit, MemoryLimit
@@ -8,7 +11,7 @@ from .limits import DepthLimit, MemoryLimit
 class Stats:
     __slots__ = ("plans_found", "expansions", "operator_applications",
                  "backtracks", "started", "elapsed", "timed_out", "interrupted",
-                 "bound")
+                 "bound", "found_by", "loop_cuts")
 
     def __init__(self):
         self.plans_found = 0
@@ -20,9 +23,11 @@ class Stats:
         self.timed_out = False
         self.interrupted = False
         self.bound = None      # the SearchBound (depth or memory) that stopped the search
+        self.found_by = None   # which search of a portfolio found the plans (--search auto)
+        self.loop_cuts = 0     # reductions the loop check refused (loops.py): 0 = complete
 
     def as_dict(self) -> dict:
-        return {
+        out = {
             "plans_found": self.plans_found,
             "search_ms": round(self.elapsed * 1000, 3),
             "expansions": self.expansions,
@@ -33,3 +38,8 @@ class Stats:
             "depth_limit_reached": isinstance(self.bound, DepthLimit),
             "memory_limit_reached": isinstance(self.bound, MemoryLimit),
         }
+        if self.found_by is not None:
+            out["found_by"] = self.found_by
+        if self.loop_cuts:
+            out["loop_cuts"] = self.loop_cuts
+        return out

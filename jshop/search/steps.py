@@ -5,7 +5,8 @@ An operator's entry holds its head unifier, its precondition, the
 substituter of its plan step and its cost; a method's its head unifier and,
 per branch, its precondition, its body maker and whether the body is ordered
 (manual 3.8, 5.2.2: a body is ordered unless written ``:unordered``, and
-always in JSHOP2 1.0.3's mode, see :mod:`htn.jshop.search.planner`). The
+always in JSHOP2 1.0.3's mode, see :mod:`htn.jshop.search.planner`; an HDDL
+body keeps its :class:`~htn.jshop.language.syntax.PartialOrder`). The
 generated pieces are warming (:mod:`htn.jshop.logic.warming`): an entry is a
 list, and a compiled piece replaces the interpreted one in place.
 """
@@ -37,7 +38,7 @@ def method_entry(logic, m: S.Method, jshop2_compat: bool) -> list:
     branches = []
     for b in m.branches:
         branch = [pre(b.pre, m.head.args, f"precondition of {m.name} branch {b.label}"),
-                  None, jshop2_compat or b.tasks.ordered]
+                  None, jshop2_compat or b.tasks.order_flag]
         branch[1] = compile_tasks(b.tasks, f"subtasks of {m.name} branch {b.label}",
                                   lambda f, branch=branch: branch.__setitem__(1, f))
         branches.append(branch)

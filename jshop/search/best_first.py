@@ -1,0 +1,231 @@
+"""Heuristic progression search over grounded task networks: greedy
+best-first (GBFS) and weighted A* (Höller, Bercher, Behnke and Biundo,
+"HTN Planning as Heuristic Progression Search", JAIR 2020; the search of
+PANDA and of PandaDealer, the IPC 2023 total-order winner).
+
+A search node is a state (an ``int`` of fact bits) and a task network
+(:mod:`htn.jshop.search.task_networks`). Its successors: for every task
+that may be done next, an action applied (when its precondition holds) or
+a method applied (when its precondition holds in the current state: HDDL
+binds and tests a method's parameters when it is applied, as the
+depth-first search does). A node whose network is empty is a plan if the
+problem's goal holds. Nodes are ordered by ``h`` (GBFS) or ``g + w * h``
+(weighted A*, ``g`` the number of actions and methods applied), ties first
+in, first out; a node whose ``(state, network)`` was reached before (with
+no smaller ``g``) is dropped (duplicate detection).
+
+:meth:`BestFirst.plans` is a stream like :meth:`Planner.plans
+<htn.jshop.search.planner.Planner.plans>`; with ``slice_s`` set it also
+yields None each time it has used that much CPU time, so that a portfolio
+can interleave it with another search (:mod:`htn.jshop.search.portfolio`).
+"""
+from __future__ import annotations
+
+import heapq
+import time
+from typing import Iterator, Optional
+
+from htn.jshop.language import syntax as S
+from htn.jshop.plans.plan import Plan, Step
+from htn.jshop.plans.tree import TaskTree
+
+from .ground_formulas import holds, satisfied
+from .grounding import ground, grounding_steps
+from .heuristics import HEURISTICS, INF
+from .limits import MemoryGuard, MemoryLimit
+from .stats import Stats
+from .task_networks import body_items, firsts, item_at, replace
+
+
+WASTAR_WEIGHT = 2.0      # --search wastar: f = g + 2 h
+
+class BestFirst:
+    """GBFS (``weight=None``) or weighted A* on one problem instance."""
+
+    def __init__(self, domain: S.Domain, instance: S.ProblemInstance,
+                 heuristic: str = "rc", weight: Optional[float] = None,
+                 max_memory: Optional[int] = None, tree_paths: bool = True,
+                 label: str = "gbfs", **_ignored):
+        self.domain, self.instance = domain, instance
+        self.heuristic_name = heuristic
+        self.label = label
+        self.weight = weight
+        self.max_memory = max_memory
+        self.tree_paths = tree_paths
+        self.stats = Stats()
+        self.slice_s: Optional[float] = None   # CPU seconds between pauses, see plans()
+        self.model = None
+        self.h = None              # the heuristic, once grounded
+        self.generated = 0
+
+    def prepare(self) -> None:
+        """Ground the problem and build the heuristic (the first call of
+        :meth:`plans` does it otherwise)."""
+        if self.model is None:
+            self._prepared(ground(self.domain, self.instance))
+
+    def _prepared(self, model) -> None:
+        self.model = model
+        self.h = HEURISTICS[self.heuristic_name](model)
+
+    # ------------------------------------------------------------ search
+    def plans(self, timeout: Optional[float] = None) -> Iterator[Optional[Plan]]:
+        """Plans as they are found (see the module docstring); ``timeout``
+        is wall-clock time since the start, like the depth-first search's."""
+        stats = self.stats
+        stats.started = time.perf_counter()
+        cpu = time.process_time
+        pause_at = cpu() + self.slice_s if self.slice_s is not None else None
+        if self.model is None:         # grounding pauses and times out like the search
+            steps = grounding_steps(self.domain, self.instance)
+            while True:
+                try:
+                    next(steps)
+                except StopIteration as done:
+                    self._prepared(done.value)
+                    break
+                if pause_at is not None and cpu() >= pause_at:
+                    yield None
+                    pause_at = cpu() + self.slice_s
+                if timeout is not None and time.perf_counter() - stats.started > timeout:
+                    stats.timed_out = True
+                    return
+        model, h, w = self.model, self.h, self.weight
+        actions, methods_of = model.actions, model.methods_of
+        net0 = body_items(model.roots, model.root_order)
+        h0 = h(model.init, net0)
+        # per node: (state, network, parent, move, g); move = (path, action or method)
+        nodes = [(model.init, net0, -1, None, 0)]
+        seen = {(model.init, net0): 0}
+        heap = [(h0 if w is None else w * h0, 0, 0)] if h0 < INF else []
+        ticks = 0
+        guard = None
+        try:
+            while heap:
+                _f, _tie, k = heapq.heappop(heap)
+                s, net, _parent, _move, g = nodes[k]
+                if seen.get((s, net), g) < g:
+                    continue          # reached again more cheaply (weighted A*)
+                if not net:
+                    if model.goal is None or satisfied(model.goal, s):
+                        stats.plans_found += 1
+                        stats.elapsed = time.perf_counter() - stats.started
+                        yield self._plan(nodes, k, stats.plans_found - 1)
+                        continue
+                    continue
+                stats.expansions += 1
+                ticks += 1
+                for path, t in firsts(net):
+                    a = actions.get(t)
+                    if a is not None:
+                        if not satisfied(a.pre, s):
+                            continue
+                        s2 = _apply(a, s)
+                        stats.operator_applications += 1
+                        self._push(nodes, heap, seen, s2, replace(net, path, ()), k, (path, a), g)
+                        continue
+                    for gm in methods_of.get(t, ()):
+                        if satisfied(gm.pre, s):
+                            new = body_items(gm.body, gm.order)
+                            self._push(nodes, heap, seen, s, replace(net, path, new), k,
+                                       (path, gm), g)
+                if not ticks & 63:
+                    if timeout is not None and time.perf_counter() - stats.started > timeout:
+                        stats.timed_out = True
+                        return
+                    if pause_at is not None and cpu() >= pause_at:
+                        stats.elapsed = time.perf_counter() - stats.started
+                        yield None
+                        pause_at = cpu() + self.slice_s
+                    if not ticks & 1023:
+                        guard = guard or MemoryGuard(self.max_memory)
+                        if guard.exceeded():
+                            stats.bound = MemoryLimit(guard.limit_bytes, None)
+                            return
+        finally:
+            stats.elapsed = time.perf_counter() - stats.started
+
+    def _push(self, nodes, heap, seen, s, net, parent, move, g) -> None:
+        g += 1
+        key = (s, net)
+        old = seen.get(key)
+        if old is not None and (self.weight is None or old <= g):
+            return
+        seen[key] = g
+        hv = self.h(s, net)
+        self.generated += 1
+        if hv == INF:
+            return
+        nodes.append((s, net, parent, move, g))
+        f = hv if self.weight is None else g + self.weight * hv
+        heapq.heappush(heap, (f, len(nodes), len(nodes) - 1))
+
+    # ------------------------------------------------------------ the plan
+    def _plan(self, nodes, k: int, index: int) -> Plan:
+        """The plan of goal node ``k`` with its task tree: the moves from the
+        root are replayed on a network of task instances."""
+        moves = []
+        while k > 0:
+            _s, _net, parent, move, _g = nodes[k]
+            moves.append(move)
+            k = parent
+        moves.reverse()
+        model = self.model
+        inst = list(model.roots)               # instance -> task id
+        net = body_items(tuple(range(len(inst))), model.root_order)
+        how: dict = {}                         # instance -> step index or (method, children)
+        steps = []
+        for path, what in moves:
+            i = item_at(net, path)
+            if hasattr(what, "op"):
+                how[i] = len(steps)
+                steps.append(Step(what.name, what.args, what.cost))
+                net = replace(net, path, ())
+            else:
+                kids = tuple(range(len(inst), len(inst) + len(what.body)))
+                inst.extend(what.body)
+                how[i] = (what, kids)
+                net = replace(net, path, body_items(kids, what.order))
+        plan = Plan(steps, sum(s.cost for s in steps), index=index)
+        plan.tree = self._tree(inst, how, len(model.roots))
+        return plan
+
+    def _tree(self, inst: list, how: dict, nroots: int) -> TaskTree:
+        tasks = self.model.tasks
+        root = TaskTree(name="", path="")
+        work = [(root, tuple(range(nroots)), "")]
+        while work:
+            parent, kids, prefix = work.pop()
+            names = [tasks[inst[i]][0] for i in kids]
+            seen: dict = {}
+            for i, name in zip(kids, names):
+                path = ""
+                if self.tree_paths:
+                    seen[name] = seen.get(name, 0) + 1
+                    label = name if names.count(name) == 1 else f"{name} :call {seen[name]}"
+                    path = f"{prefix}/{label}" if prefix else label
+                node = TaskTree(name=name, args=tasks[inst[i]][1], path=path)
+                h = how.get(i)
+                if type(h) is int:
+                    node.step = h
+                elif h is not None:
+                    gm, sub = h
+                    m = gm.method
+                    node.method = m.name
+                    node.method_index = next((j for j, x in enumerate(
+                        self.domain.methods.get(m.name, ())) if x is m), 0)
+                    node.branch = m.branches[0].label
+                    work.append((node, sub, path))
+                parent.children.append(node)
+        return root
+
+
+def _apply(a, s: int) -> int:
+    """PDDL's semantics: conditions in the state before, deletes, then adds."""
+    dels, adds = a.dels, a.adds
+    for cond, d, more in a.effects:
+        pos, neg, rest = cond
+        if s & pos == pos and not s & neg and all(holds(x, s) for x in rest):
+            dels |= d
+            adds |= more
+    return (s & ~dels) | adds

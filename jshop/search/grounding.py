@@ -1,0 +1,371 @@
+"""Grounding an HDDL problem for the heuristic search (after PANDA's
+grounder: Behnke et al., "On Succinct Groundings of HTN Planning
+Problems", AAAI 2020, in a simpler form).
+
+1. **Reachable facts**: the delete-relaxed fixpoint of the actions from the
+   initial state (negative and universal conditions dropped), computed with
+   the planner's own logic engine on a growing state.
+2. **Top-down**: from the initial task network, each ground compound task
+   is instantiated with every method whose relaxed precondition has a
+   satisfier in the reachable facts (which binds every method parameter,
+   HDDL's semantics), and each ground action with its head's binding.
+3. **Bottom-up**: a ground action is kept if its precondition can hold in a
+   reachable state; a ground compound task if some method has every
+   subtask kept, to a fixpoint (PANDA's task decomposition graph pruning).
+
+What is left is numbered: dynamic facts are bits of an ``int`` state,
+tasks and methods indices; preconditions are compiled residuals
+(:mod:`htn.jshop.search.ground_formulas`). The pulled-up conditions of the
+domain's methods (:mod:`htn.jshop.readers.pullup`) take part like written
+ones: they only cut method instances that have no plan below them.
+"""
+from __future__ import annotations
+
+from htn.jshop.language import syntax as S
+from htn.jshop.language.terms import Var, subst, variables
+from htn.jshop.logic.compile import head_unifier
+from htn.jshop.logic.engine import Logic
+from htn.jshop.logic.state import State
+
+from .ground_formulas import (FormulaGrounder, NotGroundable, compile_residual, disj,
+                              flat_and, relax)
+
+
+class GroundAction:
+    __slots__ = ("name", "args", "op", "pre", "dels", "adds", "effects", "cost")
+
+    def __init__(self, name, args, op, pre, dels, adds, effects, cost):
+        self.name, self.args, self.op = name, args, op
+        self.pre = pre            # (pos, neg, rest)
+        self.dels, self.adds = dels, adds   # masks
+        self.effects = effects    # ((condition, dels, adds), ...) conditional
+        self.cost = cost
+
+
+class GroundMethod:
+    __slots__ = ("task", "method", "pre", "body", "order")
+
+    def __init__(self, task, method, pre, body, order):
+        self.task = task          # the task id it decomposes
+        self.method = method      # the S.Method
+        self.pre = pre
+        self.body = body          # subtask ids, in the method's (topological) order
+        self.order = order        # True, False or a PartialOrder
+
+
+class GroundModel:
+    """A grounded problem: facts, tasks (``tasks[i] = (name, args)``; an
+    action's task id is its action index), methods per task, the initial
+    state and task network, and the goal."""
+
+    def __init__(self):
+        self.facts: list = []          # bit -> (pred, args)
+        self.bits: dict = {}
+        self.tasks: list = []          # id -> (name, args)
+        self.task_ids: dict = {}
+        self.actions: dict = {}        # task id -> GroundAction (primitive tasks)
+        self.methods_of: dict = {}     # task id -> [GroundMethod]
+        self.init = 0
+        self.roots: tuple = ()         # initial task ids
+        self.root_order = True
+        self.goal = None               # (pos, neg, rest) or None
+
+    def task_id(self, name: str, args: tuple) -> int:
+        key = (name, args)
+        i = self.task_ids.get(key)
+        if i is None:
+            i = self.task_ids[key] = len(self.tasks)
+            self.tasks.append(key)
+        return i
+
+
+def ground(domain: S.Domain, instance: S.ProblemInstance) -> GroundModel:
+    """The grounded problem (see the module docstring); raises
+    :class:`NotGroundable` for what this search does not handle."""
+    steps = grounding_steps(domain, instance)
+    while True:
+        try:
+            next(steps)
+        except StopIteration as done:
+            return done.value
+
+
+def grounding_steps(domain: S.Domain, instance: S.ProblemInstance):
+    """:func:`ground` as a generator that yields None between small steps
+    (so that a portfolio can pause it) and returns the model."""
+    return _Grounder(domain, instance).run()
+
+
+class _Grounder:
+    def __init__(self, domain: S.Domain, instance: S.ProblemInstance):
+        self.domain, self.instance = domain, instance
+        self.model = GroundModel()
+        self.dynamic = domain.dynamic_predicates()
+        for ops in domain.operators.values():
+            for op in ops:
+                if type(op.cost) is not float:
+                    raise NotGroundable(f"the cost of {op.name} is not a number")
+                if op.add.var is not None or op.delete.var is not None:
+                    raise NotGroundable(f"{op.name} has a variable effect list")
+        self.methods = {name: list(ms) for name, ms in domain.methods.items()}
+        self.roots = list(instance.tasks.items)
+        self.root_order = instance.tasks.order_flag
+        if instance.top is not None:
+            from htn.jshop.readers.hddl_domain import top_method
+            m = top_method(domain, instance.top)
+            self.methods[m.name] = [m]
+            self.roots, self.root_order = [m.head], True
+
+    # ------------------------------------------------------------ 1. facts
+    def reachable_facts(self):
+        state = State()
+        implied = self.domain.implied
+        for atom in (*self.domain.facts, *self.instance.state):
+            state.add(atom.pred, atom.args)
+            for pred in implied.get(atom.pred, ()):
+                state.add(pred, atom.args)
+        self.initial = [(p, a) for p, a in state.facts()]
+        logic = Logic(self.domain, state)
+        self.logic = logic
+        programs = []
+        for ops in self.domain.operators.values():
+            for op in ops:
+                # a parameter of type object has no type condition: bind it too
+                free = [S.Atom("type:object", (v,)) for v in op.head.args if type(v) is Var]
+                sat = logic.precondition(S.Precondition(flat_and([relax(op.pre.expr), *free])),
+                                         op.head.args)
+                adds = [(item.pred, item.args) for item in op.add.items
+                        if isinstance(item, S.Atom)]
+                raw = [item for item in op.add.items if isinstance(item, S.EffectForAll)]
+                foralls = [(logic.expr(flat_and([relax(item.cond)])), item.atoms) for item in raw]
+                programs.append((op, sat, adds, foralls, [item.cond for item in raw]))
+        # semi-naive: an operator is enumerated again only when a predicate
+        # its relaxed precondition reads has gained a fact since its last turn
+        # (a derived predicate could depend on any: then every turn, as before)
+        changed_at: dict = {}           # predicate -> tick of its latest new fact
+        tick = 0
+        every = bool(self.domain.axioms)
+        reads = [None if every else _predicates([op.pre.expr, *conds])
+                 for op, _sat, _adds, _fa, conds in programs]
+        last = [-1] * len(programs)
+        changed = True
+        while changed:
+            changed = False
+            for k, (op, sat, adds, foralls, _conds) in enumerate(programs):
+                if last[k] >= 0 and reads[k] is not None and \
+                        all(changed_at.get(p, -1) <= last[k] for p in reads[k]):
+                    continue
+                yield
+                last[k] = tick
+                new = []
+                for env in sat([None] * op.nvars):
+                    for pred, args in adds:
+                        new.append((pred, subst(args, env)))
+                    for cond, atoms in foralls:
+                        for nb in cond(list(env)):
+                            new.extend((a.pred, subst(a.args, nb)) for a in atoms)
+                for pred, args in new:
+                    if state.add(pred, args):
+                        tick += 1
+                        changed_at[pred] = tick
+                        changed = True
+        return state
+
+    # ------------------------------------------------------------ 2. top down
+    def run(self):
+        model = self.model
+        reach = yield from self.reachable_facts()
+        static = {}
+        for pred, lst in reach.atoms.items():
+            if pred not in self.dynamic:
+                static[pred] = set(lst)
+        for pred, args in reach.facts():
+            if pred in self.dynamic and None not in args:
+                model.bits[(pred, args)] = len(model.facts)
+                model.facts.append((pred, args))
+        self.formulas = FormulaGrounder(static, model.bits, self.logic)
+        for pred, args in self.initial:
+            bit = model.bits.get((pred, args))
+            if bit is not None:
+                model.init |= 1 << bit
+        roots = [model.task_id(t.name, tuple(t.args)) for t in self.roots]
+        self.ops = {name: [(op, head_unifier(op.head.args)) for op in ops]
+                    for name, ops in self.domain.operators.items()}
+        self.heads = {name: [(m, head_unifier(m.head.args)) for m in ms]
+                      for name, ms in self.methods.items()}
+        self.executable: dict = {}      # (name, args) -> GroundAction or None
+        self.head_bound: dict = {}
+        todo, seen = list(roots), set(roots)
+        while todo:
+            yield
+            t = todo.pop()
+            name, args = model.tasks[t]
+            if name.startswith("!"):
+                a = self.executable.get((name, args)) or self._action(name, args)
+                if a is not None:
+                    model.actions[t] = a
+                continue
+            found = model.methods_of[t] = []
+            for m, unify in self.heads.get(name, ()):
+                for gm in self._methods(t, m, unify, args):
+                    found.append(gm)
+                    for s in gm.body:
+                        if s not in seen:
+                            seen.add(s)
+                            todo.append(s)
+        self._prune()
+        model.roots, model.root_order = tuple(roots), self.root_order
+        if self.instance.goal is not None:
+            goal = self._residual(self.instance.goal.expr, [None] * self.instance.goal_nvars)
+            model.goal = compile_residual(goal) or (-1, -1, ())
+        return model
+
+    def _residual(self, expr, env: list):
+        """The residual of a formula whose free variables the relaxed
+        satisfiers bind (an ``exists``): the disjunction over them."""
+        f = self.formulas
+        return disj([f.ground(expr, nb) for nb in f.satisfiers(expr, env)])
+
+    def _action(self, name: str, args: tuple):
+        for op, unify in self.ops.get(name, ()):
+            env = [None] * op.nvars
+            if not unify(args, env):
+                continue
+            if self._bound_by_head(op):     # the common case: no exists to enumerate
+                witness = env
+                pre = compile_residual(self.formulas.ground(op.pre.expr, env))
+            else:
+                pre = compile_residual(self._residual(op.pre.expr, env))
+                witness = next(self.formulas.satisfiers(op.pre.expr, env), None)
+            if pre is None or witness is None:
+                continue
+            dels, adds, effects = self._effects(op, witness)
+            return GroundAction(name, args, op, pre, dels, adds, effects, op.cost)
+        return None
+
+    def _bound_by_head(self, op: S.Operator) -> bool:
+        """Whether the head binds every variable of the precondition outside
+        its ``forall`` s (which the formula grounder expands itself)."""
+        hit = self.head_bound.get(id(op))
+        if hit is None:
+            head = {v.index for v in variables(op.head.args, [])}
+            hit = self.head_bound[id(op)] = _top_variables(op.pre.expr) <= head
+        return hit
+
+    def _effects(self, op: S.Operator, env: list):
+        masks = [0, 0]
+        effects = []
+        bits = self.model.bits
+        for k, eff in enumerate((op.delete, op.add)):
+            for item in eff.items:
+                if isinstance(item, S.Atom):
+                    bit = bits.get((item.pred, subst(item.args, env)))
+                    if bit is not None:
+                        masks[k] |= 1 << bit
+                    continue
+                if not isinstance(item, S.EffectForAll):
+                    raise NotGroundable(f"{op.name}: a protection in an HDDL action")
+                for nb in self.formulas.satisfiers(item.cond, env):
+                    cond = compile_residual(self.formulas.ground(item.cond, nb))
+                    if cond is None:
+                        continue
+                    mask = 0
+                    for a in item.atoms:
+                        bit = bits.get((a.pred, subst(a.args, nb)))
+                        if bit is not None:
+                            mask |= 1 << bit
+                    if cond == (0, 0, ()):
+                        masks[k] |= mask
+                    elif mask:
+                        effects.append((cond, mask, 0) if k == 0 else (cond, 0, mask))
+        return masks[0], masks[1], tuple(effects)
+
+    def _methods(self, t: int, m: S.Method, unify, args: tuple):
+        model = self.model
+        env = [None] * m.nvars
+        if not unify(args, env):
+            return
+        branch = m.branches[0]
+        items = branch.tasks.items
+        if any(isinstance(x, S.TaskList) for x in items):
+            raise NotGroundable(f"method {m.name}: a nested task list")
+        groups: dict = {}
+        for nb in self.formulas.satisfiers(branch.pre.expr, env):
+            residual = self.formulas.ground(branch.pre.expr, nb)
+            if residual is False:
+                continue
+            body = tuple((x.name, subst(x.args, nb)) for x in items)
+            if body not in groups:
+                if any(None in args for _, args in body):
+                    raise NotGroundable(f"method {m.name}: a subtask argument no condition "
+                                        "binds")
+                # an action that can never apply kills the method at once, before
+                # its compound subtasks are grounded (PANDA prunes them bottom-up)
+                if not all(self._executable(name, args) for name, args in body
+                           if name.startswith("!")):
+                    groups[body] = None
+                    continue
+                groups[body] = []
+            if groups[body] is not None:
+                groups[body].append(residual)
+        for body, residuals in groups.items():
+            if residuals is None:
+                continue
+            pre = compile_residual(disj(residuals))
+            if pre is not None:
+                ids = tuple(model.task_id(name, args) for name, args in body)
+                yield GroundMethod(t, m, pre, ids, branch.tasks.order_flag)
+
+    def _executable(self, name: str, args: tuple) -> bool:
+        """Whether the ground action can apply in some reachable state (kept
+        for the action's task, which the top-down pass reads later)."""
+        key = (name, args)
+        if key not in self.executable:
+            self.executable[key] = self._action(name, args)
+        return self.executable[key] is not None
+
+    # ------------------------------------------------------------ 3. bottom up
+    def _prune(self) -> None:
+        model = self.model
+        alive = set(model.actions)
+        changed = True
+        while changed:
+            changed = False
+            for t, ms in model.methods_of.items():
+                if t not in alive and any(all(s in alive for s in gm.body) for gm in ms):
+                    alive.add(t)
+                    changed = True
+        for t, ms in model.methods_of.items():
+            ms[:] = [gm for gm in ms if all(s in alive for s in gm.body)] if t in alive else []
+        self.alive = alive
+
+
+def _top_variables(e) -> set:
+    """The variable slots of a formula outside its ``forall`` s."""
+    out: set = set()
+    stack = [e]
+    while stack:
+        x = stack.pop()
+        if isinstance(x, S.Atom):
+            out.update(v.index for v in variables(x.args, []))
+        elif isinstance(x, (S.And, S.Or)):
+            stack.extend(x.items)
+        elif isinstance(x, S.Not):
+            stack.append(x.expr)
+        elif isinstance(x, S.Equal):
+            out.update(v.index for v in variables((x.left, x.right), []))
+        elif not isinstance(x, S.ForAll):
+            raise NotGroundable(f"{type(x).__name__} in a precondition")
+    return out
+
+
+def _predicates(exprs: list) -> set:
+    """The predicates the delete relaxations of ``exprs`` read."""
+    out, stack = set(), [relax(e) for e in exprs]
+    while stack:
+        e = stack.pop()
+        if isinstance(e, S.Atom):
+            out.add(e.pred)
+        elif isinstance(e, (S.And, S.Or)):
+            stack.extend(e.items)
+    return out

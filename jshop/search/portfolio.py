@@ -1,0 +1,121 @@
+"""``--search auto``: depth-first and heuristic search as a portfolio.
+
+The searches of :mod:`htn.jshop.search.searches` run in turns in one
+process, each for a slice of CPU time (depth-first search half a second
+at first, doubling to at most four, the greedy heuristic search three times
+as long, and once that has grounded the problem a weighted A* on the same
+model as long as depth-first search), so that together they stay within
+the time limit: JSHOP2's
+depth-first search is fast where the written method order leads to a plan
+(most IPC total-order domains: within a second on the shared sample, so it
+goes first), the greedy best-first search with the relaxed composition
+heuristic where depth-first search is stuck, and it needs the time to
+ground the problem first. The first
+plan found wins and ``stats.found_by`` says by which. Depth-first search
+with its loop check may give up; the heuristic search, with duplicate
+detection on a finite grounded space, says "no plan" only when there is
+none, so that answer is taken from it (or from both). When the problem
+cannot be grounded (:class:`~htn.jshop.search.ground_formulas.NotGroundable`)
+or the heuristic search stops at a bound, depth-first search goes on alone.
+"""
+from __future__ import annotations
+
+import time
+from typing import Iterator, Optional
+
+from htn.jshop.language import syntax as S
+
+from .best_first import WASTAR_WEIGHT, BestFirst
+from .ground_formulas import NotGroundable
+from .planner import Planner
+from .stats import Stats
+
+FIRST_SLICE, LAST_SLICE = 0.5, 4.0
+# CPU slices per depth-first slice: gbfs, and weighted A* once gbfs has
+# grounded the problem (the two share the grounded model and the heuristic's
+# costs); weighted A* solves what greedy search gets lost in (ipc-po
+# Transport pfile04: 27k expansions, where GBFS made 477k without a plan)
+SHARES = {"dfs": 1, "gbfs": 3, "wastar": 1}
+
+
+class Portfolio:
+    """Interleaves a :class:`Planner`, a :class:`BestFirst` (GBFS) and,
+    once GBFS has grounded the problem, a weighted A* on the same model."""
+
+    def __init__(self, domain: S.Domain, instance: S.ProblemInstance, functions=None,
+                 max_memory: Optional[int] = None, tree_paths: bool = True, **options):
+        self.dfs = Planner(domain, instance, functions, max_memory=max_memory,
+                           tree_paths=tree_paths, **options)
+        self.gbfs = BestFirst(domain, instance, max_memory=max_memory, tree_paths=tree_paths,
+                              label="gbfs")
+        self.wastar = BestFirst(domain, instance, weight=WASTAR_WEIGHT, max_memory=max_memory,
+                                tree_paths=tree_paths, label="wastar")
+        self.stats = Stats()
+        self.labels = {id(self.dfs): "dfs", id(self.gbfs): "gbfs", id(self.wastar): "wastar"}
+        self.ended: list = []       # the searches that ended, in order
+
+    def plans(self, timeout: Optional[float] = None) -> Iterator:
+        searches = [self.dfs, self.gbfs]
+        streams = {id(s): None for s in searches}
+        live = list(searches)
+        slice_s = FIRST_SLICE
+        turn = 0
+        self.stats.started = time.perf_counter()
+        try:
+            while live:
+                if self.wastar not in live and self.wastar not in self.ended \
+                        and self.gbfs.h is not None:       # grounded: share the model
+                    self.wastar.model, self.wastar.h = self.gbfs.model, self.gbfs.h
+                    live.append(self.wastar)
+                    searches.append(self.wastar)
+                    streams[id(self.wastar)] = None
+                search = live[turn % len(live)]
+                search.slice_s = slice_s * SHARES[self.labels[id(search)]]
+                stream = streams[id(search)]
+                if stream is None:
+                    stream = streams[id(search)] = search.plans(timeout)
+                try:
+                    plan = next(stream)
+                except StopIteration:
+                    live.remove(search)
+                    self.ended.append(search)
+                    if search is not self.dfs and not search.stats.timed_out \
+                            and search.stats.bound is None:
+                        return          # searched the whole space: no other plan
+                    if search.stats.timed_out:
+                        return
+                    continue
+                except NotGroundable:
+                    live.remove(search)      # depth-first search goes on alone
+                    self.ended.append(search)
+                    continue
+                finally:
+                    self._sum()
+                if plan is None:        # its slice is over: the other one's turn
+                    turn += 1
+                    if turn % len(live) == 0:
+                        slice_s = min(2 * slice_s, LAST_SLICE)
+                    continue
+                self.stats.found_by = self.labels[id(search)]
+                self.stats.plans_found += 1
+                plan.index = self.stats.plans_found - 1
+                yield plan
+        finally:
+            for stream in streams.values():
+                if stream is not None:
+                    stream.close()
+            self._sum()
+
+    def _sum(self) -> None:
+        """The portfolio's statistics: both searches' work added up."""
+        total = self.stats
+        parts = [self.dfs.stats, self.gbfs.stats, self.wastar.stats]
+        for key in ("expansions", "operator_applications", "backtracks"):
+            setattr(total, key, sum(getattr(p, key) for p in parts))
+        total.elapsed = time.perf_counter() - total.started
+        total.timed_out = any(p.timed_out for p in parts)
+        total.interrupted = any(p.interrupted for p in parts)
+        # a bound ends the portfolio only when it stopped the last search left
+        started = 3 if self.gbfs.h is not None else 2
+        last = self.ended[-1].stats.bound if len(self.ended) >= started else None
+        total.bound = last
