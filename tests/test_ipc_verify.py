@@ -272,7 +272,7 @@ def test_an_ipc_plan_needs_an_hddl_domain(tmp_path):
     domain = tmp_path / "d.jshop"
     domain.write_text("(defdomain w ((:operator (!go ?t ?a ?b) () () ())))\n")
     problem = tmp_path / "p.jshop"
-    problem.write_text("(defproblem wp w () ((go box home shop)))\n")
+    problem.write_text("(defproblem wp w () ((!go box home shop)))\n")
     result = run_htn("validate", domain, problem, f)
     assert result.returncode == 2 and "Traceback" not in result.stderr
     assert "an IPC plan is checked against an HDDL domain and problem" in result.stderr
