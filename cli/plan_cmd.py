@@ -17,7 +17,8 @@ from htn.api.files import AtomicFile
 from htn.jshop.search.limits import DEFAULT_MAX_DEPTH
 
 from .output import console, stdout_is_terminal, warn
-from .signals import DeadlineExceeded, deadline, held, interrupt_exit, raise_again
+from .options import TIMEOUT_HELP, Timeout
+from .signals import STATE, DeadlineExceeded, deadline, held, interrupt_exit, raise_again
 
 FORMATS = ["text", "jshop", "json", "ipc"]
 
@@ -39,9 +40,8 @@ FORMATS = ["text", "jshop", "json", "ipc"]
               help="Also write the plans (jshop format, with a header naming the domain and "
                    "problem files, and each plan's task tree as comment lines) to this file, "
                    "for 'htn run'.")
-@click.option("--timeout", type=click.FloatRange(min=0, min_open=True), metavar="SECONDS",
-              help="Stop searching after this many seconds (wall clock, user functions "
-                   "included) and keep what was found.")
+@click.option("--timeout", type=Timeout(), metavar="SECONDS",
+              help=TIMEOUT_HELP + " The search stops then and keeps what was found.")
 @click.option("--functions", type=click.Path(dir_okay=False), metavar="FILE.py",
               help="Python file whose public functions can be called with (call name ...) "
                    "and used as :sort-by comparators.")
@@ -79,7 +79,7 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
     from htn.api.plan import plan as find_plans
     from htn.jshop.plans.planfile import header, plan_text
 
-    started = time.perf_counter()
+    started = STATE.started or time.perf_counter()     # --timeout counts from the start
     fmt = fmt or ("text" if stdout_is_terminal() else "jshop")
     # -o and --dot are checked before any work, and replaced only by a
     # complete new result: at least one whole plan (also after a timeout,
@@ -87,16 +87,21 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
     sinks: list = []
     written = _Written()
     try:
-        out = AtomicFile(output, "-o") if output else None
+        inputs = (domain, problem, functions)
+        out = AtomicFile(output, "-o", inputs, [(dot, "--dot")] if dot else ()) \
+            if output else None
         sinks.append(out)
-        dot_out = _DotFile(AtomicFile(dot, "--dot")) if dot else None
+        dot_out = _DotFile(AtomicFile(dot, "--dot", inputs, [(output, "-o")] if output else ())) \
+            if dot else None
         sinks.append(dot_out)
-        plans = find_plans(domain, problem, plans=None if all_plans else n_plans,
-                           timeout=timeout, functions=functions, jshop2_compat=jshop2_compat,
-                           max_depth=max_depth, max_memory=max_memory,
-                           explain=explain or explain_all, explain_all=explain_all,
-                           trees=show_tree or bool(dot) or bool(output) or fmt in ("json", "ipc"),
-                           tree_paths=show_tree or bool(dot) or fmt == "json")
+        with deadline(timeout, started):        # loading counts too
+            plans = find_plans(domain, problem, plans=None if all_plans else n_plans,
+                               timeout=timeout, functions=functions,
+                               jshop2_compat=jshop2_compat, max_depth=max_depth,
+                               max_memory=max_memory, explain=explain or explain_all,
+                               explain_all=explain_all, trees=show_tree or bool(dot) or
+                               bool(output) or fmt in ("json", "ipc"),
+                               tree_paths=show_tree or bool(dot) or fmt == "json")
         if not quiet:
             for w in plans.warnings:
                 warn(w)

@@ -98,6 +98,9 @@ def at_call(exc: HtnError, call: CallTerm) -> HtnError:
     (an error in a standard function given a symbol, or in a user function)."""
     if exc.file is None and call.pos is not None:
         exc.file, exc.line, exc.col = call.pos.file, call.pos.line, call.pos.col
+    elif getattr(exc, "in_user_code", False) and call.pos is not None:
+        exc.in_user_code = False    # placed at the user's line; say where it was called
+        exc.message += f" (called at {call.pos.file}:{call.pos.line}:{call.pos.col})"
     return exc
 
 
