@@ -71,7 +71,8 @@ def evaluate(problem, *, domain=None, runs: int = 200, seed: int = 0,
              robot: str = "projection", faults: str = "", workers: Optional[int] = None,
              scheduler: Optional[str] = None, records=None, plot=None,
              on_start: Optional[Callable[[int, list], None]] = None,
-             on_batch: Optional[Callable[[list, float], None]] = None) -> Evaluation:
+             on_batch: Optional[Callable[[list, float], None]] = None,
+             say: Optional[Callable[[str], None]] = None) -> Evaluation:
     """Plan ``problem`` (a path), transform the plan with every registered
     rule, execute both ``runs`` times and compare navigation, manipulation,
     actions and failures (Welch's t-test; pooled failure proportions with a
@@ -86,7 +87,9 @@ def evaluate(problem, *, domain=None, runs: int = 200, seed: int = 0,
     then put in run order); ``plot``: a folder for the figures.
     ``on_start(workers, notes)`` is called once the runner is ready, before
     planning; ``on_batch(records, runs)`` with each batch's new records and
-    the number of runs of every plan they complete. A cluster that cannot
+    the number of runs of every plan they complete; ``say`` gets the line
+    that says why a study too small for local workers stays in this process
+    (:func:`htn.evaluation.placement.place`). A cluster that cannot
     complete the runs raises :class:`htn.evaluation.cluster.ClusterError`.
     """
     problem = os.fspath(problem)
@@ -119,7 +122,7 @@ def evaluate(problem, *, domain=None, runs: int = 200, seed: int = 0,
                 if on_batch:
                     on_batch(new, len(new) / len(study.plans))
 
-            comp = run_study(study, problem, applied, runs, seed, runner, batch)
+            comp = run_study(study, problem, applied, runs, seed, runner, batch, say)
     finally:
         if stream:
             stream.close()

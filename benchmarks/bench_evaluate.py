@@ -1,17 +1,29 @@
-"""Benchmark: the runs of ``htn evaluate`` on 1 and 2 workers.
+"""Benchmark: ``htn evaluate`` on 1 and 2 workers, and what starting workers costs.
 
-Times the runs phase of an evaluation (from sending the first batch to the
-last result: what the number of workers changes) for projected runs on this
-process (1 worker) and on a local Dask cluster of 2 worker processes that is
-already up, as a cluster reached with ``--scheduler`` would be. The first
-evaluation on fresh workers (they unpack and prepare the study) is shown
-apart from the median of the repeats. Then physics runs per minute on the
-PyBullet robot, on 1 and 2 workers. Target: 2 workers at most 0.75x the
-time of 1 on 2 cores. A control (a CPU-bound loop split over two processes)
-shows what the two cores give while the benchmark runs. Run::
+Three measurements, each of the whole evaluation as ``htn evaluate`` does
+it once its inputs are read (the plans made and transformed, the runs on
+1 or 2 workers, the workers started and closed when they are: everything
+but the interpreter's own start-up):
 
-    python benchmarks/bench_evaluate.py                    # 200 projected runs, 4 physics runs
-    python benchmarks/bench_evaluate.py --repeats 15 --physics-runs 8
+* ``--startup``: starting and closing a local Dask cluster of N workers
+  in a fresh process, as ``htn evaluate`` does (what
+  :func:`htn.evaluation.cluster.start_seconds` estimates), median of the
+  repeats;
+* projected runs (default 200 of transport_four) with ``--workers 1`` and
+  ``--workers 2``, in turn, pair by pair, so that a machine whose speed
+  drifts moves both alike: a study this small stays in one process on two
+  workers (the line that says so is shown), so 2 workers should take as
+  long as 1, never longer;
+* physics runs (``--robot pybullet``, default 20 of each plan) on 1 and 2
+  workers: runs per minute of each, and their ratio (target: at least 1.6
+  on 2 cores).
+
+A control (a CPU-bound loop split over two processes) shows what the two
+cores give while the benchmark runs. Run::
+
+    python benchmarks/bench_evaluate.py                     # all three
+    python benchmarks/bench_evaluate.py --physics-runs 0    # no physics
+    python benchmarks/bench_evaluate.py --startup --repeats 5 --physics-runs 0 --runs 0
 
 Each "run" is one run of both plans (the original and the transformed one).
 """
@@ -24,34 +36,90 @@ from pathlib import Path
 import click
 
 ROOT = Path(__file__).resolve().parent.parent
+DOMAIN = str(ROOT / "domains" / "kitchen.jshop")
 
 
-def _runs_phase(study, problem, applied, runs, runner) -> float:
-    from htn.evaluation.study import run_study
-    return run_study(study, problem, applied, runs, 0, runner).seconds
+def _evaluation(problem: str, runs: int, workers: int, robot: str = "projection"):
+    """The whole evaluation of ``htn evaluate --workers N``; (seconds, comparison, notes)."""
+    from htn.evaluation.study import compare
+    notes: list[str] = []
+    t0 = time.perf_counter()
+    comp = compare(DOMAIN, problem, runs, seed=0, workers=workers, robot=robot,
+                   say=notes.append)
+    return time.perf_counter() - t0, comp, notes
 
 
-def _projected(problem: str, runs: int, repeats: int) -> list:
-    """Runs-phase times of (1 worker, 2 workers), measured in turn, pair by
-    pair, so that a machine whose speed drifts moves both alike."""
-    from htn.evaluation.cluster import InProcess, open_runner
-    from htn.evaluation.study import prepare_study
-    study, applied = prepare_study(str(ROOT / "domains" / "kitchen.jshop"), problem)
-    one = InProcess()
-    started = time.perf_counter()
-    with open_runner(2) as two:
-        up = time.perf_counter() - started
-        first = [_runs_phase(study, problem, applied, runs, r) for r in (one, two)]
-        pairs = [tuple(_runs_phase(study, problem, applied, runs, r) for r in (one, two))
-                 for _ in range(repeats)]
-    click.echo(f"  local cluster of 2 workers started in {up:.2f} s; first evaluation "
-               f"(fresh workers prepare the study): 1 worker {first[0]:.3f} s, "
-               f"2 workers {first[1]:.3f} s")
-    for i, label in enumerate(("1 worker (this process)", "2 workers (Dask)")):
-        times = [p[i] for p in pairs]
+# one start in a fresh process, as each htn evaluate is: the first start of a
+# process also starts the server the workers are forked from
+_START = """
+import sys, time
+from htn.evaluation.cluster import start_local_cluster
+n = int(sys.argv[1])
+t0 = time.perf_counter()
+cluster, client = start_local_cluster(n)
+client.wait_for_workers(n)
+t1 = time.perf_counter()
+client.close()
+cluster.close()
+print(t1 - t0, time.perf_counter() - t1)
+"""
+
+
+def _startup(repeats: int, sizes=(1, 2, 4)) -> None:
+    import subprocess
+    import sys
+    from htn.evaluation.cluster import start_seconds
+    for n in sizes:
+        starts, closes = [], []
+        for _ in range(repeats):
+            out = subprocess.run([sys.executable, "-c", _START, str(n)], capture_output=True,
+                                 text=True, check=True).stdout.split()
+            starts.append(float(out[0]))
+            closes.append(float(out[1]))
+        click.echo(f"  {n} worker(s): start median {statistics.median(starts):.2f} s "
+                   f"(min {min(starts):.2f}, max {max(starts):.2f}), close median "
+                   f"{statistics.median(closes):.2f} s; together "
+                   f"{statistics.median(starts) + statistics.median(closes):.2f} s "
+                   f"(htn's estimate: {start_seconds(n):.2f} s)")
+
+
+def _projected(problem: str, runs: int, repeats: int) -> None:
+    pairs, shown = [], set()
+    for i in range(repeats + 1):
+        pair = []
+        for workers in (1, 2):
+            seconds, comp, notes = _evaluation(problem, runs, workers)
+            pair.append((seconds, comp))
+            for note in notes:
+                if note not in shown:
+                    shown.add(note)
+                    click.echo(f"  (2 workers said) {note}")
+        if i:                   # the first pair warms the caches: not counted
+            pairs.append(pair)
+    assert all(a[1].metrics() == b[1].metrics() for a, b in pairs), "metrics differ"
+    for k, label in enumerate(("--workers 1", "--workers 2")):
+        times = [p[k][0] for p in pairs]
         click.echo(f"  {label}: median {statistics.median(times):.3f} s "
-                   f"(min {min(times):.3f}, max {max(times):.3f}, {repeats} repeats)")
-    return pairs
+                   f"(min {min(times):.3f}, max {max(times):.3f}, {repeats} repeats; "
+                   f"ran on {pairs[0][k][1].workers} process(es))")
+    ratios = sorted(b[0] / a[0] for a, b in pairs)
+    click.echo(f"  2 workers / 1 worker, pair by pair: median {statistics.median(ratios):.2f}x "
+               f"(min {ratios[0]:.2f}x, max {ratios[-1]:.2f}x; target <= 1.0x)")
+
+
+def _physics(problem: str, runs: int) -> None:
+    rates, results = {}, {}
+    for workers in (1, 2):
+        seconds, comp, notes = _evaluation(problem, runs, workers, robot="pybullet")
+        for note in notes:
+            click.echo(f"  ({workers} workers said) {note}")
+        executions = runs * 2
+        rates[workers] = executions / seconds * 60
+        results[workers] = comp.metrics()
+        click.echo(f"  --workers {workers}: {executions} physics runs in {seconds:.1f} s = "
+                   f"{rates[workers]:.1f} runs per minute (ran on {comp.workers} process(es))")
+    click.echo(f"  2 workers / 1 worker: {rates[2] / rates[1]:.2f}x the runs per minute "
+               f"(target >= 1.6x); the same metrics: {results[1] == results[2]}")
 
 
 def _spin(n: int) -> int:
@@ -79,36 +147,27 @@ def _control(repeats: int, n: int = 4_000_000) -> None:
                f"{statistics.median(ratios):.2f}x (min {min(ratios):.2f}x, max {max(ratios):.2f}x)")
 
 
-def _physics(problem: str, runs: int) -> None:
-    from htn.evaluation.cluster import open_runner
-    from htn.evaluation.study import prepare_study
-    study, applied = prepare_study(str(ROOT / "domains" / "kitchen.jshop"), problem,
-                                   robot="pybullet")
-    for workers in (1, 2):
-        with open_runner(workers) as runner:
-            seconds = _runs_phase(study, problem, applied, runs, runner)
-        executions = runs * len(study.plans)
-        click.echo(f"  {workers} worker(s): {executions} physics runs in {seconds:.1f} s = "
-                   f"{executions / seconds * 60:.1f} runs per minute")
-
-
 @click.command()
 @click.option("--problem", default="transport_four", show_default=True)
-@click.option("--runs", default=200, show_default=True, help="Projected runs of each plan.")
+@click.option("--runs", default=200, show_default=True,
+              help="Projected runs of each plan (0: skip).")
 @click.option("--repeats", default=9, show_default=True)
-@click.option("--physics-runs", default=4, show_default=True,
+@click.option("--physics-runs", default=20, show_default=True,
               help="PyBullet runs of each plan (0: skip).")
-def main(problem, runs, repeats, physics_runs):
-    """Time projected runs on 1 and 2 workers; count physics runs per minute."""
+@click.option("--startup", is_flag=True, help="Also time starting local clusters of 1, 2, 4.")
+def main(problem, runs, repeats, physics_runs, startup):
+    """Time evaluations on 1 and 2 workers; count physics runs per minute."""
     path = str(ROOT / "problems" / f"{problem}.jshop")
-    click.echo(f"{runs} projected runs of each plan of {problem}:")
-    pairs = _projected(path, runs, repeats)
-    ratios = sorted(two / one for one, two in pairs)
-    click.echo(f"  2 workers / 1 worker, pair by pair: median {statistics.median(ratios):.2f}x "
-               f"(min {ratios[0]:.2f}x, max {ratios[-1]:.2f}x; target <= 0.75x)")
-    _control(repeats)
+    if startup:
+        click.echo("starting and closing a local Dask cluster:")
+        _startup(repeats)
+    if runs:
+        click.echo(f"{runs} projected runs of each plan of {problem}, the whole evaluation:")
+        _projected(path, runs, repeats)
+        _control(repeats)
     if physics_runs:
-        click.echo(f"{physics_runs} PyBullet runs of each plan of {problem}:")
+        click.echo(f"{physics_runs} PyBullet runs of each plan of {problem}, the whole "
+                   "evaluation:")
         _physics(path, physics_runs)
 
 

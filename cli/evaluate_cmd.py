@@ -76,7 +76,7 @@ def evaluate(problem, domain, runs, seed, robot, faults, workers, scheduler, rec
         result = run_evaluation(problem, domain=domain, runs=runs, seed=seed, robot=robot,
                                 faults=faults, workers=workers, scheduler=scheduler,
                                 records=records, plot=plot_dir, on_start=on_start,
-                                on_batch=on_batch)
+                                on_batch=on_batch, say=warn)
     except ClusterError as exc:
         raise click.ClickException(str(exc)) from None
     finally:

@@ -10,23 +10,16 @@ plan ... | head -1``) ends the command quietly with 0.
 from __future__ import annotations
 
 import errno
+import importlib
 import sys
 
 import click
 
 from htn.jshop.language.errors import HtnError
 
-from .evaluate_cmd import evaluate
-from .examples_cmd import examples
 from .output import fail
-from .plan_cmd import plan
-from .run_cmd import run
 from .signals import DeadlineExceeded, interrupt_exit, silence_stdout
 from .signals import command as signal_handling
-from .stats_cmd import stats
-from .transform_cmd import transform
-from .validate_cmd import validate
-from .view_cmd import view
 
 # errors writing to a stream (standard output): a full disk, a device that
 # fails, a read-only file system, a descriptor that user code closed
@@ -37,7 +30,21 @@ CONTEXT = dict(help_option_names=["-h", "--help"], max_content_width=100)
 
 class HtnGroup(click.Group):
     """The command group; it ends a command on a closed pipe or an interrupt
-    before click does (click would exit 1 on a broken pipe)."""
+    before click does (click would exit 1 on a broken pipe). Its commands
+    are imported when they are looked up (click's lazily loaded
+    subcommands): ``htn plan`` does not import ``htn run``'s executor or
+    ``htn evaluate``'s statistics."""
+
+    def list_commands(self, ctx):
+        return sorted({*super().list_commands(ctx), *_COMMANDS})
+
+    def get_command(self, ctx, name):
+        # an unknown name loads them all: click suggests the close ones it has
+        for wanted in [name] if name in _COMMANDS else list(_COMMANDS):
+            if wanted not in self.commands:
+                module = importlib.import_module(f"htn.cli.{_COMMANDS[wanted]}")
+                self.add_command(getattr(module, wanted), wanted)
+        return super().get_command(ctx, name)
 
     def invoke(self, ctx):
         try:
@@ -68,8 +75,10 @@ def cli():
     """
 
 
-for command in (plan, run, validate, stats, transform, evaluate, examples, view):
-    cli.add_command(command)
+# command name -> its module in htn.cli (the command is the module's attribute of that name)
+_COMMANDS = {"plan": "plan_cmd", "run": "run_cmd", "validate": "validate_cmd",
+             "stats": "stats_cmd", "transform": "transform_cmd", "evaluate": "evaluate_cmd",
+             "examples": "examples_cmd", "view": "view_cmd"}
 
 
 def main(argv=None) -> None:

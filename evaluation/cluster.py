@@ -26,6 +26,7 @@ class ClusterError(RuntimeError):
 class InProcess:
     """Runs the batches one after another in this process."""
     workers = 1
+    deferred = False
     notes: list = []
 
     def results(self, function: Callable, batches: Iterable[tuple]) -> Iterator:
@@ -35,6 +36,8 @@ class InProcess:
 
 class DaskRunner:
     """Runs the batches as tasks of a Dask client's cluster."""
+
+    deferred = False
 
     def __init__(self, client):
         self.client = client
@@ -132,57 +135,149 @@ def _quiet_dask() -> None:
         logging.getLogger(name).setLevel(logging.ERROR)
 
 
+class LocalWorkers:
+    """A local Dask cluster of ``workers`` processes, started only when asked
+    (:meth:`start`): :mod:`htn.evaluation.placement` first measures a batch
+    in this process and starts the cluster only for a study whose runs take
+    longer than starting it. Until then, and if it is never started, the
+    runs are this process's (:attr:`workers` is then 1)."""
+
+    deferred = True
+
+    def __init__(self, workers: int, preload: tuple):
+        self.requested = workers
+        self.preload = preload
+        self.notes: list[str] = []
+        self.started_in: Optional[float] = None     # seconds the start took
+        self._cluster = self._client = self._runner = None
+
+    @property
+    def workers(self) -> int:
+        return self.requested if self._runner is not None else 1
+
+    def start(self) -> "DaskRunner":
+        """Start the workers (once) and return the runner on them."""
+        if self._runner is None:
+            import time
+            t0 = time.perf_counter()
+            self._cluster, self._client = start_local_cluster(self.requested, self.preload)
+            self._runner = DaskRunner(self._client)
+            self.started_in = time.perf_counter() - t0
+        return self._runner
+
+    def results(self, function: Callable, batches: Iterable[tuple]) -> Iterator:
+        return self.start().results(function, batches)
+
+    def close(self) -> None:
+        if self._client is not None:
+            self._client.close()
+            self._cluster.close()
+
+
+# What starting a local cluster in a fresh process costs on an idle machine, in
+# seconds: about START_BASE + START_PER_WORKER x workers. Measured on 2 cores
+# (benchmarks/bench_evaluate.py --startup, and the CPU time of the processes
+# involved): this process imports Dask (about 1 s of CPU), the server the
+# workers are forked from imports Dask and htn (about 1 s), each worker is
+# forked and registers with the scheduler (a few tenths), and closing them
+# takes 0.1-0.4 s. On a busy machine all of it takes longer, as the runs do.
+START_BASE = 2.0
+START_PER_WORKER = 0.25
+
+
+def start_seconds(workers: int) -> float:
+    """About how long starting (and closing) a local cluster of ``workers`` takes."""
+    return START_BASE + START_PER_WORKER * workers
+
+
+def start_local_cluster(workers: int, preload: tuple = ("htn.evaluation.runs",)):
+    """A local Dask cluster of ``workers`` single-threaded processes and its
+    client. The processes are forked from a server process that has imported
+    Dask and htn once (multiprocessing's forkserver, where the platform has
+    it) instead of each starting an interpreter and importing them again:
+    that is most of the cost of starting them."""
+    _quiet_dask()
+    import multiprocessing
+
+    import dask
+    from distributed import Client
+    from distributed import LocalCluster as DaskLocalCluster
+    settings = {
+        # the workers' statistical profiler feeds the dashboard, which is not
+        # started; sampling the runs' Python stacks every 10 ms slows them
+        "distributed.worker.profile.enabled": False}
+    if "forkserver" in multiprocessing.get_all_start_methods():
+        settings["distributed.worker.multiprocessing-method"] = "forkserver"
+    with dask.config.set(settings):
+        if "distributed.worker.multiprocessing-method" in settings:
+            _preload_forkserver(preload)
+        cluster = DaskLocalCluster(
+            n_workers=workers, threads_per_worker=1, processes=True,
+            dashboard_address=None, silence_logs=logging.ERROR, preload=list(preload),
+            # no dashboard; its HTTP server on any free port, not on 8787, so that
+            # two evaluations at once do not warn about the port
+            scheduler_kwargs={"dashboard": False, "dashboard_address": ":0"})
+    return cluster, Client(cluster, set_as_default=False)
+
+
+def _preload_forkserver(preload: tuple) -> None:
+    # Dask sets the server's preload (itself and the packages it uses) the
+    # first time it asks for the context; htn's modules join that list
+    import importlib.util
+
+    from distributed.utils import get_mp_context
+    from distributed.versions import optional_packages, required_packages
+    context = get_mp_context()
+    modules = ["distributed", *(p for p in (*required_packages, *optional_packages)
+                                if importlib.util.find_spec(p) is not None), *preload]
+    context.set_forkserver_preload(list(dict.fromkeys(modules)))
+
+
 @contextmanager
 def open_runner(workers: int = 1, scheduler: Optional[str] = None,
                 preload: tuple = ("htn.evaluation.runs",)):
     """A runner for ``workers`` processes (1: this process; more: a local
-    Dask cluster), or for the Dask cluster whose scheduler is at
-    ``scheduler``. The scheduler is reached, and has a worker, before this
-    returns; otherwise a one-line :class:`HtnError`."""
+    Dask cluster, started when a study is worth it, see :class:`LocalWorkers`),
+    or for the Dask cluster whose scheduler is at ``scheduler``. The
+    scheduler is reached, and has a worker, before this returns; otherwise a
+    one-line :class:`HtnError`."""
     if scheduler is None and workers <= 1:
         yield InProcess()
         return
+    if scheduler is None:
+        local = LocalWorkers(workers, preload)
+        try:
+            yield local
+        finally:
+            local.close()
+        return
     _quiet_dask()
     import dask
-    from distributed import Client, LocalCluster
-    if scheduler is not None:
-        check_scheduler_address(scheduler)
-        timeout = dask.config.get("distributed.comm.timeouts.connect")
-        from distributed.versions import VersionMismatchWarning
-        try:
-            with warnings.catch_warnings(record=True) as caught:
-                warnings.simplefilter("always", VersionMismatchWarning)
-                client = Client(scheduler, timeout=timeout, set_as_default=False)
-        except OSError as exc:
-            raise HtnError(f"--scheduler {scheduler}: cannot reach the Dask scheduler "
-                           f"({exc})") from None
-        cluster = None
-        try:
-            client.wait_for_workers(1, timeout=timeout)
-            lacking = _lacking_htn(client)
-        except TimeoutError:
-            client.close()
-            raise HtnError(f"--scheduler {scheduler}: the scheduler has no workers "
-                           f"(waited {timeout})") from None
-        if lacking:
-            client.close()
-            raise HtnError(f"--scheduler {scheduler}: htn is not installed on "
-                           f"{', '.join(lacking)}; {NEEDS}")
-        notes = _version_notes(caught)
-    else:
-        # the workers' statistical profiler feeds the dashboard, which is not
-        # started; sampling the runs' Python stacks every 10 ms slows them
-        with dask.config.set({"distributed.worker.profile.enabled": False}):
-            cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                                   dashboard_address=None, silence_logs=logging.ERROR,
-                                   preload=list(preload))
-        client = Client(cluster, set_as_default=False)
-        notes = []
+    from distributed import Client
+    check_scheduler_address(scheduler)
+    timeout = dask.config.get("distributed.comm.timeouts.connect")
+    from distributed.versions import VersionMismatchWarning
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", VersionMismatchWarning)
+            client = Client(scheduler, timeout=timeout, set_as_default=False)
+    except OSError as exc:
+        raise HtnError(f"--scheduler {scheduler}: cannot reach the Dask scheduler "
+                       f"({exc})") from None
+    try:
+        client.wait_for_workers(1, timeout=timeout)
+        lacking = _lacking_htn(client)
+    except TimeoutError:
+        client.close()
+        raise HtnError(f"--scheduler {scheduler}: the scheduler has no workers "
+                       f"(waited {timeout})") from None
+    if lacking:
+        client.close()
+        raise HtnError(f"--scheduler {scheduler}: htn is not installed on "
+                       f"{', '.join(lacking)}; {NEEDS}")
     try:
         runner = DaskRunner(client)
-        runner.notes = notes
+        runner.notes = _version_notes(caught)
         yield runner
     finally:
         client.close()
-        if cluster is not None:
-            cluster.close()

@@ -20,6 +20,7 @@ from typing import Callable, Optional
 from htn.executor.config import load_retries
 
 from .cluster import open_runner
+from .placement import place
 from .runs import MEASURES, Study, run_batch
 from .statistics import Comparison
 
@@ -57,21 +58,34 @@ def batches(runs: int, seed: int, size: int) -> list[list[tuple[int, int]]]:
 
 
 def run_study(study: Study, problem: str, applied: list, runs: int, seed: int, runner,
-              on_batch: Optional[Callable[[list], None]] = None) -> Comparison:
+              on_batch: Optional[Callable[[list], None]] = None,
+              say: Optional[Callable[[str], None]] = None) -> Comparison:
     """Execute ``runs`` runs of every plan of ``study`` on ``runner``;
-    ``on_batch`` gets each batch's new records as they arrive."""
-    workers = runner.workers
+    ``on_batch`` gets each batch's new records as they arrive. On local
+    workers not yet started, the first batch runs here and the rest goes
+    to the workers only if that is faster (:func:`.placement.place`; ``say``
+    gets the line that says it is not)."""
+    planned = runner.requested if runner.deferred else runner.workers
     size = max(1, min(MEASURES[study.robot].batch,
-                      math.ceil(runs / (workers * BATCHES_PER_WORKER))))
+                      math.ceil(runs / (planned * BATCHES_PER_WORKER))))
     key, blob = study.pack()
     tasks = [(key, blob, batch) for batch in batches(runs, seed, size)]
     done: dict = {}
-    start = time.perf_counter()
-    for records in runner.results(run_batch, tasks):
+
+    def take(records: list) -> None:
         fresh = [r for r in records if (r["run"], r["plan"]) not in done]
         done.update(((r["run"], r["plan"]), r) for r in fresh)
         if on_batch and fresh:
             on_batch(fresh)
+
+    start = time.perf_counter()
+    if runner.deferred:
+        runner, tasks = place(runner, tasks, lambda task: len(task[2]),
+                              lambda task: take(run_batch(*task)),
+                              MEASURES[study.robot].description, say)
+    workers = runner.workers
+    for records in runner.results(run_batch, tasks):
+        take(records)
     seconds = time.perf_counter() - start
     comp = Comparison(problem, runs, applied, robot=study.robot, workers=workers,
                       seconds=seconds)
@@ -82,12 +96,13 @@ def run_study(study: Study, problem: str, applied: list, runs: int, seed: int, r
 
 def compare(domain_path: str, problem_path: str, runs: int, seed: int = 0, workers: int = 1,
             on_batch: Optional[Callable[[list], None]] = None, robot: str = "projection",
-            faults: str = "", scheduler: Optional[str] = None) -> Comparison:
+            faults: str = "", scheduler: Optional[str] = None,
+            say: Optional[Callable[[str], None]] = None) -> Comparison:
     """Execute the plan and its transformed version ``runs`` times each on
     ``workers`` processes (or the cluster at ``scheduler``) and compare them."""
     with open_runner(workers, scheduler) as runner:
         study, applied = prepare_study(domain_path, problem_path, robot, faults)
-        return run_study(study, problem_path, applied, runs, seed, runner, on_batch)
+        return run_study(study, problem_path, applied, runs, seed, runner, on_batch, say)
 
 
 def plot(comp: Comparison, folder: str) -> list[str]:

@@ -1,4 +1,5 @@
-"""Shared fixtures: where the JSHOP2 corpus is, and how to run ``htn``."""
+"""Shared fixtures: where the JSHOP2 corpus is, how to run ``htn`` (in this
+process, or as a process of its own), and the markers of slow tests."""
 from __future__ import annotations
 
 import json
@@ -9,6 +10,7 @@ import time
 from pathlib import Path
 
 import pytest
+from inprocess import run_cli
 
 ROOT = Path(__file__).resolve().parent.parent
 SHARED = Path(os.environ.get("HTN_SHARED", ROOT.parent / "shared"))
@@ -20,9 +22,9 @@ def corpus_available() -> bool:
     return (CORPUS / "SUMMARY.md").is_file()
 
 
-needs_corpus = pytest.mark.skipif(
-    not corpus_available(),
-    reason=f"JSHOP2 corpus not found at {CORPUS} (set HTN_SHARED to the shared/ folder)")
+# a test that needs the JSHOP2 corpus (../shared): skipped without it, see
+# pytest_collection_modifyitems
+needs_corpus = pytest.mark.corpus
 
 
 def htn_command(*args) -> list[str]:
@@ -30,8 +32,17 @@ def htn_command(*args) -> list[str]:
 
 
 def run_htn(*args, timeout=600, input=None, env=None):
-    """Run the real command line in a subprocess; returns CompletedProcess.
-    ``env``: the environment (default: this process's)."""
+    """Run the real command line (``htn ARGS``, from the checkout's root) in
+    this process; returns a ``CompletedProcess`` with the exit code, stdout
+    and stderr a subprocess would give (see :mod:`inprocess`). ``env``: the
+    environment (default: this process's)."""
+    return run_cli(*args, cwd=ROOT, env=env, input=input, timeout=timeout)
+
+
+def run_htn_process(*args, timeout=600, input=None, env=None):
+    """Run the real command line as ``python -m htn ARGS``, a process of its
+    own (for tests about processes: signals, pipes, start-up, workers, file
+    descriptors, interpreter settings); returns CompletedProcess."""
     return subprocess.run(htn_command(*args), cwd=ROOT, capture_output=True, text=True,
                           timeout=timeout, input=input, env=env)
 
@@ -76,6 +87,17 @@ def interrupt_run(proc, sig: int, log: Path):
     return out, err, events
 
 GOLDEN = Path(__file__).resolve().parent / "golden"
+
+
+def pytest_collection_modifyitems(config, items):
+    """Tests marked ``corpus`` are skipped when the corpus is not there."""
+    if corpus_available():
+        return
+    skip = pytest.mark.skip(reason=f"JSHOP2 corpus not found at {CORPUS} "
+                                   "(set HTN_SHARED to the shared/ folder)")
+    for item in items:
+        if item.get_closest_marker("corpus"):
+            item.add_marker(skip)
 
 
 def pytest_addoption(parser):

@@ -6,14 +6,16 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import subprocess
+import time
 import sys
 import warnings
 from contextlib import contextmanager
 from pathlib import Path
 
 import pytest
-from conftest import run_htn, start_htn, wait_until
+from conftest import ROOT, run_htn, run_htn_process, start_htn, wait_until
 
 PROBLEM = "problems/transport_four.jshop"
 RUNS, SEED = "600", "5"          # about a second of projected runs on two workers
@@ -78,11 +80,13 @@ def dask_cluster(folder: Path, workers: int = 2):
                     p.wait()
 
 
+@pytest.mark.dask
+@pytest.mark.slow
 def test_a_dask_scheduler_gives_the_numbers_of_one_process(reference, tmp_path):
     records = tmp_path / "runs.jsonl"
     with dask_cluster(tmp_path) as (address, _):
-        r = run_htn("evaluate", PROBLEM, "--runs", RUNS, "--seed", SEED, "--json",
-                    "--records", records, "--scheduler", address)
+        r = run_htn_process("evaluate", PROBLEM, "--runs", RUNS, "--seed", SEED, "--json",
+                            "--records", records, "--scheduler", address)
     assert r.returncode == 0, r.stderr
     doc, (ref, ref_records) = json.loads(r.stdout), reference
     assert doc["metrics"] == ref["metrics"] and doc["applied"] == ref["applied"]
@@ -92,6 +96,8 @@ def test_a_dask_scheduler_gives_the_numbers_of_one_process(reference, tmp_path):
     assert len(ref_records.splitlines()) == 2 * int(RUNS)
 
 
+@pytest.mark.dask
+@pytest.mark.slow
 def test_a_worker_killed_mid_evaluation_is_survived(reference, tmp_path):
     records = tmp_path / "runs.jsonl"
     with dask_cluster(tmp_path) as (address, workers):
@@ -111,14 +117,88 @@ def test_a_worker_killed_mid_evaluation_is_survived(reference, tmp_path):
     assert records.read_text() == ref_records
 
 
-def test_local_workers_and_figures(tmp_path):
+@pytest.mark.dask
+@pytest.mark.slow
+def test_local_workers_give_the_numbers_of_one_process(reference):
+    from htn.evaluation.cluster import open_runner
+    from htn.evaluation.study import prepare_study, run_study
+    study, applied = prepare_study(str(ROOT / "domains" / "kitchen.jshop"), str(ROOT / PROBLEM))
+    with open_runner(2) as runner:
+        assert runner.workers == 1           # nothing started yet
+        runner.start()                       # as for a study worth the workers
+        comp = run_study(study, PROBLEM, applied, int(RUNS), int(SEED), runner)
+    assert comp.workers == 2
+    assert json.loads(json.dumps(comp.metrics())) == reference[0]["metrics"]
+
+
+def _busy(seconds: float) -> None:
+    """Work for ``seconds`` of this process's CPU time (a batch of that cost)."""
+    end = time.process_time() + seconds
+    while time.process_time() < end:
+        pass
+
+
+@pytest.mark.dask
+@pytest.mark.slow
+def test_the_workers_start_for_a_study_that_outlasts_their_start():
+    from htn.evaluation.cluster import DaskRunner, InProcess, LocalWorkers, start_seconds
+    from htn.evaluation.placement import place
+    batch = 0.3                              # CPU seconds a batch of 5 runs takes here
+    ran, said = [], []
+    tasks = [("batch", i) for i in range(round(8 * start_seconds(2) / batch))]
+    workers = LocalWorkers(2, ("htn.evaluation.runs",))
+    try:
+        runner, rest = place(workers, tasks, lambda task: 5,
+                             lambda task: (ran.append(task), _busy(batch)), "busy", said.append)
+        assert isinstance(runner, DaskRunner) and workers.workers == 2
+        assert len(runner.client.scheduler_info()["workers"]) == 2
+    finally:
+        workers.close()
+    assert ran == tasks[:1] and rest == tasks[1:] and said == []
+    # the same study of one batch more than the first stays here
+    runner, rest = place(LocalWorkers(2, ()), tasks[:2], lambda task: 5,
+                         lambda task: _busy(batch), "busy", said.append)
+    assert isinstance(runner, InProcess) and rest == tasks[1:2]
+    assert said and said[0].startswith("--workers 2: 10 busy runs take about 0.")
+    assert said[0].endswith(": running in this process")
+
+
+def test_the_projection_weighs_the_rest_against_the_start():
+    from htn.evaluation.placement import EFFICIENCY, Projection
+    small = Projection(runs=200, left=175, per_run=0.01, workers=2, start=2.0, cores=2)
+    assert small.here == pytest.approx(1.75) and not small.worth_the_workers()
+    assert small.note("projected") == ("--workers 2: 200 projected runs take about 2.0 s here, "
+                                       "less than starting 2 workers (about 2.0 s): running "
+                                       "in this process")
+    big = Projection(runs=2000, left=1975, per_run=0.01, workers=2, start=2.0, cores=2)
+    assert big.on_workers == pytest.approx(2.0 + 19.75 / 2 / EFFICIENCY)
+    assert big.worth_the_workers()
+    # more work than the start, but not enough to win it back
+    near = Projection(runs=5, left=4, per_run=1.0, workers=2, start=2.0, cores=2)
+    assert not near.worth_the_workers()
+    assert near.note("PyBullet") == ("--workers 2: 5 PyBullet runs take about 5.0 s here; about "
+                                     "5.2 s with 2 workers, 2.0 s of it to start them: running "
+                                     "in this process")
+    # a machine of one core, or nothing left to run: never
+    assert not Projection(2000, 1975, 0.01, 2, 2.0, cores=1).worth_the_workers()
+    assert not Projection(runs=1, left=0, per_run=5.0, workers=2, start=0.0).worth_the_workers()
+    # more workers than cores run no faster than one per core
+    assert Projection(2000, 1975, 0.01, 8, 2.0, cores=2).on_workers == big.on_workers
+
+
+@pytest.mark.slow
+def test_a_study_too_small_for_the_workers_runs_here_and_says_so(tmp_path):
+    # 30 projected runs take a fraction of what starting two workers takes
     plots = tmp_path / "plots"
     r = run_htn("evaluate", PROBLEM, "--runs", "30", "--json", "--plot", plots,
                 "--workers", "2")
     one = run_htn("evaluate", PROBLEM, "--runs", "30", "--json")
     assert r.returncode == 0, r.stderr
+    assert re.fullmatch(r"--workers 2: 30 projected runs take about \d+\.\d s here, less than "
+                        r"starting 2 workers \(about \d+\.\d s\): running in this process\n",
+                        r.stderr), r.stderr
     doc = json.loads(r.stdout)
-    assert doc["metrics"] == json.loads(one.stdout)["metrics"] and doc["workers"] == 2
+    assert doc["metrics"] == json.loads(one.stdout)["metrics"] and doc["workers"] == 1
     assert doc["applied"] == ["both-hands", "both-hands"] and doc["runs"] == 30
     for name in ("navigation", "manipulation", "actions", "failures"):
         m = doc["metrics"][name]
@@ -143,6 +223,8 @@ def test_local_workers_and_figures(tmp_path):
     assert "SD" in metrics_svg and "Wilson 95% CI" in metrics_svg
 
 
+@pytest.mark.sim
+@pytest.mark.slow
 def test_physics_backed_evaluation(tmp_path):
     records = tmp_path / "runs.jsonl"
     r = run_htn("evaluate", "problems/tray_three.jshop", "--robot", "pybullet", "--runs", "1",
@@ -163,12 +245,14 @@ def test_physics_backed_evaluation(tmp_path):
         [(0, "original", "verified"), (0, "transformed", "verified")]
 
 
+@pytest.mark.slow
 def test_few_runs_print_na_and_leak_no_warning():
     warn_all = {**os.environ, "PYTHONWARNINGS": "always"}
-    r = run_htn("evaluate", PROBLEM, "--runs", "1", env=warn_all, timeout=120)
+    # a process of its own: PYTHONWARNINGS is read when the interpreter starts
+    r = run_htn_process("evaluate", PROBLEM, "--runs", "1", env=warn_all, timeout=120)
     assert r.returncode == 0 and r.stderr == "", r.stderr
     assert "n/a" in r.stdout and "nan" not in r.stdout
-    r = run_htn("evaluate", PROBLEM, "--runs", "3", "--json", env=warn_all, timeout=120)
+    r = run_htn_process("evaluate", PROBLEM, "--runs", "3", "--json", env=warn_all, timeout=120)
     assert r.returncode == 0 and r.stderr == "", r.stderr
     assert "NaN" not in r.stdout and json.loads(r.stdout)["runs"] == 3
 
@@ -194,6 +278,7 @@ def test_statistics_edge_cases():
     assert applied_rules([]) == "none"
 
 
+@pytest.mark.slow
 def test_figures_of_runs_that_differ_by_rounding_only(tmp_path):
     from htn.evaluation.figures import plot
     from htn.evaluation.statistics import Comparison
@@ -223,8 +308,10 @@ def test_output_options_are_checked_before_any_work(tmp_path):
     records, plots = tmp_path / "runs.jsonl", tmp_path / "plots"
 
     def evaluate(*args, env=None):
-        return run_htn("evaluate", PROBLEM, *args, env={**os.environ, **(env or {})},
-                       timeout=120)
+        if env:     # Dask reads its configuration from the environment when imported
+            return run_htn_process("evaluate", PROBLEM, *args, env={**os.environ, **env},
+                                   timeout=120)
+        return run_htn("evaluate", PROBLEM, *args)
 
     cases = [
         (("--plot", blocker / "plots", "--records", records), f"{blocker}/plots: --plot"),

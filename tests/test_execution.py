@@ -15,6 +15,8 @@ from htn.jshop import Planner, load_domain, load_problem
 from htn.robot.pybullet_sim import Faults, PyBulletRobot
 from htn.robot.world import world_from_state
 
+pytestmark = pytest.mark.sim
+
 DOMAIN = str(ROOT / "domains" / "domestic.jshop")
 # the actions during which each kind of fault can happen (a grasp retry looks again)
 HAPPENS_IN = {"nav": {"!move_base"}, "detect": {"!detect_object", "!grasp"},
@@ -94,6 +96,7 @@ def test_faults_are_injected_and_runs_repeat_with_the_same_seed():
     assert strip(runs[0][1]) == strip(runs[1][1])
 
 
+@pytest.mark.slow
 def test_retries_recover_slips_in_the_gripper():
     recovered = 0
     limit = load_retries(DOMAIN)["!grasp"]

@@ -18,7 +18,8 @@ def _instances():
     if not (SAMPLE / "README.md").is_file():
         return [pytest.param(None, None, marks=pytest.mark.skip(
             reason=f"IPC sample not found at {SAMPLE}"))]
-    return [pytest.param(folder / "domain.hddl", problem, id=f"{folder.name}-{problem.stem}")
+    return [pytest.param(folder / "domain.hddl", problem, id=f"{folder.name}-{problem.stem}",
+                         marks=pytest.mark.corpus)
             for folder in sorted(p for p in SAMPLE.iterdir() if p.is_dir())
             for problem in sorted(folder.glob("*.hddl")) if problem.name != "domain.hddl"]
 

@@ -30,6 +30,8 @@ from htn.robot.world import ROBOT_HALF_WIDTH, _rect_seg_dist, _table_rect, kitch
 from htn.transform import rules
 from htn.transform.framework import Framework, Workspace
 
+pytestmark = pytest.mark.sim
+
 DOMAIN = str(ROOT / "domains" / "kitchen.jshop")
 
 
@@ -64,6 +66,7 @@ def predicted_facts(problem: str, steps) -> set:
     return {(p, tuple(a)) for p, a in checker.state.facts() if p in dynamic}
 
 
+@pytest.mark.slow
 def test_transformed_set_table_and_clean_up_runs_verified_in_pybullet(tmp_path):
     plan, log = tmp_path / "t.txt", tmp_path / "run.jsonl"
     r = run_htn("transform", DOMAIN, ROOT / "problems" / "set_table_and_clean_up.jshop",
@@ -82,6 +85,7 @@ def test_transformed_set_table_and_clean_up_runs_verified_in_pybullet(tmp_path):
     assert [e["event"] for e in done] == ["verified"] * 48
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("which", ["original", "transformed"])
 def test_the_simulated_kitchen_ends_as_the_plan_predicts(which):
     ws = transformed_plan("set_table_and_clean_up")
@@ -102,6 +106,7 @@ def test_the_simulated_kitchen_ends_as_the_plan_predicts(which):
         robot.close()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("problem", ["transport_four", "tray_three"])
 def test_other_kitchen_problems_run_verified_with_and_without_transformation(problem):
     ws = transformed_plan(problem)
@@ -129,6 +134,7 @@ def run_steps(robot, problem, lines):
             if e["event"] in ("verified", "failed", "aborted")]
 
 
+@pytest.mark.slow
 def test_a_closed_drawer_hides_its_spoons_and_the_grasp_is_aborted():
     inst = instance("set_table_and_clean_up")
     robot = KitchenRobot(kitchen_world_from_state(inst.state))
@@ -149,6 +155,7 @@ def test_a_closed_drawer_hides_its_spoons_and_the_grasp_is_aborted():
         robot.close()
 
 
+@pytest.mark.slow
 def test_tray_needs_both_hands_and_carries_what_stands_on_it():
     inst = instance("tray_three")
     robot = KitchenRobot(kitchen_world_from_state(inst.state))
@@ -171,6 +178,7 @@ def test_tray_needs_both_hands_and_carries_what_stands_on_it():
         robot.close()
 
 
+@pytest.mark.slow
 def test_faults_are_recovered_by_retries():
     # (a slip while driving is not: see test_monitoring.py)
     steps = transformed_plan("set_table_and_clean_up").plan.steps

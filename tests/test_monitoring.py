@@ -11,6 +11,8 @@ import pytest
 from conftest import ROOT, run_htn
 from monitoring_oracle import Oracle, run_checked
 
+pytestmark = pytest.mark.sim
+
 SHORT = ROOT / "tests" / "problems" / "short_carry.jshop"
 SHORT_PLAN = ["(!detect_object jenny pringles kitchen_counter)",
               "(!grasp jenny pringles kitchen_counter)",
@@ -39,6 +41,7 @@ def fault_runs():
         return pool.map(short_run, range(RUNS), chunksize=10)
 
 
+@pytest.mark.slow
 def test_no_false_alarm_over_200_fault_runs(fault_runs):
     kinds = {k for r in fault_runs for k in r["kinds"]}
     assert kinds == {"slip", "nav", "detect", "moved"}
@@ -51,6 +54,7 @@ def test_no_false_alarm_over_200_fault_runs(fault_runs):
     assert any(r["result"] == "verified" and r["faults"] for r in fault_runs)
 
 
+@pytest.mark.slow
 def test_a_slip_while_carrying_is_aborted_within_half_a_second(fault_runs):
     slips = [(seed, fault, abort, action) for seed, r in enumerate(fault_runs)
              for kind, fault, detail, abort, action in r["fault_to_abort"]
@@ -129,6 +133,7 @@ def test_replan_repairs_the_enclosing_task_of_a_moved_object(seed, tmp_path):
     assert r.stdout.startswith(f"verified: {n} of {n} steps verified, 2 retries, 1 replans")
 
 
+@pytest.mark.slow
 def test_replan_in_the_kitchen_finds_a_moved_object_where_it_is(tmp_path):
     """Searching is part of transporting: the re-planned transport looks for
     the object where it was put (here: on the table of its destination)."""
@@ -173,6 +178,7 @@ def test_the_behaviour_tree_has_the_task_tree_shape(tmp_path):
     assert "*" not in text and "\u24c2" not in text and "\u26a1" not in text
 
 
+@pytest.mark.slow
 def test_a_transformed_plan_runs_as_the_tree_of_its_transformed_task_list(tmp_path):
     plan, dot = tmp_path / "t.txt", tmp_path / "bt.dot"
     r = run_htn("transform", ROOT / "domains" / "kitchen.jshop",

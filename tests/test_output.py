@@ -66,6 +66,7 @@ def test_a_deep_task_tree_is_flat_json(tmp_path):
     assert depth == 1501
 
 
+@pytest.mark.slow
 def test_all_json_streams_and_keeps_to_the_timeout(tmp_path):
     d, p = files(tmp_path)
     t0 = time.monotonic()
@@ -173,6 +174,7 @@ def test_plan_piped_into_head_exits_quietly(tmp_path, fmt):
     assert temporaries(tmp_path) == []
 
 
+@pytest.mark.slow
 def test_every_printing_command_exits_quietly_on_a_closed_pipe(tmp_path):
     # 3,000 one-step plans: validate prints more lines than a pipe holds
     d, p = files(tmp_path, domain="(defdomain d ((:operator (!a ?x) () () ()) "

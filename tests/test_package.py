@@ -27,6 +27,9 @@ BASIC_DOMAIN = """(defdomain basic (
 BASIC_PROBLEM = "(defproblem problem basic ((have kiwi)) ((swap banjo kiwi)))\n"
 
 
+# one xdist worker builds the wheel (in the checkout's build/) for all of them
+pytestmark = [pytest.mark.slow, pytest.mark.xdist_group("wheel")]
+
 def sh(*args, cwd, env=None, timeout=600):
     return subprocess.run([str(a) for a in args], cwd=cwd, capture_output=True, text=True,
                           timeout=timeout, env=env)

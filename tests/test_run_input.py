@@ -55,6 +55,7 @@ def test_a_step_with_an_unknown_location_is_found_before_the_robot_moves(plan, t
     assert log.read_text() == "an earlier log\n"
 
 
+@pytest.mark.sim
 def test_a_step_with_a_variable_is_an_input_error_at_its_column(plan):
     plan.write_text(plan.read_text().replace("(!say jenny here_you_are)", "(!say jenny ?x)"))
     r = run_htn("run", plan, "--sim")
@@ -68,6 +69,7 @@ def test_retry_limits_of_operators_the_domain_lacks_are_rejected(plan):
     assert one_error_line(r) == "--retries: the domain domestic has no operator !bogus"
 
 
+@pytest.mark.sim
 def test_output_folders_are_checked_before_work_starts(plan, tmp_path):
     r = run_htn("run", plan, "--sim", "--log", tmp_path / "missing" / "x.jsonl")
     assert one_error_line(r) == (f"{tmp_path / 'missing' / 'x.jsonl'}: --log: no such folder "
@@ -84,6 +86,7 @@ def test_output_folders_are_checked_before_work_starts(plan, tmp_path):
     assert sorted(os.listdir(tmp_path)) == ["a-file", "plan.txt"]     # nothing written
 
 
+@pytest.mark.sim
 def test_gui_without_a_display_says_so(plan):
     env_none = {k: v for k, v in os.environ.items() if k != "DISPLAY"}
     for env, message in ((env_none, "--gui needs a display (DISPLAY is not set)"),
@@ -104,6 +107,7 @@ def catches(pid: int, sig: int) -> bool:
     return bool(int(mask, 16) >> (sig - 1) & 1)
 
 
+@pytest.mark.sim
 def test_sigterm_halts_the_tree_like_ctrl_c(plan, tmp_path):
     log = tmp_path / "run.jsonl"
     proc = start_htn("run", plan, "--sim", "--log", log, "-q")
@@ -150,6 +154,7 @@ def test_sigterm_while_repair_plans_between_ticks_is_logged_as_sigterm(tmp_path)
 
 # counted from the moment htn's entry point has its handlers (before that,
 # the interpreter itself is starting up and a Ctrl-C is Python's to report)
+@pytest.mark.sim
 @pytest.mark.parametrize("delay", [0.0, 0.1, 0.3, 0.7])
 def test_ctrl_c_during_start_up_exits_130_without_a_traceback(plan, tmp_path, delay):
     log = tmp_path / "run.jsonl"

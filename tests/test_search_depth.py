@@ -4,6 +4,8 @@ operators at the memory budget, each with a message naming the task, exit
 code 1, in bounded memory; a long plan is bounded by neither."""
 from __future__ import annotations
 
+import pytest
+
 import json
 
 import resource
@@ -41,6 +43,7 @@ def _limit_memory():
     resource.setrlimit(resource.RLIMIT_AS, (one_gb, one_gb))
 
 
+@pytest.mark.slow
 def test_runaway_recursion_stops_at_the_default_depth_within_1_gb(tmp_path):
     domain, problem = _files(tmp_path)
     # the whole process may use at most 1 GB of address space
@@ -78,6 +81,7 @@ def test_a_plan_longer_than_the_depth_bound_is_found(tmp_path):
     assert result.stdout.count("(!a ") == 300
 
 
+@pytest.mark.slow
 def test_endless_plan_stops_at_the_memory_budget_within_1_gb(tmp_path):
     (tmp_path / "tail.jshop").write_text(TAIL_DOMAIN)
     (tmp_path / "p.jshop").write_text("(defproblem p tail () ((forever)))\n")

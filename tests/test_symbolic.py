@@ -17,6 +17,9 @@ DOMESTIC = ROOT / "domains" / "domestic.jshop"
 BRING = ROOT / "problems" / "bring_object.jshop"
 
 
+SLOW_EXAMPLES = {"blocks-problem"}
+
+
 def corpus_examples(with_plan=True):
     if not corpus_available():
         return [pytest.param("missing", marks=needs_corpus)]
@@ -24,7 +27,9 @@ def corpus_examples(with_plan=True):
     for folder in sorted(p for p in CORPUS.iterdir() if p.is_dir()):
         if with_plan and not (folder / "plans-first.txt").read_text().strip():
             continue          # foralltest: JSHOP2 finds no plan
-        out.append(folder.name)
+        # blocks-problem's plans take seconds to validate
+        out.append(pytest.param(folder.name, marks=pytest.mark.slow)
+                   if folder.name in SLOW_EXAMPLES else folder.name)
     return out
 
 
@@ -187,6 +192,8 @@ def test_retry_limits_travel_with_the_domain(tmp_path):
     assert r.returncode == 2 and "--force" in r.stderr
 
 
+@pytest.mark.sim
+@pytest.mark.slow
 def test_the_log_header_reproduces_a_pybullet_run(tmp_path):
     plan, first, again = tmp_path / "plan.txt", tmp_path / "a.jsonl", tmp_path / "b.jsonl"
     assert run_htn("plan", DOMESTIC, BRING, "-o", plan).returncode == 0

@@ -77,6 +77,7 @@ def test_tray_needs_more_than_two_transports():
     assert two.log == []            # the rule matched two transports; the tray was not used
 
 
+@pytest.mark.slow
 def test_priorities_and_enable_disable():
     fw = framework()
     assert [t.name for t in fw.transformations] == ["tray", "container", "both-hands"]
@@ -110,6 +111,7 @@ def test_transport_four_gets_both_hands_twice_and_stays_valid():
     assert max_holding == 2          # both arms are used at once
 
 
+@pytest.mark.slow
 def test_set_table_and_clean_up_uses_all_three_rules():
     ws = workspace("set_table_and_clean_up")
     framework().apply_all_transformations(ws)
@@ -149,6 +151,7 @@ def test_a_rewrite_that_breaks_the_plan_is_rolled_back():
     assert ws.plan.lines() == original
 
 
+@pytest.mark.slow
 def test_a_costlier_rewrite_is_rolled_back():
     fw = Framework()
 
@@ -170,6 +173,7 @@ def test_a_costlier_rewrite_is_rolled_back():
     assert navigation_distance(ws.instance, ws.plan) == before
 
 
+@pytest.mark.slow
 def test_htn_transform_cli(tmp_path):
     out = tmp_path / "plan.txt"
     r = run_htn("transform", DOMAIN, PROBLEMS / "set_table_and_clean_up.jshop", "--json",
@@ -205,6 +209,7 @@ def test_projection_is_deterministic_and_monitored():
     assert broken["result"] == "aborted"
 
 
+@pytest.mark.slow
 def test_evaluate_reproduces_the_papers_findings():
     from htn.evaluation.study import compare
     four = compare(DOMAIN, str(PROBLEMS / "transport_four.jshop"), runs=120, seed=0).metrics()

@@ -9,6 +9,7 @@ many domains: such a process calls :func:`clear_caches` between domains.
 from __future__ import annotations
 
 _REGISTERED: list[dict] = []
+_HOOKS: list = []
 
 
 def cache() -> dict:
@@ -18,7 +19,14 @@ def cache() -> dict:
     return d
 
 
+def on_clear(hook) -> None:
+    """Call ``hook()`` too when the caches are cleared."""
+    _HOOKS.append(hook)
+
+
 def clear_caches() -> None:
-    """Forget every compiled function."""
+    """Forget every compiled function (and its source, see ``codegen``)."""
     for d in _REGISTERED:
         d.clear()
+    for hook in _HOOKS:
+        hook()

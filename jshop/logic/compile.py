@@ -24,9 +24,10 @@ from __future__ import annotations
 from typing import Callable
 
 from htn.jshop.language.errors import HtnError
-from htn.jshop.language.terms import CallTerm, Var, is_ground, subst, unify
+from htn.jshop.language.terms import CallTerm, Var, is_ground, source_str, subst, unify
 
 from .caches import cache
+from .codegen import define
 
 
 def flat_args(args: tuple) -> bool:
@@ -37,18 +38,24 @@ _BINDERS: dict = cache()
 _UNIFIERS: dict = cache()
 
 
-def binder(args: tuple) -> Callable[[list], tuple]:
-    """Cached :func:`make_binder` (keyed by the domain's own tuple object)."""
+def _shown(args: tuple) -> str:
+    """Terms as the source writes them, for the names of generated code."""
+    return "(" + " ".join(source_str(a) for a in args) + ")"
+
+
+def binder(args: tuple, what: str = None) -> Callable[[list], tuple]:
+    """Cached :func:`make_binder` (keyed by the domain's own tuple object);
+    ``what`` names the generated code (see :mod:`~htn.jshop.logic.codegen`)."""
     hit = _BINDERS.get(id(args))
     if hit is None or hit[0] is not args:
-        hit = _BINDERS[id(args)] = (args, make_binder(args))
+        hit = _BINDERS[id(args)] = (args, make_binder(args, what))
     return hit[1]
 
 
 _SUBSTITUTERS: dict = cache()
 
 
-def substituter(args: tuple) -> Callable[[list], tuple]:
+def substituter(args: tuple, what: str = None) -> Callable[[list], tuple]:
     """``env -> subst(args, env)`` (the binder's tuple without its key), for
     the places that only build a term: effects, task atoms, plan steps. A
     tuple of symbols, numbers and variables needs no groundness test."""
@@ -64,10 +71,11 @@ def substituter(args: tuple) -> Callable[[list], tuple]:
                 else:
                     ns[f"c{i}"] = a
                     parts.append(f"c{i}")
-            exec(f"def sub(env):\n    return ({''.join(p + ', ' for p in parts)})", ns)
+            define(f"def sub(env):\n    return ({''.join(p + ', ' for p in parts)})",
+                   what or f"substitution into {_shown(args)}", ns)
             fn = ns["sub"]
         else:
-            bind = binder(args)
+            bind = binder(args, what)
 
             def fn(env, bind=bind):
                 return bind(env)[1]
@@ -75,18 +83,18 @@ def substituter(args: tuple) -> Callable[[list], tuple]:
     return hit[1]
 
 
-def head_unifier(head: tuple) -> Callable[[tuple, list], bool]:
+def head_unifier(head: tuple, what: str = None) -> Callable[[tuple, list], bool]:
     """Cached :func:`make_head_unifier`."""
     hit = _UNIFIERS.get(id(head))
     if hit is None or hit[0] is not head:
-        hit = _UNIFIERS[id(head)] = (head, make_head_unifier(head))
+        hit = _UNIFIERS[id(head)] = (head, make_head_unifier(head, what))
     return hit[1]
 
 
 GENERIC = 1 << 30   # a scan key meaning "use the generic scanner"
 
 
-def make_binder(args: tuple) -> Callable[[list], tuple]:
+def make_binder(args: tuple, what: str = None) -> Callable[[list], tuple]:
     """A function ``env -> (key, bound_args)`` equivalent to ``subst``.
 
     ``key`` is None when the result is ground (the caller can then look the
@@ -161,7 +169,7 @@ def make_binder(args: tuple) -> Callable[[list], tuple]:
            *_or_lines("key", keys),
            f"    return key, ({', '.join(unbound)},)"]
     ns = dict(consts, is_ground=is_ground, subst=subst, GENERIC=GENERIC)
-    exec("\n".join(src), ns)
+    define("\n".join(src), what or f"binding of {_shown(args)}", ns)
     return ns["bind"]
 
 
@@ -247,7 +255,7 @@ class _NoFastPath(Exception):
     pass
 
 
-def make_scanner(args: tuple, key: int) -> Callable:
+def make_scanner(args: tuple, key: int, what: str = None) -> Callable:
     """A generator ``(atoms, bound, env) -> envs`` matching ``args`` whose
     unbound variables are those of ``key`` (see :func:`make_binder`) against a
     live list of atoms, in order; equivalent to unifying element by element."""
@@ -278,7 +286,7 @@ def make_scanner(args: tuple, key: int) -> Callable:
            *[f"            {x}" for x in assigns],
            "            yield new"]
     ns: dict = {}
-    exec("\n".join(src), ns)
+    define("\n".join(src), f"{what or 'atoms matching ' + _shown(args)} (unbound: {key:b})", ns)
     return ns["scan"]
 
 
@@ -287,11 +295,11 @@ _TERMS: dict = cache()
 _CONJUNCTIONS: dict = {}
 
 
-def term_binder(term) -> Callable[[list], tuple]:
+def term_binder(term, what: str = None) -> Callable[[list], tuple]:
     """Cached binder of a single term (keyed by the term object itself)."""
     hit = _TERMS.get(id(term))
     if hit is None or hit[0] is not term:
-        hit = _TERMS[id(term)] = (term, make_binder((term,)))
+        hit = _TERMS[id(term)] = (term, make_binder((term,), what))
     return hit[1]
 
 
@@ -316,7 +324,7 @@ def conjunction(sats: list) -> Callable:
         lines.append("    " * (n + 1) + f"yield from s{n - 1}(e{n - 1})")
         lines.append("    return conj")
         ns: dict = {}
-        exec("\n".join(lines).replace("(e0)", "(env)"), ns)
+        define("\n".join(lines).replace("(e0)", "(env)"), f"conjunction of {n} conjuncts", ns)
         make = _CONJUNCTIONS[n] = ns["make"]
     return make(*sats)
 
@@ -340,15 +348,15 @@ def _stacked_conjunction(sats: list) -> Callable:
     return conj
 
 
-def scanner(args: tuple, key: int) -> Callable:
+def scanner(args: tuple, key: int, what: str = None) -> Callable:
     """Cached :func:`make_scanner`."""
     hit = _SCANNERS.get((id(args), key))
     if hit is None or hit[0] is not args:
-        hit = _SCANNERS[(id(args), key)] = (args, make_scanner(args, key))
+        hit = _SCANNERS[(id(args), key)] = (args, make_scanner(args, key, what))
     return hit[1]
 
 
-def make_head_unifier(head: tuple) -> Callable[[tuple, list], bool]:
+def make_head_unifier(head: tuple, what: str = None) -> Callable[[tuple, list], bool]:
     """A function ``(task_args, env) -> bool`` equivalent to unifying each
     head term with the task's term (a variable in the task binds nothing)."""
     n = len(head)
@@ -382,5 +390,5 @@ def make_head_unifier(head: tuple) -> Callable[[tuple, list], bool]:
             src.append(f"    if type(t) is not Var and not (type(t) is type(c{i}) and t == c{i}):"
                        " return False")
     src.append("    return True")
-    exec("\n".join(src), ns)
+    define("\n".join(src), what or f"unifier of the head {_shown(head)}", ns)
     return ns["unify_head"]

@@ -1,9 +1,11 @@
 """The conjuncts of a conjunction as the mode compiler sees them
 (:mod:`htn.jshop.logic.modes`): each classified once (a state atom, its
 negation, a call, an assignment, an axiom, or anything else, which is asked
-of the general engine), with its variables, and the calls the generated code
-makes."""
+of the general engine), with its variables, the calls the generated code
+makes, and the lengths a predicate's atoms can have (:func:`arities`)."""
 from __future__ import annotations
+
+from typing import Optional
 
 from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import HtnError
@@ -118,4 +120,23 @@ def flatten(items: list) -> list:
             out.extend(flatten(x.items))
         else:
             out.append(x)
+    return out
+
+
+def arities(domain: S.Domain, state) -> Optional[dict]:
+    """``pred -> {arity}``: the lengths the atoms of each predicate can have
+    in ``state`` from now on (those already there and those of add lists);
+    None when an add list has a variable atom (3.14), which can be anything."""
+    out = {pred: {len(a) for a in lst} for pred, lst in state.atoms.items()}
+    for ops in domain.operators.values():
+        for op in ops:
+            if op.add.var is not None:
+                return None
+            for item in op.add.items:
+                if isinstance(item, S.Protection):
+                    continue         # protects an atom, adds none
+                for a in item.atoms if isinstance(item, S.EffectForAll) else [item]:
+                    if not isinstance(a, S.Atom):
+                        return None
+                    out.setdefault(a.pred, set()).add(len(a.args))
     return out

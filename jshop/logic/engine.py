@@ -10,21 +10,23 @@ precondition iterator, and the state is restored before the next binding.
 
 Axioms follow 3.6: a later branch is tried only if no earlier branch had a
 satisfier. ``:first`` keeps the first satisfier, ``:sort-by`` sorts all of them
-with Java's sort algorithm (see :func:`java_sort`).
+with Java's sort algorithm (see :mod:`~htn.jshop.logic.java_sort`).
 """
 from __future__ import annotations
 
-from typing import Callable, Iterator, Optional
+from typing import Callable, Iterator
 
 from htn.jshop.language import syntax as S
-from htn.jshop.language.errors import HtnError, PlanningError
-from htn.jshop.language.terms import (Var, atom_from_term, is_ground, subst, term_str, unify,
-                                      variables)
+from htn.jshop.language.errors import PlanningError
+from htn.jshop.language.terms import (Var, atom_from_term, is_ground, source_atom, source_str,
+                                      subst, unify, variables)
 
 from .caches import cache
-from .compile import GENERIC, binder, head_unifier, scanner, term_binder
-from .conjuncts import always
-from .java_sort import java_sort
+from .codegen import described
+from . import warming as warm
+from .compile import GENERIC
+from .conjuncts import always, arities
+from .java_sort import sorted_by
 from .modes import compile_conjunction
 from .scan import scan_atoms
 
@@ -79,22 +81,35 @@ class Logic:
                 heads.append(ax.head.args)
                 counts[ax.head.args] = counts.get(ax.head.args, 0) + 1
             else:
-                flat = all(type(a) in (str, float, Var) for a in ax.head.args)
-                segments.append((ax, head_unifier(ax.head.args), binder(ax.head.args),
-                                 [self.precondition(b.pre, ax.head.args) for b in ax.branches],
-                                 flat))
+                segments.append(self._axiom(ax))
         return segments
 
+    def _axiom(self, ax: S.Axiom) -> list:
+        """``[axiom, head unifier, head binder, branches, flat head]`` (the
+        unifier and binder warming: compiled ones replace them in place)."""
+        args = ax.head.args
+        head = source_atom(ax.head.pred, args)
+        seg = [ax, None, None, [self.precondition(b.pre, args, f"precondition of axiom {head} "
+                                                  f"branch {b.label}") for b in ax.branches],
+               all(type(a) in (str, float, Var) for a in args)]
+        seg[1] = warm.head_unifier(args, lambda: described(f"unifier of the axiom head {head}",
+                                                           ax.pos), lambda f: seg.__setitem__(1, f))
+        seg[2] = warm.binder(args, lambda: described(f"binding of the axiom head {head}", ax.pos),
+                             lambda f: seg.__setitem__(2, f))
+        return seg
+
     # ------------------------------------------------------------ preconditions
-    def precondition(self, pre: S.Precondition, head: tuple = None) -> Sat:
+    def precondition(self, pre: S.Precondition, head: tuple = None, what: str = None) -> Sat:
         """``head``: the arguments of the method's, operator's or axiom's head,
         whose variables are the only ones bound when the precondition is
-        asked (the binding is fresh), so only they decide its binding mode."""
+        asked (the binding is fresh), so only they decide its binding mode.
+        ``what`` names the generated code (``precondition of !grasp``)."""
         e = pre.expr
         if isinstance(e, (S.Atom, S.Not)):   # one literal: compiled as a conjunction of one
             e = _single(e)
-        if head is not None and isinstance(e, S.And) and e.items:
-            sat = compile_conjunction(self, e, head_variables(head))
+        if isinstance(e, S.And) and e.items and (head is not None or what is not None):
+            sat = compile_conjunction(self, e, None if head is None else head_variables(head),
+                                      what)
         else:
             sat = self.expr(e)
         if pre.first:
@@ -104,36 +119,8 @@ class Logic:
                     return
             return first
         if pre.sort_var is not None:
-            return self._sorted(sat, pre)
+            return sorted_by(sat, pre, self.functions)
         return sat
-
-    def _sorted(self, sat: Sat, pre: S.Precondition) -> Sat:
-        idx = pre.sort_var.index
-        name = pre.comparator
-        if name in ("<", ">"):
-            sign = 1 if name == "<" else -1
-
-            def cmp(a, b):
-                x, y = a[idx], b[idx]
-                if type(x) is not float or type(y) is not float:
-                    raise PlanningError.at(pre.pos, f":sort-by {name} needs numbers, got "
-                                           f"{term_str(x)} and {term_str(y)}")
-                return sign * ((x > y) - (x < y))
-        else:
-            from htn.jshop.language.functions import compare
-            user = self.functions.comparator(name) if self.functions else None
-            if user is None:
-                raise HtnError.at(pre.pos, f"undefined comparator '{name}'")
-
-            def cmp(a, b):
-                try:
-                    return compare(name, user, a[idx], b[idx])
-                except HtnError as exc:    # placed at the :sort-by that called it
-                    raise PlanningError.at(pre.pos, exc.message) from None
-
-        def sorted_sat(env):
-            yield from java_sort(list(sat(env)), cmp)
-        return sorted_sat
 
     # ------------------------------------------------------------ expressions
     def expr(self, e) -> Sat:
@@ -196,8 +183,17 @@ class Logic:
                 yield env
         return equal
 
+    def _term_binder(self, term, pos, install):
+        return warm.term_binder(term, lambda: described(f"value of {source_str(term)}", pos),
+                                install)
+
     def _assign(self, e: S.Assign) -> Sat:
-        idx, bind = e.var.index, term_binder(e.term)
+        idx = e.var.index
+
+        def install(f):
+            nonlocal bind
+            bind = f
+        bind = self._term_binder(e.term, e.pos, install)
 
         def assign(env):
             if env[idx] is not None:  # JSHOP2 merges: an earlier binding wins
@@ -209,7 +205,10 @@ class Logic:
         return assign
 
     def _callexpr(self, e: S.CallExpr) -> Sat:
-        bind = term_binder(e.call)
+        def install(f):
+            nonlocal bind
+            bind = f
+        bind = self._term_binder(e.call, e.pos, install)
 
         def callexpr(env):
             v = bind(env)[1][0]
@@ -230,18 +229,31 @@ class Logic:
             yield from self.match(pred, args, env)
         return varatom
 
-    def _lookup(self, e: S.Atom) -> tuple:
-        """What a compiled atom test holds on to: the binder of its arguments,
-        its predicate's atom list and set (the state keeps them for good),
-        its axioms, and a cache of scanners per binding key."""
-        pred = e.pred
-        return (binder(e.args), self.state.bucket(pred), self.state.members[pred],
-                self._axioms.get(pred), {})
+    def _lookup(self, e: S.Atom, install) -> tuple:
+        """What an atom test holds on to: the binder of its arguments (warming,
+        ``install`` puts the compiled one in place), its predicate's atom list
+        and set (the state keeps them for good), its axioms, and a function
+        giving the scanner of a binding key (warming too)."""
+        pred, args = e.pred, e.args
+        shown = lambda: source_atom(pred, args)   # noqa: E731 - names compiled code
+        scanners: dict = {}
+
+        def scanner(key):
+            scan = scanners[key] = warm.scanner(
+                args, key, lambda: described(f"atoms matching {shown()}", e.pos),
+                lambda f: scanners.__setitem__(key, f))
+            return scan
+        bind = warm.binder(args, lambda: described(f"binding of {shown()}", e.pos), install)
+        return (bind, self.state.bucket(pred), self.state.members[pred],
+                self._axioms.get(pred), scanners, scanner)
 
     def _atom(self, e: S.Atom) -> Sat:
-        args = e.args
-        bind, lst, members, axioms, scanners = self._lookup(e)
         prove = self._prove
+
+        def install(f):
+            nonlocal bind
+            bind = f
+        bind, lst, members, axioms, scanners, scanner = self._lookup(e, install)
 
         def atom(env):
             key, bound = bind(env)
@@ -251,10 +263,7 @@ class Logic:
             elif key >= GENERIC:
                 yield from scan_atoms(lst, bound, env)
             else:
-                scan = scanners.get(key)
-                if scan is None:
-                    scan = scanners[key] = scanner(args, key)
-                yield from scan(lst, bound, env)
+                yield from (scanners.get(key) or scanner(key))(lst, bound, env)
             if axioms:
                 yield from prove(axioms, bound, env, key is None)
         return atom
@@ -263,9 +272,12 @@ class Logic:
         """``(not (p ...))``: the same test as :meth:`_atom`, stopping at the
         first satisfier without making generators for it (the most common
         negation, so worth its own code)."""
-        args = e.args
-        bind, lst, members, axioms, scanners = self._lookup(e)
         prove = self._prove
+
+        def install(f):
+            nonlocal bind
+            bind = f
+        bind, lst, members, axioms, scanners, scanner = self._lookup(e, install)
 
         def neg(env):
             key, bound = bind(env)
@@ -275,12 +287,8 @@ class Logic:
             elif key >= GENERIC:
                 if next(scan_atoms(lst, bound, env), None) is not None:
                     return
-            else:
-                scan = scanners.get(key)
-                if scan is None:
-                    scan = scanners[key] = scanner(args, key)
-                if next(scan(lst, bound, env), None) is not None:
-                    return
+            elif next((scanners.get(key) or scanner(key))(lst, bound, env), None) is not None:
+                return
             if axioms and next(prove(axioms, bound, env, key is None), None) is not None:
                 return
             yield env
@@ -359,25 +367,6 @@ class Logic:
                         from None
                 if found:
                     break
-
-
-def arities(domain: S.Domain, state) -> Optional[dict]:
-    """``pred -> {arity}``: the lengths the atoms of each predicate can have
-    in ``state`` from now on (those already there and those of add lists);
-    None when an add list has a variable atom (3.14), which can be anything."""
-    out = {pred: {len(a) for a in lst} for pred, lst in state.atoms.items()}
-    for ops in domain.operators.values():
-        for op in ops:
-            if op.add.var is not None:
-                return None
-            for item in op.add.items:
-                if isinstance(item, S.Protection):
-                    continue         # protects an atom, adds none
-                for a in item.atoms if isinstance(item, S.EffectForAll) else [item]:
-                    if not isinstance(a, S.Atom):
-                        return None
-                    out.setdefault(a.pred, set()).add(len(a.args))
-    return out
 
 
 _SINGLES: dict = cache()

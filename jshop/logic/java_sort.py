@@ -1,8 +1,11 @@
 """Java 17's ``Arrays.sort(Object[], Comparator)``, with which JSHOP2 sorts
-the satisfiers of a ``:sort-by`` precondition (manual 3.6)."""
+the satisfiers of a ``:sort-by`` precondition (manual 3.6), and that sort."""
 from __future__ import annotations
 
 from functools import cmp_to_key
+
+from htn.jshop.language.errors import HtnError, PlanningError
+from htn.jshop.language.terms import term_str
 
 
 def java_sort(a: list, cmp) -> list:
@@ -42,3 +45,35 @@ def java_sort(a: list, cmp) -> list:
         a[left + 1:start + 1] = a[left:start]
         a[left] = pivot
     return a
+
+
+def sorted_by(sat, pre, functions):
+    """The satisfiers of ``sat`` sorted as a ``:sort-by`` precondition ``pre``
+    says (manual 3.5): by its variable's value with ``<`` or ``>`` (numbers
+    only), or with a user comparator from ``functions``."""
+    idx = pre.sort_var.index
+    name = pre.comparator
+    if name in ("<", ">"):
+        sign = 1 if name == "<" else -1
+
+        def cmp(a, b):
+            x, y = a[idx], b[idx]
+            if type(x) is not float or type(y) is not float:
+                raise PlanningError.at(pre.pos, f":sort-by {name} needs numbers, got "
+                                       f"{term_str(x)} and {term_str(y)}")
+            return sign * ((x > y) - (x < y))
+    else:
+        from htn.jshop.language.functions import compare
+        user = functions.comparator(name) if functions else None
+        if user is None:
+            raise HtnError.at(pre.pos, f"undefined comparator '{name}'")
+
+        def cmp(a, b):
+            try:
+                return compare(name, user, a[idx], b[idx])
+            except HtnError as exc:    # placed at the :sort-by that called it
+                raise PlanningError.at(pre.pos, exc.message) from None
+
+    def sorted_sat(env):
+        yield from java_sort(list(sat(env)), cmp)
+    return sorted_sat

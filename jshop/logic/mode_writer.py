@@ -7,6 +7,7 @@ from itertools import chain
 from htn.jshop.language.errors import HtnError
 from htn.jshop.language.terms import CallTerm, Var, is_ground
 
+from .codegen import define
 from .compile import NESTED_CONJUNCTS
 from .conjuncts import (ASSIGN, ATOM, AXIOM, CALL, GENERAL, NOT_ATOM, NOT_AXIOM, Literal, call_at,
                         call_nested, has_call, term_vars)
@@ -72,9 +73,10 @@ class CodeWriter:
         self.emit("except HtnError:")
         self.emit(f"    {target} = {slow}")
 
-    def factory(self):
+    def factory(self, what: str = "conjunction"):
         """The code's factory ``make(*constants) -> run``, or None when this
-        mode gains nothing (every conjunct would take the general path)."""
+        mode gains nothing (every conjunct would take the general path).
+        ``what`` names the code (see :mod:`~htn.jshop.logic.codegen`)."""
         lits = self.lits
         if all(lit.kind == GENERAL
                or (lit.kind == ASSIGN and not term_vars(lit.expr.term, set()) <= self.known)
@@ -94,7 +96,7 @@ class CodeWriter:
             params += [f"L{k}", f"M{k}", f"H{k}", f"G{k}", f"R{k}"]
         src = [f"def make({', '.join(params)}):", "    def run(env):", *self.lines,
                "    return run"]
-        exec("\n".join(src), self.ns)
+        define("\n".join(src), what, self.ns)
         return self.ns["make"]
 
     def finish(self) -> None:

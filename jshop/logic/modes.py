@@ -34,12 +34,15 @@ from __future__ import annotations
 from typing import Callable
 
 from htn.jshop.language import syntax as S
-from htn.jshop.language.terms import is_ground
+from htn.jshop.language.terms import Var, is_ground
+from htn.jshop.language.walk import walk_expr
 
 from .caches import cache
+from .codegen import described, define
 from .compile import conjunction
 from .conjuncts import ATOM, AXIOM, GENERAL, NOT_ATOM, NOT_AXIOM, Literal, flatten
 from .mode_writer import CodeWriter
+from . import warming
 
 MAX_LITERALS = 40     # longer conjunctions stay on the general path (indentation)
 MAX_VARS = 60         # a mode is a bit mask over the conjunction's variables
@@ -48,10 +51,11 @@ _CODE: dict = cache()    # (id(conjunction), mode, sized, entry) -> (conjunction
 _LITERALS: dict = cache()  # id(conjunction) -> (conjunction, conjuncts, _Literals, variables)
 
 
-def compile_conjunction(logic, e: S.And, entry: frozenset = None) -> Callable:
+def compile_conjunction(logic, e: S.And, entry: frozenset = None, what: str = None) -> Callable:
     """``sat(env)`` for the conjunction ``e`` (see the module docstring).
     ``entry``: the only variables that can be bound when it is asked (a
-    precondition's head variables), or None for any."""
+    precondition's head variables), or None for any. ``what`` names the
+    generated code (``precondition of !grasp``; see :mod:`~htn.jshop.logic.codegen`)."""
     hit = _LITERALS.get(id(e))
     if hit is None or hit[0] is not e:     # the same for every planner of the domain
         items = flatten(e.items)
@@ -69,27 +73,52 @@ def compile_conjunction(logic, e: S.And, entry: frozenset = None) -> Callable:
         return gen
     state = logic.state
     modes: dict = {}
-    met: set = set()      # the modes met once, whose code was not written yet
     constants = _constants(logic, lits, general)
+    test = _tester(logic, lits) if len(names) == len(hit[3]) else None
+    full = (1 << len(names)) - 1
 
     def build(mode: int):
-        """This mode's code, or None for the general path: a mode met for
-        the first time is not worth compiling (a tiny search meets it once),
-        unless an earlier planner of the domain compiled it already."""
+        """This mode's code, or None for the general path: a mode is
+        compiled when it is met the ``WARM``-th time in the process (see
+        :mod:`~htn.jshop.logic.warming`), or at once if an earlier planner of
+        the domain compiled it already."""
         key = (id(e), mode, sized, entry)
         hit = _CODE.get(key)
         if hit is None or hit[0] is not e:
-            if mode not in met:
-                met.add(mode)
-                return None
+            met = warming.calls(e, (mode, sized, entry))
+            met[1] += 1
+            if met[1] < warming.WARM:
+                return test if mode == full else None
             known = {v for j, v in enumerate(names) if mode >> j & 1}
-            hit = _CODE[key] = (e, CodeWriter(lits, known, sized).factory())
+            hit = _CODE[key] = (e, CodeWriter(lits, known, sized).factory(
+                _mode_name(what, e, known, lits)))
         factory = hit[1]
         f = gen if factory is None else factory(*constants)
         modes[mode] = f
         return f
 
     return _entry(names)(state, gen, modes, build)
+
+
+def _tester(logic, lits: list):
+    """While a conjunction of state atoms and their negations, flat and with
+    every variable bound, is warming: its test, interpreted (a set lookup per
+    conjunct; an operator's precondition is often just that), or None."""
+    plan = []
+    for lit in lits:
+        if lit.kind not in (ATOM, NOT_ATOM) or lit.facts or \
+                not all(type(a) in (str, float, Var) for a in lit.args):
+            return None
+        logic.state.bucket(lit.pred)
+        plan.append((logic.state.members[lit.pred], lit.kind == NOT_ATOM,
+                     tuple((type(a) is Var, a.index if type(a) is Var else a) for a in lit.args)))
+
+    def test(env):
+        for members, negated, parts in plan:
+            if (tuple([env[x] if var else x for var, x in parts]) in members) is negated:
+                return
+        yield env
+    return test
 
 
 def _constants(logic, lits: list, general: list) -> list:
@@ -128,6 +157,15 @@ def _rest(general: list, k: int) -> Callable:
     return rest
 
 
+def _mode_name(what, e: S.And, known: set, lits: list) -> str:
+    """``precondition of !grasp, domestic.jshop:41 (bound: ?r ?o)``."""
+    names: dict = {}
+    for lit in lits:
+        walk_expr(lit.expr, lambda v: names.setdefault(v.index, v.name))
+    bound = " ".join(names.get(v, f"#{v}") for v in sorted(known)) or "none"
+    return f"{described(what or 'conjunction', e.pos)} (bound: {bound})"
+
+
 _ENTRIES: dict = {}
 
 
@@ -157,7 +195,8 @@ def _entry(names: list):
               "        return f(env)",
               "    return sat"]
     ns = {"is_ground": is_ground}
-    exec("\n".join(lines), ns)
+    define("\n".join(lines), f"binding mode of a conjunction over variables "
+           f"{', '.join(map(str, names)) or 'none'}", ns)
     make = _ENTRIES[key] = ns["make"]
     return make
 

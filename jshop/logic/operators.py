@@ -19,9 +19,10 @@ from typing import Optional
 
 from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import PlanningError
-from htn.jshop.language.terms import atom_from_term, term_str
+from htn.jshop.language.terms import atom_from_term, source_atom, term_str
 
-from .compile import substituter
+from .codegen import described
+from . import warming as warm
 from .state import Change
 
 _ATOM, _VAR_ATOM, _PROTECT, _FORALL = range(4)
@@ -46,22 +47,22 @@ class Operators:
             if dels is not None and adds is not None:
                 prog = (dels, adds, None, None, op)
             else:
-                prog = (dels, adds, self._compile(op.delete), self._compile(op.add), op)
+                prog = (dels, adds, self._compile(op.delete, op), self._compile(op.add, op), op)
             self._programs[id(op)] = prog
         return prog
 
-    def _compile(self, eff: S.Effects):
+    def _compile(self, eff: S.Effects, op: S.Operator):
         if eff.var is not None:
             return eff.var
         out = []
         for item in eff.items:
             if isinstance(item, S.EffectForAll):
                 out.append((_FORALL, self.logic.expr(item.cond),
-                            [_atom_program(a) for a in item.atoms]))
+                            [_atom_program(a, op) for a in item.atoms]))
             elif isinstance(item, S.Protection):
-                out.append((_PROTECT, _atom_program(item.atom), None))
+                out.append((_PROTECT, _atom_program(item.atom, op), None))
             else:
-                out.append(_atom_program(item))
+                out.append(_atom_program(item, op))
         return out
 
     # ------------------------------------------------------------ applying
@@ -145,7 +146,8 @@ class Operators:
         current state (protections left out)."""
         general = self._general.get(id(op))
         if general is None:
-            general = self._general[id(op)] = (self._compile(op.delete), self._compile(op.add))
+            general = self._general[id(op)] = (self._compile(op.delete, op),
+                                               self._compile(op.add, op))
         dels = [a for a in self.atoms(general[0], env, op) if a[0] is not None]
         adds = [a for a in self.atoms(general[1], env, op) if a[0] is not None]
         return dels, adds
@@ -157,21 +159,34 @@ _PLAIN: dict = {}     # id(op) -> (op, dels, adds): the same for every planner
 def _plain_lists(op: S.Operator) -> tuple:
     hit = _PLAIN.get(id(op))
     if hit is None or hit[0] is not op:
-        hit = _PLAIN[id(op)] = (op, _plain(op.delete), _plain(op.add))
+        hit = _PLAIN[id(op)] = (op, _plain(op.delete, op), _plain(op.add, op))
     return hit[1], hit[2]
 
 
-def _plain(eff: S.Effects) -> Optional[list]:
-    """``[(pred, substituter)]`` for a list of plain atoms, else None (general case)."""
+def _plain(eff: S.Effects, op: S.Operator) -> Optional[list]:
+    """``[[pred, substituter]]`` for a list of plain atoms, else None (general
+    case). The substituters are warming: compiled ones replace them in place."""
     if eff.var is not None or not all(isinstance(i, S.Atom) for i in eff.items):
         return None
-    return [(i.pred, substituter(i.args)) for i in eff.items]
+    out = []
+    for i in eff.items:
+        entry = [i.pred, None]
+        entry[1] = _substituter(i, op, lambda f, entry=entry: entry.__setitem__(1, f))
+        out.append(entry)
+    return out
 
 
-def _atom_program(a) -> tuple:
+def _substituter(a: S.Atom, op: S.Operator, install):
+    return warm.substituter(a.args, lambda: described(
+        f"effect {source_atom(a.pred, a.args)} of {op.name}", a.pos or op.pos), install)
+
+
+def _atom_program(a, op: S.Operator) -> list:
     if isinstance(a, S.VarAtom):
-        return (_VAR_ATOM, a, None)
-    return (_ATOM, a.pred, substituter(a.args))
+        return [_VAR_ATOM, a, None]
+    entry = [_ATOM, a.pred, None]
+    entry[2] = _substituter(a, op, lambda f: entry.__setitem__(2, f))
+    return entry
 
 
 def _ground(atom: tuple, env: list) -> tuple:

@@ -15,7 +15,7 @@ from typing import Optional
 
 from htn.jshop.language import syntax as S
 from htn.jshop.language.terms import atom_str, subst
-from htn.jshop.logic.task_lists import task_list_maker
+from htn.jshop.logic.task_lists import task_list_maker, task_list_warming
 
 
 class Task:
@@ -51,9 +51,13 @@ class Node:
         self.loop_key = None   # the active task instance it is, see loops.py
 
 
-def compile_tasks(tl):
-    """Compile a task list into ``env -> [Node]`` (its bound subtasks)."""
-    return task_list_maker(tl, Node, Task)
+def compile_tasks(tl, what: str = "task list", install=None):
+    """Compile a task list into ``env -> [Node]`` (its bound subtasks);
+    ``what`` names the generated code. With ``install``, the maker is
+    warming (:func:`htn.jshop.logic.task_lists.task_list_warming`)."""
+    if install is not None:
+        return task_list_warming(tl, Node, Task, what, install)
+    return task_list_maker(tl, Node, Task, what)
 
 
 def bind_tasks(tl: S.TaskList, env: list) -> Node:

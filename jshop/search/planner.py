@@ -43,7 +43,6 @@ from typing import Iterator, Optional
 from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import PlanningError
 from htn.jshop.language.terms import subst, term_str, variables
-from htn.jshop.logic.compile import head_unifier, substituter
 from htn.jshop.logic.engine import Logic
 from htn.jshop.logic.operators import Operators
 from htn.jshop.logic.state import Change, HashedState, State
@@ -52,9 +51,9 @@ from htn.jshop.plans.tree import snapshot
 
 from .goals import GoalGuard
 from .limits import DEFAULT_MAX_DEPTH, DepthLimit, MemoryGuard, MemoryLimit
-from .network import (Node, bind_tasks, compile_tasks, deepest_task, first_in_order,
-                      first_tasks, undo_marks)
+from .network import Node, bind_tasks, deepest_task, first_in_order, first_tasks, undo_marks
 from .stats import Stats
+from .steps import method_entry, operator_entry
 from .loops import LoopCheck
 
 _PLAN = object()
@@ -91,18 +90,11 @@ class Planner:
         if instance.goal is not None:
             self._goal = (self.logic.precondition(instance.goal), instance.goal_nvars)
             self.guard = GoalGuard(domain, instance.goal) or None
-        pre = self.logic.precondition
         # (operator, head unifier, precondition, head substituter, constant cost or None)
-        self._ops = {name: [(op, head_unifier(op.head.args), pre(op.pre, op.head.args),
-                             substituter(op.head.args),
-                             op.cost if type(op.cost) is float else None)
-                            for op in ops]
+        self._ops = {name: [operator_entry(self.logic, op) for op in ops]
                      for name, ops in domain.operators.items()}
-        # (precondition, body, body is ordered) per branch; see the module docstring
-        self._methods = {name: [(m, head_unifier(m.head.args),
-                                 [(pre(b.pre, m.head.args), compile_tasks(b.tasks),
-                                   jshop2_compat or b.tasks.ordered) for b in m.branches])
-                                for m in ms]
+        # (method, head unifier, [(precondition, body, body is ordered)] per branch)
+        self._methods = {name: [method_entry(self.logic, m, jshop2_compat) for m in ms]
                          for name, ms in domain.methods.items()}
         self.stats = Stats()
         # the problem's own variables (if any) stay unbound, like a method's
@@ -111,9 +103,7 @@ class Planner:
         if instance.top is not None:     # HDDL: a root task binds the network's parameters
             from htn.jshop.readers.hddl_domain import top_method
             m = top_method(domain, instance.top)
-            self._methods[m.name] = [(m, head_unifier(m.head.args),
-                                      [(pre(b.pre, m.head.args), compile_tasks(b.tasks), True)
-                                       for b in m.branches])]
+            self._methods[m.name] = [method_entry(self.logic, m, True)]
             self.root = bind_tasks(S.TaskList([m.head]), [])
         else:
             self.root = bind_tasks(instance.tasks, [None] * nvars)
