@@ -31,14 +31,14 @@ import os
 from typing import Any, Callable, Optional
 
 from .errors import STOPS, HtnError, is_stop, raised_stop
-from .terms import NIL, Dotted, term_str
+from .terms import NIL, Dotted, shown_term
 
 TRUE = 1.0
 
 
 def _num(x: Any, fn: str) -> float:
     if type(x) is not float:
-        raise HtnError(f"call {fn}: expected a number, got {term_str(x)}")
+        raise HtnError(f"call {fn}: expected a number, got {shown_term(x)}")
     return x
 
 
@@ -206,7 +206,7 @@ def _shown(v: Any, limit: int = 80) -> str:
     elif type(v) in (list, tuple, dict):
         text = f"a {type(v).__name__} of {len(v)} element(s)"
     else:
-        text = f"a {type(v).__module__}.{type(v).__qualname__}"
+        text = f"an object of class {type(v).__qualname__}"
     return _clip(text, limit)
 
 
