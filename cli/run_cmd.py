@@ -7,6 +7,7 @@ import sys
 import click
 
 from htn.api.extras import require_robot_extra
+from htn.jshop.language.errors import HtnError
 from htn.api.files import atomic_write, check_output_file, check_output_folder, make_output_folder
 
 from .output import stdout_is_terminal, warn
@@ -148,9 +149,12 @@ def _run(ctx, plan_file, robot_name, sim, gui, snapshots, faults, seed, retries,
             check_output_folder(path, option, inputs, others)
         else:
             check_output_file(path, option, inputs, others)
-    execution = prepare(plan, robot=robot_name, domain=domain, problem=problem,
-                        functions=functions, plan_index=plan_index, faults=faults or "",
-                        seed=seed, retries=retries, replan=replan, log=log_path, gui=gui)
+    try:
+        execution = prepare(plan, robot=robot_name, domain=domain, problem=problem,
+                            functions=functions, plan_index=plan_index, faults=faults or "",
+                            seed=seed, retries=retries, replan=replan, log=log_path, gui=gui)
+    except HtnError as exc:
+        raise _as_header_error(exc, from_log) from None
     if not quiet:
         for note in execution.notes:
             warn(note)
@@ -209,6 +213,25 @@ def _run(ctx, plan_file, robot_name, sim, gui, snapshots, faults, seed, retries,
     if viewer:                   # Ctrl-C ends the view; the exit code is the run's
         keep_up(viewer, listen=signals.listen_again)
     sys.exit(0 if summary.result == "verified" else 1)
+
+
+# what the log's header gave instead of an option: its errors name the field
+HEADER_OPTIONS = {"--faults": "faults", "--retries": "retries", "--plan-index": "plan_index",
+                  "--robot": "robot", "--seed": "seed"}
+
+
+def _as_header_error(exc, from_log):
+    """An error about a value the log's header gave (``--faults: ...``),
+    worded as the header's: ``run.jsonl:1: header field "faults": ...``."""
+    option, _, rest = exc.message.partition(": ")
+    if not from_log:
+        return exc
+    field = HEADER_OPTIONS.get(option) or next(
+        (f for o, f in HEADER_OPTIONS.items() if exc.message.startswith(o + " ")), None)
+    if field is None:
+        return exc
+    text = rest if option in HEADER_OPTIONS else exc.message.split(" ", 2)[-1]
+    return HtnError(f'header field "{field}": {text}', from_log, 1)
 
 
 def _end_in_emergency(execution):

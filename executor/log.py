@@ -66,12 +66,8 @@ class LineFile:
     def _cut(self) -> None:
         """Back to the last whole line (what follows it is half a line)."""
         try:
-            end = os.lseek(self.fd, 0, os.SEEK_END)
-            tail = os.pread(self.fd, end - self.size, self.size) if end > self.size else b""
-            keep = self.size + tail.rfind(b"\n") + 1
-            os.ftruncate(self.fd, keep)
-            os.lseek(self.fd, keep, os.SEEK_SET)
-            self.size = keep
+            os.ftruncate(self.fd, self.size)
+            os.lseek(self.fd, self.size, os.SEEK_SET)
         except OSError:
             pass
 
