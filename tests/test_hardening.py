@@ -262,3 +262,19 @@ def test_a_method_task_with_more_arguments_than_its_task_is_located(tmp_path):
     r = run_htn("plan", d, p)
     assert r.returncode == 2 and "Traceback" not in r.stderr
     assert r.stderr.startswith(f"{d}:4:49: t takes 1 argument(s), given 2"), r.stderr
+
+
+def test_transform_and_examples_refuse_what_they_must_not_write(tmp_path):
+    from conftest import ROOT
+    d = tmp_path / "kitchen.jshop"
+    d.write_bytes((ROOT / "domains" / "kitchen.jshop").read_bytes())
+    before = d.read_bytes()
+    r = run_htn("transform", d, ROOT / "problems" / "tray_three.jshop", "-o", d)
+    assert r.returncode == 2 and f"{d}: -o: is an input of this command" in r.stderr
+    assert d.read_bytes() == before
+    assert run_htn("examples", tmp_path / "ex").returncode == 0
+    victim = tmp_path / "ex" / "domains" / "domestic.jshop"
+    victim.unlink()
+    os.mkfifo(victim)
+    r = run_htn("examples", tmp_path / "ex", "--force", timeout=60)
+    assert r.returncode == 2 and "is a FIFO, not a file" in r.stderr and not victim.is_file()
