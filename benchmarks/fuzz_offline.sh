@@ -18,7 +18,7 @@ lane() {
         HTN_FUZZ_EXAMPLES=$examples HTN_FUZZ_RANDOM=1 nice -n 15 \
             python -m pytest -q -s -p no:cacheprovider -m slow \
             tests/test_fuzz.py tests/test_fuzz_hostile.py 2>&1 |
-            grep -E "inputs;|passed|failed|Error|Falsifying|Draw|^E " | cut -c1-400
+            grep -E "inputs;|passed|failed|Error|Falsifying|Draw|^ *[|]? *E " | cut -c1-600
     done
 }
 for n in $(seq 1 "$lanes"); do
