@@ -186,3 +186,26 @@ def test_signals_at_40_instants_of_plan_and_run_on_a_loaded_machine(tmp_path):
                     path.unlink()
                 code, err, events = signal_at(argv, at, sig, path)
                 check_stopped(code, err, events, sig, f"{name}, {sig.name} at {at:.2f} s")
+
+
+@pytest.mark.slow
+@pytest.mark.sim
+def test_a_signal_just_after_the_log_header_still_ends_the_log(tmp_path):
+    # main blocked the signals with a thread mask while the header was
+    # written: the kernel gave the signal to another thread (PyBullet's,
+    # NumPy's), Python raised it in the middle of writing, and half the logs
+    # ended on their header
+    plan = tmp_path / "plan.txt"
+    assert run_htn("plan", ROOT / "domains" / "domestic.jshop",
+                   ROOT / "problems" / "bring_object.jshop", "-o", plan).returncode == 0
+    for i in range(10):
+        log = tmp_path / f"run{i}.jsonl"
+        sig = signal.SIGINT if i % 2 == 0 else signal.SIGTERM
+        proc = start_htn("run", plan, "--sim", "--log", log, "-q")
+        while not (log.exists() and log.stat().st_size > 0) and proc.poll() is None:
+            pass                        # as soon as the header is there
+        proc.send_signal(sig)
+        out, err = proc.communicate(timeout=120)
+        events = [json.loads(line) for line in log.read_text().splitlines()]
+        check_stopped(proc.returncode, err, events, sig, f"run {i}, {sig.name}")
+        assert events[-2]["event"] == "interrupted", events[-3:]
