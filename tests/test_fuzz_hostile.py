@@ -34,10 +34,12 @@ from collections import Counter
 
 import pytest
 from conftest import run_htn, run_htn_process
-from hypothesis import HealthCheck, given, settings, strategies as st
+from hypothesis import HealthCheck, Phase, given, settings, strategies as st
 
 EXAMPLES = int(os.environ.get("HTN_FUZZ_EXAMPLES", "200"))
 RANDOM = bool(os.environ.get("HTN_FUZZ_RANDOM"))
+# offline (fresh seeds, many inputs): a failure is reported as found, not shrunk
+PHASES = [Phase.generate] if RANDOM else list(Phase)
 LOCATED = re.compile(r"^[^\n]+:\d+(:\d+)?: ")
 USAGE = re.compile(r"^(Usage: |Error: )", re.M)
 
@@ -136,7 +138,7 @@ def _check(r, argv, inputs: dict, limit: float | None, began: float, kind: str) 
 
 @pytest.mark.slow
 @settings(max_examples=EXAMPLES, deadline=None, derandomize=not RANDOM, database=None,
-          suppress_health_check=list(HealthCheck))
+          suppress_health_check=list(HealthCheck), phases=PHASES)
 @given(data=st.data())
 def test_hostile_options_and_functions_get_a_clean_answer(tmp_path_factory, data):
     folder = tmp_path_factory.mktemp("hostile")
@@ -195,7 +197,7 @@ def logged(tmp_path_factory):
 
 @pytest.mark.slow
 @settings(max_examples=EXAMPLES, deadline=None, derandomize=not RANDOM, database=None,
-          suppress_health_check=list(HealthCheck))
+          suppress_health_check=list(HealthCheck), phases=PHASES)
 @given(data=st.data())
 def test_edited_logs_get_a_clean_answer(logged, data):
     folder, fns, text = logged

@@ -105,7 +105,10 @@ def test_a_function_that_swallows_a_signal_is_ended(tmp_path, sig):
     wait_until((tmp_path / "fns.py.called").exists, "the function", proc)
     proc.send_signal(sig)
     began = time.monotonic()
-    out, err = proc.communicate(timeout=60)
+    try:
+        out, err = proc.communicate(timeout=60)
+    finally:
+        proc.kill()         # still running: the test fails, the process must not stay
     assert proc.returncode == 128 + sig and "Traceback" not in err, err
     assert "function f did not stop" in err and time.monotonic() - began < 10
 
