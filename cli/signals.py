@@ -128,7 +128,9 @@ def _deliver(exc: BaseException) -> None:
         return                          # the command is stopping already
     st.swallowed = False
     st.raised = exc
-    if st.watchdog is None:
+    if st.watchdog is None and st.process:
+        # only in htn's own process: a library caller's (or a test's) process
+        # is not ours to interrupt from another thread, nor to end
         st.watchdog = Watchdog(_signal_of, _emergency_exit).begin()
     d = st.dispatcher
     if d is not None and d.in_tick:
@@ -230,7 +232,7 @@ def interrupt_exit(exc: BaseException | None, note: str = "", now: bool = False)
         sys.stderr.flush()
     except (OSError, ValueError):
         pass
-    if now:
+    if now and st.process:      # a library caller's process is not ours to end
         os._exit(code)
     sys.exit(code)
 

@@ -59,7 +59,7 @@ class Watchdog:
     def _watch(self) -> None:
         while not self.done.wait(EVERY):
             signum = self.signal_of()
-            if signum is not None:
+            if signum is not None and not self.done.is_set():
                 _thread.interrupt_main(signum)
             waited = time.monotonic() - self.since
             stuck = running_user_code()
