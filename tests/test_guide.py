@@ -78,9 +78,14 @@ def venv(tmp_path_factory) -> Path:
     here = sysconfig.get_paths()["purelib"]
     (site / "htn-test-parent-site.pth").write_text(f"import site; site.addsitedir({here!r})\n")
     (wheel,) = wheels.glob("htn-*.whl")
-    r = subprocess.run([venv / "bin" / "python", "-m", "pip", "install", "-q", "--no-deps", wheel],
+    # --ignore-installed: the parent site may hold htn of the same version (a
+    # non-editable install, as CI makes), and pip would then skip the wheel and
+    # leave the venv without its own htn and htn command.
+    r = subprocess.run([venv / "bin" / "python", "-m", "pip", "install", "-q", "--no-deps",
+                        "--ignore-installed", wheel],
                        capture_output=True, text=True, timeout=600)
     assert r.returncode == 0, r.stdout + r.stderr
+    assert (venv / "bin" / "htn").is_file()
     return venv
 
 

@@ -190,6 +190,7 @@ def test_transform_writes_the_transformed_tree_and_run_executes_it(tmp_path, cou
                 "--json")
     assert r.returncode == 0, r.stderr
     tree = json.loads(r.stdout)["tree"]["nodes"]
+    count_planning.clear()          # htn transform plans (in this process): only run counts
     with prepare(out, robot="symbolic") as execution:
         root = execution.begin().root
         executed = {b.name: (b.htn_task.method_index, b.htn_task.branch)

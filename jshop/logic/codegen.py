@@ -8,8 +8,9 @@ that says what it compiles, ``<htn: precondition of !grasp, domestic.jshop:41>``
 and its source is registered with :mod:`linecache`, so a traceback through it
 shows the generated lines and ``pdb`` can list and step through them.
 
-``HTN_DUMP_COMPILED=DIR`` (read once, when this module is imported) also
-writes every piece to a file in ``DIR`` named after what it compiles.
+``HTN_DUMP_COMPILED=DIR`` (read when a piece is compiled, so a program that
+sets it later is heard) also writes every piece to a file in ``DIR`` named
+after what it compiles.
 
 Compiling costs far more than running a piece once (Python compiles about a
 microsecond per character of source), and a small search runs most pieces a
@@ -24,7 +25,6 @@ import re
 
 from .caches import on_clear
 
-_DUMP_DIR = os.environ.get("HTN_DUMP_COMPILED") or None
 _SOURCES: dict = {}       # file name -> source compiled under it
 
 
@@ -56,17 +56,18 @@ def define(src: str, what: str, ns: dict) -> dict:
         _SOURCES[name] = src
         # mtime None: linecache.checkcache keeps the entry (there is no file)
         linecache.cache[name] = (len(src), None, src.splitlines(True), name)
-        if _DUMP_DIR is not None:
-            _dump(name, src)
+        dump_dir = os.environ.get("HTN_DUMP_COMPILED")
+        if dump_dir:
+            _dump(dump_dir, name, src)
     exec(compile(src, name, "exec"), ns)
     return ns
 
 
-def _dump(name: str, src: str) -> None:
-    os.makedirs(_DUMP_DIR, exist_ok=True)
+def _dump(dump_dir: str, name: str, src: str) -> None:
+    os.makedirs(dump_dir, exist_ok=True)
     stem = re.sub(r"[^A-Za-z0-9._-]+", "_", name[6:-1]).strip("_")[:150] or "code"
     # the lines as a traceback numbers them; what they are at the end
-    with open(os.path.join(_DUMP_DIR, stem + ".py"), "w", encoding="utf-8") as f:
+    with open(os.path.join(dump_dir, stem + ".py"), "w", encoding="utf-8") as f:
         f.write(f"{src}\n# {name}\n")
 
 
