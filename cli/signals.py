@@ -13,9 +13,8 @@ Every moment of the process is covered, from the entry point's first line
   and a second one must not break its clean-up; any signal still decides
   the exit code (130, 143) when the command ends;
 * output units (a plan, a JSON line) are written in :func:`held` blocks: a
-  stop that comes meanwhile is raised when the block ends. This is a flag
-  the handler reads, not a signal mask: the kernel gives a process's signal
-  to any of its threads (NumPy's, PyBullet's), a mask holds back only one;
+  stop that comes meanwhile is raised when the block ends (a flag, not a
+  signal mask: the kernel gives a signal to any thread, a mask holds one);
 * ``htn run`` :func:`watch`\\ es its task dispatcher: a signal during a tick
   halts it when the tick ends (the robot holds its pose, the log is ended);
 * ``--timeout`` is a wall-clock :func:`deadline`: SIGALRM raises
@@ -38,7 +37,7 @@ from contextlib import contextmanager
 
 from htn.jshop.language.errors import is_stop, raised_stop
 
-from .watchdog import GRACE, Watchdog
+from .watchdog import GRACE, Watchdog, backstop_after
 
 INTERRUPT_EXIT = 128 + signal.SIGINT
 SIGTERM_EXIT = 128 + signal.SIGTERM
@@ -107,8 +106,17 @@ def _on_signal(signum, frame):
     _deliver(exc)
 
 
+AGAIN = 0.5     # seconds: the deadline is raised again until the command stops
+
+
 def _on_alarm(signum, frame):
     st = STATE
+    # again until the deadline's block ends: Python drops an exception raised
+    # in a finalizer, and even a library caller's command must stop
+    if st.dispatcher is None:       # htn run ends by halting its dispatcher, once
+        signal.setitimer(signal.ITIMER_REAL, AGAIN)
+        if isinstance(st.raised, DeadlineExceeded) and not st.swallowed:
+            st.swallowed = True         # raised before and the command goes on: again
     _deliver(TimedOut(timeout_reason(st.timeout)) if st.dispatcher is not None
              else DeadlineExceeded())
 
@@ -371,28 +379,19 @@ def deadline(seconds: float | None, started: float | None = None):
         return
     outer, st.timeout = st.timeout, seconds
     signal.setitimer(signal.ITIMER_REAL, max(remaining, 1e-3))
-    backstop = _backstop(max(remaining, 0.0) + GRACE + 2.0)
+    # a library caller's process is not ours to end
+    backstop = st.process and backstop_after(max(remaining, 0.0) + GRACE + 2.0)
     try:
         yield
     finally:
-        signal.setitimer(signal.ITIMER_REAL, 0)
+        while True:
+            try:
+                signal.setitimer(signal.ITIMER_REAL, 0)
+                break
+            except DeadlineExceeded:    # raised again as it was being cancelled
+                continue
         if backstop:
             import faulthandler
             faulthandler.cancel_dump_traceback_later()
         signal.signal(signal.SIGALRM, old)
         st.timeout = outer if outer is not None else st.timeout
-
-
-_DEVNULL = []
-
-
-def _backstop(after: float) -> bool:
-    """End the process (exit 1, nothing printed) ``after`` seconds from now
-    even if no Python code can run: faulthandler's timer is a C thread."""
-    if not STATE.process:       # a library caller's process is not ours to end
-        return False
-    import faulthandler
-    if not _DEVNULL:
-        _DEVNULL.append(open(os.devnull, "w"))
-    faulthandler.dump_traceback_later(after, exit=True, file=_DEVNULL[0])
-    return True

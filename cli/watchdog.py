@@ -21,6 +21,7 @@ This module imports only the standard library.
 from __future__ import annotations
 
 import _thread
+import os
 import sys
 import threading
 import time
@@ -71,3 +72,16 @@ class Watchdog:
     def _end(self, why: str) -> None:
         if not self.done.is_set():
             self.end(why)
+
+
+_DEVNULL: list = []
+
+
+def backstop_after(after: float) -> bool:
+    """End the process (exit 1, nothing printed) ``after`` seconds from now
+    even if no Python code can run: faulthandler's timer is a C thread."""
+    import faulthandler
+    if not _DEVNULL:
+        _DEVNULL.append(open(os.devnull, "w"))
+    faulthandler.dump_traceback_later(after, exit=True, file=_DEVNULL[0])
+    return True
