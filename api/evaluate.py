@@ -62,10 +62,11 @@ def check_evaluation(problem, domain, robot, faults, workers, scheduler, plot, r
                        "one and its workers: give one of them")
     from htn.robot.faults import parse_faults
     parse_faults(faults, MEASURES[robot].fault_kinds)
+    inputs = (problem, domain)
     if plot is not None:
-        check_output_folder(plot, "--plot")
+        check_output_folder(plot, "--plot", inputs, [(records, "--records")] if records else ())
     if records is not None:
-        check_output_file(records, "--records")
+        check_output_file(records, "--records", inputs, [(plot, "--plot")] if plot else ())
 
 
 def check_study(study, log: list, problem: str) -> None:

@@ -14,7 +14,8 @@ from dataclasses import dataclass
 from typing import Optional
 
 from htn.executor.config import load_retries, parse_overrides
-from htn.executor.log import check_plan_digest, check_plan_present, read_header
+from htn.executor.log_header import (check_plan_digest, check_plan_present, check_unchanged,
+                                     file_sha256, read_header)
 from htn.executor.plan_tree import RECOVER_PLANS, RECOVER_TIMEOUT, check_runnable, recover_tree
 from htn.jshop.language.errors import HtnError
 from htn.jshop.plans.plan import Plan
@@ -61,7 +62,7 @@ def run_inputs(plan, domain=None, problem=None, functions=None, plan_index: int 
     if pf is not None:
         domain = domain or pf.domain
         problem = problem or pf.problem
-        functions = functions or pf.file("functions")
+        functions = checked_functions(pf.named_functions(), functions, where)
         if not domain or not problem:
             raise HtnError("the plan file names no domain or problem (write it with 'htn plan "
                            "-o', or give --domain and --problem)", where)
@@ -129,6 +130,31 @@ def methods_of(domain, instance) -> dict:
     return {**domain.methods, top.name: [top]}
 
 
+def checked_functions(named, given, where: str, line: Optional[int] = None,
+                      option: str = "--functions"):
+    """The functions to run with: ``given`` (a path or a loaded table, from
+    the user), checked against ``named`` ((path, line, SHA-256 or None): the
+    file a plan file or a log says its plans were made with). A data file
+    never makes htn import Python: if it names a functions file the user
+    must give it, and one whose SHA-256 differs is refused."""
+    if named is None:
+        return given
+    path, at, digest = named
+    at = line or at
+    if given is None:
+        raise HtnError(f"these plans were made with the functions file {path}; htn imports "
+                       f"no Python a data file names: give {option} {path} to run it",
+                       where, at)
+    if digest and is_path(given):
+        actual = file_sha256(os.fspath(given))
+        if actual != digest:
+            raise HtnError(f"{option} {os.fspath(given)} is not the functions file these plans "
+                           f"were made with ({path}): its SHA-256 is "
+                           f"{(actual or 'unreadable')[:12]}..., recorded "
+                           f"{digest[:12]}...", where, at)
+    return given
+
+
 @dataclass
 class LoggedRun:
     """What a log's header records of its run (``htn run --log``), with the
@@ -153,15 +179,21 @@ class LoggedRun:
                     replan=self.replan)
 
 
-def read_run_log(path) -> LoggedRun:
+def read_run_log(path, functions=None) -> LoggedRun:
     """The run a log records (its first event, the header): the plan file it
-    ran must be there and unchanged (its SHA-256), else an input error at the
-    log's first line."""
+    ran, its domain and problem must be there and unchanged (their SHA-256),
+    else an input error at the log's first line. ``functions``: the user's
+    functions file, required if the run had one (the log's is never loaded
+    because the log names it) and checked to be that file."""
     path = os.fspath(path)
     rec = read_header(path)
     check_plan_present(rec["plan"], path)
     pf = read_plan_file(rec["plan"])
     check_plan_digest(rec["plan"], rec.get("plan_sha256"), pf.sha256, path)
+    for kind in ("domain", "problem"):
+        check_unchanged(rec, kind, path)
+    named = (rec["functions"], 1, rec.get("functions_sha256")) if rec.get("functions") else None
+    functions = checked_functions(named, functions, path, 1)
     return LoggedRun(path, pf, rec["plan_index"], rec["domain"], rec["problem"],
-                     rec.get("functions"), rec["robot"], rec["seed"], rec["faults"],
+                     functions, rec["robot"], rec["seed"], rec["faults"],
                      dict(rec["retries"] or {}), rec["replan"])

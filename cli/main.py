@@ -9,6 +9,7 @@ plan ... | head -1``) ends the command quietly with 0.
 """
 from __future__ import annotations
 
+import errno
 import importlib
 import sys
 
@@ -17,7 +18,12 @@ import click
 from htn.jshop.language.errors import HtnError
 
 from .output import fail
-from .signals import interrupt_exit, sigterm_as_interrupt, silence_stdout
+from .signals import DeadlineExceeded, interrupt_exit, silence_stdout
+from .signals import command as signal_handling
+
+# errors writing to a stream (standard output): a full disk, a device that
+# fails, a read-only file system, a descriptor that user code closed
+STREAM_ERRORS = {errno.ENOSPC, errno.EIO, errno.EROFS, errno.EDQUOT, errno.EFBIG, errno.EBADF}
 
 CONTEXT = dict(help_option_names=["-h", "--help"], max_content_width=100)
 
@@ -78,23 +84,32 @@ _COMMANDS = {"plan": "plan_cmd", "run": "run_cmd", "validate": "validate_cmd",
 def main(argv=None) -> None:
     """Console entry point: run the click group, turning input errors into exit 2."""
     sys.setrecursionlimit(max(sys.getrecursionlimit(), 20000))
-    try:
-        with sigterm_as_interrupt():
+    with signal_handling() as state:
+        try:
             code = cli.main(args=argv, prog_name="htn", standalone_mode=False)
             sys.stdout.flush()
-    except HtnError as exc:
-        fail(exc)
-        sys.exit(2)
-    except click.exceptions.Abort as exc:    # click's form of an interrupt outside a command
-        interrupt_exit(exc.__context__)
-    except click.ClickException as exc:
-        exc.show()
-        sys.exit(exc.exit_code)
-    except KeyboardInterrupt as exc:
-        interrupt_exit(exc)
-    except BrokenPipeError:
-        silence_stdout()
-        sys.exit(0)
+        except HtnError as exc:
+            fail(exc)
+            code = 2
+        except click.exceptions.Abort as exc:    # click's form of an interrupt outside a command
+            interrupt_exit(exc.__context__)
+        except click.ClickException as exc:
+            exc.show()
+            code = exc.exit_code
+        except (KeyboardInterrupt, DeadlineExceeded) as exc:
+            interrupt_exit(exc)
+        except BrokenPipeError:
+            silence_stdout()
+            code = 0
+        except OSError as exc:
+            if exc.filename is not None or exc.errno not in STREAM_ERRORS:
+                raise
+            # every file htn writes reports its own errors: this is a stream's
+            silence_stdout()
+            fail(HtnError(f"cannot write: {exc.strerror or exc}", "standard output"))
+            code = 2
+        if state.received is not None and not state.reported:
+            interrupt_exit(state.received)   # a signal the command did not report
     sys.exit(code or 0)
 
 

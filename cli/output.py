@@ -8,9 +8,18 @@ import sys
 import click
 
 
+MESSAGE_LIMIT = 1000    # characters: each quoted term is cut to 200 already
+
+
 def fail(exc) -> None:
-    """Print an input error as one ``file:line:col: message`` line (+ source)."""
-    click.echo(f"{exc}", err=True)
+    """Print an input error as one ``file:line:col: message`` line (+ source),
+    cut to :data:`MESSAGE_LIMIT` characters (its middle left out) whatever
+    it quotes."""
+    text = f"{exc}"
+    if len(text) > MESSAGE_LIMIT:
+        half = MESSAGE_LIMIT // 2
+        text = f"{text[:half]} ... {text[-half:]}"
+    click.echo(text, err=True)
     src = exc.source_line() if hasattr(exc, "source_line") else None
     if src:
         click.echo(src, err=True)

@@ -18,8 +18,9 @@ from htn.jshop.search.limits import DEFAULT_MAX_DEPTH
 from htn.jshop.search.searches import SEARCHES
 
 from .output import console, stdout_is_terminal, warn
+from .options import TIMEOUT_HELP, Timeout
 from .progress import Phase
-from .signals import DeadlineExceeded, deadline, held, interrupt_exit, raise_again
+from .signals import STATE, DeadlineExceeded, deadline, held, interrupt_exit, raise_again
 
 FORMATS = ["text", "jshop", "json", "ipc"]
 
@@ -41,9 +42,8 @@ FORMATS = ["text", "jshop", "json", "ipc"]
               help="Also write the plans (jshop format, with a header naming the domain and "
                    "problem files, and each plan's task tree as comment lines) to this file, "
                    "for 'htn run'.")
-@click.option("--timeout", type=click.FloatRange(min=0, min_open=True), metavar="SECONDS",
-              help="Stop searching after this many seconds (wall clock, user functions "
-                   "included) and keep what was found.")
+@click.option("--timeout", type=Timeout(), metavar="SECONDS",
+              help=TIMEOUT_HELP + " The search stops then and keeps what was found.")
 @click.option("--functions", type=click.Path(dir_okay=False), metavar="FILE.py",
               help="Python file whose public functions can be called with (call name ...) "
                    "and used as :sort-by comparators.")
@@ -86,7 +86,7 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
     from htn.api.plan import UnsupportedSearch, plan as find_plans
     from htn.jshop.plans.planfile import header, plan_text
 
-    started = time.perf_counter()
+    started = STATE.started or time.perf_counter()     # --timeout counts from the start
     fmt = fmt or ("text" if stdout_is_terminal() else "jshop")
     # -o and --dot are checked before any work, and replaced only by a
     # complete new result: at least one whole plan (also after a timeout,
@@ -94,15 +94,19 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
     sinks: list = []
     written = _Written()
     try:
-        out = AtomicFile(output, "-o") if output else None
+        inputs = (domain, problem, functions)
+        out = AtomicFile(output, "-o", inputs, [(dot, "--dot")] if dot else ()) \
+            if output else None
         sinks.append(out)
-        dot_out = _DotFile(AtomicFile(dot, "--dot")) if dot else None
+        dot_out = _DotFile(AtomicFile(dot, "--dot", inputs, [(output, "-o")] if output else ())) \
+            if dot else None
         sinks.append(dot_out)
         # reading a large HDDL instance, and the search before the first
         # plan, can take seconds: a spinner says which (on a terminal, after
-        # a second; it is gone before anything is printed)
+        # a second; it is gone before anything is printed); loading counts
+        # toward --timeout too
         try:
-            with Phase("reading the domain and the problem"):
+            with deadline(timeout, started), Phase("reading the domain and the problem"):
                 plans = find_plans(domain, problem, plans=None if all_plans else n_plans,
                                    timeout=timeout, functions=functions,
                                    jshop2_compat=jshop2_compat, max_depth=max_depth,

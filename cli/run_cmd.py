@@ -7,17 +7,20 @@ import sys
 import click
 
 from htn.api.extras import require_robot_extra
+from htn.jshop.language.errors import HtnError
 from htn.api.files import atomic_write, check_output_file, check_output_folder, make_output_folder
 
 from .output import stdout_is_terminal, warn
 from .progress import Phase
 from .run_checks import check_display
+from . import signals
+from .options import TIMEOUT_HELP, Timeout
 from .run_lines import event_line
-from .signals import Signals, held, interrupt_exit, silence_stdout
+from .signals import STATE, deadline, held, interrupt_exit, silence_stdout
 from .view_cmd import keep_up, start_run_view, view_options, wait_for_page
 
 RUN_OPTIONS = ("plan_file", "robot_name", "sim", "faults", "seed", "retries", "replan",
-               "plan_index", "domain", "problem", "functions")
+               "plan_index", "domain", "problem")
 
 
 @click.command("run")
@@ -52,7 +55,11 @@ RUN_OPTIONS = ("plan_file", "robot_name", "sim", "faults", "seed", "retries", "r
 @click.option("--problem", type=click.Path(dir_okay=False),
               help="Problem file (default: the one named in the plan file).")
 @click.option("--functions", type=click.Path(dir_okay=False), metavar="FILE.py",
-              help="User functions for (call ...) (default: the plan file's, if any).")
+              help="User functions for (call ...): needed when the plans were made with "
+                   "one (the plan file or log names it, and htn checks its SHA-256; it "
+                   "never imports a file a plan file or log names on its own).")
+@click.option("--timeout", type=Timeout(), metavar="SECONDS", help=TIMEOUT_HELP +
+              " For a run: the robot holds its pose and the log ends 'interrupted'.")
 @click.option("--bt-dot", "bt_dot", type=click.Path(dir_okay=False), metavar="FILE.dot",
               help="Write the behaviour tree (py_trees' DOT export) before the run, and "
                    "again after it if it was repaired.")
@@ -60,7 +67,7 @@ RUN_OPTIONS = ("plan_file", "robot_name", "sim", "faults", "seed", "retries", "r
 @view_options
 @click.pass_context
 def run(ctx, plan_file, robot_name, sim, gui, snapshots, faults, seed, retries, replan,
-        log_path, from_log, plan_index, domain, problem, functions, bt_dot, quiet,
+        log_path, from_log, plan_index, domain, problem, functions, timeout, bt_dot, quiet,
         view, view_host, view_port, view_wait):
     """Execute PLAN_FILE (written by 'htn plan -o') with per-action monitoring.
 
@@ -94,18 +101,16 @@ def run(ctx, plan_file, robot_name, sim, gui, snapshots, faults, seed, retries, 
     """
     if view_wait and not view:
         raise click.UsageError("--view-wait waits for the page of --view: give --view too")
-    signals = Signals()
     try:
-        _run(ctx, signals, plan_file, robot_name, sim, gui, snapshots, faults, seed, retries,
-             replan, log_path, from_log, plan_index, domain, problem, functions, bt_dot, quiet,
-             web=(view_host, view_port, view_wait) if view else None)
-    except KeyboardInterrupt as exc:        # before the robot runs: nothing to stop
+        with deadline(timeout, STATE.started):
+            _run(ctx, plan_file, robot_name, sim, gui, snapshots, faults, seed, retries,
+                 replan, log_path, from_log, plan_index, domain, problem, functions, bt_dot,
+                 quiet, web=(view_host, view_port, view_wait) if view else None)
+    except (KeyboardInterrupt, signals.DeadlineExceeded) as exc:  # before the robot runs
         interrupt_exit(exc, now=True)       # now: PyBullet may have been interrupted
-    finally:
-        signals.restore()
 
 
-def _run(ctx, signals, plan_file, robot_name, sim, gui, snapshots, faults, seed, retries,
+def _run(ctx, plan_file, robot_name, sim, gui, snapshots, faults, seed, retries,
          replan, log_path, from_log, plan_index, domain, problem, functions, bt_dot, quiet,
          web=None):
     from htn.api.run import prepare, read_run_log
@@ -120,7 +125,8 @@ def _run(ctx, signals, plan_file, robot_name, sim, gui, snapshots, faults, seed,
         if given:
             raise click.UsageError(f"--from-log takes the run from the log; do not give "
                                    f"{', '.join(given)} as well")
-        logged = read_run_log(from_log)     # the plan file too, checked to be unchanged
+        # the plan, domain and problem files too, checked to be unchanged
+        logged = read_run_log(from_log, functions)
         plan, plan_file = logged.plan, logged.plan.path
         robot_name, seed, replan = logged.robot, logged.seed, logged.replan
         faults, plan_index, retries = logged.faults, logged.plan_index, logged.retries
@@ -136,17 +142,24 @@ def _run(ctx, signals, plan_file, robot_name, sim, gui, snapshots, faults, seed,
     require_robot_extra(robot_name, "htn run --sim" if sim else f"htn run --robot {robot_name}")
     if gui:
         check_display()
-    for path, option in ((log_path, "--log"), (bt_dot, "--bt-dot")):
-        if path:
-            check_output_file(path, option)
-    if snapshots:
-        check_output_folder(snapshots, "--snapshots")
+    inputs = [plan_file, domain, problem, functions, from_log]
+    outputs = [(p, o) for p, o in ((log_path, "--log"), (bt_dot, "--bt-dot"),
+                                   (snapshots, "--snapshots")) if p]
+    for path, option in outputs:
+        others = [x for x in outputs if x[1] != option]
+        if option == "--snapshots":
+            check_output_folder(path, option, inputs, others)
+        else:
+            check_output_file(path, option, inputs, others)
     # reading and checking everything, and building a simulated world, can
     # take seconds: a spinner says so (on a terminal, after a second)
-    with Phase(f"reading the plan and building the {robot_name} robot"):
-        execution = prepare(plan, robot=robot_name, domain=domain, problem=problem,
-                            functions=functions, plan_index=plan_index, faults=faults or "",
-                            seed=seed, retries=retries, replan=replan, log=log_path, gui=gui)
+    try:
+        with Phase(f"reading the plan and building the {robot_name} robot"):
+            execution = prepare(plan, robot=robot_name, domain=domain, problem=problem,
+                                functions=functions, plan_index=plan_index, faults=faults or "",
+                                seed=seed, retries=retries, replan=replan, log=log_path, gui=gui)
+    except HtnError as exc:
+        raise _as_header_error(exc, from_log) from None
     if not quiet:
         for note in execution.notes:
             warn(note)
@@ -161,6 +174,7 @@ def _run(ctx, signals, plan_file, robot_name, sim, gui, snapshots, faults, seed,
         # (an interrupt meanwhile arrives right after, see below)
         with held():
             dispatcher = execution.begin(argv=["htn", *sys.argv[1:]])
+            signals.on_emergency(lambda: _end_in_emergency(execution))
         if bt_dot:
             _write_dot(dispatcher.root, bt_dot)
         view = None
@@ -180,7 +194,7 @@ def _run(ctx, signals, plan_file, robot_name, sim, gui, snapshots, faults, seed,
         signals.watch(dispatcher)
         with view or contextlib.nullcontext():
             summary = execution.execute().summary
-        signals.ignore()       # the robot holds and the log is complete: shut down in order
+        signals.settle()       # the robot holds and the log is complete: shut down in order
         if bt_dot and summary.replans:
             _write_dot(dispatcher.root, bt_dot)
     except KeyboardInterrupt as exc:
@@ -188,7 +202,7 @@ def _run(ctx, signals, plan_file, robot_name, sim, gui, snapshots, faults, seed,
             raise
         # outside dispatcher.run() (e.g. while --bt-dot is written): the log
         # still ends with the outcome and a summary
-        signals.ignore()
+        signals.settle()
         summary = execution.interrupted(str(exc)).summary
     except BaseException as exc:
         execution.fail(exc)
@@ -200,10 +214,44 @@ def _run(ctx, signals, plan_file, robot_name, sim, gui, snapshots, faults, seed,
     except BrokenPipeError:      # the reader went away: the exit code still tells
         silence_stdout()
     if summary.result == "interrupted":     # log closed, robot disconnected
-        interrupt_exit(signals.received, now=True)
+        interrupt_exit(STATE.received or STATE.raised, now=True)
     if viewer:                   # Ctrl-C ends the view; the exit code is the run's
-        keep_up(viewer, listen=signals.restore)
+        keep_up(viewer, listen=signals.listen_again)
     sys.exit(0 if summary.result == "verified" else 1)
+
+
+# what the log's header gave instead of an option: its errors name the field
+HEADER_OPTIONS = {"--faults": "faults", "--retries": "retries", "--plan-index": "plan_index",
+                  "--robot": "robot", "--seed": "seed"}
+
+
+def _as_header_error(exc, from_log):
+    """An error about a value the log's header gave (``--faults: ...``),
+    worded as the header's: ``run.jsonl:1: header field "faults": ...``."""
+    option, _, rest = exc.message.partition(": ")
+    if not from_log:
+        return exc
+    field = HEADER_OPTIONS.get(option) or next(
+        (f for o, f in HEADER_OPTIONS.items() if exc.message.startswith(o + " ")), None)
+    if field is None:
+        return exc
+    text = rest if option in HEADER_OPTIONS else exc.message.split(" ", 2)[-1]
+    return HtnError(f'header field "{field}": {text}', from_log, 1)
+
+
+def _end_in_emergency(execution):
+    """The watchdog ends the process (user code kept running after a stop):
+    the log still ends with ``interrupted`` and its summary."""
+    log = execution.log
+    if log is None or log.ended:
+        return None
+    try:
+        execution.interrupted(str(STATE.raised or "stopped"))
+    except BaseException:       # noqa: BLE001 - the dispatcher is mid-tick: end the log itself
+        log.emit(None, None, "interrupted", None, "ended by the watchdog")
+        log.emit(None, None, "summary", None, "interrupted", result="interrupted")
+    log.close()
+    return None
 
 
 def summary_line(summary) -> str:

@@ -40,7 +40,7 @@ def transform(domain, problem, rules, metric, output, as_json):
     from htn.api.transform import UnknownRules, transform as transform_plan
 
     # a bad -o fails before the work; the file is replaced once all is done
-    with atomic_write(output, "-o") if output else contextlib.nullcontext() as out:
+    with atomic_write(output, "-o", (domain, problem)) if output else contextlib.nullcontext() as out:
         try:
             # planning and each rule's projected runs take seconds: a spinner
             # says which (on a terminal, after a second)

@@ -5,6 +5,8 @@ import sys
 
 import click
 
+from .options import TIMEOUT_HELP, Timeout
+
 
 @click.command("validate")
 @click.argument("domain", type=click.Path(dir_okay=False))
@@ -14,8 +16,9 @@ import click
               help="Validate only the N-th plan of the file [default: every plan].")
 @click.option("--functions", type=click.Path(dir_okay=False), metavar="FILE.py",
               help="Python file with user functions for (call ...).")
+@click.option("--timeout", type=Timeout(), metavar="SECONDS", help=TIMEOUT_HELP)
 @click.option("-q", "--quiet", is_flag=True, help="Print only failures.")
-def validate(domain, problem, plan_file, plan_index, functions, quiet):
+def validate(domain, problem, plan_file, plan_index, functions, timeout, quiet):
     """Check that each plan in PLAN can be executed from PROBLEM's initial
     state with DOMAIN's operators: every step's precondition holds in the
     state its predecessors reach, no step deletes a protected atom, and the
@@ -38,11 +41,14 @@ def validate(domain, problem, plan_file, plan_index, functions, quiet):
     """
     from htn.api.validate import ipc_text, validate as validate_plans
 
-    text = ipc_text(plan_file)
-    if text is not None:
-        sys.exit(_validate_ipc(domain, problem, plan_file, text, plan_index, functions, quiet))
-    checked = validate_plans(domain, problem, plan_file, plan_index=plan_index,
-                             functions=functions)
+    from .signals import STATE, deadline
+    with deadline(timeout, STATE.started):
+        text = ipc_text(plan_file)
+        if text is not None:
+            sys.exit(_validate_ipc(domain, problem, plan_file, text, plan_index, functions,
+                                   quiet))
+        checked = validate_plans(domain, problem, plan_file, plan_index=plan_index,
+                                 functions=functions)
     bad = 0
     for c in checked:
         label = f"plan {c.plan.index + 1}"

@@ -61,7 +61,8 @@ def keep_up(view, listen=None) -> None:
                    err=True)
         _serve_until_interrupted()
     except KeyboardInterrupt:
-        pass
+        from .signals import consume
+        consume()
     view.close()
 
 
@@ -74,11 +75,12 @@ def _announce(url: str, host: str) -> None:
 
 
 def _serve_until_interrupted() -> None:
+    from .signals import consume
     try:
         while True:
             time.sleep(3600)
     except KeyboardInterrupt:
-        pass
+        consume()       # Ctrl-C is how the page is closed: the exit code is not its
 
 
 @click.command("view")
@@ -119,6 +121,7 @@ def view(log_file, host, port):
                    err=True)
         _serve_until_interrupted()
     except KeyboardInterrupt:       # Ctrl-C is how a server stops: not an error
-        pass
+        from .signals import consume
+        consume()
     finally:
         server.close()

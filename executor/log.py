@@ -2,17 +2,83 @@
 happens, so an interrupted run still leaves a complete, parseable file.
 
 Its first event (``header``) records what is needed to run the same thing
-again (:func:`run_header`; ``htn run --from-log`` reads it back with
-:func:`read_header`); its last one is the run's ``summary``.
+again (:mod:`htn.executor.log_header`); its last one is the run's ``summary``.
+Each event is one line written with one system call (:class:`LineFile`), so
+the file only ever holds whole lines: a full disk (or a failing device) cuts
+it back to its last whole line, and the summary is still written when the
+disk allows.
 """
 from __future__ import annotations
 
 import json
 import os
+import threading
 import time
-from typing import IO, Optional
+from typing import Optional
 
-from htn.jshop.language.errors import HtnError
+from htn.jshop.language.errors import WriteError
+
+from .log_header import read_header, run_header  # noqa: F401  (the log's header, re-exported)
+
+
+class LineFile:
+    """A file written line by line, each line whole or not at all.
+
+    An I/O error cuts the file back to its last whole line and raises a
+    :class:`~htn.jshop.language.errors.WriteError` naming the path (and
+    ``option``); after it, only a ``last`` line (a summary) is tried once
+    more, and silently dropped if it does not fit either."""
+
+    def __init__(self, path: str, option: Optional[str] = None):
+        self.path, self.option = path, option
+        self.failed: Optional[WriteError] = None
+        self.size = 0                   # bytes of whole lines written
+        self.lock = threading.Lock()    # the watchdog may end the file from its thread
+        try:
+            self.fd: Optional[int] = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o666)
+        except OSError as exc:
+            raise self._error(exc) from None
+
+    def _error(self, exc: OSError) -> WriteError:
+        what = f"{self.option}: " if self.option else ""
+        return WriteError(f"{what}cannot write: {exc.strerror or exc}", self.path)
+
+    def write_line(self, text: str, last: bool = False) -> bool:
+        """Append ``text`` and a newline; False if it was dropped (the file
+        failed earlier). ``last``: the final line, tried even then."""
+        data = (text + "\n").encode("utf-8")
+        with self.lock:
+            if self.fd is None or (self.failed is not None and not last):
+                return False
+            try:
+                view = memoryview(data)
+                while view:
+                    view = view[os.write(self.fd, view):]
+            except OSError as exc:
+                self._cut()
+                if self.failed is None:
+                    self.failed = self._error(exc)
+                    raise self.failed from None
+                return False
+            self.size += len(data)
+            return True
+
+    def _cut(self) -> None:
+        """Back to the last whole line (what follows it is half a line)."""
+        try:
+            os.ftruncate(self.fd, self.size)
+            os.lseek(self.fd, self.size, os.SEEK_SET)
+        except OSError:
+            pass
+
+    def close(self) -> None:
+        with self.lock:
+            if self.fd is not None:
+                try:
+                    os.close(self.fd)
+                except OSError:
+                    pass
+                self.fd = None
 
 
 class EventLog:
@@ -20,16 +86,24 @@ class EventLog:
 
     ``t`` is wall-clock seconds since the log was opened, ``sim_t`` seconds of
     simulated (robot) time; ``step`` is 1-based. Listeners (e.g. the live
-    view) get every event too.
+    view) get every event too. :attr:`ended` tells whether the ``summary``
+    is in; a file that cannot be written raises
+    :class:`~htn.jshop.language.errors.WriteError` at the first event that
+    does not fit (the run then ends with its summary, if the disk allows).
     """
 
-    def __init__(self, path: Optional[str] = None, clock=None):
-        self._fh: Optional[IO[str]] = open(path, "w", encoding="utf-8") if path else None
+    def __init__(self, path: Optional[str] = None, clock=None, option: Optional[str] = "--log"):
+        self._file: Optional[LineFile] = LineFile(path, option) if path else None
         self.path = path
         self.clock = clock or (lambda: 0.0)
         self.start = time.perf_counter()
         self.listeners: list = []
         self.events: list[dict] = []
+        self.ended = False
+
+    @property
+    def failed(self) -> Optional[WriteError]:
+        return self._file.failed if self._file is not None else None
 
     def emit(self, step: Optional[int], action: Optional[str], event: str,
              attempt: Optional[int] = None, detail: str = "", sim_t: Optional[float] = None,
@@ -38,82 +112,18 @@ class EventLog:
                   "sim_t": round(self.clock() if sim_t is None else sim_t, 4),
                   "step": step, "action": action, "event": event, "attempt": attempt,
                   "detail": detail, **extra}
+        last = event == "summary"
+        if self.ended:
+            return record       # a run ends once (the watchdog may have ended it)
+        self.ended = last
         self.events.append(record)
-        if self._fh is not None:
-            self._fh.write(json.dumps(record) + "\n")
-            self._fh.flush()
+        if self._file is not None:
+            self._file.write_line(json.dumps(record), last=last)
         for listener in self.listeners:
             listener(record)
         return record
 
     def close(self) -> None:
-        if self._fh is not None:
-            self._fh.close()
-            self._fh = None
-
-
-def run_header(plan_file, plan_sha256, plan_index, domain, problem, functions, robot, seed,
-               faults, retries, replan, argv) -> dict:
-    """What a log's header records: enough to run the same thing again
-    (``argv``: the command line as given, None for a program's call), with
-    the plan file's SHA-256 (of the bytes the run read) and the versions it
-    ran with."""
-    import platform
-    from importlib.metadata import PackageNotFoundError, version
-
-    from htn.installation import version as htn_version
-
-    def installed(name):
-        try:
-            return version(name)
-        except PackageNotFoundError:
-            return None
-    absolute = lambda p: os.path.abspath(p) if p else None  # noqa: E731
-    return {"htn": htn_version(), "argv": None if argv is None else list(argv),
-            "plan": absolute(plan_file), "plan_sha256": plan_sha256,
-            "plan_index": plan_index, "domain": absolute(domain), "problem": absolute(problem),
-            "functions": absolute(functions), "robot": robot, "seed": seed, "faults": faults,
-            "retries": dict(sorted(retries.items())), "replan": replan,
-            "python": platform.python_version(), "pybullet": installed("pybullet")}
-
-
-HEADER_KEYS = ("plan", "plan_index", "domain", "problem", "robot", "seed", "faults",
-               "retries", "replan")
-
-
-def read_header(path: str) -> dict:
-    """The header event of a log written by ``htn run --log``."""
-    if not os.path.isfile(path):
-        raise HtnError("no such log file", path)
-    try:
-        with open(path, encoding="utf-8") as fh:
-            first = fh.readline()
-        rec = json.loads(first)
-    except (OSError, UnicodeDecodeError, ValueError) as exc:
-        raise HtnError(f"not a log of htn run --log: {exc}", path, 1, 1)
-    if not isinstance(rec, dict) or rec.get("event") != "header":
-        raise HtnError("not a log of htn run --log: its first line is no header event",
-                       path, 1, 1)
-    missing = [k for k in HEADER_KEYS if k not in rec]
-    if missing:
-        raise HtnError(f"the header lacks {', '.join(missing)}", path, 1, 1)
-    return rec
-
-
-def check_plan_present(plan_file: Optional[str], log_path: str) -> None:
-    """The plan file a header names is there; otherwise an input error at the
-    log's first line."""
-    if not plan_file:
-        raise HtnError("the log records no plan file (its run was of a plan a program "
-                       "passed in)", log_path, 1, 1)
-    if not os.path.isfile(plan_file):
-        raise HtnError(f"the plan file of this run is missing: {plan_file}", log_path, 1, 1)
-
-
-def check_plan_digest(plan_file: str, recorded: Optional[str], actual: str,
-                      log_path: str) -> None:
-    """The plan file is unchanged since the logged run (when the header has
-    its SHA-256): ``actual`` is the digest of the bytes read now."""
-    if recorded and actual != recorded:
-        raise HtnError(f"the plan file {plan_file} has changed since this run (SHA-256 "
-                       f"{actual[:12]}..., the log says {recorded[:12]}...)", log_path, 1, 1)
+        if self._file is not None:
+            self._file.close()
+            self._file = None

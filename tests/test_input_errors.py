@@ -299,8 +299,13 @@ def test_runtime_error_of_a_call_names_its_place(tmp_path):
 def test_user_function_that_raises_or_exits(tmp_path, function, message):
     d, p = write(tmp_path, domain=DOMAIN.replace("((at ?from))",
                                                  f"((at ?from) (call {function} ?from))"))
-    r = run_htn("plan", d, p, "--functions", functions_file(tmp_path))
-    check_error(r, at(d, "(call"), message)
+    fns = functions_file(tmp_path)
+    r = run_htn("plan", d, p, "--functions", fns)
+    # at the user's own line that raised, saying where the domain called it
+    raising = next(n for n, line in enumerate(fns.read_text().splitlines(), 1)
+                   if ("raise" if function == "fails" else "exit") in line)
+    check_error(r, f"{fns}:{raising}:", message)
+    assert f"(called at {at(d, '(call')[:-1]})" in r.stderr.splitlines()[0]
 
 
 @pytest.mark.parametrize("comparator,shown", [("word", "'less'"), ("nothing", "None")])

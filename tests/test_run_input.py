@@ -144,7 +144,7 @@ def test_sigterm_while_repair_plans_between_ticks_is_logged_as_sigterm(tmp_path)
     # the push never has its effect: aborted, retried once (the default for a
     # domain without a .toml) and aborted again; then repair re-plans (push-it box)
     proc = start_htn("run", plan, "--robot", "symbolic", "--faults", "effect=1", "--replan",
-                     "--log", log, "-q")
+                     "--functions", fns, "--log", log, "-q")
     wait_until((tmp_path / "slow.py.repairing").exists, "repair planning", proc)
     out, err, evs = interrupt_run(proc, signal.SIGTERM, log)
     assert [e["event"] for e in evs if e["event"] in ("aborted", "replanned")] == ["aborted"] * 2

@@ -1,4 +1,6 @@
-"""User-facing errors: each names the place in the input it is about."""
+"""User-facing errors: each names the place in the input it is about; and
+the stops (interrupts, the deadline) htn raises into the program, told apart
+from what user code raises."""
 from __future__ import annotations
 
 from typing import Optional
@@ -66,3 +68,39 @@ def _with_caret(text: str, at: int) -> str:
 
 class PlanningError(HtnError):
     """Raised during search, e.g. an operator cost that is not a number."""
+
+
+class WriteError(HtnError):
+    """An output could not be written (a full disk, a failing device, a
+    read-only file system); ``file`` is its path. What was there before is
+    kept (a file replaced whole) or ends on its last whole line (a log)."""
+
+
+class _Stops:
+    """The stops htn's signal handlers raised into the program
+    (:mod:`htn.cli.signals`: Ctrl-C, SIGTERM, ``--timeout``), counted, so that
+    code calling user functions can tell one the user's code caught and
+    dropped (:func:`htn.jshop.language.functions.run_user_code`)."""
+
+    def __init__(self):
+        self.count = 0
+        self.last: Optional[BaseException] = None
+
+
+STOPS = _Stops()
+STOP_MARK = "htn_stop"
+
+
+def raised_stop(exc: BaseException) -> BaseException:
+    """``exc``, marked as a stop that htn itself raises (see :func:`is_stop`)
+    and counted in :data:`STOPS`; the caller raises it."""
+    setattr(exc, STOP_MARK, True)
+    STOPS.count += 1
+    STOPS.last = exc
+    return exc
+
+
+def is_stop(exc: BaseException) -> bool:
+    """Was ``exc`` raised by htn's own handlers (an interrupt or the
+    deadline), not by user code (which may raise ``KeyboardInterrupt`` too)?"""
+    return getattr(exc, STOP_MARK, False) is True

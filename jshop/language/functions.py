@@ -9,10 +9,16 @@ same way (``None``/``False`` become ``nil``, ``True`` becomes ``1.0``). A
 function used as a ``:sort-by`` comparator takes two such values and returns a
 negative, zero or positive number (manual appendix B).
 
-A user function that raises, calls ``sys.exit`` or returns something that is
-not a term is an input error; the caller reports it at the call's place in the
-domain (:func:`htn.jshop.language.terms.at_call`). Ctrl-C and the command line's
-``--timeout`` deadline (exceptions that are not ``Exception``) pass through.
+A user function (or a functions file as it loads) that raises anything
+(any ``BaseException``: ``sys.exit``, ``GeneratorExit``, its own
+``KeyboardInterrupt``), or returns something that is not a term, is an input
+error located at the line of the user's file that raised (else the caller
+reports it at the call's place in the domain,
+:func:`htn.jshop.language.terms.at_call`). Only the stops htn's own handlers
+raise (Ctrl-C, SIGTERM, ``--timeout``: :func:`~.errors.is_stop`) pass
+through; one that user code caught and dropped is raised again as soon as
+its function returns, and the watchdog (:mod:`htn.cli.watchdog`) ends user
+code that does not return (:func:`running_user_code` names it).
 """
 from __future__ import annotations
 
@@ -21,17 +27,18 @@ import importlib.util
 import inspect
 import math
 import operator
-from typing import Any, Callable
+import os
+from typing import Any, Callable, Optional
 
-from .errors import HtnError
-from .terms import NIL, Dotted, term_str
+from .errors import STOPS, HtnError, is_stop, raised_stop
+from .terms import NIL, Dotted, shown_term
 
 TRUE = 1.0
 
 
 def _num(x: Any, fn: str) -> float:
     if type(x) is not float:
-        raise HtnError(f"call {fn}: expected a number, got {term_str(x)}")
+        raise HtnError(f"call {fn}: expected a number, got {shown_term(x)}")
     return x
 
 
@@ -176,21 +183,30 @@ def from_python(v: Any) -> Any:
         return NIL
     if v is True:
         return TRUE
-    if isinstance(v, (int, float)):
-        return float(v)
+    # subclasses of the built-in types are read by the built-in types' own
+    # methods: no method of the user's class runs (it might raise or loop)
+    if isinstance(v, int):
+        return float(int.__index__(v))
+    if isinstance(v, float):
+        return float.__float__(v)
     if isinstance(v, str):
-        return v.lower()
-    if isinstance(v, (list, tuple)):
-        return tuple(from_python(x) for x in v)
+        return str.lower(v)
+    if isinstance(v, list):
+        return tuple(from_python(x) for x in list.__iter__(v))
+    if isinstance(v, tuple):
+        return tuple(from_python(x) for x in tuple.__iter__(v))
     raise HtnError(f"a user function returned {_shown(v)}, which is not a term")
 
 
 def _shown(v: Any, limit: int = 80) -> str:
-    """A user value for a message: its repr, cut to ``limit`` characters."""
-    try:
-        text = repr(v)
-    except Exception:  # a user object whose repr fails
-        text = f"a {type(v).__name__}"
+    """A user value for a message: its repr, cut to ``limit`` characters
+    (built-in values only: a user class's ``__repr__`` is not called)."""
+    if type(v) in (int, float, str, bool, type(None)):
+        text = repr(v) if type(v) is not str or len(v) <= 4 * limit else repr(v[:4 * limit])
+    elif type(v) in (list, tuple, dict):
+        text = f"a {type(v).__name__} of {len(v)} element(s)"
+    else:
+        text = f"an object of class {type(v).__qualname__}"
     return _clip(text, limit)
 
 
@@ -198,19 +214,72 @@ def _clip(text: str, limit: int) -> str:
     return text if len(text) <= limit else text[:limit - 3] + "..."
 
 
-def run_user_code(what: str, fn: Callable, *args) -> Any:
-    """``fn(*args)``; what goes wrong inside becomes an :class:`HtnError`
-    naming ``what`` ran (the caller adds the place of the call)."""
+_RUNNING: list = []     # what user code runs now (innermost last), for the watchdog
+
+
+def running_user_code() -> Optional[str]:
+    """What user code runs now (``function spin``), if any."""
+    return _RUNNING[-1] if _RUNNING else None
+
+
+def _user_frame(exc: BaseException, files) -> tuple:
+    """(file, line) of the innermost frame of ``exc``'s traceback in one
+    of ``files`` (the user's own code), or (None, None)."""
+    place = (None, None)
+    tb = exc.__traceback__
+    while tb is not None:
+        name = tb.tb_frame.f_code.co_filename
+        if name in files:
+            place = (name, tb.tb_lineno)
+        tb = tb.tb_next
+    return place
+
+
+def _message(exc: BaseException) -> str:
     try:
-        return fn(*args)
+        text = BaseException.__str__(exc)
+    except BaseException:   # noqa: BLE001 - a user exception whose str fails
+        text = ""
+    return f"{type(exc).__name__}: {_clip(text, 160)}" if text else type(exc).__name__
+
+
+def user_error(what: str, exc: BaseException, files=()) -> HtnError:
+    """``exc`` (raised by user code) as one line at the user's file:line."""
+    if isinstance(exc, SystemExit):
+        text = f"{what} called sys.exit({_shown(exc.code)})"
+    elif isinstance(exc, RecursionError):
+        text = f"{what} recursed too deeply"
+    else:
+        text = f"{what} raised {_message(exc)}"
+    file, line = _user_frame(exc, files)
+    err = HtnError(text, file, line)
+    err.in_user_code = file is not None      # at_call adds where the domain called it
+    return err
+
+
+def run_user_code(what: str, fn: Callable, *args) -> Any:
+    """``fn(*args)``; anything it raises but htn's own stops becomes an
+    :class:`HtnError` naming ``what`` ran, at the user's line that raised
+    (else the caller adds the place of the call). A stop the function
+    caught and dropped is raised again when it returns."""
+    stops = STOPS.count
+    _RUNNING.append(what)
+    try:
+        result = fn(*args)
     except HtnError:
         raise
-    except SystemExit as exc:
-        raise HtnError(f"{what} called sys.exit({_shown(exc.code)})") from None
-    except RecursionError:
-        raise HtnError(f"{what} recursed too deeply") from None
-    except Exception as exc:  # the user's code failed: report, no traceback
-        raise HtnError(f"{what} raised {type(exc).__name__}: {_clip(str(exc), 160)}") from None
+    except BaseException as exc:  # noqa: BLE001 - the user's code failed: report, no traceback
+        if is_stop(exc):
+            raise
+        if STOPS.count != stops and STOPS.last is not None:
+            raise raised_stop(STOPS.last) from None     # it turned our stop into its own
+        code = getattr(fn, "__code__", None)
+        raise user_error(what, exc, {code.co_filename} if code else ()) from None
+    finally:
+        _RUNNING.pop()
+    if STOPS.count != stops and STOPS.last is not None:
+        raise raised_stop(STOPS.last)       # it swallowed a stop: the command stops all the same
+    return result
 
 
 def wrap_user_function(name: str, fn: Callable) -> Callable:
@@ -221,7 +290,7 @@ def wrap_user_function(name: str, fn: Callable) -> Callable:
                                            else to_python(a) for a in args])
         try:
             return from_python(result)
-        except (OverflowError, RecursionError):   # a huge int, a list nested in itself
+        except (OverflowError, RecursionError, ValueError):  # huge, nested in itself, NaN int
             raise HtnError(f"function {name} returned {_shown(result)}, which is not a term") \
                 from None
     call.__name__ = name
@@ -232,10 +301,14 @@ def compare(name: str, fn: Callable, a: Any, b: Any) -> int:
     """A user comparator's verdict on two terms: negative, zero or positive
     (manual appendix B); anything but a number is an error."""
     r = run_user_code(f"comparator {name}", fn, to_python(a), to_python(b))
-    if isinstance(r, bool) or not isinstance(r, (int, float)) or r != r:
+    n = None
+    if not isinstance(r, bool) and isinstance(r, (int, float)):
+        # the built-in value, without calling a subclass's methods
+        n = int.__index__(r) if isinstance(r, int) else float.__float__(r)
+    if n is None or n != n:
         raise HtnError(f"comparator {name} returned {_shown(r)}, not a number "
                        "(negative, zero or positive)")
-    return (r > 0) - (r < 0)
+    return (n > 0) - (n < 0)
 
 
 class FunctionTable:
@@ -255,20 +328,33 @@ class FunctionTable:
     def load_file(self, path: str) -> None:
         """Load every public top-level function of a Python file (whatever
         its name ends with: it is read as Python source)."""
-        import os
         if not os.path.isfile(path):
             raise HtnError("functions file not found", path)
         loader = importlib.machinery.SourceFileLoader("_htn_user_functions", path)
         spec = importlib.util.spec_from_loader(loader.name, loader)
         module = importlib.util.module_from_spec(spec)
+        stops = STOPS.count
+        _RUNNING.append(f"the functions file {path}")
         try:
             loader.exec_module(module)
         except SyntaxError as exc:
-            raise HtnError(f"syntax error: {exc.msg}", path, exc.lineno, exc.offset)
-        except SystemExit as exc:
-            raise HtnError(f"loading failed: it called sys.exit({_shown(exc.code)})", path)
-        except Exception as exc:
-            raise HtnError(f"loading failed: {type(exc).__name__}: {exc}", path)
+            raise HtnError(f"syntax error: {_clip(str(exc.msg), 160)}", path, exc.lineno,
+                           exc.offset) from None
+        except HtnError:
+            raise
+        except BaseException as exc:  # noqa: BLE001 - the file failed to load: one line
+            if is_stop(exc):
+                raise
+            if STOPS.count != stops and STOPS.last is not None:
+                raise raised_stop(STOPS.last) from None
+            err = user_error("loading failed: it", exc, {path, loader.get_filename()})
+            if err.file is None:
+                err.file = path
+            raise err from None
+        finally:
+            _RUNNING.pop()
+        if STOPS.count != stops and STOPS.last is not None:
+            raise raised_stop(STOPS.last)
         self.source = path
         for name, fn in vars(module).items():
             if name.startswith("_") or not inspect.isfunction(fn):

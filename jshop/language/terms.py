@@ -98,6 +98,9 @@ def at_call(exc: HtnError, call: CallTerm) -> HtnError:
     (an error in a standard function given a symbol, or in a user function)."""
     if exc.file is None and call.pos is not None:
         exc.file, exc.line, exc.col = call.pos.file, call.pos.line, call.pos.col
+    elif getattr(exc, "in_user_code", False) and call.pos is not None:
+        exc.in_user_code = False    # placed at the user's line; say where it was called
+        exc.message += f" (called at {call.pos.file}:{call.pos.line}:{call.pos.col})"
     return exc
 
 
@@ -272,6 +275,73 @@ def term_str(t: Any) -> str:
     return str(t)
 
 
+SHOWN_TERM = 200     # characters of a term quoted in a message
+
+
+def shown_term(t: Any, limit: int = SHOWN_TERM) -> str:
+    """``term_str(t)`` for a message: cut to about ``limit`` characters
+    (``...`` where the rest is left out), in time that grows with ``limit``,
+    not with the term (a list of millions of elements is quoted at once)."""
+    out: list = []
+    size = 0
+    stack = [t]
+    while stack and size <= limit:
+        x = stack.pop()
+        tx = type(x)
+        if tx is _Text:
+            piece = x.text
+        elif tx is tuple:
+            if not x:
+                piece = "NIL"
+            else:
+                piece = "("
+                stack.append(_CLOSE)
+                # only as many elements as can still be shown are looked at
+                items = x[:limit - size + 1]
+                if len(items) < len(x):
+                    stack.append(_MORE)
+                for i in range(len(items) - 1, -1, -1):
+                    stack.append(items[i])
+                    if i:
+                        stack.append(_SPACE)
+        elif tx is Dotted:
+            stack.extend([_CLOSE, x.tail, _Text(" . ")])
+            items = x.items[:limit]
+            for i in range(len(items) - 1, -1, -1):
+                stack.append(items[i])
+                if i:
+                    stack.append(_SPACE)
+            piece = "("
+        elif tx is CallTerm:
+            stack.append(_CLOSE)
+            for a in reversed(x.args[:limit]):
+                stack.append(a)
+                stack.append(_SPACE)
+            piece = f"(CALL {x.name}"
+        elif tx is str or tx is float or tx is Var:
+            piece = term_str(x)
+        else:
+            piece = str(x)
+        if len(piece) > limit:
+            piece = piece[:limit]
+        out.append(piece)
+        size += len(piece)
+    text = "".join(out)
+    if stack or len(text) > limit:
+        return text[:max(limit - 3, 0)] + "..."
+    return text
+
+
+class _Text:
+    __slots__ = ("text",)
+
+    def __init__(self, text: str):
+        self.text = text
+
+
+_CLOSE, _SPACE, _MORE = _Text(")"), _Text(" "), _Text(" ...")
+
+
 def atom_str(name: str, args: Sequence) -> str:
     """Print a predicate or task instance: ``(name a1 .. an)``."""
     if not args:
@@ -321,5 +391,5 @@ def atom_from_term(t, pos) -> tuple[str, tuple]:
     """A list term ``(p a1 .. an)`` used as an atom (manual 3.14)."""
     if type(t) is tuple and t and type(t[0]) is str:
         return t[0], t[1:]
-    raise PlanningError.at(pos, f"a variable used as an atom is bound to {term_str(t)}, "
+    raise PlanningError.at(pos, f"a variable used as an atom is bound to {shown_term(t)}, "
                            "which is not an atom")

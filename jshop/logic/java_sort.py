@@ -5,7 +5,7 @@ from __future__ import annotations
 from functools import cmp_to_key
 
 from htn.jshop.language.errors import HtnError, PlanningError
-from htn.jshop.language.terms import term_str
+from htn.jshop.language.terms import shown_term
 
 
 def java_sort(a: list, cmp) -> list:
@@ -60,7 +60,7 @@ def sorted_by(sat, pre, functions):
             x, y = a[idx], b[idx]
             if type(x) is not float or type(y) is not float:
                 raise PlanningError.at(pre.pos, f":sort-by {name} needs numbers, got "
-                                       f"{term_str(x)} and {term_str(y)}")
+                                       f"{shown_term(x)} and {shown_term(y)}")
             return sign * ((x > y) - (x < y))
     else:
         from htn.jshop.language.functions import compare

@@ -19,7 +19,7 @@ from typing import Optional
 
 from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import PlanningError
-from htn.jshop.language.terms import atom_from_term, source_atom, term_str
+from htn.jshop.language.terms import atom_from_term, shown_term, source_atom
 
 from .codegen import described
 from . import warming as warm
@@ -125,7 +125,7 @@ class Operators:
             lst = env[program.index]
             if type(lst) is not tuple:
                 raise PlanningError.at(op.pos, f"the effect list variable {program.name} "
-                                       f"of {op.name} is bound to {term_str(lst)}")
+                                       f"of {op.name} is bound to {shown_term(lst)}")
             for t in lst:
                 yield atom_from_term(t, op.pos)
             return

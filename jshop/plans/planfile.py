@@ -85,6 +85,16 @@ def header(out_path: str, domain: str, problem: str, functions: Optional[str] = 
     for kind, path in files.items():
         if path:
             lines.append(f"; {kind} (absolute): {os.path.abspath(path)}\n")
+    if functions:
+        # a plan file is data: htn run imports no file it names, it asks for
+        # --functions and checks that this is the file the plans were made with
+        try:
+            with open(functions, "rb") as fh:
+                digest = hashlib.sha256(fh.read()).hexdigest()
+        except OSError:
+            digest = None
+        if digest:
+            lines.append(f"; functions sha256: {digest}\n")
     return "".join(lines)
 
 
@@ -118,6 +128,17 @@ class PlanFile:
         shown = " nor ".join(p for p, _ in candidates)
         raise HtnError(f"the {kind} file named here is missing: {shown} (give it with "
                        f"htn run --{kind} FILE)", self.path, candidates[0][1], 1)
+
+    def named_functions(self) -> Optional[tuple]:
+        """(path as written, line, SHA-256 or None) of the functions file the
+        plans were made with, if the header names one. It is never loaded
+        because of that (see :func:`htn.api.run_inputs.checked_functions`)."""
+        candidates = self.named.get("functions")
+        if not candidates:
+            return None
+        digest = self.notes.get("functions sha256", (None,))[0]
+        path = next((p for p, _ in candidates if os.path.isfile(p)), candidates[-1][0])
+        return path, candidates[0][1], digest
 
     @property
     def domain(self) -> Optional[str]:

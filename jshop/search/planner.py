@@ -42,7 +42,7 @@ from typing import Iterator, Optional
 
 from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import PlanningError
-from htn.jshop.language.terms import subst, term_str, variables
+from htn.jshop.language.terms import shown_term, subst, variables
 from htn.jshop.logic.engine import Logic
 from htn.jshop.logic.operators import Operators
 from htn.jshop.logic.state import Change, HashedState, State
@@ -252,7 +252,7 @@ class Planner:
                                 cost = subst(op.cost, nb)
                                 if type(cost) is not float:
                                     raise PlanningError.at(op.pos, f"cost of {op.name} is "
-                                                           f"{term_str(cost)}, not a number")
+                                                           f"{shown_term(cost)}, not a number")
                             node.how = len(steps)
                             steps.append((op.name, bind_head(nb), cost))
                             self._cost += cost
