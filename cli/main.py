@@ -98,6 +98,12 @@ def main(argv=None) -> None:
             code = exc.exit_code
         except (KeyboardInterrupt, DeadlineExceeded) as exc:
             interrupt_exit(exc)
+        except RuntimeError as exc:
+            # Python 3.11 wraps what __set_name__ raises: a Ctrl-C while a
+            # class is made (in an import) comes as its cause
+            if not isinstance(exc.__cause__, (KeyboardInterrupt, DeadlineExceeded)):
+                raise
+            interrupt_exit(exc.__cause__)
         except BrokenPipeError:
             silence_stdout()
             code = 0

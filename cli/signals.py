@@ -37,7 +37,7 @@ from contextlib import contextmanager
 
 from htn.jshop.language.errors import is_stop, raised_stop
 
-from .watchdog import GRACE, Watchdog, backstop_after
+from .watchdog import GRACE, Watchdog, backstop_after, leave_now
 
 INTERRUPT_EXIT = 128 + signal.SIGINT
 SIGTERM_EXIT = 128 + signal.SIGTERM
@@ -211,6 +211,8 @@ def end_process(code) -> None:
     if st.received is not None and not st.reported:
         interrupt_exit(st.received)
     flush_stdout()
+    if st.received is not None:     # interrupted: the shutdown was seen to end
+        leave_now(code)             # the process by SIGINT (about 1 in 8, loaded)
     sys.exit(code)
 
 
