@@ -9,9 +9,8 @@ Every moment of the process is covered, from the entry point's first line
 * while a command runs (:func:`command`), SIGINT raises ``KeyboardInterrupt``
   and SIGTERM :class:`Terminated` (a kind of it), so every clean-up after
   Ctrl-C (whole plans kept, temporary files removed, logs ended) is done for
-  a ``kill`` too. Only the first signal is raised: the command is stopping,
-  and a second one must not break its clean-up; any signal still decides
-  the exit code (130, 143) when the command ends;
+  a ``kill`` too. Only the first signal is raised (a second must not break
+  the clean-up); any signal still decides the exit code (130, 143);
 * output units (a plan, a JSON line) are written in :func:`held` blocks: a
   stop that comes meanwhile is raised when the block ends (a flag, not a
   signal mask: the kernel gives a signal to any thread, a mask holds one);
@@ -186,6 +185,7 @@ def command():
     st.reset()
     st.started = time.perf_counter()
     st.phase = COMMAND
+    mask = signal.pthread_sigmask(signal.SIG_BLOCK, ())    # put back after (user code)
     try:
         old = {sig: signal.signal(sig, _on_signal) for sig in (signal.SIGINT, signal.SIGTERM)}
     except ValueError:          # not the main thread: leave signals alone
@@ -201,6 +201,7 @@ def command():
         sys.unraisablehook = hook
         for sig, handler in old.items():
             signal.signal(sig, handler)
+        signal.pthread_sigmask(signal.SIG_SETMASK, mask)
 
 
 def end_process(code) -> None:

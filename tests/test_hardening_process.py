@@ -21,9 +21,10 @@ CALLS = """(defdomain d (
   (:operator (!go ?x) () () ((at ?x)))
   (:method (travel ?x) ((call f ?x)) ((!go ?x)))))"""
 # f catches everything htn raises into it (Ctrl-C, SIGTERM, the deadline) and goes on
-SWALLOW = ("import time\ndef f(x):\n    open(__file__ + '.called', 'w').close()\n"
-           "    while True:\n        try:\n            time.sleep(0.05)\n"
-           "        except BaseException:\n            pass\n")
+# (it says it was called from inside its try: a signal that came before would end it)
+SWALLOW = ("import time\ndef f(x):\n    while True:\n        try:\n"
+           "            while True:\n                open(__file__ + '.called', 'w').close()\n"
+           "                time.sleep(0.05)\n        except BaseException:\n            pass\n")
 
 
 def files(tmp_path, domain=ENDLESS, problem="(defproblem p d () ((m)))"):
