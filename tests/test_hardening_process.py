@@ -14,9 +14,8 @@ from contextlib import contextmanager
 import pytest
 
 from conftest import ROOT, run_htn, run_htn_process, start_htn, wait_until
+from test_output import files      # the endless domain, written beside its problem
 
-ENDLESS = """(defdomain d ((:operator (!a) () () ())
-  (:method (m) () ((!a))) (:method (m) () ((!a) (m)))))"""
 CALLS = """(defdomain d (
   (:operator (!go ?x) () () ((at ?x)))
   (:method (travel ?x) ((call f ?x)) ((!go ?x)))))"""
@@ -25,13 +24,6 @@ CALLS = """(defdomain d (
 SWALLOW = ("import time\ndef f(x):\n    while True:\n        try:\n"
            "            while True:\n                open(__file__ + '.called', 'w').close()\n"
            "                time.sleep(0.05)\n        except BaseException:\n            pass\n")
-
-
-def files(tmp_path, domain=ENDLESS, problem="(defproblem p d () ((m)))"):
-    d, p = tmp_path / "d.jshop", tmp_path / "p.jshop"
-    d.write_text(domain)
-    p.write_text(problem)
-    return d, p
 
 
 # ------------------------------------------------------------------ 3. a full disk
