@@ -48,9 +48,16 @@ class DaskRunner:
         return len(self.client.scheduler_info()["workers"])
 
     def results(self, function: Callable, batches: Iterable[tuple]) -> Iterator:
+        return self.submit(function, batches)
+
+    def submit(self, function: Callable, batches: Iterable[tuple]) -> Iterator:
+        """Send the batches now; an iterator over their results as they finish."""
+        futures = [self.client.submit(function, *args, pure=False) for args in batches]
+        return self._collect(futures)
+
+    def _collect(self, futures: list) -> Iterator:
         from distributed import as_completed
         from distributed.scheduler import KilledWorker
-        futures = [self.client.submit(function, *args, pure=False) for args in batches]
         try:
             for _, result in as_completed(futures, loop=self.client.loop, with_results=True):
                 yield result
@@ -172,6 +179,7 @@ class LocalWorkers:
         if self._client is not None:
             self._client.close()
             self._cluster.close()
+        self._cluster = self._client = self._runner = None
 
 
 # What starting a local cluster in a fresh process costs on an idle machine, in

@@ -13,16 +13,26 @@ and by a margin (:data:`MARGIN`), since a projection from one batch is
 rough. Otherwise every run stays here, and one line says why. A run depends
 only on its seed, so the results are the same either way. Times are CPU
 seconds of this process, which is what a run costs on an idle machine.
+
+The workers start in a thread while this process goes on running batches,
+and take the batches not yet begun as soon as they are up, so that their
+start-up hides behind runs instead of adding to them (a PyBullet run takes
+about as long as starting two workers). Nor do they wait for the first
+batch to end: they start the moment the CPU time it has taken so far is
+enough to make the study worth them (the batch will take at least that).
 """
 from __future__ import annotations
 
 import os
+import sys
+import threading
 import time
 from dataclasses import dataclass, field
-from typing import Callable, Optional
+from typing import Callable, Iterator, Optional
 
 EFFICIENCY = 0.9        # of each worker, against this process (sending tasks, results)
 MARGIN = 1.15           # the workers must be this much faster to be started
+SWITCH_INTERVAL = 0.0002    # seconds between GIL hand-overs while the workers start
 
 
 @dataclass
@@ -69,29 +79,138 @@ def _seconds(s: float) -> str:
     return f"{s:.1f} s" if s < 10 else f"{s:.0f} s"
 
 
-def place(runner, tasks: list, runs_in: Callable[[tuple], int], execute: Callable,
-          description: str, say: Optional[Callable[[str], None]] = None):
+def place(runner, tasks: list, runs_in: Callable[[tuple], int], function: Callable,
+          take: Callable[[list], None], description: str,
+          say: Optional[Callable[[str], None]] = None):
     """Run ``tasks`` (batches) in this process until it is clear where the
-    rest should go, and return the runner for the rest and the tasks left.
-    ``runner`` is a not yet started :class:`~.cluster.LocalWorkers`;
-    ``execute(task)`` runs one batch here (and records it), ``runs_in(task)``
-    is how many runs it holds. ``say`` gets the line that says why the runs
-    stay here, if they do."""
+    rest should go; return the runner for the rest and an iterator over the
+    results of the tasks left. ``runner`` is a not yet started
+    :class:`~.cluster.LocalWorkers`; ``function(*task)`` runs one batch and
+    ``take(results)`` records them; ``runs_in(task)`` is how many runs it
+    holds. ``say`` gets the line that says why the runs stay here, if they do."""
     from .cluster import InProcess, start_seconds
     if not tasks:
-        return InProcess(), tasks
-    # CPU time: on a machine others share, waiting for a core is not the
-    # study's cost (the workers would wait as long), and the start-up cost
-    # is what it is on an idle machine
-    t0 = time.process_time()
-    execute(tasks[0])
-    seconds = time.process_time() - t0
-    rest = tasks[1:]
-    runs = sum(runs_in(t) for t in tasks)
-    projection = Projection(runs, runs - runs_in(tasks[0]), seconds / runs_in(tasks[0]),
-                            runner.requested, start_seconds(runner.requested))
-    if projection.worth_the_workers():
-        return runner.start(), rest
+        return InProcess(), iter(())
+    runs, first = sum(runs_in(t) for t in tasks), runs_in(tasks[0])
+
+    def projection(seconds: float) -> Projection:
+        return Projection(runs, runs - first, seconds / first, runner.requested,
+                          start_seconds(runner.requested))
+
+    # CPU time of this thread: on a machine others share, waiting for a core
+    # is not the study's cost (the workers would wait as long), the start-up
+    # cost is what it is on an idle machine, and a starting cluster's thread
+    # is not the batch's
+    clock = _thread_clock()
+    t0 = time.clock_gettime(clock) if clock is not None else time.thread_time()
+    starter = None
+    if clock is not None:
+        starter = _Starter(runner, tasks, function, begun=1, when=lambda: projection(
+            time.clock_gettime(clock) - t0).worth_the_workers())
+    try:
+        take(function(*tasks[0]))
+    except BaseException:
+        if starter is not None:
+            starter.stop()
+        raise
+    seconds = time.clock_gettime(clock) - t0 if clock is not None else time.thread_time() - t0
+    if starter is not None and not starter.stop():
+        starter = None                  # the first batch was too short to start them
+    if starter is None and projection(seconds).worth_the_workers():
+        starter = _Starter(runner, tasks, function, begun=1)
+    if starter is not None:
+        starter.run_here(take)
+        return starter.result()
     if say is not None:
-        say(projection.note(description))
-    return InProcess(), rest
+        say(projection(seconds).note(description))
+    return InProcess(), InProcess().results(function, tasks[1:])
+
+
+def _thread_clock() -> Optional[int]:
+    """The CPU-time clock of the calling thread, which another thread can read."""
+    try:
+        return time.pthread_getcpuclockid(threading.get_ident())
+    except (AttributeError, OSError):   # not on this platform
+        return None
+
+
+class _Starter:
+    """Starts ``runner``'s workers in a thread (once ``when()`` is true, if
+    given) while this process runs the tasks; once they are up, the thread
+    hands them every task not yet begun here."""
+
+    POLL = 0.02                         # seconds between looks at ``when()``
+
+    def __init__(self, runner, tasks: list, function: Callable, begun: int,
+                 when: Optional[Callable[[], bool]] = None):
+        self.runner, self.tasks, self.function = runner, tasks, function
+        self.begun = begun                  # tasks[:begun] are (being) run here
+        self.when = when
+        self.lock = threading.Lock()
+        self.stopped = threading.Event()
+        self.starting = False
+        self.workers = self.results = self.error = None
+        self.interval = sys.getswitchinterval()
+        self.thread = threading.Thread(target=self._start, name="htn: starting workers",
+                                       daemon=True)
+        self.thread.start()
+
+    def _start(self) -> None:
+        try:
+            while self.when is not None and not self.when():
+                if self.stopped.wait(self.POLL):
+                    return
+            with self.lock:
+                if self.stopped.is_set():
+                    return
+                self.starting = True
+            # the start is many short steps of Dask's event loop, each
+            # waiting for the GIL while a run holds it: by default up to 5 ms
+            # a step, which made starting two workers beside a PyBullet run
+            # take 15 s instead of 2.5
+            sys.setswitchinterval(SWITCH_INTERVAL)
+            workers = self.runner.start()
+            with self.lock:
+                self.workers = workers
+                self.results = workers.submit(self.function, self.tasks[self.begun:])
+        except BaseException as exc:    # re-raised in the calling thread
+            self.error = exc
+
+    def stop(self) -> bool:
+        """Stop waiting to start the workers; whether they are starting (or up)."""
+        with self.lock:
+            self.stopped.set()
+            starting = self.starting
+        if not starting:
+            self.thread.join()
+        return starting
+
+    def run_here(self, take: Callable) -> None:
+        """Run tasks here, one at a time, until the workers are up (or have
+        failed to start) or no task is left."""
+        try:
+            while True:
+                with self.lock:
+                    if (self.workers is not None or self.begun == len(self.tasks)
+                            or not self.thread.is_alive()):
+                        return
+                    task = self.tasks[self.begun]
+                    self.begun += 1
+                take(self.function(*task))
+        except BaseException:
+            # a run failed or a signal stopped it: the caller closes the
+            # cluster, which must be started (or have failed) by then
+            self._join()
+            raise
+
+    def _join(self) -> None:
+        self.thread.join()
+        sys.setswitchinterval(self.interval)
+
+    def result(self) -> tuple:
+        """The runner on the workers and the iterator over the results of
+        the tasks they were given."""
+        self._join()
+        if self.error is not None:
+            raise self.error
+        return self.workers, self.results

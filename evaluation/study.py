@@ -69,9 +69,9 @@ def run_study(study: Study, problem: str, applied: list, runs: int, seed: int, r
               say: Optional[Callable[[str], None]] = None) -> Comparison:
     """Execute ``runs`` runs of every plan of ``study`` on ``runner``;
     ``on_batch`` gets each batch's new records as they arrive. On local
-    workers not yet started, the first batch runs here and the rest goes
-    to the workers only if that is faster (:func:`.placement.place`; ``say``
-    gets the line that says it is not)."""
+    workers not yet started, batches run here and the rest goes to the
+    workers, once they are up, only if that is faster
+    (:func:`.placement.place`; ``say`` gets the line that says it is not)."""
     planned = runner.requested if runner.deferred else runner.workers
     size = max(1, min(MEASURES[study.robot].batch,
                       math.ceil(runs / (planned * BATCHES_PER_WORKER))))
@@ -86,12 +86,14 @@ def run_study(study: Study, problem: str, applied: list, runs: int, seed: int, r
             on_batch(fresh)
 
     start = time.perf_counter()
+    measure = MEASURES[study.robot]
     if runner.deferred:
-        runner, tasks = place(runner, tasks, lambda task: len(task[2]),
-                              lambda task: take(run_batch(*task)),
-                              MEASURES[study.robot].description, say)
+        runner, results = place(runner, tasks, lambda task: len(task[2]), run_batch, take,
+                                measure.description, say)
+    else:
+        results = runner.results(run_batch, tasks)
     workers = runner.workers
-    for records in runner.results(run_batch, tasks):
+    for records in results:
         take(records)
     seconds = time.perf_counter() - start
     comp = Comparison(problem, runs, applied, robot=study.robot, workers=workers,

@@ -8,8 +8,8 @@ import json
 import os
 import re
 import subprocess
-import time
 import sys
+import time
 import warnings
 from contextlib import contextmanager
 from pathlib import Path
@@ -132,9 +132,9 @@ def test_local_workers_give_the_numbers_of_one_process(reference):
 
 
 def _busy(seconds: float) -> None:
-    """Work for ``seconds`` of this process's CPU time (a batch of that cost)."""
-    end = time.process_time() + seconds
-    while time.process_time() < end:
+    """Work for ``seconds`` of this thread.s CPU time (a batch of that cost)."""
+    end = time.thread_time() + seconds
+    while time.thread_time() < end:
         pass
 
 
@@ -142,23 +142,41 @@ def _busy(seconds: float) -> None:
 @pytest.mark.slow
 def test_the_workers_start_for_a_study_that_outlasts_their_start():
     from htn.evaluation.cluster import DaskRunner, InProcess, LocalWorkers, start_seconds
-    from htn.evaluation.placement import place
+    from htn.evaluation.placement import SWITCH_INTERVAL, place
     batch = 0.3                              # CPU seconds a batch of 5 runs takes here
-    ran, said = [], []
+    ran, said, starting = [], [], []
+
+    def run(*task):
+        ran.append(task)
+        _busy(1.0 if len(ran) == 1 else batch)
+        if len(ran) == 1:   # the first batch's 0.3 s made the study worth the workers
+            starting.append(sys.getswitchinterval() == pytest.approx(SWITCH_INTERVAL))
+
     tasks = [("batch", i) for i in range(round(8 * start_seconds(2) / batch))]
     workers = LocalWorkers(2, ("htn.evaluation.runs",))
     try:
-        runner, rest = place(workers, tasks, lambda task: 5,
-                             lambda task: (ran.append(task), _busy(batch)), "busy", said.append)
+        runner, results = place(workers, tasks, lambda task: 5, run, lambda _: None,
+                                "busy", said.append)
         assert isinstance(runner, DaskRunner) and workers.workers == 2
         assert len(runner.client.scheduler_info()["workers"]) == 2
+        # they began to start during the first batch, batches ran here
+        # until they were up (how many depends on the machine's load), and
+        # they were given every batch not begun here
+        assert starting == [True]
+        assert ran == tasks[:len(ran)]
+        assert len(list(results)) == len(tasks) - len(ran)
     finally:
         workers.close()
-    assert ran == tasks[:1] and rest == tasks[1:] and said == []
-    # the same study of one batch more than the first stays here
-    runner, rest = place(LocalWorkers(2, ()), tasks[:2], lambda task: 5,
-                         lambda task: _busy(batch), "busy", said.append)
-    assert isinstance(runner, InProcess) and rest == tasks[1:2]
+    assert said == [] and sys.getswitchinterval() != pytest.approx(SWITCH_INTERVAL)
+    # the same study of one batch more than the first stays here, and no
+    # worker was started for it
+    ran.clear()
+    small = LocalWorkers(2, ())
+    runner, results = place(small, tasks[:2], lambda task: 5,
+                            lambda *task: (ran.append(task), _busy(batch)), lambda _: None,
+                            "busy", said.append)
+    assert isinstance(runner, InProcess) and ran == tasks[:1] and small._client is None
+    assert len(list(results)) == 1 and ran == tasks[:2]
     assert said and said[0].startswith("--workers 2: 10 busy runs take about 0.")
     assert said[0].endswith(": running in this process")
 
