@@ -216,6 +216,19 @@ def test_goal_is_checked_on_the_final_state(tmp_path):
      "p.hddl:4:25", "no subtask is labelled t3"),
     (DOMAIN, PROBLEM.replace("(:init", "(:int"),
      "p.hddl:5:4", "unknown keyword ':int'; did you mean :init?"),
+    # a goal or an initial state the domain cannot speak of: an error where
+    # it is written, not a search to the time limit
+    (DOMAIN, PROBLEM.replace("(:goal (at box home))", "(:goal (and (at box home) (atx box)))"),
+     "p.hddl:6:29", "unknown predicate atx in the goal (the domain declares no such predicate)"),
+    (DOMAIN, PROBLEM.replace("(:goal (at box home))", "(:goal (not (at box)))"),
+     "p.hddl:6:15", "predicate at takes 2 argument(s), given 1 in the goal"),
+    (DOMAIN, PROBLEM.replace("(:goal (at box home))", "(:goal (at box garage))"),
+     "p.hddl:6:10", "unknown object garage in the goal (neither an object of the problem "
+                    "nor a constant of the domain)"),
+    (DOMAIN, PROBLEM.replace("(road shop home))", "(road shop home) (road shop mall))"),
+     "p.hddl:5:58", "unknown object mall in the initial state"),
+    (DOMAIN, PROBLEM.replace("(road shop home))", "(raod shop home))"),
+     "p.hddl:5:41", "unknown predicate raod in the initial state"),
 ])
 def test_hddl_errors_name_file_line_col(tmp_path, domain, problem, where, message):
     d, p = _write(tmp_path, domain, problem)

@@ -45,8 +45,8 @@ from htn.jshop.language.errors import HtnError
 from htn.jshop.language.terms import Var, variables
 
 from .hddl_formulas import Formulas, Scope, order_conjuncts, type_condition, type_predicate
-from .hddl_model import (ActionDef, EffectCost, EffectForall, EffectWhen, HDomain, HProblem,
-                         MethodDef, Subtask, TaskDef)
+from .hddl_model import (ActionDef, EffectCost, EffectForall, EffectWhen, Exists, HDomain,
+                         HProblem, MethodDef, Subtask, TaskDef)
 from .hddl_order import is_total, subtask_order
 from .pullup import pulled_conditions
 
@@ -327,6 +327,53 @@ def resolve_problem_tasks(domain: S.Domain, problem: S.Problem) -> None:
         for t in S.task_atoms(inst.tasks):
             if t.name in h.actions and t.name not in h.tasks:
                 t.name = "!" + t.name
+
+
+def check_problem_symbols(domain: S.Domain, problem: S.Problem) -> None:
+    """Every atom of an HDDL problem's initial state and goal names a
+    predicate of its domain, with as many arguments as it declares, and
+    only objects of the problem or constants of the domain: a goal that
+    could never hold is an input error, not a search to the time limit."""
+    h, hp = domain.hddl, problem.hddl
+    if h is None or hp is None:
+        return
+    objects = {o.name for o in hp.objects} | {c.name for c in h.constants}
+
+    def atom(a: S.Atom, where: str) -> None:
+        params = h.predicates.get(a.pred)
+        if params is None:
+            raise HtnError.at(a.pos, f"unknown predicate {a.pred} in the {where} (the domain "
+                              "declares no such predicate)")
+        if len(params) != len(a.args):
+            raise HtnError.at(a.pos, f"predicate {a.pred} takes {len(params)} argument(s), "
+                              f"given {len(a.args)} in the {where}")
+        terms(a.args, a.pos, where)
+
+    def terms(args, pos, where: str) -> None:
+        for x in args:
+            if not isinstance(x, Var) and x not in objects:
+                raise HtnError.at(pos, f"unknown object {x} in the {where} (neither an "
+                                  "object of the problem nor a constant of the domain)")
+
+    def formula(e) -> None:
+        if isinstance(e, S.Atom):
+            atom(e, "goal")
+        elif isinstance(e, (S.And, S.Or)):
+            for x in e.items:
+                formula(x)
+        elif isinstance(e, S.Not):
+            formula(e.expr)
+        elif isinstance(e, S.Equal):
+            terms((e.left, e.right), e.pos, "goal")
+        elif isinstance(e, Exists):
+            formula(e.expr)
+        elif isinstance(e, S.ForAll):
+            formula(e.cond)
+            formula(e.then)
+
+    for a in hp.init:
+        atom(a, "initial state")
+    formula(hp.goal)
 
 
 def from_model(h):

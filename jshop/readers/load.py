@@ -83,7 +83,8 @@ def paired(dom: S.Domain, prob: S.Problem) -> tuple[S.Domain, S.Problem]:
     (:func:`~htn.jshop.readers.hddl_domain.for_problem`)."""
     check_domain_name(dom, prob)
     if dom.hddl is not None:
-        from .hddl_domain import for_problem, resolve_problem_tasks
+        from .hddl_domain import check_problem_symbols, for_problem, resolve_problem_tasks
+        check_problem_symbols(dom, prob)
         resolve_problem_tasks(dom, prob)
         dom = for_problem(dom, prob)
     return dom, prob
