@@ -195,6 +195,7 @@ def test_validate_gives_a_verdict_per_plan():
     assert not v.valid and v.failed_step == 1 and "does not hold" in v.verdict.reason
 
 
+@pytest.mark.slow
 def test_transform_is_callable_and_gives_a_checked_plan(tmp_path):
     done = htn.transform(KITCHEN, TRAY, rules="tray")
     assert done.document["applied"] == ["tray"]

@@ -8,6 +8,7 @@ import shutil
 import subprocess
 import sys
 
+import pytest
 from conftest import ROOT
 
 EXAMPLE = ROOT / "examples" / "plan_and_run.py"
@@ -18,6 +19,7 @@ def _sh(*args, cwd, env=None):
                           timeout=900, env=env)
 
 
+@pytest.mark.slow
 def test_the_example_runs_outside_the_checkout_on_the_core_install(tmp_path):
     wheels = tmp_path / "wheel"
     r = _sh(sys.executable, "-m", "pip", "wheel", "-q", "--no-deps", "-w", wheels, ROOT,

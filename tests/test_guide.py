@@ -89,6 +89,7 @@ def venv(tmp_path_factory) -> Path:
     return venv
 
 
+@pytest.mark.slow
 def test_the_guide_runs_from_a_folder_outside_the_checkout(venv, tmp_path):
     work = tmp_path / "work"
     work.mkdir()

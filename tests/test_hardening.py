@@ -231,6 +231,7 @@ def test_junk_returned_by_a_function_runs_none_of_its_methods(made, tmp_path):
 
 # ------------------------------------------------------------------ 8. bounded messages
 
+@pytest.mark.slow
 def test_a_huge_term_in_a_message_is_cut_and_quick(tmp_path):
     d, p = tmp_path / "d.jshop", tmp_path / "p.jshop"
     d.write_text("(defdomain d ((:operator (!a ?l) ((big ?l) (call < ?l 1)) () ())))")

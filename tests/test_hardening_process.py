@@ -78,6 +78,7 @@ def test_a_log_on_a_full_disk_ends_on_a_whole_line_and_its_summary(tmp_path):
 
 # ------------------------------------------------------------------ 6. the watchdog
 
+@pytest.mark.slow
 def test_a_function_that_swallows_the_deadline_is_ended(tmp_path):
     d, p = files(tmp_path, CALLS, "(defproblem p d () ((travel home)))")
     fns = tmp_path / "fns.py"
@@ -89,6 +90,7 @@ def test_a_function_that_swallows_the_deadline_is_ended(tmp_path):
     assert time.monotonic() - began < 2 + 5 + 10      # the grace, and a loaded start-up
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
 def test_a_function_that_swallows_a_signal_is_ended(tmp_path, sig):
     d, p = files(tmp_path, CALLS, "(defproblem p d () ((travel home)))")

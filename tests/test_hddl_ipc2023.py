@@ -22,8 +22,9 @@ SEARCH_BOUND = {"Lamps/pfile04.pddl", "Snake/pb-4slots-seed1.snake.hddl",
                 "Snake/pb-5slots-seed1.snake.hddl"}
 
 
-def _pairs(sample: str) -> list:
-    """(domain file, problem file) of every instance of a sample folder."""
+def _pairs(sample: str, slow: frozenset = frozenset()) -> list:
+    """(domain file, problem file) of every instance of a sample folder;
+    those named in ``slow`` are marked so."""
     root = CORPUS / sample
     if not (root / "README.md").is_file():
         return [pytest.param(None, None, marks=pytest.mark.skip(
@@ -35,8 +36,9 @@ def _pairs(sample: str) -> list:
         for problem in (f for f in files if f not in domains):
             stem = problem.name.rsplit(".", 1)[0]
             own = [d for d in domains if d.name == f"{stem}-domain.hddl"]
-            out.append(pytest.param((own or domains)[0], problem,
-                                    id=f"{folder.name}/{problem.name}"))
+            name = f"{folder.name}/{problem.name}"
+            out.append(pytest.param((own or domains)[0], problem, id=name,
+                                    marks=[pytest.mark.slow] if name in slow else []))
     return out
 
 
@@ -60,7 +62,7 @@ def test_every_instance_is_read_or_refused_at_a_place(domain, problem):
 
 
 @pytest.mark.corpus
-@pytest.mark.parametrize("domain,problem", _pairs("ipc2023-to"))
+@pytest.mark.parametrize("domain,problem", _pairs("ipc2023-to", frozenset(SEARCH_BOUND)))
 def test_total_order_instances_plan_and_verify(tmp_path, ipc_oracle, domain, problem):
     name = f"{problem.parent.name}/{problem.name}"
     limit = "5" if name in SEARCH_BOUND else "60"

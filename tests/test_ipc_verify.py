@@ -282,6 +282,7 @@ PLAN_LINES = st.lists(st.sampled_from(PLAN.splitlines()) | st.text(
     alphabet=st.sampled_from(list("0123 ->()<=\n\tabgo")), max_size=12), max_size=8)
 
 
+@pytest.mark.slow
 @settings(max_examples=150, deadline=None, derandomize=True, database=None,
           suppress_health_check=list(HealthCheck))
 @given(edit=st.data())

@@ -40,6 +40,7 @@ def _tone_pixels(image, tone, box) -> int:
     return int((abs(_pixels(image, box) - tone).sum(axis=1) < 40).sum())
 
 
+@pytest.mark.slow
 def test_snapshots_are_large_and_say_what_they_show(faulty_run):
     from PIL import Image
 
@@ -74,6 +75,7 @@ def test_a_caption_holds_step_action_attempt_outcome_and_time():
                                "pringles is 0.310 m from the gripper"]
 
 
+@pytest.mark.slow
 def test_drives_report_the_error_they_end_with(faulty_run):
     _, events = faulty_run
     drives = [e for e in events if e["event"] in ("verified", "aborted")

@@ -184,6 +184,7 @@ def test_a_tree_that_misses_a_step_is_refused(three, tmp_path, capsys):
 
 # ---------------------------------------------------------------- transform, variables, depth
 
+@pytest.mark.slow
 def test_transform_writes_the_transformed_tree_and_run_executes_it(tmp_path, count_planning):
     out = tmp_path / "t.txt"
     r = run_htn("transform", KITCHEN, ROOT / "problems" / "tray_three.jshop", "-o", out,

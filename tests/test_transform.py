@@ -97,6 +97,7 @@ def test_priorities_and_enable_disable():
         fw2.disable_transformation("no-such-rule")
 
 
+@pytest.mark.slow
 def test_transport_four_gets_both_hands_twice_and_stays_valid():
     ws = workspace("transport_four")
     before = navigation_distance(ws.instance, ws.plan)
@@ -220,6 +221,7 @@ def test_evaluate_reproduces_the_papers_findings():
     assert tray["actions"]["change_pct"] > 20 and -15 < tray["navigation"]["change_pct"] < 0
 
 
+@pytest.mark.slow
 def test_task_tree_annotated_by_a_projected_run():
     from htn.executor.config import load_retries
     from htn.transform.projection import projected_tree

@@ -36,7 +36,10 @@ MISSING = [what for what, ok in (
     ("Debian's chromium-driver (apt-get install chromium-driver)", DRIVER),
     ("selenium (pip install selenium)", SELENIUM),
     ("the view extra (pip install 'htn[view]')", not missing_modules("view"))) if not ok]
-pytestmark = pytest.mark.skipif(bool(MISSING), reason="the browser tests need " + ", ".join(MISSING))
+# a real browser per test: in the full suite, not in the fast subset
+pytestmark = [pytest.mark.slow,
+              pytest.mark.skipif(bool(MISSING),
+                                 reason="the browser tests need " + ", ".join(MISSING))]
 
 CHROMIUM_FLAGS = ("--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
                   "--no-first-run", "--disable-background-networking",

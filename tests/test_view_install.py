@@ -11,6 +11,7 @@ import sys
 import urllib.request
 from pathlib import Path
 
+import pytest
 from conftest import ROOT
 
 STATIC = ROOT / "view" / "static"
@@ -28,6 +29,7 @@ def test_no_asset_of_the_page_comes_from_elsewhere():
             "http://www.w3.org/2000/svg", "")), path     # the SVG namespace is no address
 
 
+@pytest.mark.slow
 def test_the_view_extra_installs_the_page(tmp_path):
     out = tmp_path / "wheel"
     r = sh(sys.executable, "-m", "pip", "wheel", "-q", "--no-deps", "-w", out, ROOT, cwd=tmp_path)
