@@ -212,8 +212,8 @@ def end_process(code) -> None:
     if st.received is not None and not st.reported:
         interrupt_exit(st.received)
     flush_stdout()
-    if st.received is not None:     # interrupted: the shutdown was seen to end
-        leave_now(code)             # the process by SIGINT (about 1 in 8, loaded)
+    if st.process:      # the shutdown puts the default handlers back: a signal
+        leave_now(code)     # then kills the process (-2, seen after htn run --sim)
     sys.exit(code)
 
 

@@ -88,14 +88,22 @@ def backstop_after(after: float) -> bool:
 
 
 def leave_now(code) -> None:
-    """Exit with ``code`` without the interpreter's shutdown (the exit hooks,
-    which remove temporaries, run first): an interrupted htn plan, under
-    load, was seen to die by SIGINT in the shutdown instead (1 in 8)."""
+    """Exit with ``code`` as ``sys.exit(code)`` would (None: 0; a message:
+    printed, 1) but without the interpreter's shutdown (the exit hooks,
+    which remove temporaries, run first): the shutdown puts the default
+    signal handlers back, and a signal then kills the process (an
+    interrupted htn plan under load, 1 in 8; a finished htn run --sim)."""
     import atexit
     atexit._run_exitfuncs()
+    if code is not None and not isinstance(code, int):
+        try:
+            sys.stderr.write(f"{code}\n")
+        except (OSError, ValueError):
+            pass
+        code = 1
     for stream in (sys.stdout, sys.stderr):
         try:
             stream.flush()
         except (OSError, ValueError):
             pass
-    os._exit(code if isinstance(code, int) else 1)
+    os._exit(code or 0)
