@@ -132,6 +132,29 @@ def ipc_oracle():
         pytest.skip(f"{oracle.missing}: IPC plans checked by htn validate only")
 
 
+@pytest.fixture(scope="session")
+def checkout_wheel(tmp_path_factory) -> Path:
+    """One wheel of this checkout for the whole run, shared by the xdist
+    workers: pip builds it in the checkout's ``build/`` folder, so two
+    builds at once collide (``File exists: build/bdist.../htn-0.1.0.dist-info``)."""
+    import fcntl
+    base = tmp_path_factory.getbasetemp()
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        base = base.parent                  # the run's folder, above each worker's
+    folder = base / "checkout-wheel"
+    with open(base / "checkout-wheel.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        wheels = list(folder.glob("htn-*.whl"))
+        if not wheels:
+            r = subprocess.run([sys.executable, "-m", "pip", "wheel", "-q", "--no-deps", "-w",
+                                str(folder), str(ROOT)], cwd=base, capture_output=True,
+                               text=True, timeout=900)
+            assert r.returncode == 0, r.stdout + r.stderr
+            wheels = list(folder.glob("htn-*.whl"))
+    (wheel,) = wheels
+    return wheel
+
+
 GOLDEN = Path(__file__).resolve().parent / "golden"
 
 

@@ -20,12 +20,8 @@ def _sh(*args, cwd, env=None):
 
 
 @pytest.mark.slow
-def test_the_example_runs_outside_the_checkout_on_the_core_install(tmp_path):
-    wheels = tmp_path / "wheel"
-    r = _sh(sys.executable, "-m", "pip", "wheel", "-q", "--no-deps", "-w", wheels, ROOT,
-            cwd=tmp_path)
-    assert r.returncode == 0, r.stdout + r.stderr
-    (wheel,) = wheels.glob("htn-*.whl")
+def test_the_example_runs_outside_the_checkout_on_the_core_install(tmp_path, checkout_wheel):
+    wheel = checkout_wheel
     venv = tmp_path / "venv"
     assert _sh(sys.executable, "-m", "venv", venv, cwd=tmp_path).returncode == 0
     python = venv / "bin" / "python"

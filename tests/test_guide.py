@@ -62,14 +62,10 @@ def test_the_guide_marks_its_blocks_and_shows_the_tested_coffee_robot():
 
 
 @pytest.fixture(scope="module")
-def venv(tmp_path_factory) -> Path:
+def venv(tmp_path_factory, checkout_wheel) -> Path:
     """A fresh virtualenv with htn from a wheel of this checkout, its
     dependencies seen from this interpreter's site-packages."""
     base = tmp_path_factory.mktemp("venv")
-    wheels = base / "wheel"
-    r = subprocess.run([sys.executable, "-m", "pip", "wheel", "-q", "--no-deps", "-w", wheels,
-                        ROOT], capture_output=True, text=True, timeout=600)
-    assert r.returncode == 0, r.stdout + r.stderr
     venv = base / "venv"
     assert subprocess.run([sys.executable, "-m", "venv", venv], timeout=600).returncode == 0
     site = Path(subprocess.run([venv / "bin" / "python", "-c",
@@ -77,7 +73,7 @@ def venv(tmp_path_factory) -> Path:
                                capture_output=True, text=True).stdout.strip())
     here = sysconfig.get_paths()["purelib"]
     (site / "htn-test-parent-site.pth").write_text(f"import site; site.addsitedir({here!r})\n")
-    (wheel,) = wheels.glob("htn-*.whl")
+    wheel = checkout_wheel
     # --ignore-installed: the parent site may hold htn of the same version (a
     # non-editable install, as CI makes), and pip would then skip the wheel and
     # leave the venv without its own htn and htn command.

@@ -58,12 +58,8 @@ def make_venv(path: Path) -> Venv:
 
 
 @pytest.fixture(scope="session")
-def wheel(tmp_path_factory) -> Path:
-    out = tmp_path_factory.mktemp("wheel")
-    r = sh(sys.executable, "-m", "pip", "wheel", "-q", "--no-deps", "-w", out, ROOT, cwd=out)
-    assert r.returncode == 0, r.stdout + r.stderr
-    (whl,) = out.glob("htn-*.whl")
-    return whl
+def wheel(checkout_wheel) -> Path:
+    return checkout_wheel
 
 
 @pytest.fixture(scope="session")

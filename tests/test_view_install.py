@@ -30,11 +30,8 @@ def test_no_asset_of_the_page_comes_from_elsewhere():
 
 
 @pytest.mark.slow
-def test_the_view_extra_installs_the_page(tmp_path):
-    out = tmp_path / "wheel"
-    r = sh(sys.executable, "-m", "pip", "wheel", "-q", "--no-deps", "-w", out, ROOT, cwd=tmp_path)
-    assert r.returncode == 0, r.stderr
-    (wheel,) = out.glob("htn-*.whl")
+def test_the_view_extra_installs_the_page(tmp_path, checkout_wheel):
+    wheel = checkout_wheel
     venv = tmp_path / "venv"
     assert sh(sys.executable, "-m", "venv", venv, cwd=tmp_path).returncode == 0
     env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "VIRTUAL_ENV")}
