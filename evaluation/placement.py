@@ -12,7 +12,7 @@ when the rest would end sooner on them, start-up included:
 and by a margin (:data:`MARGIN`), since a projection from one batch is
 rough. Otherwise every run stays here, and one line says why. A run depends
 only on its seed, so the results are the same either way. Times are CPU
-seconds of this process, which is what a run costs on an idle machine.
+seconds of the thread that runs them, which is what a run costs on an idle machine.
 
 The workers start in a thread while this process goes on running batches,
 and take the batches not yet begun as soon as they are up, so that their
