@@ -28,7 +28,7 @@ import sys
 import threading
 import time
 from dataclasses import dataclass, field
-from typing import Callable, Iterator, Optional
+from typing import Callable, Optional
 
 EFFICIENCY = 0.9        # of each worker, against this process (sending tasks, results)
 MARGIN = 1.15           # the workers must be this much faster to be started
@@ -102,18 +102,19 @@ def place(runner, tasks: list, runs_in: Callable[[tuple], int], function: Callab
     # cost is what it is on an idle machine, and a starting cluster's thread
     # is not the batch's
     clock = _thread_clock()
-    t0 = time.clock_gettime(clock) if clock is not None else time.thread_time()
+    now = time.thread_time if clock is None else lambda: time.clock_gettime(clock)
+    t0 = now()
     starter = None
-    if clock is not None:
-        starter = _Starter(runner, tasks, function, begun=1, when=lambda: projection(
-            time.clock_gettime(clock) - t0).worth_the_workers())
+    if clock is not None:           # another thread can read this one's clock
+        starter = _Starter(runner, tasks, function, begun=1,
+                           when=lambda: projection(now() - t0).worth_the_workers())
     try:
         take(function(*tasks[0]))
     except BaseException:
         if starter is not None:
             starter.stop()
         raise
-    seconds = time.clock_gettime(clock) - t0 if clock is not None else time.thread_time() - t0
+    seconds = now() - t0
     if starter is not None and not starter.stop():
         starter = None                  # the first batch was too short to start them
     if starter is None and projection(seconds).worth_the_workers():

@@ -72,8 +72,9 @@ def run_study(study: Study, problem: str, applied: list, runs: int, seed: int, r
     workers not yet started, batches run here and the rest goes to the
     workers, once they are up, only if that is faster
     (:func:`.placement.place`; ``say`` gets the line that says it is not)."""
+    measure = MEASURES[study.robot]
     planned = runner.requested if runner.deferred else runner.workers
-    size = max(1, min(MEASURES[study.robot].batch,
+    size = max(1, min(measure.batch,
                       math.ceil(runs / (planned * BATCHES_PER_WORKER))))
     key, blob = study.pack()
     tasks = [(key, blob, batch) for batch in batches(runs, seed, size)]
@@ -86,7 +87,6 @@ def run_study(study: Study, problem: str, applied: list, runs: int, seed: int, r
             on_batch(fresh)
 
     start = time.perf_counter()
-    measure = MEASURES[study.robot]
     if runner.deferred:
         runner, results = place(runner, tasks, lambda task: len(task[2]), run_batch, take,
                                 measure.description, say)
