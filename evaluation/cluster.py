@@ -45,7 +45,10 @@ class DaskRunner:
 
     @property
     def workers(self) -> int:
-        return len(self.client.scheduler_info()["workers"])
+        # the scheduler's count: the per-worker entries are left out of the
+        # client's cached copy when a fresh one cannot be fetched
+        info = self.client.scheduler_info()
+        return info.get("n_workers", len(info["workers"]))
 
     def results(self, function: Callable, batches: Iterable[tuple]) -> Iterator:
         return self.submit(function, batches)
@@ -168,6 +171,13 @@ class LocalWorkers:
             import time
             t0 = time.perf_counter()
             self._cluster, self._client = start_local_cluster(self.requested, self.preload)
+            # up means registered with the scheduler and running
+            try:
+                self._client.wait_for_workers(self.requested, timeout=START_TIMEOUT)
+            except TimeoutError:
+                self.close()
+                raise ClusterError(f"{self.requested} local workers were not up after "
+                                   f"{START_TIMEOUT} s") from None
             self._runner = DaskRunner(self._client)
             self.started_in = time.perf_counter() - t0
         return self._runner
@@ -191,6 +201,7 @@ class LocalWorkers:
 # takes 0.1-0.4 s. On a busy machine all of it takes longer, as the runs do.
 START_BASE = 2.0
 START_PER_WORKER = 0.25
+START_TIMEOUT = 120     # seconds the workers may take to be up, on a machine ever so busy
 
 
 def start_seconds(workers: int) -> float:

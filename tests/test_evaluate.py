@@ -158,7 +158,7 @@ def test_the_workers_start_for_a_study_that_outlasts_their_start():
         runner, results = place(workers, tasks, lambda task: 5, run, lambda _: None,
                                 "busy", said.append)
         assert isinstance(runner, DaskRunner) and workers.workers == 2
-        assert len(runner.client.scheduler_info()["workers"]) == 2
+        assert runner.workers == 2           # the scheduler's own count
         # they began to start during the first batch, batches ran here
         # until they were up (how many depends on the machine's load), and
         # they were given every batch not begun here
