@@ -79,7 +79,7 @@ def _seconds(s: float) -> str:
     return f"{s:.1f} s" if s < 10 else f"{s:.0f} s"
 
 
-def place(runner, tasks: list, runs_in: Callable[[tuple], int], function: Callable,
+def place(runner, tasks: list, runs_in: Callable[[tuple], float], function: Callable,
           take: Callable[[list], None], description: str,
           say: Optional[Callable[[str], None]] = None):
     """Run ``tasks`` (batches) in this process until it is clear where the
@@ -87,14 +87,14 @@ def place(runner, tasks: list, runs_in: Callable[[tuple], int], function: Callab
     results of the tasks left. ``runner`` is a not yet started
     :class:`~.cluster.LocalWorkers`; ``function(*task)`` runs one batch and
     ``take(results)`` records them; ``runs_in(task)`` is how many runs it
-    holds. ``say`` gets the line that says why the runs stay here, if they do."""
+    holds (a fraction: some of a run's plans). ``say`` gets the line that says why the runs stay here, if they do."""
     from .cluster import InProcess, start_seconds
     if not tasks:
         return InProcess(), iter(())
     runs, first = sum(runs_in(t) for t in tasks), runs_in(tasks[0])
 
     def projection(seconds: float) -> Projection:
-        return Projection(runs, runs - first, seconds / first, runner.requested,
+        return Projection(round(runs), runs - first, seconds / first, runner.requested,
                           start_seconds(runner.requested))
 
     # CPU time of this thread: on a machine others share, waiting for a core

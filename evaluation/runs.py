@@ -17,7 +17,7 @@ import hashlib
 import pickle
 from collections import OrderedDict
 from dataclasses import dataclass, field
-from typing import Callable
+from typing import Callable, Optional
 
 from htn.executor.dispatcher import RunSummary
 from htn.jshop.language import syntax as S
@@ -58,6 +58,9 @@ class Measure:
     read: Callable               # (robot, RunSummary) -> {navigation, manipulation, actions, failed}
     description: str
     batch: int
+    # each plan's run a task of its own: a physics run takes seconds, and at
+    # the end of a study the workers wait for the last task
+    per_plan: bool = False
 
 
 def _projection_prepare(study: Study):
@@ -87,7 +90,7 @@ MEASURES: dict[str, Measure] = {
         projection_metrics, "projected", batch=25),
     "pybullet": Measure(
         Faults.kinds(), lambda study: study, _pybullet_robot, _pybullet_read, "PyBullet",
-        batch=1),
+        batch=1, per_plan=True),
 }
 
 
@@ -104,10 +107,11 @@ _PREPARED: OrderedDict = OrderedDict()     # study key -> (study, prepared), thi
 _KEEP = 4
 
 
-def run_batch(key: str, blob: bytes, runs: list) -> list[dict]:
-    """Execute runs ``[(number, seed), ...]`` of a packed study, every plan
-    once per run; one record per plan execution. The study is unpacked and
-    prepared once per process and kept for the next batches."""
+def run_batch(key: str, blob: bytes, runs: list, plans: Optional[tuple] = None) -> list[dict]:
+    """Execute runs ``[(number, seed), ...]`` of a packed study, each of
+    ``plans`` (default: every plan) once per run; one record per plan
+    execution. The study is unpacked and prepared once per process and kept
+    for the next batches."""
     if key not in _PREPARED:
         study = pickle.loads(blob)
         _PREPARED[key] = (study, MEASURES[study.robot].prepare(study))
@@ -116,4 +120,4 @@ def run_batch(key: str, blob: bytes, runs: list) -> list[dict]:
     study, prepared = _PREPARED[key]
     _PREPARED.move_to_end(key)
     return [{"run": number, "seed": seed, "plan": name, **execute(study, prepared, name, seed)}
-            for number, seed in runs for name in study.plans]
+            for number, seed in runs for name in (plans or study.plans)]

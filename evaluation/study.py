@@ -77,7 +77,15 @@ def run_study(study: Study, problem: str, applied: list, runs: int, seed: int, r
     size = max(1, min(measure.batch,
                       math.ceil(runs / (planned * BATCHES_PER_WORKER))))
     key, blob = study.pack()
-    tasks = [(key, blob, batch) for batch in batches(runs, seed, size)]
+    if measure.per_plan:
+        tasks = [(key, blob, batch, (name,)) for batch in batches(runs, seed, size)
+                 for name in study.plans]
+    else:
+        tasks = [(key, blob, batch) for batch in batches(runs, seed, size)]
+    share = 1 / len(study.plans) if measure.per_plan else 1     # of a run, a task's plans
+
+    def runs_in(task: tuple) -> float:
+        return len(task[2]) * share
     done: dict = {}
 
     def take(records: list) -> None:
@@ -88,7 +96,7 @@ def run_study(study: Study, problem: str, applied: list, runs: int, seed: int, r
 
     start = time.perf_counter()
     if runner.deferred:
-        runner, results = place(runner, tasks, lambda task: len(task[2]), run_batch, take,
+        runner, results = place(runner, tasks, runs_in, run_batch, take,
                                 measure.description, say)
     else:
         results = runner.results(run_batch, tasks)

@@ -263,6 +263,21 @@ def test_physics_backed_evaluation(tmp_path):
         [(0, "original", "verified"), (0, "transformed", "verified")]
 
 
+def test_a_task_of_one_plan_gives_that_plans_records_of_the_whole_run():
+    # physics studies send each plan's run as a task of its own: a run of a
+    # plan depends on its seed alone, not on the plans run beside it
+    from htn.evaluation.runs import run_batch
+    from htn.evaluation.study import prepare_study
+    study, _ = prepare_study(str(ROOT / "domains" / "kitchen.jshop"), str(ROOT / PROBLEM))
+    key, blob = study.pack()
+    runs = [(3, 8), (4, 9)]
+    whole = run_batch(key, blob, runs)
+    assert [(r["run"], r["plan"]) for r in whole] == [
+        (3, "original"), (3, "transformed"), (4, "original"), (4, "transformed")]
+    for name in study.plans:
+        assert run_batch(key, blob, runs, (name,)) == [r for r in whole if r["plan"] == name]
+
+
 @pytest.mark.slow
 def test_few_runs_print_na_and_leak_no_warning():
     warn_all = {**os.environ, "PYTHONWARNINGS": "always"}
