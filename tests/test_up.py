@@ -86,7 +86,9 @@ def test_an_up_ini_file_registers_the_engine_without_an_import(tmp_path):
 # ---------------------------------------------------------------- UP's test cases
 
 @pytest.mark.parametrize("name", SUPPORTED)
-def test_every_supported_test_case_gets_a_valid_hierarchical_plan(name):
+def test_every_supported_test_case_gets_a_valid_hierarchical_plan(name, tmp_path, monkeypatch):
+    import tempfile
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))    # aries-val's log file, not /tmp's
     problem = cases()[name].problem
     result = solve(problem)
     assert result.status == Status.SOLVED_SATISFICING, result.log_messages
