@@ -22,13 +22,11 @@ ones: they only cut method instances that have no plan below them.
 from __future__ import annotations
 
 from htn.jshop.language import syntax as S
-from htn.jshop.language.terms import Var, subst, variables
+from htn.jshop.language.terms import subst, variables
 from htn.jshop.logic.compile import head_unifier
-from htn.jshop.logic.engine import Logic
-from htn.jshop.logic.state import State
 
-from .ground_formulas import (FormulaGrounder, NotGroundable, compile_residual, disj,
-                              flat_and, relax)
+from .ground_formulas import FormulaGrounder, NotGroundable, compile_residual, disj
+from .reachability import reachable
 
 
 class GroundAction:
@@ -118,57 +116,7 @@ class _Grounder:
 
     # ------------------------------------------------------------ 1. facts
     def reachable_facts(self):
-        state = State()
-        implied = self.domain.implied
-        for atom in (*self.domain.facts, *self.instance.state):
-            state.add(atom.pred, atom.args)
-            for pred in implied.get(atom.pred, ()):
-                state.add(pred, atom.args)
-        self.initial = [(p, a) for p, a in state.facts()]
-        logic = Logic(self.domain, state)
-        self.logic = logic
-        programs = []
-        for ops in self.domain.operators.values():
-            for op in ops:
-                # a parameter of type object has no type condition: bind it too
-                free = [S.Atom("type:object", (v,)) for v in op.head.args if type(v) is Var]
-                sat = logic.precondition(S.Precondition(flat_and([relax(op.pre.expr), *free])),
-                                         op.head.args)
-                adds = [(item.pred, item.args) for item in op.add.items
-                        if isinstance(item, S.Atom)]
-                raw = [item for item in op.add.items if isinstance(item, S.EffectForAll)]
-                foralls = [(logic.expr(flat_and([relax(item.cond)])), item.atoms) for item in raw]
-                programs.append((op, sat, adds, foralls, [item.cond for item in raw]))
-        # semi-naive: an operator is enumerated again only when a predicate
-        # its relaxed precondition reads has gained a fact since its last turn
-        # (a derived predicate could depend on any: then every turn, as before)
-        changed_at: dict = {}           # predicate -> tick of its latest new fact
-        tick = 0
-        every = bool(self.domain.axioms)
-        reads = [None if every else _predicates([op.pre.expr, *conds])
-                 for op, _sat, _adds, _fa, conds in programs]
-        last = [-1] * len(programs)
-        changed = True
-        while changed:
-            changed = False
-            for k, (op, sat, adds, foralls, _conds) in enumerate(programs):
-                if last[k] >= 0 and reads[k] is not None and \
-                        all(changed_at.get(p, -1) <= last[k] for p in reads[k]):
-                    continue
-                yield
-                last[k] = tick
-                new = []
-                for env in sat([None] * op.nvars):
-                    for pred, args in adds:
-                        new.append((pred, subst(args, env)))
-                    for cond, atoms in foralls:
-                        for nb in cond(list(env)):
-                            new.extend((a.pred, subst(a.args, nb)) for a in atoms)
-                for pred, args in new:
-                    if state.add(pred, args):
-                        tick += 1
-                        changed_at[pred] = tick
-                        changed = True
+        state, self.initial, self.logic = yield from reachable(self.domain, self.instance)
         return state
 
     # ------------------------------------------------------------ 2. top down
@@ -356,16 +304,4 @@ def _top_variables(e) -> set:
             out.update(v.index for v in variables((x.left, x.right), []))
         elif not isinstance(x, S.ForAll):
             raise NotGroundable(f"{type(x).__name__} in a precondition")
-    return out
-
-
-def _predicates(exprs: list) -> set:
-    """The predicates the delete relaxations of ``exprs`` read."""
-    out, stack = set(), [relax(e) for e in exprs]
-    while stack:
-        e = stack.pop()
-        if isinstance(e, S.Atom):
-            out.add(e.pred)
-        elif isinstance(e, (S.And, S.Or)):
-            stack.extend(e.items)
     return out

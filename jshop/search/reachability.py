@@ -1,0 +1,136 @@
+"""The facts an HDDL problem can reach under the delete relaxation: the
+first step of grounding (:mod:`.grounding`).
+
+Every action is applied, negative and universal conditions dropped, until
+no new fact appears, with the planner's own logic engine on a growing
+state. The fixpoint is semi-naive: after an action's first turn, only its
+bindings that use a fact new since its last turn are enumerated, by binding
+one of its precondition's atoms to each new fact in turn (a binding that
+uses old facts only was found before). Where that does not hold (derived
+predicates; a disjunction or a conditional effect reading a predicate that
+has gained facts) the action's bindings are all enumerated again.
+"""
+from __future__ import annotations
+
+from htn.jshop.language import syntax as S
+from htn.jshop.language.terms import Var, subst
+from htn.jshop.logic.engine import Logic
+from htn.jshop.logic.state import State
+
+from .ground_formulas import flat_and, relax
+
+
+class _Program:
+    """One action's relaxed precondition, compiled, and what it adds."""
+
+    def __init__(self, op: S.Operator, logic: Logic, every: bool):
+        # a parameter of type object has no type condition: bind it too
+        free = [S.Atom("type:object", (v,)) for v in op.head.args if type(v) is Var]
+        pre = flat_and([relax(op.pre.expr), *free])
+        self.op, self.nvars = op, op.nvars
+        self.sat = logic.precondition(S.Precondition(pre), op.head.args)
+        self.adds = [(item.pred, item.args) for item in op.add.items
+                     if isinstance(item, S.Atom)]
+        raw = [item for item in op.add.items if isinstance(item, S.EffectForAll)]
+        self.foralls = [(logic.expr(flat_and([relax(item.cond)])), item.atoms) for item in raw]
+        # the atoms a new fact can be bound to; what else reads the state
+        self.atoms = [x for x in pre.items if isinstance(x, S.Atom) and _plain(x.args)]
+        others = [x for x in pre.items if not any(x is a for a in self.atoms)]
+        self.reads = None if every else predicates([op.pre.expr, *(i.cond for i in raw)])
+        self.others = predicates(others + [i.cond for i in raw])
+        self.seen = -1                  # the log's length at this action's last turn
+
+    def bindings(self, log: list):
+        """The bindings to apply now, given the facts added so far (``log``)."""
+        new = log[self.seen:] if self.seen >= 0 else None
+        self.seen = len(log)
+        if new is None or self.reads is None:
+            yield from self.sat([None] * self.nvars)
+            return
+        preds = {p for p, _ in new}
+        if not preds & self.reads:
+            return
+        if preds & self.others:
+            yield from self.sat([None] * self.nvars)
+            return
+        for atom in self.atoms:
+            if atom.pred not in preds:
+                continue
+            for pred, args in new:
+                if pred != atom.pred:
+                    continue
+                env = [None] * self.nvars
+                if _match(atom.args, args, env):
+                    yield from self.sat(env)
+
+    def added(self, env: list) -> list:
+        out = [(pred, subst(args, env)) for pred, args in self.adds]
+        for cond, atoms in self.foralls:
+            for nb in cond(list(env)):
+                out.extend((a.pred, subst(a.args, nb)) for a in atoms)
+        return out
+
+
+def reachable(domain: S.Domain, instance: S.ProblemInstance, semi_naive: bool = True):
+    """A generator (it yields between actions' turns, for the caller's
+    deadline) that returns ``(state, initial facts, logic)``: the reachable
+    facts, the initial state's, and the engine on the growing state.
+    ``semi_naive=False`` enumerates every binding at every turn (the
+    reference the tests compare with)."""
+    state = State()
+    implied = domain.implied
+    for atom in (*domain.facts, *instance.state):
+        state.add(atom.pred, atom.args)
+        for pred in implied.get(atom.pred, ()):
+            state.add(pred, atom.args)
+    initial = [(p, a) for p, a in state.facts()]
+    logic = Logic(domain, state)
+    every = bool(domain.axioms)         # a derived predicate could depend on any
+    programs = [_Program(op, logic, every) for ops in domain.operators.values() for op in ops]
+    log: list = []                      # the facts added, in order
+    changed = True
+    while changed:
+        changed = False
+        for program in programs:
+            yield
+            if not semi_naive:
+                program.seen = -1
+            new = [fact for env in program.bindings(log) for fact in program.added(env)]
+            for pred, args in new:
+                if state.add(pred, args):
+                    log.append((pred, args))
+                    changed = True
+    return state, initial, logic
+
+
+def _plain(args) -> bool:
+    """Whether ``args`` are variables and constants only (no compound terms)."""
+    return all(type(a) is Var or not isinstance(a, (list, tuple)) for a in args)
+
+
+def _match(pattern, args: tuple, env: list) -> bool:
+    """Bind ``pattern``'s variables in ``env`` to ``args``; whether they fit."""
+    if len(pattern) != len(args):
+        return False
+    for p, a in zip(pattern, args):
+        if type(p) is Var:
+            bound = env[p.index]
+            if bound is None:
+                env[p.index] = a
+            elif bound != a:
+                return False
+        elif p != a:
+            return False
+    return True
+
+
+def predicates(exprs: list) -> set:
+    """The predicates the delete relaxations of ``exprs`` read."""
+    out, stack = set(), [relax(e) for e in exprs]
+    while stack:
+        e = stack.pop()
+        if isinstance(e, S.Atom):
+            out.add(e.pred)
+        elif isinstance(e, (S.And, S.Or)):
+            stack.extend(e.items)
+    return out

@@ -1,0 +1,43 @@
+"""The reachable facts of grounding (:mod:`htn.jshop.search.reachability`):
+the semi-naive fixpoint reaches exactly the facts of enumerating every
+binding of every action at every turn, on IPC instances of both orders."""
+from __future__ import annotations
+
+import pytest
+from conftest import SHARED
+
+from htn.jshop.readers.load import load_inputs
+from htn.jshop.search.reachability import reachable
+
+CORPUS = SHARED / "corpus"
+INSTANCES = [  # (domain, problem) under the corpus: conditional effects, types, many actions
+    ("ipc2020-to/Childsnack/domain.hddl", "ipc2020-to/Childsnack/p05.hddl"),
+    ("ipc-po/Rover/domain.hddl", "ipc-po/Rover/pfile01.hddl"),
+    ("ipc-po/UM-Translog/domain.hddl", "ipc-po/UM-Translog/06-A-AutoTruck.hddl"),
+    ("ipc2020-to-hard/Multiarm-Blocksworld/domain.hddl",
+     "ipc2020-to-hard/Multiarm-Blocksworld/pfile_02_055.hddl"),
+    ("ipc2020-to-hard/Monroe-Partially-Observable/pfile14-p-0017-clear-road-tree-13-domain.hddl",
+     "ipc2020-to-hard/Monroe-Partially-Observable/pfile14-p-0017-clear-road-tree-13.hddl"),
+]
+
+
+def _facts(domain, instance, semi_naive):
+    steps = reachable(domain, instance, semi_naive)
+    try:
+        while True:
+            next(steps)
+    except StopIteration as done:
+        state, _initial, _logic = done.value
+    return {(pred, args) for pred, args in state.facts()}
+
+
+@pytest.mark.corpus
+@pytest.mark.parametrize("domain, problem", INSTANCES, ids=[p.split("/")[1] for _, p in INSTANCES])
+def test_the_semi_naive_fixpoint_reaches_the_facts_of_the_naive_one(domain, problem):
+    if not (CORPUS / domain).is_file():
+        pytest.skip(f"{CORPUS / domain} not found")
+    dom, prob = load_inputs(str(CORPUS / domain), str(CORPUS / problem))
+    instance = prob.instances[0]
+    fast = _facts(dom, instance, True)
+    assert fast == _facts(dom, instance, False)
+    assert len(fast) > len(instance.state)         # the actions added some
