@@ -12,8 +12,9 @@ twice.
 from __future__ import annotations
 
 import logging
+import threading
 import warnings
-from contextlib import contextmanager
+from contextlib import contextmanager, nullcontext
 from typing import Callable, Iterable, Iterator, Optional
 
 from htn.jshop.language.errors import HtnError
@@ -160,6 +161,28 @@ class LocalWorkers:
         self.notes: list[str] = []
         self.started_in: Optional[float] = None     # seconds the start took
         self._cluster = self._client = self._runner = None
+        self._lock = threading.Lock()
+        self._early: Optional[threading.Thread] = None
+        self._early_error: Optional[BaseException] = None
+
+    @property
+    def starting(self) -> bool:
+        """Whether :meth:`start_soon` has begun the start."""
+        return self._early is not None
+
+    def start_soon(self, around=nullcontext) -> None:
+        """Begin the start in a thread (inside the context ``around()``);
+        :meth:`start` waits for it and raises what it raised."""
+        def start() -> None:
+            try:
+                with around():
+                    self.start()
+            except BaseException as exc:        # re-raised by start()
+                self._early_error = exc
+        if self._early is None:
+            self._early = threading.Thread(target=start, name="htn: starting workers",
+                                           daemon=True)
+            self._early.start()
 
     @property
     def workers(self) -> int:
@@ -167,6 +190,15 @@ class LocalWorkers:
 
     def start(self) -> "DaskRunner":
         """Start the workers (once) and return the runner on them."""
+        early = self._early
+        if early is not None and early is not threading.current_thread():
+            early.join()
+            if self._early_error is not None:
+                raise self._early_error
+        with self._lock:
+            return self._start()
+
+    def _start(self) -> "DaskRunner":
         if self._runner is None:
             import time
             t0 = time.perf_counter()
@@ -186,6 +218,8 @@ class LocalWorkers:
         return self.start().results(function, batches)
 
     def close(self) -> None:
+        if self._early is not None:
+            self._early.join()      # a cluster still starting is closed once up
         if self._client is not None:
             self._client.close()
             self._cluster.close()

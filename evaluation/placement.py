@@ -27,6 +27,7 @@ import os
 import sys
 import threading
 import time
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from typing import Callable, Optional
 
@@ -91,6 +92,10 @@ def place(runner, tasks: list, runs_in: Callable[[tuple], float], function: Call
     from .cluster import InProcess, start_seconds
     if not tasks:
         return InProcess(), iter(())
+    if getattr(runner, "starting", False):     # started early: no need to measure
+        starter = _Starter(runner, tasks, function, begun=0)
+        starter.run_here(take)
+        return starter.result()
     runs, first = sum(runs_in(t) for t in tasks), runs_in(tasks[0])
 
     def projection(seconds: float) -> Projection:
@@ -127,6 +132,56 @@ def place(runner, tasks: list, runs_in: Callable[[tuple], float], function: Call
     return InProcess(), InProcess().results(function, tasks[1:])
 
 
+def start_early(runner, runs: int, plans: int, least: float) -> None:
+    """Start ``runner``'s workers now, beside the planning, if the least a
+    run of a plan can take (``least`` seconds) already makes the ``runs``
+    runs of ``plans`` plans worth them: a PyBullet run takes seconds, and the
+    start then hides behind the planning too. Otherwise :func:`place`
+    measures first."""
+    from .cluster import start_seconds
+    if not getattr(runner, "deferred", False) or least <= 0 or runs <= 0:
+        return
+    projection = Projection(runs, runs, least * plans, runner.requested,
+                            start_seconds(runner.requested))
+    if projection.worth_the_workers():
+        runner.start_soon(fast_switching)
+
+
+_switching = threading.Lock()
+_switchers = [0, None]          # threads starting workers; the interval before them
+
+
+def _switch_fast() -> None:
+    """Hand the GIL over every :data:`SWITCH_INTERVAL` while workers start:
+    the start is many short steps of Dask's event loop, each waiting for the
+    GIL while a run (or the planning) holds it, by default up to 5 ms a
+    step, which made starting two workers beside a PyBullet run take 15 s
+    instead of 2.5. Calls nest, from any thread: the last
+    :func:`_switch_back` restores the interval."""
+    with _switching:
+        if not _switchers[0]:
+            _switchers[1] = sys.getswitchinterval()
+            sys.setswitchinterval(SWITCH_INTERVAL)
+        _switchers[0] += 1
+
+
+def _switch_back() -> None:
+    with _switching:
+        _switchers[0] -= 1
+        if not _switchers[0]:
+            sys.setswitchinterval(_switchers[1])
+
+
+@contextmanager
+def fast_switching():
+    """:func:`_switch_fast` for the time of a ``with`` block."""
+    _switch_fast()
+    try:
+        yield
+    finally:
+        _switch_back()
+
+
 def _thread_clock() -> Optional[int]:
     """The CPU-time clock of the calling thread, which another thread can read."""
     try:
@@ -149,9 +204,8 @@ class _Starter:
         self.when = when
         self.lock = threading.Lock()
         self.stopped = threading.Event()
-        self.starting = False
+        self.starting = self.switched = False
         self.workers = self.results = self.error = None
-        self.interval = sys.getswitchinterval()
         self.thread = threading.Thread(target=self._start, name="htn: starting workers",
                                        daemon=True)
         self.thread.start()
@@ -165,11 +219,8 @@ class _Starter:
                 if self.stopped.is_set():
                     return
                 self.starting = True
-            # the start is many short steps of Dask's event loop, each
-            # waiting for the GIL while a run holds it: by default up to 5 ms
-            # a step, which made starting two workers beside a PyBullet run
-            # take 15 s instead of 2.5
-            sys.setswitchinterval(SWITCH_INTERVAL)
+            _switch_fast()                  # until the caller has joined this thread
+            self.switched = True
             workers = self.runner.start()
             with self.lock:
                 self.workers = workers
@@ -206,7 +257,9 @@ class _Starter:
 
     def _join(self) -> None:
         self.thread.join()
-        sys.setswitchinterval(self.interval)
+        if self.switched:
+            self.switched = False
+            _switch_back()
 
     def result(self) -> tuple:
         """The runner on the workers and the iterator over the results of

@@ -20,7 +20,7 @@ from typing import Callable, Optional
 from htn.executor.config import load_retries
 
 from .cluster import open_runner
-from .placement import place
+from .placement import place, start_early
 from .runs import MEASURES, Study, run_batch
 from .statistics import Comparison
 
@@ -118,6 +118,7 @@ def compare(domain_path: str, problem_path: str, runs: int, seed: int = 0, worke
     """Execute the plan and its transformed version ``runs`` times each on
     ``workers`` processes (or the cluster at ``scheduler``) and compare them."""
     with open_runner(workers, scheduler) as runner:
+        start_early(runner, runs, 2, MEASURES[robot].least)
         study, applied = prepare_study(domain_path, problem_path, robot, faults)
         return run_study(study, problem_path, applied, runs, seed, runner, on_batch, say)
 

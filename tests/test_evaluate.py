@@ -181,6 +181,31 @@ def test_the_workers_start_for_a_study_that_outlasts_their_start():
     assert said[0].endswith(": running in this process")
 
 
+@pytest.mark.dask
+@pytest.mark.slow
+def test_a_study_of_long_runs_starts_its_workers_before_measuring_them():
+    from htn.evaluation.cluster import DaskRunner, InProcess, LocalWorkers
+    from htn.evaluation.placement import place, start_early
+    # 20 runs of 2 plans of at least 0.5 s each: worth 2 workers, known before any run
+    workers = LocalWorkers(2, ())
+    try:
+        start_early(workers, 20, 2, 0.5)
+        assert workers.starting
+        ran = []
+        runner, results = place(workers, [("task", i) for i in range(4)], lambda task: 1,
+                                lambda *task: ran.append(task) or task, lambda _: None, "busy")
+        assert isinstance(runner, DaskRunner) and runner.workers == 2
+        # nothing was measured here: the tasks ran here only until the workers were up
+        assert sorted([*ran, *results]) == [("task", i) for i in range(4)]
+    finally:
+        workers.close()
+    # one run of each plan is not worth them, nor is a runner that starts nothing
+    few = LocalWorkers(2, ())
+    start_early(few, 1, 2, 0.5)
+    start_early(InProcess(), 20, 2, 0.5)
+    assert not few.starting and few._client is None
+
+
 def test_the_projection_weighs_the_rest_against_the_start():
     from htn.evaluation.placement import EFFICIENCY, Projection
     small = Projection(runs=200, left=175, per_run=0.01, workers=2, start=2.0, cores=2)
