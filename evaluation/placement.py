@@ -20,6 +20,9 @@ start-up hides behind runs instead of adding to them (a PyBullet run takes
 about as long as starting two workers). Nor do they wait for the first
 batch to end: they start the moment the CPU time it has taken so far is
 enough to make the study worth them (the batch will take at least that).
+A study whose runs are known to be long (PyBullet's: a run takes half a
+second at the least) and many enough starts them even before, beside its
+planning (:func:`start_early`).
 """
 from __future__ import annotations
 
@@ -88,7 +91,9 @@ def place(runner, tasks: list, runs_in: Callable[[tuple], float], function: Call
     results of the tasks left. ``runner`` is a not yet started
     :class:`~.cluster.LocalWorkers`; ``function(*task)`` runs one batch and
     ``take(results)`` records them; ``runs_in(task)`` is how many runs it
-    holds (a fraction: some of a run's plans). ``say`` gets the line that says why the runs stay here, if they do."""
+    holds (a fraction: some of a run's plans). ``say`` gets the line that
+    says why the runs stay here, if they do. Workers that
+    :func:`start_early` began to start get the tasks once up, unmeasured."""
     from .cluster import InProcess, start_seconds
     if not tasks:
         return InProcess(), iter(())
