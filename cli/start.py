@@ -22,9 +22,27 @@ def _early(signum, frame):
     os._exit(128 + signum)
 
 
+def _whole_writes() -> None:
+    # -u or PYTHONUNBUFFERED=1 leave stdout and stderr without a buffered
+    # layer: a write that a signal interrupts part way (the deadline's timer,
+    # into a full pipe) then drops what the kernel did not take, and a plan's
+    # JSON line is cut in two. A BufferedWriter writes the rest; line
+    # buffering keeps the output as prompt. (The old streams stay alive as
+    # sys.__stdout__ and sys.__stderr__, so the file descriptors stay open.)
+    import io
+    import sys
+    for name in ("stdout", "stderr"):
+        stream = getattr(sys, name)
+        raw = getattr(stream, "buffer", None)
+        if isinstance(raw, io.RawIOBase):
+            setattr(sys, name, io.TextIOWrapper(io.BufferedWriter(raw), encoding=stream.encoding,
+                                                errors=stream.errors, line_buffering=True))
+
+
 def main(argv=None):
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, _early)
+    _whole_writes()
     from . import signals
     signals.begin_process()
     code = 0

@@ -3,6 +3,7 @@ by a complete result, and clean ends on signals and closed pipes (issue 10)."""
 from __future__ import annotations
 
 import json
+import os
 import signal
 import time
 
@@ -81,6 +82,28 @@ def test_all_json_streams_and_keeps_to_the_timeout(tmp_path):
     assert stats["type"] == "stats" and stats["timed_out"]
     assert stats["plans_found"] == len(lines) > 100
     assert all(json.loads(line)["type"] == "plan" for line in lines[:-1])
+
+
+@pytest.mark.slow
+def test_json_lines_stay_whole_when_the_deadline_interrupts_a_write(tmp_path):
+    # -u / PYTHONUNBUFFERED=1 (CI has it) leave stdout without a buffered
+    # layer: a write into a full pipe that the deadline's timer interrupts
+    # part way dropped the rest of the line (a plan cut at 128 KiB)
+    d, p = files(tmp_path)
+    proc = start_htn("plan", d, p, "--all", "-f", "json", "--timeout", "2",
+                     env={**os.environ, "PYTHONUNBUFFERED": "1"})
+    chunks = []
+    while True:                 # a slow reader: the pipe is full most of the time
+        chunk = proc.stdout.read(4096)
+        if not chunk:
+            break
+        chunks.append(chunk)
+        time.sleep(0.002)
+    assert proc.wait(timeout=60) == 0, proc.stderr.read()
+    lines = "".join(chunks).splitlines()
+    records = [json.loads(line) for line in lines]      # every line whole
+    assert records[-1]["type"] == "stats" and records[-1]["plans_found"] == len(lines) - 1
+    assert max(len(line) for line in lines) > 8 * 4096     # lines of many reads each
 
 
 # ------------------------------------------------------------------ -o and --dot
