@@ -14,6 +14,7 @@ from __future__ import annotations
 
 from htn.jshop.language import syntax as S
 from htn.jshop.language.terms import Var, subst
+from htn.jshop.logic.compile import head_unifier
 from htn.jshop.logic.engine import Logic
 from htn.jshop.logic.state import State
 
@@ -27,15 +28,15 @@ class _Program:
         # a parameter of type object has no type condition: bind it too
         free = [S.Atom("type:object", (v,)) for v in op.head.args if type(v) is Var]
         pre = flat_and([relax(op.pre.expr), *free])
-        self.op, self.nvars = op, op.nvars
+        self.nvars = op.nvars
         self.sat = logic.precondition(S.Precondition(pre), op.head.args)
         self.adds = [(item.pred, item.args) for item in op.add.items
                      if isinstance(item, S.Atom)]
         raw = [item for item in op.add.items if isinstance(item, S.EffectForAll)]
         self.foralls = [(logic.expr(flat_and([relax(item.cond)])), item.atoms) for item in raw]
-        # the atoms a new fact can be bound to; what else reads the state
-        self.atoms = [x for x in pre.items if isinstance(x, S.Atom) and _plain(x.args)]
-        others = [x for x in pre.items if not any(x is a for a in self.atoms)]
+        # the atoms a new fact can be bound to (and their unifiers); what else reads the state
+        self.atoms = [(x.pred, head_unifier(x.args)) for x in pre.items if isinstance(x, S.Atom)]
+        others = [x for x in pre.items if not isinstance(x, S.Atom)]
         self.reads = None if every else predicates([op.pre.expr, *(i.cond for i in raw)])
         self.others = predicates(others + [i.cond for i in raw])
         self.seen = -1                  # the log's length at this action's last turn
@@ -53,14 +54,14 @@ class _Program:
         if preds & self.others:
             yield from self.sat([None] * self.nvars)
             return
-        for atom in self.atoms:
-            if atom.pred not in preds:
+        for wanted, unify in self.atoms:
+            if wanted not in preds:
                 continue
             for pred, args in new:
-                if pred != atom.pred:
+                if pred != wanted:
                     continue
                 env = [None] * self.nvars
-                if _match(atom.args, args, env):
+                if unify(args, env):
                     yield from self.sat(env)
 
     def added(self, env: list) -> list:
@@ -101,27 +102,6 @@ def reachable(domain: S.Domain, instance: S.ProblemInstance, semi_naive: bool = 
                     log.append((pred, args))
                     changed = True
     return state, initial, logic
-
-
-def _plain(args) -> bool:
-    """Whether ``args`` are variables and constants only (no compound terms)."""
-    return all(type(a) is Var or not isinstance(a, (list, tuple)) for a in args)
-
-
-def _match(pattern, args: tuple, env: list) -> bool:
-    """Bind ``pattern``'s variables in ``env`` to ``args``; whether they fit."""
-    if len(pattern) != len(args):
-        return False
-    for p, a in zip(pattern, args):
-        if type(p) is Var:
-            bound = env[p.index]
-            if bound is None:
-                env[p.index] = a
-            elif bound != a:
-                return False
-        elif p != a:
-            return False
-    return True
 
 
 def predicates(exprs: list) -> set:
