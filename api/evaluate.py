@@ -148,9 +148,8 @@ def evaluate(problem, *, domain=None, runs: int = 200, seed: int = 0,
         on_warning(w)
 
     from htn.evaluation.cluster import open_runner
-    from htn.evaluation.placement import start_early
-    from htn.evaluation.runs import MEASURES
-    from htn.evaluation.study import RecordsFile, plot as figures, prepare_study, run_study
+    from htn.evaluation.study import (RecordsFile, plot as figures, prepare_study, run_study,
+                                      start_workers_early)
 
     stream = None
     try:
@@ -161,7 +160,7 @@ def evaluate(problem, *, domain=None, runs: int = 200, seed: int = 0,
             if on_start:
                 on_start(runner.workers, notes)
             log: list = []
-            start_early(runner, runs, 2, MEASURES[robot].least)     # the plan and its rewrite
+            start_workers_early(runner, robot, runs)
             study, applied = prepare_study(dom, prob, robot, faults, log=log, on_phase=phase)
             check_study(study, log, problem)
             if log and not applied and on_warning:

@@ -111,6 +111,13 @@ def run_study(study: Study, problem: str, applied: list, runs: int, seed: int, r
     return comp
 
 
+def start_workers_early(runner, robot: str, runs: int) -> None:
+    """Before the study is prepared: start ``runner``'s workers beside the
+    planning if ``runs`` runs of the plan and its transformed version on
+    ``robot`` are sure to be worth them (:func:`.placement.start_early`)."""
+    start_early(runner, runs, 2, MEASURES[robot].least)
+
+
 def compare(domain_path: str, problem_path: str, runs: int, seed: int = 0, workers: int = 1,
             on_batch: Optional[Callable[[list], None]] = None, robot: str = "projection",
             faults: str = "", scheduler: Optional[str] = None,
@@ -118,7 +125,7 @@ def compare(domain_path: str, problem_path: str, runs: int, seed: int = 0, worke
     """Execute the plan and its transformed version ``runs`` times each on
     ``workers`` processes (or the cluster at ``scheduler``) and compare them."""
     with open_runner(workers, scheduler) as runner:
-        start_early(runner, runs, 2, MEASURES[robot].least)
+        start_workers_early(runner, robot, runs)
         study, applied = prepare_study(domain_path, problem_path, robot, faults)
         return run_study(study, problem_path, applied, runs, seed, runner, on_batch, say)
 
