@@ -104,8 +104,8 @@ def make_app(hub: Hub, token: str):
         if sender.done() and not sender.cancelled() and sender.exception() is None:
             try:
                 await ws.close(code=1000)     # the hub closed: the view is over
-            except RuntimeError:
-                pass
+            except (WebSocketDisconnect, RuntimeError):
+                pass        # the page went first (starlette turns a send to it into this)
 
     class Static(StaticFiles):
         async def get_response(self, path, scope):
