@@ -20,6 +20,11 @@ from __future__ import annotations
 from htn.jshop.language import syntax as S
 from htn.jshop.language.terms import subst
 
+from .residual_code import compile_formula
+
+
+COMPILE_AFTER = 32     # groundings of a formula before it is compiled
+
 
 class NotGroundable(Exception):
     """A construct the grounded search does not handle (calls, assignments,
@@ -108,6 +113,22 @@ class FormulaGrounder:
         self.bits = bits
         self.relaxed = relaxed
         self._sat: dict = {}
+        self._code: dict = {}     # id(formula) -> [formula, uses, compiled or None]
+
+    def ground(self, e, env: list):
+        """The residual of ``e`` under ``env``: walked while a formula is new,
+        compiled (:mod:`~htn.jshop.search.residual_code`) once it has been
+        grounded ``COMPILE_AFTER`` times."""
+        hit = self._code.get(id(e))
+        if hit is None or hit[0] is not e:
+            hit = self._code[id(e)] = [e, 0, None]
+        code = hit[2]
+        if code is not None:
+            return code(env)
+        hit[1] += 1
+        if hit[1] >= COMPILE_AFTER:
+            hit[2] = compile_formula(self, e, _HELPERS)
+        return self.walk(e, env)
 
     def satisfiers(self, e, env: list):
         """Bindings extending ``env`` that satisfy ``e``'s relaxation in the
@@ -118,7 +139,8 @@ class FormulaGrounder:
         for nb in hit[1](list(env)):
             yield list(nb)
 
-    def ground(self, e, env: list):
+    def walk(self, e, env: list):
+        """:meth:`ground` by walking the formula."""
         if isinstance(e, S.Atom):
             args = subst(e.args, env)
             facts = self.static.get(e.pred)
@@ -129,15 +151,15 @@ class FormulaGrounder:
         if isinstance(e, S.And):
             out = []
             for x in e.items:
-                g = self.ground(x, env)
+                g = self.walk(x, env)
                 if g is False:
                     return False
                 out.append(g)
             return conj(out)
         if isinstance(e, S.Or):
-            return disj([self.ground(x, env) for x in e.items])
+            return disj([self.walk(x, env) for x in e.items])
         if isinstance(e, S.Not):
-            return negate(self.ground(e.expr, env))
+            return negate(self.walk(e.expr, env))
         if isinstance(e, S.Equal):
             return subst(e.left, env) == subst(e.right, env)
         if isinstance(e, S.ForAll):
@@ -148,6 +170,9 @@ class FormulaGrounder:
                     return False
             return conj(out)
         raise NotGroundable(f"{type(e).__name__} in a precondition")
+
+
+_HELPERS = {"conj": conj, "disj": disj, "negate": negate}
 
 
 def compile_residual(r) -> tuple:

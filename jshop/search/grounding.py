@@ -25,7 +25,9 @@ from htn.jshop.language import syntax as S
 from htn.jshop.language.terms import subst, variables
 from htn.jshop.logic.compile import head_unifier
 
-from .ground_formulas import FormulaGrounder, NotGroundable, compile_residual, disj
+from .ground_formulas import (COMPILE_AFTER, FormulaGrounder, NotGroundable, compile_residual,
+                              disj)
+from .residual_code import compile_body
 from .reachability import reachable
 
 
@@ -143,6 +145,7 @@ class _Grounder:
                       for name, ms in self.methods.items()}
         self.executable: dict = {}      # (name, args) -> GroundAction or None
         self.head_bound: dict = {}
+        self.bodies: dict = {}          # id(method) -> [method, uses, compiled body or None]
         todo, seen = list(roots), set(roots)
         while todo:
             yield
@@ -238,11 +241,23 @@ class _Grounder:
         if any(isinstance(x, S.TaskList) for x in items):
             raise NotGroundable(f"method {m.name}: a nested task list")
         groups: dict = {}
+        code = self._body_code(m)
         for nb in self.formulas.satisfiers(branch.pre.expr, env):
             residual = self.formulas.ground(branch.pre.expr, nb)
             if residual is False:
                 continue
-            body = tuple((x.name, subst(x.args, nb)) for x in items)
+            make = code[2]
+            body = None
+            if make is not None:
+                body = make(nb)
+                if any(None in args for _, args in body):
+                    body = None
+            else:
+                code[1] += 1
+                if code[1] == COMPILE_AFTER:
+                    code[2] = compile_body(items, getattr(m.head, "pos", None))
+            if body is None:
+                body = tuple((x.name, subst(x.args, nb)) for x in items)
             if body not in groups:
                 if any(None in args for _, args in body):
                     raise NotGroundable(f"method {m.name}: a subtask argument no condition "
@@ -263,6 +278,16 @@ class _Grounder:
             if pre is not None:
                 ids = tuple(model.task_id(name, args) for name, args in body)
                 yield GroundMethod(t, m, pre, ids, branch.tasks.order_flag)
+
+    def _body_code(self, m: S.Method) -> list:
+        """``[method, uses, compiled subtask list or None]``: a method's body is
+        compiled (:func:`compile_body`) once it has been instantiated
+        ``COMPILE_AFTER`` times, unless its arguments are not all variables
+        and constants."""
+        hit = self.bodies.get(id(m))
+        if hit is None or hit[0] is not m:
+            hit = self.bodies[id(m)] = [m, 0, None]
+        return hit
 
     def _executable(self, name: str, args: tuple) -> bool:
         """Whether the ground action can apply in some reachable state (kept
