@@ -31,7 +31,8 @@ from .ground_formulas import positive_bits
 from .task_networks import tasks
 
 INF = float("inf")
-CACHED_STATES = 256
+CACHED_STATES = 256       # h_add passes kept, at most
+CACHE_ENTRIES = 8_000_000  # list entries the kept passes may hold, about
 
 
 class _Relaxation:
@@ -71,35 +72,60 @@ class _Relaxation:
                 consumers[n].append(i)
         self.consumers = consumers
 
-    def costs(self, sources: list, targets=None) -> list:
+    def costs(self, sources: list) -> list:
         """h_add costs (unit operator costs) from ``sources`` (cost 0): a list
-        by node, None where a node is unreachable. With ``targets`` (a set of
-        nodes) it stops once every target is known.
+        by node, None where a node is unreachable."""
+        p = _Pass(self, sources)
+        p.settle(())
+        return p.cost
 
-        Costs are whole numbers and every operator's cost exceeds those of
-        its preconditions, so nodes are settled by buckets of equal cost
-        (a heap of the distinct costs pending, not of the nodes): the same
-        order as Dijkstra's, at a fraction of the heap operations."""
-        cost: list = [None] * self.nodes
-        acc = [0] * len(self.npre)
-        left = self.npre[:]
+
+class _Pass:
+    """One h_add computation from a state, resumable: :meth:`settle`
+    settles nodes cheapest first until the nodes asked for are settled, and
+    a later call goes on from there (a successor network may hold a task
+    the last one did not).
+
+    Costs are whole numbers and every operator's cost exceeds those of its
+    preconditions, so nodes are settled by buckets of equal cost (a heap of
+    the distinct costs pending, not of the nodes): the same order as
+    Dijkstra's, at a fraction of the heap operations. A whole bucket is
+    settled at a time, so every node cheaper than a settled one is settled."""
+
+    __slots__ = ("r", "cost", "acc", "left", "buckets", "keys")
+
+    def __init__(self, r: _Relaxation, sources: list):
+        self.r = r
+        self.cost: list = [None] * r.nodes
+        self.acc = [0] * len(r.npre)
+        self.left = r.npre[:]
         buckets: dict = {0: list(sources)}
-        if self.free:
-            buckets[1] = [e for i in self.free for e in self.effects[i]]
-        keys = sorted(buckets)
-        pending = len(targets) if targets is not None else -1
-        consumers, effects = self.consumers, self.effects
+        if r.free:
+            buckets[1] = [e for i in r.free for e in r.effects[i]]
+        self.buckets = buckets
+        self.keys = sorted(buckets)
+
+    @property
+    def done(self) -> bool:
+        return not self.keys
+
+    def settle(self, nodes) -> None:
+        """Settle buckets until every node of ``nodes`` has a cost (all of
+        them with ``()``) or nothing is left to settle."""
+        cost, acc, left, buckets, keys = self.cost, self.acc, self.left, self.buckets, self.keys
+        consumers, effects = self.r.consumers, self.r.effects
         push, pop = heapq.heappush, heapq.heappop
+        pending = [n for n in nodes if cost[n] is None]
         while keys:
+            if nodes:
+                pending = [n for n in pending if cost[n] is None]
+                if not pending:
+                    return
             c = pop(keys)
             for n in buckets.pop(c):
                 if cost[n] is not None:
                     continue
                 cost[n] = c
-                if pending > 0 and n in targets:
-                    pending -= 1
-                    if not pending:
-                        return cost
                 for i in consumers[n]:
                     acc[i] += c
                     left[i] -= 1
@@ -110,7 +136,7 @@ class _Relaxation:
                             buckets[ci] = bucket = []
                             push(keys, ci)
                         bucket.extend(effects[i])
-        return cost
+        self.acc = self.left = None     # finished: only the costs are kept
 
 
 def _bits(mask: int) -> list:
@@ -128,29 +154,40 @@ class RelaxedComposition:
     name = "rc"
 
     def __init__(self, model):
-        self.relaxation = _Relaxation(model)
+        self.relaxation = r = _Relaxation(model)
         self.goal = _bits(model.goal[0]) if model.goal is not None and model.goal[0] > 0 else []
-        self._costs: dict = {}      # state -> its costs, for the latest states
+        self._passes: dict = {}     # state -> its _Pass, for the latest states
+        # an unfinished pass holds two lists as long as the operators
+        self.cached = max(8, min(CACHED_STATES, CACHE_ENTRIES // (2 * len(r.npre) + r.nodes + 1)))
+
+    def needed(self, state: int, net: tuple) -> tuple:
+        """The state's pass with every node the network needs settled (or
+        found unreachable), and those nodes."""
+        p = self._passes.get(state)
+        if p is None:
+            if len(self._passes) >= self.cached:
+                self._passes.pop(next(iter(self._passes)))
+            p = self._passes[state] = _Pass(self.relaxation, _bits(state))
+        nfacts = self.relaxation.nfacts
+        nodes = self.goal + [nfacts + t for t in tasks(net)]
+        if not p.done:
+            cost = p.cost
+            for n in nodes:
+                if cost[n] is None:
+                    p.settle(nodes)
+                    break
+        return p, nodes
 
     def __call__(self, state: int, net: tuple) -> float:
         """The costs depend on the state only: the successors that apply a
         method (all but one, in a totally ordered network) share them with
-        their parent, so each state's costs are computed once, completely."""
-        r = self.relaxation
-        cost = self._costs.get(state)
-        if cost is None:
-            if len(self._costs) >= CACHED_STATES:
-                self._costs.pop(next(iter(self._costs)))
-            cost = self._costs[state] = r.costs(_bits(state))
+        their parent, so each state's pass is made once, and settled as far
+        as the networks seen with that state need."""
+        p, nodes = self.needed(state, net)
+        cost = p.cost
         total = 0
-        for n in self.goal:
+        for n in nodes:
             c = cost[n]
-            if c is None:
-                return INF
-            total += c
-        nfacts = r.nfacts
-        for t in tasks(net):
-            c = cost[nfacts + t]
             if c is None:
                 return INF
             total += c
