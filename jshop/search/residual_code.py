@@ -37,15 +37,7 @@ class _Source:
     def args(self, args: tuple) -> str | None:
         """A tuple expression for the atom's arguments under ``env``, or None
         when an argument is neither a variable nor a constant."""
-        out = []
-        for t in args:
-            if type(t) is Var:
-                out.append(f"env[{t.index}]")
-            elif type(t) is str or type(t) is float:
-                out.append(self.const(t))
-            else:
-                return None
-        return "(" + "".join(x + ", " for x in out) + ")"
+        return _slots(args, self.const)
 
     def atom_test(self, e: S.Atom, negated: bool) -> list | None:
         """Lines that leave the atom's (or its negation's) value in ``x``."""
@@ -110,22 +102,34 @@ def compile_formula(grounder, e, helpers: dict):
     return ns[top]
 
 
+def _slots(args: tuple, const) -> str | None:
+    """``(env[2], k7, )`` for arguments ``(?x, n0)`` (``const`` names a
+    constant), or None when an argument is neither a variable nor a constant."""
+    out = []
+    for t in args:
+        if type(t) is Var:
+            out.append(f"env[{t.index}]")
+        elif type(t) is str or type(t) is float:
+            out.append(const(t))
+        else:
+            return None
+    return "(" + "".join(x + ", " for x in out) + ")"
+
+
 def compile_body(items: list, where=None):
     """A function ``env -> ((name, args), ...)`` of a method's subtasks, or
     None when an argument is neither a variable nor a constant."""
     ns: dict = {}
+
+    def const(value) -> str:
+        name = f"k{len(ns)}"
+        ns[name] = value
+        return name
     parts = []
     for x in items:
-        args = []
-        for t in x.args:
-            if type(t) is Var:
-                args.append(f"env[{t.index}]")
-            elif type(t) is str or type(t) is float:
-                ns[f"k{len(ns)}"] = t
-                args.append(f"k{len(ns) - 1}")
-            else:
-                return None
-        ns[f"k{len(ns)}"] = x.name
-        parts.append(f"(k{len(ns) - 1}, (" + "".join(a + ", " for a in args) + "))")
+        args = _slots(x.args, const)
+        if args is None:
+            return None
+        parts.append(f"({const(x.name)}, {args})")
     src = "def body(env):\n    return (" + "".join(p + ", " for p in parts) + ")\n"
     return define(src, described("ground method body", where), ns)["body"]
