@@ -115,7 +115,7 @@ class _Pass:
         cost, acc, left, buckets, keys = self.cost, self.acc, self.left, self.buckets, self.keys
         consumers, effects = self.r.consumers, self.r.effects
         push, pop = heapq.heappush, heapq.heappop
-        pending = [n for n in nodes if cost[n] is None]
+        pending = nodes
         while keys:
             if nodes:
                 pending = [n for n in pending if cost[n] is None]
@@ -160,9 +160,11 @@ class RelaxedComposition:
         # an unfinished pass holds two lists as long as the operators
         self.cached = max(8, min(CACHED_STATES, CACHE_ENTRIES // (2 * len(r.npre) + r.nodes + 1)))
 
-    def needed(self, state: int, net: tuple) -> tuple:
-        """The state's pass with every node the network needs settled (or
-        found unreachable), and those nodes."""
+    def __call__(self, state: int, net: tuple) -> float:
+        """The costs depend on the state only: the successors that apply a
+        method (all but one, in a totally ordered network) share them with
+        their parent, so each state's pass is made once, and settled as far
+        as the networks seen with that state need."""
         p = self._passes.get(state)
         if p is None:
             if len(self._passes) >= self.cached:
@@ -171,19 +173,7 @@ class RelaxedComposition:
         nfacts = self.relaxation.nfacts
         nodes = self.goal + [nfacts + t for t in tasks(net)]
         if not p.done:
-            cost = p.cost
-            for n in nodes:
-                if cost[n] is None:
-                    p.settle(nodes)
-                    break
-        return p, nodes
-
-    def __call__(self, state: int, net: tuple) -> float:
-        """The costs depend on the state only: the successors that apply a
-        method (all but one, in a totally ordered network) share them with
-        their parent, so each state's pass is made once, and settled as far
-        as the networks seen with that state need."""
-        p, nodes = self.needed(state, net)
+            p.settle(nodes)
         cost = p.cost
         total = 0
         for n in nodes:
