@@ -12,7 +12,9 @@ depth-first search does). A node whose network is empty is a plan if the
 problem's goal holds. Nodes are ordered by ``h`` (GBFS) or ``g + w * h``
 (weighted A*, ``g`` the number of actions and methods applied), ties first
 in, first out; a node whose ``(state, network)`` was reached before (with
-no smaller ``g``) is dropped (duplicate detection).
+no smaller ``g``) is dropped (duplicate detection), and so is one whose
+network cannot make the goal's chain true in its order
+(:mod:`htn.jshop.search.goal_chain`).
 
 :meth:`BestFirst.plans` is a stream like :meth:`Planner.plans
 <htn.jshop.search.planner.Planner.plans>`; with ``slice_s`` set it also
@@ -29,6 +31,7 @@ from htn.jshop.language import syntax as S
 from htn.jshop.plans.plan import Plan, Step
 from htn.jshop.plans.tree import TaskTree
 
+from .goal_chain import GoalChain
 from .ground_formulas import holds, satisfied
 from .grounding import ground, grounding_steps
 from .heuristics import HEURISTICS, INF
@@ -56,6 +59,7 @@ class BestFirst:
         self.slice_s: Optional[float] = None   # CPU seconds between pauses, see plans()
         self.model = None
         self.h = None              # the heuristic, once grounded
+        self.cut = None            # the goal-chain cut (None: off), once grounded
         self.generated = 0
 
     def prepare(self) -> None:
@@ -64,9 +68,12 @@ class BestFirst:
         if self.model is None:
             self._prepared(ground(self.domain, self.instance))
 
-    def _prepared(self, model) -> None:
+    def _prepared(self, model, h=None, cut=None) -> None:
+        """Take a grounded model (and the heuristic and goal-chain cut
+        another search built on it, to share their caches)."""
         self.model = model
-        self.h = HEURISTICS[self.heuristic_name](model)
+        self.h = h if h is not None else HEURISTICS[self.heuristic_name](model)
+        self.cut = cut if cut is not None else _cut(model)
 
     # ------------------------------------------------------------ search
     def plans(self, timeout: Optional[float] = None) -> Iterator[Optional[Plan]]:
@@ -93,7 +100,8 @@ class BestFirst:
         model, h, w = self.model, self.h, self.weight
         actions, methods_of = model.actions, model.methods_of
         net0 = body_items(model.roots, model.root_order)
-        h0 = h(model.init, net0)
+        cut = self.cut
+        h0 = h(model.init, net0) if cut is None or cut.ok(model.init, net0) else INF
         # per node: (state, network, parent, move, g); move = (path, action or method)
         nodes = [(model.init, net0, -1, None, 0)]
         seen = {(model.init, net0): 0}
@@ -152,8 +160,11 @@ class BestFirst:
         if old is not None and (self.weight is None or old <= g):
             return
         seen[key] = g
-        hv = self.h(s, net)
         self.generated += 1
+        if self.cut is not None and not self.cut.ok(s, net):
+            self.stats.goal_cuts += 1
+            return
+        hv = self.h(s, net)
         if hv == INF:
             return
         nodes.append((s, net, parent, move, g))
@@ -218,6 +229,14 @@ class BestFirst:
                     work.append((node, sub, path))
                 parent.children.append(node)
         return root
+
+
+def _cut(model):
+    """The goal-chain cut (:mod:`.goal_chain`) where the goal has a chain."""
+    if model.goal is None:
+        return None
+    cut = GoalChain(model)
+    return cut if cut.active else None
 
 
 def _apply(a, s: int) -> int:

@@ -6,10 +6,12 @@ command line and the library, as pyperplan keeps its searches).
   JSHOP2 input and for enumerating plans (``--all``);
 * ``gbfs`` -- greedy best-first progression search on the grounded problem
   with the relaxed composition heuristic (:mod:`htn.jshop.search.best_first`,
-  :mod:`htn.jshop.search.heuristics`);
+  :mod:`htn.jshop.search.heuristics`), cutting nodes that cannot reach
+  the goal's chain in their order (:mod:`htn.jshop.search.goal_chain`);
 * ``wastar`` -- the same as weighted A* (``g + 2 h``);
-* ``auto`` -- ``dfs`` and ``gbfs`` as a portfolio, interleaved in slices of
-  CPU time (:mod:`htn.jshop.search.portfolio`).
+* ``auto`` -- ``dfs``, ``gbfs``, ``wastar`` (and, where the goal has a
+  chain, GBFS with TDG_m) as a portfolio, interleaved in slices of CPU
+  time (:mod:`htn.jshop.search.portfolio`).
 
 Kept free of heavy imports: the command line reads the names for ``--help``.
 """

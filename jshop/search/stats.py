@@ -11,7 +11,7 @@ from .limits import DepthLimit, MemoryLimit
 class Stats:
     __slots__ = ("plans_found", "expansions", "operator_applications",
                  "backtracks", "started", "elapsed", "timed_out", "interrupted",
-                 "bound", "found_by", "loop_cuts")
+                 "bound", "found_by", "loop_cuts", "goal_cuts")
 
     def __init__(self):
         self.plans_found = 0
@@ -25,6 +25,7 @@ class Stats:
         self.bound = None      # the SearchBound (depth or memory) that stopped the search
         self.found_by = None   # which search of a portfolio found the plans (--search auto)
         self.loop_cuts = 0     # reductions the loop check refused (loops.py): 0 = complete
+        self.goal_cuts = 0     # nodes the goal-chain cut dropped (goal_chain.py): sound
 
     def as_dict(self) -> dict:
         out = {
@@ -42,4 +43,6 @@ class Stats:
             out["found_by"] = self.found_by
         if self.loop_cuts:
             out["loop_cuts"] = self.loop_cuts
+        if self.goal_cuts:
+            out["goal_cuts"] = self.goal_cuts
         return out
