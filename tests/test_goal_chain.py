@@ -136,3 +136,26 @@ def test_no_node_of_a_plan_found_without_the_cut_is_cut(domain, problem, monkeyp
         else:
             net = replace(net, path, body_items(what.body, what.order))
     assert not net and checked > len(plan.steps)
+
+
+@pytest.mark.corpus
+@pytest.mark.parametrize("domain,problem,arms", [
+    ("ipc-po/PCP/p-pcp11-domain.hddl", "ipc-po/PCP/p-pcp11.hddl", ["wastar", "gbfs-tdg"]),
+    ("ipc2020-to/Childsnack/domain.hddl", "ipc2020-to/Childsnack/p05.hddl", ["wastar"]),
+], ids=["goal-chain", "no-goal"])
+def test_auto_adds_a_tdg_search_where_the_goal_has_a_chain(domain, problem, arms):
+    if not (CORPUS / domain).is_file():
+        pytest.skip(f"{CORPUS / domain} not found")
+    from htn.jshop.search.portfolio import Portfolio
+    dom, prob = load_inputs(str(CORPUS / domain), str(CORPUS / problem))
+    auto = Portfolio(dom, prob.instances[0])
+    auto.gbfs.prepare()
+    more = auto._on_model()
+    assert [auto.labels[id(s)] for s in more] == arms and auto.started == 2 + len(arms)
+    for s in more:
+        assert s.model is auto.gbfs.model and s.cut is auto.gbfs.cut
+    assert auto.wastar.h is auto.gbfs.h
+    if "gbfs-tdg" in arms:
+        assert auto.tdg.heuristic_name == "tdg" and auto.tdg.cut is not None
+        plan = next(p for p in auto.tdg.plans(timeout=60) if p is not None)
+        assert plan.steps

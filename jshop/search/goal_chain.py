@@ -40,7 +40,7 @@ from .task_networks import tasks
 
 FEW = 2          # a precondition with at most this many adders joins the chain
 MAX_CHAIN = 60   # chain facts, at most (sets are small ints)
-MAX_PAIRS = 400_000   # (task, set) values kept; beyond it the cut is off
+MAX_PAIRS = 200_000   # (task, set) values kept; beyond it the cut is off
 
 
 class GoalChain:

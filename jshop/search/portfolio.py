@@ -4,7 +4,9 @@ The searches of :mod:`htn.jshop.search.searches` run in turns in one
 process, each for a slice of CPU time (depth-first search half a second
 at first, doubling to at most four, the greedy heuristic search three times
 as long, and once that has grounded the problem a weighted A* on the same
-model as long as depth-first search), so that together they stay within
+model as long as depth-first search, and where the goal has a chain
+(:mod:`.goal_chain`) a GBFS with TDG_m as long as the first GBFS), so that
+together they stay within
 the time limit: JSHOP2's
 depth-first search is fast where the written method order leads to a plan
 (most IPC total-order domains: within a second on the shared sample, so it
@@ -35,12 +37,19 @@ FIRST_SLICE, LAST_SLICE = 0.5, 4.0
 # grounded the problem (the two share the grounded model and the heuristic's
 # costs); weighted A* solves what greedy search gets lost in (ipc-po
 # Transport pfile04: 27k expansions, where GBFS made 477k without a plan)
-SHARES = {"dfs": 1, "gbfs": 3, "wastar": 1}
+# and, where the goal has a chain (goal_chain.py), GBFS with the cheap
+# TDG heuristic as long as GBFS: the cut carries the goal, and TDG_m's
+# estimate costs nothing per state where an RC-add pass of a new state takes
+# 0.1 s (Monroe-Partially-Observable pfile14: 10k expansions, where GBFS with
+# RC-add made 1.7k in 30 s without a plan; ipc-po Monroe-PO pfile21: 74k
+# expansions in 8 s, which a share of 1 left unsolved in 30 s)
+SHARES = {"dfs": 1, "gbfs": 3, "wastar": 1, "gbfs-tdg": 3}
 
 
 class Portfolio:
     """Interleaves a :class:`Planner`, a :class:`BestFirst` (GBFS) and,
-    once GBFS has grounded the problem, a weighted A* on the same model."""
+    once GBFS has grounded the problem, a weighted A* on the same model
+    (and a GBFS with TDG_m where the goal-chain cut is on)."""
 
     def __init__(self, domain: S.Domain, instance: S.ProblemInstance, functions=None,
                  max_memory: Optional[int] = None, tree_paths: bool = True, **options):
@@ -50,8 +59,13 @@ class Portfolio:
                               label="gbfs")
         self.wastar = BestFirst(domain, instance, weight=WASTAR_WEIGHT, max_memory=max_memory,
                                 tree_paths=tree_paths, label="wastar")
+        self.tdg = BestFirst(domain, instance, heuristic="tdg", max_memory=max_memory,
+                             tree_paths=tree_paths, label="gbfs-tdg")
         self.stats = Stats()
-        self.labels = {id(self.dfs): "dfs", id(self.gbfs): "gbfs", id(self.wastar): "wastar"}
+        self.labels = {id(self.dfs): "dfs", id(self.gbfs): "gbfs", id(self.wastar): "wastar",
+                       id(self.tdg): "gbfs-tdg"}
+        self.grounded = False
+        self.started = 2            # searches started: dfs, gbfs, then those on its model
         self.ended: list = []       # the searches that ended, in order
 
     def plans(self, timeout: Optional[float] = None) -> Iterator:
@@ -63,12 +77,11 @@ class Portfolio:
         self.stats.started = time.perf_counter()
         try:
             while live:
-                if self.wastar not in live and self.wastar not in self.ended \
-                        and self.gbfs.h is not None:       # grounded: share the model
-                    self.wastar.model, self.wastar.h = self.gbfs.model, self.gbfs.h
-                    live.append(self.wastar)
-                    searches.append(self.wastar)
-                    streams[id(self.wastar)] = None
+                if not self.grounded and self.gbfs.h is not None:
+                    for s in self._on_model():
+                        live.append(s)
+                        searches.append(s)
+                        streams[id(s)] = None
                 search = live[turn % len(live)]
                 search.slice_s = slice_s * SHARES[self.labels[id(search)]]
                 stream = streams[id(search)]
@@ -106,16 +119,28 @@ class Portfolio:
                     stream.close()
             self._sum()
 
+    def _on_model(self) -> list:
+        """The searches to start once GBFS has grounded the problem, on its
+        model (and its heuristic's costs and goal-chain cut, shared)."""
+        self.grounded = True
+        g = self.gbfs
+        self.wastar._prepared(g.model, g.h, g.cut)
+        more = [self.wastar]
+        if g.cut is not None:
+            self.tdg._prepared(g.model, None, g.cut)
+            more.append(self.tdg)
+        self.started += len(more)
+        return more
+
     def _sum(self) -> None:
         """The portfolio's statistics: both searches' work added up."""
         total = self.stats
-        parts = [self.dfs.stats, self.gbfs.stats, self.wastar.stats]
-        for key in ("expansions", "operator_applications", "backtracks"):
+        parts = [self.dfs.stats, self.gbfs.stats, self.wastar.stats, self.tdg.stats]
+        for key in ("expansions", "operator_applications", "backtracks", "goal_cuts"):
             setattr(total, key, sum(getattr(p, key) for p in parts))
         total.elapsed = time.perf_counter() - total.started
         total.timed_out = any(p.timed_out for p in parts)
         total.interrupted = any(p.interrupted for p in parts)
         # a bound ends the portfolio only when it stopped the last search left
-        started = 3 if self.gbfs.h is not None else 2
-        last = self.ended[-1].stats.bound if len(self.ended) >= started else None
+        last = self.ended[-1].stats.bound if len(self.ended) >= self.started else None
         total.bound = last
