@@ -189,25 +189,31 @@ class GoalChain:
 
     def _solve(self, key) -> None:
         """Kleene iteration on the pairs reachable from ``key``: values
-        start at None and only grow (a pair is worked again when a pair it
-        read has grown)."""
+        start at None and only grow, and a pair is worked again when a pair
+        it read has grown. A fold may read a pair that is new (None for
+        now) where it read a smaller one before, so an evaluation can come
+        out smaller than the value: the value keeps the union, which stays
+        sound (at the end every value holds its own evaluation from the
+        final values, so by induction on a refinement's height it holds
+        what the refinement can reach) and makes the iteration end."""
         methods_of, value, readers = self.model.methods_of, self.value, self.readers
         value[key] = None
         self._work = work = [key]
         while work:
             k = work.pop()
             t, s = k
-            out = None
+            out = value[k]
             for gm in methods_of.get(t, ()):
                 r = self._method(gm, s, k)
                 if r is not None:
                     out = r if out is None else out | r
-            if out is not None and out != value[k]:
-                value[k] = out if value[k] is None else value[k] | out
+            if out != value[k]:         # grown: what read it is worked again
+                value[k] = out
                 work.extend(readers.get(k, ()))
-        if len(value) > MAX_PAIRS:      # too many sets of chain facts: give up
-            self.active = False
-            self.value, self.readers = {}, {}
+            if len(value) > MAX_PAIRS:  # too many sets of chain facts: give up
+                self.active = False
+                self.value, self.readers, self._work = {}, {}, []
+                return
 
 
 def _bits(mask: int) -> list:
