@@ -257,7 +257,7 @@ class _Check:
         first = None
         options = [self.choices[i] for i in ambiguous]
         for combo in itertools.islice(itertools.product(*options), MAX_COMBINATIONS):
-            chosen = dict(fixed, **dict(zip(ambiguous, combo)))
+            chosen = {**fixed, **dict(zip(ambiguous, combo))}
             if combo or first is not None:
                 self.planner = self._planner()
             findings = Replay(self, chosen).run()
