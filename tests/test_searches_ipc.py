@@ -87,3 +87,32 @@ def test_one_sample_instance_per_search(tmp_path, search):
         d, p = found[0].values
         result = run_htn("plan", d, p, "-f", "json", "--search", "auto", "-q")
         assert json.loads(result.stdout.splitlines()[-1])["found_by"] in ("dfs", "gbfs")
+
+
+UL = PARTIAL / "Ultralight-Cockpit"
+
+
+@pytest.mark.parametrize("name,fact,anchor", [
+    ("pfile02", "(p_reachable aerodrome1)", "(p_landingSpotClear aerodrome2)"),
+    ("pfile03", "(p_landingSpotClear aerodrome2)", "(p_reachable aerodrome2)")])
+def test_ultralight_no_plan_is_the_answer(tmp_path, name, fact, anchor):
+    """The two "no plan" answers on ipc-po are right, and one fact away from
+    a plan: the only method of ``precautionary_land`` flies over a landing
+    spot (``m_perform_fly_over`` needs ``p_reachable``; its alternative
+    needs ``p_controlParameterReached``, which nothing adds) and then lands
+    there (``m_land`` needs ``p_landingSpotClear``, which nothing adds).
+    pfile02 has no reachable spot; in pfile03 the reachable one is not
+    clear. With the missing fact in the initial state, the search finds a
+    plan that both verifiers accept."""
+    domain, problem = UL / "UL_domain.hddl", UL / f"{name}.hddl"
+    if not problem.is_file():
+        pytest.skip(f"{problem} not found")
+    result = run_htn("plan", domain, problem, "--search", "gbfs", "-f", "json", "-q")
+    stats = json.loads(result.stdout.splitlines()[-1])
+    assert result.returncode == 1 and stats["plans_found"] == 0, result.stdout + result.stderr
+    assert not (stats["timed_out"] or stats["memory_limit_reached"])   # the space was exhausted
+    text = problem.read_text()
+    assert anchor in text and fact not in text.replace(";(not " + fact, "")
+    changed = tmp_path / f"{name}.hddl"
+    changed.write_text(text.replace(anchor, f"{anchor} {fact}", 1))
+    _check(tmp_path, domain, changed, "gbfs")
