@@ -186,7 +186,7 @@ def measure(dname, domain, problem, search, flag, limit, runs, verifier, pin, re
         row["search_ms"] = search_time(domain, problem, search, flag, limit, runs, pin)
         row["ht_plan_ms"] = ht = ref.get((dname, problem.stem))
         if ht:
-            row["search_ratio"] = round(row["search_ms"] / ht, 2)
+            row["search_ratio"] = float(f"{row['search_ms'] / ht:.3g}")
     return row
 
 
@@ -214,8 +214,9 @@ def summary(rows: list, sample: str) -> dict:
     ratios = [r["search_ratio"] for r in rows if "search_ratio" in r]
     if ratios:
         slow = [r["search_ratio"] for r in rows if "search_ratio" in r and r["ht_plan_ms"] > 10]
-        out["search_ratio_geomean"] = round(math.exp(sum(map(math.log, ratios)) / len(ratios)),
-                                            2)
+        # from the unrounded times: a search of a few µs rounds its ratio to 0
+        exact = [max(r["search_ms"], 1e-3) / r["ht_plan_ms"] for r in rows if "search_ratio" in r]
+        out["search_ratio_geomean"] = round(math.exp(sum(map(math.log, exact)) / len(exact)), 3)
         out["search_ratio_max"] = max(ratios)
         out["over_10ms_at_most_1"] = f"{sum(x <= 1.0 for x in slow)} of {len(slow)}"
     return out
