@@ -47,6 +47,8 @@ def aries(domain: Path, problem: Path, limit: float, validate_timeout: float) ->
         return {"status": "UP cannot read", "why": f"{type(e).__name__}: {first}"}
     r = bench_up.solve("aries", up_problem, limit, 1)
     out = {k: r[k] for k in ("status", "time", "cpu", "length")}
+    if r["plan"] is None and r["log"]:
+        out["why"] = r["log"][0].splitlines()[0][:200]
     if r["plan"] is not None:
         out["checks"], notes = bench_up.checks(up_problem, r["plan"], (domain, problem),
                                                validate_timeout)
@@ -97,7 +99,8 @@ def main(only, limit, validate_timeout, pin, as_json):
         click.echo(f"{dname} {problem.name}: htn {'solved' if h['solved'] else h['result']} "
                    f"{h['cpu_median_s']:.2f} s CPU; aries {a['status']}"
                    + (f" {a['time']:.2f} s ({a['cpu']:.2f} s CPU) {a.get('checks', '')}"
-                      if "time" in a else f" ({a.get('why', '')})"), err=True)
+                      if "time" in a else "") + (f" ({a['why']})" if "why" in a else ""),
+                   err=True)
     read = [r for r in rows if r["aries"]["status"] != "UP cannot read"]
     both = [r for r in rows if "ratio_cpu" in r]
     summary = {"instances": len(rows), "htn_solved": sum(r["htn"]["solved"] for r in rows),

@@ -90,6 +90,8 @@ def main(modes, only, limit, pin, hddl_report, as_json):
     hddl = {}
     if hddl_report:
         for s in json.loads(Path(hddl_report).read_text())["samples"]:
+            if s["summary"]["sample"] != "ipc-po":     # a report of several samples
+                continue
             for r in s["instances"]:
                 hddl[(r["domain"], r["instance"])] = r["solved"]
     summary = {mode: dict(Counter(r["domain"] for r in rows if r["mode"] == mode

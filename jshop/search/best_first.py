@@ -11,10 +11,13 @@ binds and tests a method's parameters when it is applied, as the
 depth-first search does). A node whose network is empty is a plan if the
 problem's goal holds. Nodes are ordered by ``h`` (GBFS) or ``g + w * h``
 (weighted A*, ``g`` the number of actions and methods applied), ties first
-in, first out; a node whose ``(state, network)`` was reached before (with
-no smaller ``g``) is dropped (duplicate detection), and so is one whose
-network cannot make the goal's chain true in its order
-(:mod:`htn.jshop.search.goal_chain`).
+in, first out, or last in, first out where some network of the problem is
+partially ordered (:func:`interleaves`); a node whose ``(state, network)``
+was reached before (with no smaller ``g``) is dropped (duplicate
+detection), and so is one whose network cannot make the goal's chain true
+in its order (:mod:`htn.jshop.search.goal_chain`). When a task that may be
+done next has only methods that test nothing, it is decomposed as the only
+move (:func:`committed`).
 
 :meth:`BestFirst.plans` is a stream like :meth:`Planner.plans
 <htn.jshop.search.planner.Planner.plans>`; with ``slice_s`` set it also
