@@ -21,7 +21,7 @@ SEARCHES = {
     "dfs": "depth-first, JSHOP2's order",
     "gbfs": "greedy best-first, relaxed composition heuristic (HDDL)",
     "wastar": "weighted A* (w = 2), same heuristic (HDDL)",
-    "auto": "dfs and gbfs interleaved (HDDL)",
+    "auto": "dfs, gbfs and wastar interleaved, the first plan wins (HDDL)",
 }
 
 
