@@ -34,6 +34,7 @@ Run (pinned to one core, as the README of the corpus measures)::
 
     taskset -c 1 python benchmarks/bench_up.py                 # 30 s per problem
     python benchmarks/bench_up.py --timeout 10 --repeat 3 --json up.json
+    python benchmarks/bench_up.py --htn-search gbfs        # htn's heuristic search
 """
 from __future__ import annotations
 
@@ -98,12 +99,16 @@ def _reap(patience: float = 5.0) -> None:
             time.sleep(0.005)
 
 
+HTN_PARAMS: dict = {}      # the htn engine's params (--htn-search)
+
+
 def solve(engine: str, problem, timeout: float, repeat: int) -> dict:
     from unified_planning.shortcuts import OneshotPlanner
     times, cpus, internal, result = [], [], [], None
+    params = HTN_PARAMS if engine == "htn" else {}
     for _ in range(repeat):
         cpu0, children0 = time.process_time(), _children_cpu()
-        with OneshotPlanner(name=engine) as planner:
+        with OneshotPlanner(name=engine, params=params) as planner:
             t0 = time.perf_counter()
             result = planner.solve(problem, timeout=timeout)
             times.append(time.perf_counter() - t0)
@@ -244,8 +249,11 @@ def engines() -> tuple[list, list]:
 @click.option("--only", default="", help="Problems whose name contains this text.")
 @click.option("--json", "json_path", type=click.Path(dir_okay=False),
               help="Also write the records as JSON.")
-def main(timeout, repeat, validate_timeout, only, json_path):
+@click.option("--htn-search", type=click.Choice(["dfs", "gbfs", "wastar", "auto"]),
+              default="dfs", show_default=True, help="The htn engine's search option.")
+def main(timeout, repeat, validate_timeout, only, json_path, htn_search):
     """htn and Aries through unified-planning on UP's hierarchical test cases and the IPC sample."""
+    HTN_PARAMS["search"] = htn_search
     from unified_planning.shortcuts import get_environment
     get_environment().credits_stream = None
     warnings.simplefilter("ignore")

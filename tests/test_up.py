@@ -227,6 +227,26 @@ def test_plan_kind_sequential_returns_the_action_plan():
     assert flat == hier.action_plan == hier.convert_to(PlanKind.SEQUENTIAL_PLAN, problem)
 
 
+@pytest.mark.parametrize("search", ["gbfs", "wastar", "auto"])
+@pytest.mark.parametrize("name", SUPPORTED)
+def test_the_heuristic_searches_give_valid_hierarchical_plans(name, search, tmp_path,
+                                                              monkeypatch):
+    """``params={"search": ...}``: the searches of ``htn plan --search`` on
+    every supported case, each plan checked by UP, htn and aries-val."""
+    import tempfile
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    problem = cases()[name].problem
+    result = solve(problem, search=search)
+    assert result.status == Status.SOLVED_SATISFICING, result.log_messages
+    plan = result.plan
+    assert set(plan.decomposition.subtasks) == {s.identifier for s in problem.task_network.subtasks}
+    assert up_valid(problem, plan)
+    assert htn_valid(problem, plan).status.name == "VALID"
+    with PlanValidator(name="aries-val") as aries:
+        if aries.supports(problem.kind):
+            assert aries.validate(problem, plan).status.name == "VALID"
+
+
 def test_the_output_stream_gets_the_progress():
     out = io.StringIO()
     with OneshotPlanner(name="htn") as planner:
@@ -240,6 +260,7 @@ def test_the_output_stream_gets_the_progress():
     ({"max_depth": 0}, "positive integer"),
     ({"optimize": "yes"}, "must be a bool"),
     ({"plan_kind": "partial"}, "plan_kind must be one of"),
+    ({"search": "bfs"}, "search must be one of dfs, gbfs, wastar, auto"),
 ])
 def test_bad_options_are_one_line_usage_errors(params, message):
     with pytest.raises(UPUsageError, match=message):

@@ -130,6 +130,36 @@ def test_an_ipc_problem_read_by_up_plans_as_htn_plans_the_hddl_files(domain):
     assert validate(problem, result.plan).status.name == "VALID"
 
 
+@pytest.mark.parametrize("search", ["gbfs", "auto"])
+def test_a_goal_the_decomposition_misses_is_unsolvable_in_every_search(search):
+    problem = delivery()
+    problem.add_goal(problem.fluent("seen")(problem.object("far")))
+    with OneshotPlanner(name="htn", params={"search": search}) as planner:
+        assert planner.solve(problem, timeout=60).status == Status.UNSOLVABLE_PROVEN
+
+
+HARD = SHARED / "corpus" / "ipc2020-to-hard" / "Multiarm-Blocksworld"
+
+
+@pytest.mark.slow
+@pytest.mark.corpus
+@pytest.mark.skipif(not HARD.is_dir(), reason=f"{HARD} not found")
+def test_the_heuristic_search_solves_through_up_what_depth_first_cannot():
+    """``params={"search": "gbfs"}`` on an instance read by UP's HDDL reader
+    where depth-first search in the written order is stuck (a few seconds
+    against no plan in 30 s, ``benchmarks/bench_ipc.py``)."""
+    from unified_planning.io import PDDLReader
+    problem = PDDLReader().parse_problem(str(HARD / "domain.hddl"),
+                                         str(HARD / "pfile_02_055.hddl"))
+    with OneshotPlanner(name="htn", params={"search": "dfs"}) as planner:
+        assert planner.solve(problem, timeout=3).status == Status.TIMEOUT
+    with OneshotPlanner(name="htn", params={"search": "gbfs"}) as planner:
+        result = planner.solve(problem, timeout=120)
+    assert result.status == Status.SOLVED_SATISFICING, result.log_messages
+    assert up_valid(problem, result.plan)
+    assert validate(problem, result.plan).status.name == "VALID"
+
+
 # ---------------------------------------------------------------- the validator
 
 def htn_go():

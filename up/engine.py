@@ -23,6 +23,13 @@ Options (UP's ``params``: ``OneshotPlanner(name="htn", params={...})``):
     costs; 1 per action otherwise): ``SOLVED_OPTIMALLY`` when the search space
     was exhausted with no bound reached and no loop cut, otherwise the best
     found (``SOLVED_SATISFICING``, or ``TIMEOUT`` at the time limit);
+``search`` (``"dfs"``, ``"gbfs"``, ``"wastar"`` or ``"auto"``, default dfs)
+    the search of ``htn plan --search``: depth-first in JSHOP2's order, or
+    the heuristic progression searches on the grounded problem (greedy
+    best-first, weighted A*) and the portfolio of all of them. With a
+    heuristic search, ``max_depth`` and ``loop_check`` concern only the
+    depth-first part, and "no plan" is ``UNSOLVABLE_PROVEN`` (the grounded
+    space was exhausted);
 ``plan_kind`` (``"hierarchical"`` or ``"sequential"``, default hierarchical)
     a ``HierarchicalPlan`` (the actions and the decomposition of every task),
     or only its ``SequentialPlan`` (cheaper: no task tree is recorded).
@@ -54,6 +61,7 @@ from unified_planning.exceptions import UPUsageError
 from unified_planning.plans import PlanKind
 
 from htn.jshop.search.limits import DEFAULT_MAX_DEPTH
+from htn.jshop.search.searches import SEARCHES
 
 from . import kind
 from .convert import checked
@@ -66,6 +74,7 @@ OPTIONS = {
     "loop_check": (bool, True),
     "optimize": (bool, False),
     "plan_kind": (str, "hierarchical"),
+    "search": (str, "dfs"),
 }
 PLAN_KINDS = ("hierarchical", "sequential")
 
@@ -97,6 +106,9 @@ def parse_options(options: dict) -> dict:
         if wanted is not int and not isinstance(value, wanted):
             raise UPUsageError(f"htn option {name} must be a {wanted.__name__}, not {value!r}")
         out[name] = value
+    if out["search"] not in SEARCHES:
+        raise UPUsageError(f"htn option search must be one of {', '.join(SEARCHES)}, "
+                           f"not {out['search']!r}")
     if out["plan_kind"] not in PLAN_KINDS:
         raise UPUsageError(f"htn option plan_kind must be one of {', '.join(PLAN_KINDS)}, "
                            f"not {out['plan_kind']!r}")

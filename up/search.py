@@ -9,8 +9,9 @@ from typing import IO, Optional
 from unified_planning.engines import (LogLevel, LogMessage, PlanGenerationResult,
                                       PlanGenerationResultStatus as Status)
 
+from htn.jshop.search.ground_formulas import NotGroundable
 from htn.jshop.search.limits import MemoryLimit
-from htn.jshop.search.planner import Planner
+from htn.jshop.search.searches import make_search
 
 from .convert import Conversion
 from .decompose import hierarchical_plan, sequential_plan
@@ -22,10 +23,10 @@ def search(engine, conv: Conversion, options: dict, started: float,
     """Plan for ``conv`` within ``timeout`` seconds of ``started``."""
     hierarchical = options["plan_kind"] == "hierarchical"
     max_memory = options["max_memory"]
-    planner = Planner(conv.domain, conv.instance, record_trees=hierarchical,
-                      tree_paths=False, max_depth=options["max_depth"],
-                      loop_check=options["loop_check"],
-                      max_memory=max_memory << 20 if max_memory else None)
+    planner = make_search(options["search"], conv.domain, conv.instance,
+                          record_trees=hierarchical, tree_paths=False,
+                          max_depth=options["max_depth"], loop_check=options["loop_check"],
+                          max_memory=max_memory << 20 if max_memory else None)
     converted = time.perf_counter()
     remaining = None if timeout is None else timeout - (converted - started)
     best, found = None, 0
@@ -41,11 +42,16 @@ def search(engine, conv: Conversion, options: dict, started: float,
                                         f"{p.cost:g}\n")
                 if not options["optimize"]:
                     break
+        except NotGroundable as e:  # gbfs, wastar: the problem cannot be grounded
+            logs.append(LogMessage(LogLevel.ERROR, f"htn: search {options['search']}: {e}"))
+            return PlanGenerationResult(Status.UNSUPPORTED_PROBLEM, None, engine.name,
+                                        log_messages=logs)
         finally:
             stream.close()
     stats = planner.stats
     timed_out = stats.timed_out or (remaining is not None and remaining <= 0)
-    cut = planner.loops.cut if planner.loops is not None else 0
+    loops = getattr(planner, "loops", None)      # the depth-first search's loop check
+    cut = loops.cut if loops is not None else 0
     complete = not timed_out and stats.bound is None and cut == 0 and (
         options["optimize"] or best is None)
     status = _status(best, timed_out, complete, stats.bound, options["optimize"])
