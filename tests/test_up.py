@@ -85,12 +85,15 @@ def test_an_up_ini_file_registers_the_engine_without_an_import(tmp_path):
 
 # ---------------------------------------------------------------- UP's test cases
 
+@pytest.mark.parametrize("search", ["dfs", "gbfs", "wastar", "auto"])
 @pytest.mark.parametrize("name", SUPPORTED)
-def test_every_supported_test_case_gets_a_valid_hierarchical_plan(name, tmp_path, monkeypatch):
+def test_every_supported_test_case_gets_a_valid_hierarchical_plan(name, search, tmp_path,
+                                                                  monkeypatch):
+    """In every search of ``params={"search": ...}`` (``htn plan --search``)."""
     import tempfile
     monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))    # aries-val's log file, not /tmp's
     problem = cases()[name].problem
-    result = solve(problem)
+    result = solve(problem, search=search)
     assert result.status == Status.SOLVED_SATISFICING, result.log_messages
     plan = result.plan
     assert isinstance(plan, HierarchicalPlan)
@@ -225,26 +228,6 @@ def test_plan_kind_sequential_returns_the_action_plan():
     hier = solve(problem).plan
     assert isinstance(flat, SequentialPlan)
     assert flat == hier.action_plan == hier.convert_to(PlanKind.SEQUENTIAL_PLAN, problem)
-
-
-@pytest.mark.parametrize("search", ["gbfs", "wastar", "auto"])
-@pytest.mark.parametrize("name", SUPPORTED)
-def test_the_heuristic_searches_give_valid_hierarchical_plans(name, search, tmp_path,
-                                                              monkeypatch):
-    """``params={"search": ...}``: the searches of ``htn plan --search`` on
-    every supported case, each plan checked by UP, htn and aries-val."""
-    import tempfile
-    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
-    problem = cases()[name].problem
-    result = solve(problem, search=search)
-    assert result.status == Status.SOLVED_SATISFICING, result.log_messages
-    plan = result.plan
-    assert set(plan.decomposition.subtasks) == {s.identifier for s in problem.task_network.subtasks}
-    assert up_valid(problem, plan)
-    assert htn_valid(problem, plan).status.name == "VALID"
-    with PlanValidator(name="aries-val") as aries:
-        if aries.supports(problem.kind):
-            assert aries.validate(problem, plan).status.name == "VALID"
 
 
 def test_the_output_stream_gets_the_progress():
