@@ -36,7 +36,7 @@ from htn.jshop.plans.tree import TaskTree
 
 from .goal_chain import GoalChain
 from .ground_formulas import holds, satisfied
-from .grounding import ground, grounding_steps
+from .grounding import UNREACHABLE_GOAL, ground, grounding_steps
 from .heuristics import HEURISTICS, INF
 from .limits import MemoryGuard, MemoryLimit
 from .stats import Stats
@@ -110,8 +110,8 @@ class BestFirst:
         actions, methods_of = model.actions, model.methods_of
         net0 = body_items(model.roots, model.root_order)
         cut, free = self.cut, self.free
-        if model.goal is not None and model.goal[0] < 0:
-            h0 = INF                  # grounding found the goal unreachable
+        if model.goal == UNREACHABLE_GOAL:
+            h0 = INF
         else:
             h0 = h(model.init, net0) if cut is None or cut.ok(model.init, net0) else INF
         # per node: (state, network, parent, move, g); move = (path, action or method)
@@ -301,7 +301,7 @@ def interleaves(model) -> bool:
 
 def _cut(model):
     """The goal-chain cut (:mod:`.goal_chain`) where the goal has a chain."""
-    if model.goal is None or model.goal[0] < 0:
+    if model.goal is None or model.goal == UNREACHABLE_GOAL:
         return None
     cut = GoalChain(model)
     return cut if cut.active else None

@@ -30,6 +30,10 @@ from .ground_formulas import (COMPILE_AFTER, FormulaGrounder, NotGroundable, com
 from .residual_code import compile_body
 from .reachability import reachable
 
+# the goal of a model where grounding found it false in every reachable state
+# (no fact has every bit: no state satisfies it)
+UNREACHABLE_GOAL = (-1, -1, ())
+
 
 class GroundAction:
     __slots__ = ("name", "args", "op", "pre", "dels", "adds", "effects", "cost")
@@ -168,7 +172,7 @@ class _Grounder:
         model.roots, model.root_order = tuple(roots), self.root_order
         if self.instance.goal is not None:
             goal = self._residual(self.instance.goal.expr, [None] * self.instance.goal_nvars)
-            model.goal = compile_residual(goal) or (-1, -1, ())
+            model.goal = compile_residual(goal) or UNREACHABLE_GOAL
         return model
 
     def _residual(self, expr, env: list):
