@@ -30,8 +30,7 @@ from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import HtnError
 from htn.jshop.language.terms import Var, term_str, variables
 from htn.jshop.readers.hddl_formulas import Formulas, Scope, order_conjuncts, type_condition
-
-TOP, TOP_METHOD = "__top", "__top_method"
+from htn.jshop.readers.hddl_model import TOP, TOP_METHOD
 
 
 @dataclass

@@ -276,6 +276,7 @@ class Builder(Transformer_NonRecursive):
             elif part[0] == "types":
                 for p in part[1]:
                     d.types.setdefault(p.name, [])
+                    d.type_pos.setdefault(p.name, p.pos)
                     for t in p.types:
                         if t != "object" or p.name != "object":
                             d.types[p.name].append(t)

@@ -44,43 +44,21 @@ from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import HtnError
 from htn.jshop.language.terms import Var, variables
 
+from .hddl_checks import (check_domain, check_method, type_ancestors, unique_labels,
+                          unique_params)
 from .hddl_formulas import Formulas, Scope, order_conjuncts, type_condition, type_predicate
-from .hddl_model import (ActionDef, EffectCost, EffectForall, EffectWhen, Exists, HDomain,
-                         HProblem, MethodDef, Subtask, TaskDef)
+from .hddl_model import (TOP, TOP_METHOD, ActionDef, EffectCost, EffectForall, EffectWhen,
+                         Exists, HDomain, HProblem, MethodDef, Subtask)
 from .hddl_order import is_total, subtask_order
 from .pullup import pulled_conditions
-
-# An initial task network with parameters is the body of this task's one
-# method, which binds them (the IPC 2020 plan format's artificial root)
-TOP, TOP_METHOD = "__top", "__top_method"
-
 
 # ------------------------------------------------------------------ domain
 
 class _Domain:
-    def __init__(self, h: HDomain):
+    def __init__(self, h: HDomain, ancestors: dict):
         self.h = h
-        self.ancestors = self._type_closure()
+        self.ancestors = ancestors
         self.method_count = 0
-
-    def _type_closure(self) -> dict:
-        types = dict(self.h.types)
-        types.setdefault("object", [])
-        out = {}
-        for t in types:
-            seen, stack = [], list(types[t])
-            while stack:
-                s = stack.pop()
-                if s not in types:
-                    raise HtnError.at(self.h.pos, f"type {s} (a supertype of {t}) is not "
-                                      "declared")
-                if s not in seen and s != t:
-                    seen.append(s)
-                    stack.extend(types[s])
-            if t != "object" and "object" not in seen:
-                seen.append("object")
-            out[t] = seen
-        return out
 
     def check_types(self, params) -> None:
         for p in params:
@@ -90,10 +68,9 @@ class _Domain:
 
     def declare(self, scope: Scope, params, what: str) -> dict:
         self.check_types(params)
+        unique_params(params, what)
         names = {}
         for p in params:
-            if p.name in names:
-                raise HtnError.at(p.pos, f"{what}: parameter {p.name} is declared twice")
             names[p.name] = p.name
             scope.var(p.name)
         return names
@@ -117,29 +94,11 @@ class _Domain:
 
     # ------------------------------------------------------------ methods
     def task_name(self, st) -> str:
-        if st.name in self.h.actions:
-            params = self.h.actions[st.name].params
-            name = "!" + st.name
-        elif st.name in self.h.tasks:
-            params = self.h.tasks[st.name].params
-            name = st.name
-        else:
-            raise HtnError.at(st.pos, f"unknown task {st.name}: neither a task nor an action "
-                              "of the domain")
-        if len(params) != len(st.args):
-            raise HtnError.at(st.pos, f"{st.name} takes {len(params)} argument(s), given "
-                              f"{len(st.args)}")
-        return name
+        """A subtask's task: ``!name`` for an action (its arity and the
+        method's were checked when the domain was read, :mod:`.hddl_checks`)."""
+        return "!" + st.name if st.name in self.h.actions else st.name
 
     def method(self, m: MethodDef, pulled: list) -> S.Method:
-        task = self.h.tasks.get(m.task.name) if m.task.name != TOP else TaskDef(TOP, [])
-        if task is None:
-            kind = "an action" if m.task.name in self.h.actions else "not a declared task"
-            raise HtnError.at(m.task.pos, f"method {m.name} decomposes {m.task.name}, "
-                              f"which is {kind}")
-        if len(task.params) != len(m.task.args):
-            raise HtnError.at(m.task.pos, f"{m.task.name} takes {len(task.params)} "
-                              f"argument(s), given {len(m.task.args)}")
         scope = Scope()
         names = self.declare(scope, m.params, f"method {m.name}")
         f = Formulas(scope, self.h.predicates)
@@ -220,7 +179,7 @@ def domain_from_model(h: HDomain, pullup: bool | None = None) -> S.Domain:
     ``pullup`` None: pull conditions up when every method is totally ordered."""
     if pullup is None:
         pullup = all(is_total(m.network) for m in h.methods)
-    t = _Domain(h)
+    t = _Domain(h, check_domain(h))
     for c in h.constants:
         t.check_types([c])
     for task in h.tasks.values():
@@ -251,7 +210,8 @@ def top_method(domain: S.Domain, top: MethodDef) -> S.Method:
     conditions, in the domain's terms."""
     if domain.hddl is None:
         raise HtnError.at(top.pos, "an HDDL problem with parameters needs an HDDL domain")
-    t = _Domain(domain.hddl)
+    t = _Domain(domain.hddl, type_ancestors(domain.hddl))
+    check_method(domain.hddl, top)
     pulled = {}
     if domain.pullup:
         pulled = pulled_conditions(domain.hddl, t.ancestors, extra=[top])
@@ -283,6 +243,7 @@ def problem_from_model(h: HProblem) -> S.Problem:
         state.append(a)
     declared = {p.name for p in h.params}
     items = []
+    unique_labels(h.network, "the initial task network")
     subtasks, order = subtask_order(h.network, "the initial task network", h.pos)
     for st in subtasks:
         for x in st.args:

@@ -8,6 +8,10 @@ from typing import Optional
 
 from htn.jshop.language import syntax as S
 
+# An initial task network with parameters is the body of this task's one
+# method, which binds them (the IPC 2020 plan format's artificial root)
+TOP, TOP_METHOD = "__top", "__top_method"
+
 
 @dataclass
 class Param:
@@ -97,6 +101,7 @@ class EffectCost:
 class HDomain:
     name: str
     types: dict = field(default_factory=dict)        # type -> [parent types]
+    type_pos: dict = field(default_factory=dict)     # type -> where it is first declared
     constants: list = field(default_factory=list)    # [Param]
     predicates: dict = field(default_factory=dict)   # name -> [Param]
     tasks: dict = field(default_factory=dict)        # name -> TaskDef
