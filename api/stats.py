@@ -44,6 +44,7 @@ class ScenarioStats:
     methods: int
     operators: int
     timed_out: bool = False
+    repeats: int = 1            # enumerations timed (fewer than asked when time ran out)
     # the located warnings of the inputs' check (as htn.plan has them)
     warnings: list = field(default_factory=list)
 
@@ -81,15 +82,21 @@ def scenarios(files=()) -> list[tuple[str, str]]:
 def stats(files=(), *, repeat: int = 1, functions=None,
           timeout: Optional[float] = None) -> list[ScenarioStats]:
     """The statistics of each scenario of ``files`` (see :func:`scenarios`):
-    every plan enumerated ``repeat`` times, the median time reported;
-    ``timeout`` bounds each enumeration (checked between expansions)."""
+    every plan enumerated ``repeat`` times, the median time reported.
+    ``timeout`` bounds the whole call (checked between expansions): an
+    enumeration it cuts short is partial (``timed_out``), and no repeat
+    starts after it."""
+    until = None if timeout is None else time.perf_counter() + timeout
     table = function_table(functions)
-    return [scenario_stats(d, p, table, repeat, timeout) for d, p in scenarios(files)]
+    return [scenario_stats(d, p, table, repeat, until=until) for d, p in scenarios(files)]
 
 
 def scenario_stats(domain_path: str, problem_path: str, functions=None, repeat: int = 1,
-                   timeout: Optional[float] = None) -> ScenarioStats:
-    """Enumerate every plan ``repeat`` times; report the median wall time."""
+                   timeout: Optional[float] = None, *,
+                   until: Optional[float] = None) -> ScenarioStats:
+    """Enumerate every plan ``repeat`` times; report the median wall time.
+    ``timeout`` bounds each enumeration, ``until`` (a ``time.perf_counter()``
+    value) all of them: an enumeration cut short is the last."""
     functions = function_table(functions)
     inputs = read_inputs(domain_path, problem_path, functions)
     domain, problem = inputs.domain, inputs.problem
@@ -100,13 +107,26 @@ def scenario_stats(domain_path: str, problem_path: str, functions=None, repeat: 
         t0 = time.perf_counter()
         plans = []
         for inst in problem.instances:
+            budget = _budget(timeout, until)
             planner = Planner(domain, inst, functions)
-            plans.extend(tuple(p.lines()) for p in planner.plans(timeout))
+            plans.extend(tuple(p.lines()) for p in planner.plans(budget))
             timed_out = timed_out or planner.stats.timed_out
         times.append(time.perf_counter() - t0)
+        if timed_out or until is not None and time.perf_counter() >= until:
+            break           # a partial enumeration says nothing more if repeated
     return ScenarioStats(
         domain=domain_path, problem=problem_path, plans=len(plans),
         distinct_plans=len(set(plans)), plan_ms=round(statistics.median(times) * 1000, 3),
         min_length=min((len(p) for p in plans), default=None),
         methods=domain.n_methods, operators=domain.n_operators, timed_out=timed_out,
+        repeats=len(times),
         warnings=inputs.warnings)
+
+
+def _budget(timeout: Optional[float], until: Optional[float]) -> Optional[float]:
+    """Seconds an enumeration may take: ``timeout``, and no more than is left
+    until ``until`` (at least a moment: the planner then stops at once)."""
+    if until is None:
+        return timeout
+    left = max(until - time.perf_counter(), 1e-6)
+    return left if timeout is None else min(timeout, left)

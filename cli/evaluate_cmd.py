@@ -7,8 +7,10 @@ import os
 
 import click
 
+from .options import MAX_RUNS, MAX_WORKERS, SEED, TIMEOUT_HELP, Count, Timeout
 from .output import warn
 from .progress import Phase
+from .signals import STATE, deadline
 
 
 @click.command("evaluate")
@@ -16,9 +18,9 @@ from .progress import Phase
 @click.option("--domain", type=click.Path(dir_okay=False),
               help="Domain file [default: <domain name>.jshop beside PROBLEM, in ../domains/ "
                    "beside it, in ./domains/, or the bundled one].")
-@click.option("--runs", type=click.IntRange(min=1), default=200, show_default=True,
+@click.option("--runs", type=Count(1, MAX_RUNS), default=200, show_default=True,
               help="Runs of each plan.")
-@click.option("--seed", type=int, default=0, show_default=True,
+@click.option("--seed", type=SEED, default=0, show_default=True,
               help="Seed of the first run (run i uses seed + i, for both plans).")
 @click.option("--robot", default="projection", show_default=True, metavar="NAME",
               help="Robot the runs execute on: 'projection' (the paper's fast kinematic "
@@ -27,7 +29,7 @@ from .progress import Phase
               help="Failure probabilities. projection: navigate, detect, grasp, grasp_busy, "
                    "place, container, tray (defaults 0.02-0.10; given ones replace them); "
                    "pybullet: slip, nav, detect, moved (default none).")
-@click.option("--workers", type=click.IntRange(min=1), default=None, metavar="N",
+@click.option("--workers", type=Count(1, MAX_WORKERS), default=None, metavar="N",
               help="Worker processes: 1 runs in this process, more start a local Dask "
                    "cluster  [default: 1]")
 @click.option("--scheduler", metavar="tcp://HOST:PORT",
@@ -39,8 +41,11 @@ from .progress import Phase
 @click.option("--plot", "plot_dir", type=click.Path(), metavar="DIR",
               help="Write figures as PNG (300 dpi), PDF and SVG (like the paper's Fig. 8, 9).")
 @click.option("--json", "as_json", is_flag=True, help="Print JSON instead of a table.")
+@click.option("--timeout", type=Timeout(), metavar="SECONDS",
+              help=TIMEOUT_HELP + " Planning, transforming and the runs: what ends "
+                   "unfinished prints no table, and --records keeps the runs done.")
 def evaluate(problem, domain, runs, seed, robot, faults, workers, scheduler, records,
-             plot_dir, as_json):
+             plot_dir, as_json, timeout):
     """Execute PROBLEM's plan and its transformed plan RUNS times each and
     compare navigation, manipulation, actions and failure rate (mean,
     standard deviation, change, Welch t-test p-value; pooled failure
@@ -83,7 +88,7 @@ def evaluate(problem, domain, runs, seed, robot, faults, workers, scheduler, rec
         bar.advance(task, done)
 
     try:
-        with phase:
+        with deadline(timeout, STATE.started), phase:
             result = run_evaluation(problem, domain=domain, runs=runs, seed=seed, robot=robot,
                                     faults=faults, workers=workers, scheduler=scheduler,
                                     records=records, plot=plot_dir, on_start=on_start,

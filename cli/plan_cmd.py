@@ -18,7 +18,7 @@ from htn.jshop.search.limits import DEFAULT_MAX_DEPTH
 from htn.jshop.search.searches import SEARCHES
 
 from .output import console, stdout_is_terminal, warn
-from .options import TIMEOUT_HELP, Timeout
+from .options import TIMEOUT_HELP, Count, Timeout, memory_mb
 from .progress import Phase
 from .signals import STATE, DeadlineExceeded, deadline, held, interrupt_exit, raise_again
 
@@ -28,7 +28,7 @@ FORMATS = ["text", "jshop", "json", "ipc"]
 @click.command("plan")
 @click.argument("domain", type=click.Path(dir_okay=False))
 @click.argument("problem", type=click.Path(dir_okay=False))
-@click.option("-n", "--plans", "n_plans", type=click.IntRange(min=1), default=1, show_default=True,
+@click.option("-n", "--plans", "n_plans", type=Count(), default=1, show_default=True,
               help="Stop after the first N plans (per problem in the file).")
 @click.option("-a", "--all", "all_plans", is_flag=True,
               help="Enumerate every plan (JSHOP2's -ra); stream them as they are found.")
@@ -56,11 +56,11 @@ FORMATS = ["text", "jshop", "json", "ipc"]
 @click.option("--jshop2-compat", is_flag=True,
               help="Reproduce JSHOP2 1.0.3 exactly: a method body written (:unordered ...) "
                    "runs in order [default: unordered, as the JSHOP2 manual says].")
-@click.option("--max-depth", type=click.IntRange(min=1), default=DEFAULT_MAX_DEPTH,
+@click.option("--max-depth", type=Count(), default=DEFAULT_MAX_DEPTH,
               show_default=True, metavar="N",
               help="Stop a search that nests more than N method reductions without an "
                    "operator in between (a method that decomposes into itself without end).")
-@click.option("--max-memory", type=click.IntRange(min=1), metavar="MB",
+@click.option("--max-memory", type=Count(1, memory_mb()), metavar="MB",
               help="Stop a search whose process reaches this much resident memory "
                    "[default: 80% of the memory available, and of ulimit -v if set].")
 @click.option("--explain", is_flag=True,

@@ -14,7 +14,7 @@ from .output import stdout_is_terminal, warn
 from .progress import Phase
 from .run_checks import check_display
 from . import signals
-from .options import TIMEOUT_HELP, Timeout
+from .options import SEED, TIMEOUT_HELP, Count, Timeout
 from .run_lines import event_line
 from .signals import STATE, deadline, held, interrupt_exit, silence_stdout
 from .view_cmd import keep_up, start_run_view, view_options, wait_for_page
@@ -35,7 +35,7 @@ RUN_OPTIONS = ("plan_file", "robot_name", "sim", "faults", "seed", "retries", "r
 @click.option("--faults", metavar="KIND=P,...",
               help="Inject faults with these probabilities: slip, nav, detect, moved on "
                    "PyBullet; effect on the symbolic robot.")
-@click.option("--seed", type=int, default=0, show_default=True,
+@click.option("--seed", type=SEED, default=0, show_default=True,
               help="Random seed for faults (same seed, same run).")
 @click.option("--retries", multiple=True, metavar="OPERATOR=N",
               help="Override retry limits of the domain's .toml, e.g. grasp=3.")
@@ -48,7 +48,7 @@ RUN_OPTIONS = ("plan_file", "robot_name", "sim", "faults", "seed", "retries", "r
 @click.option("--from-log", "from_log", type=click.Path(dir_okay=False), metavar="FILE.jsonl",
               help="Re-run what the log's header records (plan, robot, seed, faults, "
                    "retries, ...).")
-@click.option("--plan-index", type=click.IntRange(min=1), default=1, show_default=True,
+@click.option("--plan-index", type=Count(), default=1, show_default=True,
               help="Which plan of the file to run.")
 @click.option("--domain", type=click.Path(dir_okay=False),
               help="Domain file (default: the one named in the plan file).")

@@ -2,23 +2,28 @@
 from __future__ import annotations
 
 import json
+import time
 from pathlib import Path
 
 import click
 
+from .options import MAX_RUNS, TIMEOUT_HELP, Count, Timeout
 from .output import console
-from .signals import DeadlineExceeded, deadline
+from .signals import STATE, DeadlineExceeded, deadline
+
+GRACE = 0.5     # seconds past --timeout before a user function is interrupted
 
 
 @click.command("stats")
 @click.argument("files", nargs=-1, type=click.Path(dir_okay=False))
-@click.option("--repeat", type=click.IntRange(min=1), default=5, show_default=True,
+@click.option("--repeat", type=Count(1, MAX_RUNS), default=5, show_default=True,
               help="Plan N times and report the median time.")
 @click.option("--json", "as_json", is_flag=True, help="Print JSON instead of a table.")
 @click.option("--functions", type=click.Path(dir_okay=False), metavar="FILE.py",
               help="Python file with user functions for (call ...).")
-@click.option("--timeout", type=click.FloatRange(min=0, min_open=True), metavar="SECONDS",
-              help="Stop enumerating plans of a problem after this many seconds.")
+@click.option("--timeout", type=Timeout(), metavar="SECONDS",
+              help=TIMEOUT_HELP + " An enumeration cut short is reported as partial; the "
+                   "repeats stop then.")
 def stats(files, repeat, as_json, functions, timeout):
     """Plan counts, planning time, shortest plan and domain size (Table 1).
 
@@ -35,24 +40,28 @@ def stats(files, repeat, as_json, functions, timeout):
 
     if len(files) == 1:
         raise click.UsageError("give a DOMAIN and at least one PROBLEM (or no arguments)")
-    pairs = scenarios(files)
-    table = function_table(functions)
     rows = []
     shown: set = set()          # a domain's warnings once, however many problems
-    for d, p in pairs:
-        # --timeout bounds each enumeration; the deadline catches a user
-        # function that never returns, which the planner cannot interrupt
-        try:
-            with deadline(None if timeout is None else timeout * repeat + 1.0):
-                rows.append(scenario_stats(d, p, table, repeat, timeout))
+    # --timeout bounds the whole command: each enumeration gets what is left
+    # (the planner stops by itself and the figures are partial), and the
+    # deadline a little after it catches a user function that never
+    # returns, which the planner cannot interrupt
+    started = STATE.started or time.perf_counter()
+    until = None if timeout is None else started + timeout
+    with deadline(None if timeout is None else timeout + GRACE, started):
+        pairs = scenarios(files)
+        table = function_table(functions)
+        for d, p in pairs:
+            try:
+                rows.append(scenario_stats(d, p, table, repeat, until=until))
+            except DeadlineExceeded:
+                click.echo(f"{p}: --timeout {timeout:g} s ran out inside a user function "
+                           "or comparator; no figures", err=True)
+                raise SystemExit(1) from None
             for w in rows[-1].warnings:
                 if w not in shown:
                     shown.add(w)
                     click.echo(w, err=True)
-        except DeadlineExceeded:
-            click.echo(f"{p}: --timeout {timeout:g} s ran out inside a user function "
-                       "or comparator; no figures", err=True)
-            raise SystemExit(1) from None
     if as_json:
         click.echo(json.dumps({"scenarios": [r.as_dict() for r in rows]}, indent=1))
         return
@@ -84,7 +93,10 @@ def stats(files, repeat, as_json, functions, timeout):
                    if show_paper and Path(r.problem).stem in PAPER else "") for r in rows])
     out = console()
     out.print(t)
-    out.print(f"[dim]time: median of {repeat} run(s), parsing excluded; "
+    done = min(r.repeats for r in rows)
+    out.print(f"[dim]time: median of {done} run(s)"
+              + (f" (of {repeat} asked: --timeout ran out)" if done < repeat else "")
+              + "; parsing excluded; "
                   f"domain {rows[0].domain}[/dim]")
     if any(r.timed_out for r in rows):
         out.print("[yellow]some problems timed out; their counts are partial[/yellow]")

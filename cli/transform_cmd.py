@@ -9,8 +9,10 @@ import click
 
 from htn.api.files import atomic_write
 
+from .options import TIMEOUT_HELP, Timeout
 from .output import warn
 from .progress import Phase
+from .signals import STATE, deadline
 
 
 @click.command("transform")
@@ -28,7 +30,9 @@ from .progress import Phase
               help="Write the transformed plan (jshop format with header, rewritten task list and "
                    "task tree) for 'htn run'.")
 @click.option("--json", "as_json", is_flag=True, help="Print JSON instead of text.")
-def transform(domain, problem, rules, metric, output, as_json):
+@click.option("--timeout", type=Timeout(), metavar="SECONDS",
+              help=TIMEOUT_HELP + " -o is written only if all is done in time.")
+def transform(domain, problem, rules, metric, output, as_json, timeout):
     """Plan PROBLEM, transform its task tree with the registered rules
     (tray > container > both-hands), check and print what changed.
 
@@ -44,7 +48,8 @@ def transform(domain, problem, rules, metric, output, as_json):
         try:
             # planning and each rule's projected runs take seconds: a spinner
             # says which (on a terminal, after a second)
-            with Phase("reading the domain and the problem") as phase:
+            with deadline(timeout, STATE.started), \
+                    Phase("reading the domain and the problem") as phase:
                 done = transform_plan(domain, problem, rules=rules, metric=metric,
                                       on_warning=warn, on_phase=phase.update)
         except UnknownRules as exc:

@@ -5,14 +5,14 @@ import sys
 
 import click
 
-from .options import TIMEOUT_HELP, Timeout
+from .options import TIMEOUT_HELP, Count, Timeout
 
 
 @click.command("validate")
 @click.argument("domain", type=click.Path(dir_okay=False))
 @click.argument("problem", type=click.Path(dir_okay=False))
 @click.argument("plan_file", metavar="PLAN", type=click.Path(dir_okay=False))
-@click.option("--plan-index", type=click.IntRange(min=1), metavar="N",
+@click.option("--plan-index", type=Count(), metavar="N",
               help="Validate only the N-th plan of the file [default: every plan].")
 @click.option("--functions", type=click.Path(dir_okay=False), metavar="FILE.py",
               help="Python file with user functions for (call ...).")

@@ -14,6 +14,8 @@ import click
 
 from htn.api.extras import require_extra
 
+from .options import PORT
+
 HOST_HELP = ("Address to serve the view on (default 127.0.0.1: this machine only; any "
              "other address lets other machines reach it, with the token, and is warned of)")
 
@@ -26,7 +28,7 @@ def view_options(command):
                           "action, camera, events) and print its URL; the page stays up "
                           "after the run until Ctrl-C (the 'view' extra)."),
         click.option("--view-host", metavar="HOST", default="127.0.0.1", help=HOST_HELP + "."),
-        click.option("--view-port", metavar="PORT", type=click.IntRange(0, 65535), default=0,
+        click.option("--view-port", metavar="PORT", type=PORT, default=0,
                      help="Port of the view (default: a free one)."),
         click.option("--view-wait", is_flag=True,
                      help="With --view: start the robot only once a page has connected, so "
@@ -86,7 +88,7 @@ def _serve_until_interrupted() -> None:
 @click.command("view")
 @click.argument("log_file", type=click.Path(dir_okay=False))
 @click.option("--host", default="127.0.0.1", metavar="HOST", help=HOST_HELP + ".")
-@click.option("--port", type=click.IntRange(0, 65535), default=0, metavar="PORT",
+@click.option("--port", type=PORT, default=0, metavar="PORT",
               help="Port to serve on (default: a free one).")
 def view(log_file, host, port):
     """Show the log of a run (htn run --log FILE.jsonl) in a browser.

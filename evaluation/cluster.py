@@ -221,6 +221,13 @@ class LocalWorkers:
         if self._early is not None:
             self._early.join()      # a cluster still starting is closed once up
         if self._client is not None:
+            # a study stopped midway (Ctrl-C, --timeout) cancels the work the
+            # scheduler is taking in, which it logs as an error as its loop
+            # ends, after close() has returned: no error of the user's. The
+            # next cluster's start sets the level back (_quiet_dask)
+            for name in ("distributed", "distributed.scheduler", "distributed.client",
+                         "distributed.core"):
+                logging.getLogger(name).setLevel(logging.CRITICAL)
             self._client.close()
             self._cluster.close()
         self._cluster = self._client = self._runner = None
