@@ -100,7 +100,8 @@ class _Domain:
 
     def method(self, m: MethodDef, pulled: list) -> S.Method:
         scope = Scope()
-        names = self.declare(scope, m.params, f"method {m.name}")
+        names = self.declare(scope, m.params, f"method {m.name}" if m.name != TOP_METHOD
+                             else "the initial task network")
         f = Formulas(scope, self.h.predicates)
         params = [scope.var(p.name) for p in m.params]
         f.outer.update(v.index for v in params)
