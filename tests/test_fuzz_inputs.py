@@ -70,6 +70,7 @@ def plan_files(tmp_path_factory):
     return plan_of
 
 
+@pytest.mark.slow
 @settings(max_examples=EXAMPLES, deadline=None, derandomize=not RANDOM, database=None,
           suppress_health_check=list(HealthCheck), phases=PHASES)
 @given(inp=inputs())
