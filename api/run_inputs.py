@@ -17,6 +17,7 @@ from htn.executor.config import load_retries, parse_overrides
 from htn.executor.log_header import (check_plan_digest, check_plan_present, check_unchanged,
                                      file_sha256, read_header)
 from htn.executor.plan_tree import RECOVER_PLANS, RECOVER_TIMEOUT, check_runnable, recover_tree
+from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import HtnError
 from htn.jshop.plans.plan import Plan
 from htn.jshop.plans.planfile import PlanFile, read_plan_file
@@ -125,8 +126,7 @@ def methods_of(domain, instance) -> dict:
     an HDDL problem with parameters the artificial root task's."""
     if getattr(instance, "top", None) is None:
         return domain.methods
-    from htn.jshop.readers.hddl_domain import top_method
-    top = top_method(domain, instance.top)
+    top = S.root_method(instance)
     return {**domain.methods, top.name: [top]}
 
 

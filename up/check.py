@@ -106,8 +106,7 @@ class _Walk:
         return binding
 
     def _top(self, binding: dict) -> None:
-        from htn.jshop.readers.hddl_domain import top_method
-        m = top_method(self.conv.domain, self.conv.instance.top)
+        m = self.conv.instance.root
         names = [v.name for v in self.conv.problem.task_network.variables]
         unset = [n for n in names if n not in binding]
         if unset:

@@ -25,7 +25,7 @@ from typing import Any
 from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import HtnError
 from htn.jshop.language.terms import Var
-from htn.jshop.readers.hddl_domain import domain_from_model, problem_from_model
+from htn.jshop.readers.hddl_domain import attach_roots, domain_from_model, problem_from_model
 from htn.jshop.readers.hddl_model import (ActionDef, EffectCost, HDomain, HProblem, MethodDef,
                                           Network, Param, Subtask, TaskDef)
 from htn.jshop.readers.hddl_order import linearise
@@ -98,12 +98,14 @@ def convert(problem) -> Conversion:
                   params=[param(v, f"variable {v.name}") for v in problem.task_network.variables],
                   network=net, init=_initial_state(problem),
                   goal=_conjunction(x, problem.goals))
-    instance = problem_from_model(hp).instances[0]
+    read = problem_from_model(hp)
+    instance = read.instances[0]
     # problem_from_model leaves the names of the network's subtasks as written,
     # without the "!" of an action's operator (it does not see the domain)
     for t in instance.tasks.items:
         if t.name in h.actions:
             t.name = "!" + t.name
+    attach_roots(domain, read)
     methods = {m.branches[0].label: m for ms in domain.methods.values() for m in ms}
     return Conversion(problem, domain, instance, order, orders, methods, warnings)
 

@@ -303,6 +303,10 @@ class ProblemInstance:
     # an HDDL initial task network with parameters: the (HDDL) method of an
     # artificial root task whose body is ``tasks`` and which binds them
     top: Any = None
+    # ... and that method in the domain's terms (a Method, pulled-up
+    # conditions included), built once the domain is known
+    # (htn.jshop.readers.load.paired): what the searches and checks use
+    root: Any = None
 
 
 @dataclass
@@ -316,3 +320,13 @@ class Problem:
     language: str = "jshop2"
     spelling: dict = field(default_factory=dict)    # lower-case name -> as written
     hddl: Any = None                                # the HDDL model it was read from
+
+
+def root_method(instance: ProblemInstance) -> "Method":
+    """The root method of an HDDL instance whose initial task network has
+    parameters (``instance.top``), as the reader built it with the domain."""
+    if instance.root is None:
+        raise ValueError("an HDDL problem whose initial task network has parameters is "
+                         "planned once it is paired with its domain "
+                         "(htn.jshop.readers.load.paired, or htn.api's readers)")
+    return instance.root

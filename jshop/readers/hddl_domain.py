@@ -219,6 +219,15 @@ def top_method(domain: S.Domain, top: MethodDef) -> S.Method:
     return t.method(top, pulled.get(id(top), []))
 
 
+def attach_roots(domain: S.Domain, problem: S.Problem) -> None:
+    """Give each instance of ``problem`` whose initial task network has
+    parameters its root method (``ProblemInstance.root``), in the terms of
+    ``domain``, the domain it is planned with: built once, here."""
+    for inst in problem.instances:
+        if inst.top is not None and inst.root is None:
+            inst.root = top_method(domain, inst.top)
+
+
 def for_problem(domain: S.Domain, problem: S.Problem) -> S.Domain:
     """The domain to plan ``problem`` with: read again without pulled-up
     conditions when the problem's initial task network is not totally

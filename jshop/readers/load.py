@@ -80,13 +80,17 @@ def paired(dom: S.Domain, prob: S.Problem) -> tuple[S.Domain, S.Problem]:
     to plan that problem with: for HDDL, the problem's tasks that are
     actions become operators, and a problem whose initial task network is
     not totally ordered gets the domain without pulled-up conditions
-    (:func:`~htn.jshop.readers.hddl_domain.for_problem`)."""
+    (:func:`~htn.jshop.readers.hddl_domain.for_problem`), and an initial task
+    network with parameters its root method, in that domain's terms
+    (``ProblemInstance.root``)."""
     check_domain_name(dom, prob)
     if dom.hddl is not None:
-        from .hddl_domain import check_problem_symbols, for_problem, resolve_problem_tasks
+        from .hddl_domain import (attach_roots, check_problem_symbols, for_problem,
+                                  resolve_problem_tasks)
         check_problem_symbols(dom, prob)
         resolve_problem_tasks(dom, prob)
         dom = for_problem(dom, prob)
+        attach_roots(dom, prob)
     return dom, prob
 
 

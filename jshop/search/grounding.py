@@ -115,8 +115,7 @@ class _Grounder:
         self.roots = list(instance.tasks.items)
         self.root_order = instance.tasks.order_flag
         if instance.top is not None:
-            from htn.jshop.readers.hddl_domain import top_method
-            m = top_method(domain, instance.top)
+            m = S.root_method(instance)
             self.methods[m.name] = [m]
             self.roots, self.root_order = [m.head], True
 

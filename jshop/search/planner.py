@@ -101,8 +101,7 @@ class Planner:
         nvars = 1 + max((v.index for t in S.task_atoms(instance.tasks)
                          for v in variables(t.args, [])), default=-1)
         if instance.top is not None:     # HDDL: a root task binds the network's parameters
-            from htn.jshop.readers.hddl_domain import top_method
-            m = top_method(domain, instance.top)
+            m = S.root_method(instance)
             self._methods[m.name] = [method_entry(self.logic, m, False)]   # its own order
             self.root = bind_tasks(S.TaskList([m.head]), [])
         else:
