@@ -60,6 +60,7 @@ from unified_planning.engines.results import FailedValidationReason
 from unified_planning.exceptions import UPUsageError
 from unified_planning.plans import PlanKind
 
+from htn.jshop.logic.caches import clear_caches
 from htn.jshop.search.limits import DEFAULT_MAX_DEPTH
 from htn.jshop.search.searches import SEARCHES
 
@@ -166,7 +167,12 @@ class HtnEngine(Engine, OneshotPlannerMixin, PlanValidatorMixin):
             return PlanGenerationResult(Status.UNSUPPORTED_PROBLEM, None, self.name,
                                         log_messages=logs)
         logs += [LogMessage(LogLevel.WARNING, w) for w in conv.warnings]
-        return search(self, conv, self.options, started, timeout, output_stream, logs)
+        try:
+            return search(self, conv, self.options, started, timeout, output_stream, logs)
+        finally:
+            # every problem is a new domain (converted anew): what was compiled
+            # for this one is never used again
+            clear_caches()
 
     # ------------------------------------------------------------ validation
     def _validate(self, problem, plan) -> ValidationResult:
@@ -181,6 +187,8 @@ class HtnEngine(Engine, OneshotPlannerMixin, PlanValidatorMixin):
             verdict = check(conv, plan)
         except Unsupported as e:
             return self._unknown(f"unsupported problem: {e}")
+        finally:
+            clear_caches()
         metrics = {"engine_internal_time": str(time.perf_counter() - started)}
         if verdict.valid:
             return ValidationResult(ValidationResultStatus.VALID, self.name, [],

@@ -34,8 +34,8 @@ def flat_args(args: tuple) -> bool:
     return all(type(a) in (str, float, Var) for a in args)
 
 
-_BINDERS: dict = cache()
-_UNIFIERS: dict = cache()
+_BINDERS = cache()
+_UNIFIERS = cache()
 
 
 def _shown(args: tuple) -> str:
@@ -46,21 +46,18 @@ def _shown(args: tuple) -> str:
 def binder(args: tuple, what: str = None) -> Callable[[list], tuple]:
     """Cached :func:`make_binder` (keyed by the domain's own tuple object);
     ``what`` names the generated code (see :mod:`~htn.jshop.logic.codegen`)."""
-    hit = _BINDERS.get(id(args))
-    if hit is None or hit[0] is not args:
-        hit = _BINDERS[id(args)] = (args, make_binder(args, what))
-    return hit[1]
+    return _BINDERS.make(args, lambda: make_binder(args, what))
 
 
-_SUBSTITUTERS: dict = cache()
+_SUBSTITUTERS = cache()
 
 
 def substituter(args: tuple, what: str = None) -> Callable[[list], tuple]:
     """``env -> subst(args, env)`` (the binder's tuple without its key), for
     the places that only build a term: effects, task atoms, plan steps. A
     tuple of symbols, numbers and variables needs no groundness test."""
-    hit = _SUBSTITUTERS.get(id(args))
-    if hit is None or hit[0] is not args:
+    fn = _SUBSTITUTERS.get(args)
+    if fn is None:
         if flat_args(args):
             ns: dict = {}
             parts = []
@@ -79,16 +76,13 @@ def substituter(args: tuple, what: str = None) -> Callable[[list], tuple]:
 
             def fn(env, bind=bind):
                 return bind(env)[1]
-        hit = _SUBSTITUTERS[id(args)] = (args, fn)
-    return hit[1]
+        _SUBSTITUTERS.put(args, fn)
+    return fn
 
 
 def head_unifier(head: tuple, what: str = None) -> Callable[[tuple, list], bool]:
     """Cached :func:`make_head_unifier`."""
-    hit = _UNIFIERS.get(id(head))
-    if hit is None or hit[0] is not head:
-        hit = _UNIFIERS[id(head)] = (head, make_head_unifier(head, what))
-    return hit[1]
+    return _UNIFIERS.make(head, lambda: make_head_unifier(head, what))
 
 
 GENERIC = 1 << 30   # a scan key meaning "use the generic scanner"
@@ -290,17 +284,14 @@ def make_scanner(args: tuple, key: int, what: str = None) -> Callable:
     return ns["scan"]
 
 
-_SCANNERS: dict = cache()
-_TERMS: dict = cache()
+_SCANNERS = cache()
+_TERMS = cache()
 _CONJUNCTIONS: dict = {}
 
 
 def term_binder(term, what: str = None) -> Callable[[list], tuple]:
     """Cached binder of a single term (keyed by the term object itself)."""
-    hit = _TERMS.get(id(term))
-    if hit is None or hit[0] is not term:
-        hit = _TERMS[id(term)] = (term, make_binder((term,), what))
-    return hit[1]
+    return _TERMS.make(term, lambda: make_binder((term,), what))
 
 
 NESTED_CONJUNCTS = 16   # Python allows 20 nested blocks; longer conjunctions use a stack
@@ -350,10 +341,7 @@ def _stacked_conjunction(sats: list) -> Callable:
 
 def scanner(args: tuple, key: int, what: str = None) -> Callable:
     """Cached :func:`make_scanner`."""
-    hit = _SCANNERS.get((id(args), key))
-    if hit is None or hit[0] is not args:
-        hit = _SCANNERS[(id(args), key)] = (args, make_scanner(args, key, what))
-    return hit[1]
+    return _SCANNERS.make(args, lambda: make_scanner(args, key, what), (id(args), key))
 
 
 def make_head_unifier(head: tuple, what: str = None) -> Callable[[tuple, list], bool]:

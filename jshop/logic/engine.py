@@ -30,15 +30,12 @@ from .java_sort import sorted_by
 from .modes import compile_conjunction
 from .scan import scan_atoms
 
-_HEADS: dict = cache()
+_HEADS = cache()
 
 
 def head_variables(args: tuple) -> frozenset:
     """The indices of the variables of a head (cached by the head's tuple)."""
-    hit = _HEADS.get(id(args))
-    if hit is None or hit[0] is not args:
-        hit = _HEADS[id(args)] = (args, frozenset(v.index for v in variables(args, [])))
-    return hit[1]
+    return _HEADS.make(args, lambda: frozenset(v.index for v in variables(args, [])))
 
 Sat = Callable[[list], Iterator[list]]
 
@@ -369,16 +366,13 @@ class Logic:
                     break
 
 
-_SINGLES: dict = cache()
+_SINGLES = cache()
 
 
 def _single(e) -> S.And:
     """The conjunction of ``e`` alone, one object per ``e`` (the compiled
     code is cached by conjunction object)."""
-    hit = _SINGLES.get(id(e))
-    if hit is None or hit[0] is not e:
-        hit = _SINGLES[id(e)] = (e, S.And([e], getattr(e, "pos", None)))
-    return hit[1]
+    return _SINGLES.make(e, lambda: S.And([e], getattr(e, "pos", None)))
 
 
 def _true(env):

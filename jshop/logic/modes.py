@@ -47,8 +47,9 @@ from . import warming
 MAX_LITERALS = 40     # longer conjunctions stay on the general path (indentation)
 MAX_VARS = 60         # a mode is a bit mask over the conjunction's variables
 
-_CODE: dict = cache()    # (id(conjunction), mode, sized, entry) -> (conjunction, factory or None)
-_LITERALS: dict = cache()  # id(conjunction) -> (conjunction, conjuncts, _Literals, variables)
+_CODE = cache()      # (id(conjunction), mode, sized, entry) -> factory or None
+_LITERALS = cache()  # id(conjunction) -> (conjunctions, _Literals, variables)
+_NONE = object()
 
 
 def compile_conjunction(logic, e: S.And, entry: frozenset = None, what: str = None) -> Callable:
@@ -56,12 +57,12 @@ def compile_conjunction(logic, e: S.And, entry: frozenset = None, what: str = No
     ``entry``: the only variables that can be bound when it is asked (a
     precondition's head variables), or None for any. ``what`` names the
     generated code (``precondition of !grasp``; see :mod:`~htn.jshop.logic.codegen`)."""
-    hit = _LITERALS.get(id(e))
-    if hit is None or hit[0] is not e:     # the same for every planner of the domain
+    hit = _LITERALS.get(e)
+    if hit is None:     # the same for every planner of the domain
         items = flatten(e.items)
         lits = [Literal(x, logic.domain.axioms) for x in items]
-        hit = _LITERALS[id(e)] = (e, items, lits, sorted(set().union(*(l.vars for l in lits))))
-    _, items, lits, names = hit
+        hit = _LITERALS.put(e, (items, lits, sorted(set().union(*(l.vars for l in lits)))))
+    items, lits, names = hit
     general = [logic.expr(x) for x in items]
     gen = conjunction(general) if len(general) > 1 else general[0]
     sized = tuple(lit.sized(logic.arities) for lit in lits)
@@ -74,7 +75,7 @@ def compile_conjunction(logic, e: S.And, entry: frozenset = None, what: str = No
     state = logic.state
     modes: dict = {}
     constants = _constants(logic, lits, general)
-    test = _tester(logic, lits) if len(names) == len(hit[3]) else None
+    test = _tester(logic, lits) if len(names) == len(hit[2]) else None
     full = (1 << len(names)) - 1
 
     def build(mode: int):
@@ -83,16 +84,15 @@ def compile_conjunction(logic, e: S.And, entry: frozenset = None, what: str = No
         :mod:`~htn.jshop.logic.warming`), or at once if an earlier planner of
         the domain compiled it already."""
         key = (id(e), mode, sized, entry)
-        hit = _CODE.get(key)
-        if hit is None or hit[0] is not e:
+        factory = _CODE.get(e, key, _NONE)
+        if factory is _NONE:
             met = warming.calls(e, (mode, sized, entry))
             met[1] += 1
             if met[1] < warming.WARM:
                 return test if mode == full else None
             known = {v for j, v in enumerate(names) if mode >> j & 1}
-            hit = _CODE[key] = (e, CodeWriter(lits, known, sized).factory(
-                _mode_name(what, e, known, lits)))
-        factory = hit[1]
+            factory = _CODE.put(e, CodeWriter(lits, known, sized).factory(
+                _mode_name(what, e, known, lits)), key)
         f = gen if factory is None else factory(*constants)
         modes[mode] = f
         return f

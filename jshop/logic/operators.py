@@ -21,6 +21,7 @@ from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import PlanningError
 from htn.jshop.language.terms import atom_from_term, shown_term, source_atom
 
+from .caches import cache
 from .codegen import described
 from . import warming as warm
 from .state import Change
@@ -153,14 +154,11 @@ class Operators:
         return dels, adds
 
 
-_PLAIN: dict = {}     # id(op) -> (op, dels, adds): the same for every planner
+_PLAIN = cache()     # id(op) -> (dels, adds): the same for every planner
 
 
 def _plain_lists(op: S.Operator) -> tuple:
-    hit = _PLAIN.get(id(op))
-    if hit is None or hit[0] is not op:
-        hit = _PLAIN[id(op)] = (op, _plain(op.delete, op), _plain(op.add, op))
-    return hit[1], hit[2]
+    return _PLAIN.make(op, lambda: (_plain(op.delete, op), _plain(op.add, op)))
 
 
 def _plain(eff: S.Effects, op: S.Operator) -> Optional[list]:

@@ -13,7 +13,7 @@ from .compile import flat_args, substituter
 from .warming import interpreted_substitution, warming
 
 
-_TASK_LISTS: dict = cache()
+_TASK_LISTS = cache()
 
 
 def task_list_maker(tl, node: Callable, task: Callable, what: str = "task list") -> Callable[[list], list]:
@@ -24,8 +24,9 @@ def task_list_maker(tl, node: Callable, task: Callable, what: str = "task list")
     ordered)`` (its own function, so the code never nests). Cached per list
     object and node and task constructors. ``what`` names the generated
     code (``subtasks of m_deliver``, see :mod:`~htn.jshop.logic.codegen`)."""
-    hit = _TASK_LISTS.get(id(tl))
-    if hit is None or hit[0] is not tl or hit[1] is not node or hit[2] is not task:
+    # the constructors are part of the key (kept alive by it)
+    make = _TASK_LISTS.get(tl, (id(tl), node, task))
+    if make is None:
         ns: dict = {"N": node, "T": task}
         parts = []
         for i, x in enumerate(tl.items):
@@ -48,17 +49,17 @@ def task_list_maker(tl, node: Callable, task: Callable, what: str = "task list")
             parts.append(f"N(T(n{i}, {bound}, {bool(x.immediate)}, a{i}))")
         src = "def make(env):\n    return [" + "".join(p + ",\n        " for p in parts) + "]"
         define(src, described(what, tl.pos), ns)
-        hit = _TASK_LISTS[id(tl)] = (tl, node, task, ns["make"])
-    return hit[3]
+        make = _TASK_LISTS.put(tl, ns["make"], (id(tl), node, task))
+    return make
 
 
 def task_list_warming(tl, node: Callable, task: Callable, what: str,
                       install: Callable) -> Callable[[list], list]:
     """:func:`task_list_maker`, warming (see :mod:`~htn.jshop.logic.warming`):
     the members are first built term by term, with ``subst``."""
-    hit = _TASK_LISTS.get(id(tl))
-    if hit is not None and hit[0] is tl and hit[1] is node and hit[2] is task:
-        return hit[3]
+    made = _TASK_LISTS.get(tl, (id(tl), node, task))
+    if made is not None:
+        return made
     return warming(_interpreted(tl, node, task),
                    lambda: task_list_maker(tl, node, task, what), install, tl, node)
 

@@ -49,28 +49,19 @@ def warming(slow: Callable, compile_fast: Callable, install: Callable, piece,
     return warm
 
 
-_CALLS: dict = cache()    # (id(piece), kind) -> [piece, calls]
+_CALLS = cache()    # (id(piece), kind) -> [piece, calls]
 
 
 def calls(piece, kind="") -> list:
     """``[piece, calls so far]``, the process's count of a piece's calls."""
-    key = (id(piece), kind)
-    hit = _CALLS.get(key)
-    if hit is None or hit[0] is not piece:
-        hit = _CALLS[key] = [piece, 0]
-    return hit
-
-
-def _compiled(cache: dict, key, obj):
-    hit = cache.get(key)
-    return hit[1] if hit is not None and hit[0] is obj else None
+    return _CALLS.make(piece, lambda: [piece, 0], (id(piece), kind))
 
 
 def binder(args: tuple, what: Callable, install: Callable) -> Callable:
     """:func:`~htn.jshop.logic.compile.binder`, warming. The interpreted
     binder returns the key ``GENERIC`` for any pattern that is not ground,
     which asks for the general matcher (``scan_atoms``)."""
-    fast = _compiled(C._BINDERS, id(args), args)
+    fast = C._BINDERS.get(args)
     if fast is not None:
         return fast
 
@@ -98,7 +89,7 @@ def binder(args: tuple, what: Callable, install: Callable) -> Callable:
 
 def term_binder(term, what: Callable, install: Callable) -> Callable:
     """:func:`~htn.jshop.logic.compile.term_binder`, warming."""
-    fast = _compiled(C._TERMS, id(term), term)
+    fast = C._TERMS.get(term)
     if fast is not None:
         return fast
     return warming(lambda env: (None, (subst(term, env),)),
@@ -107,7 +98,7 @@ def term_binder(term, what: Callable, install: Callable) -> Callable:
 
 def scanner(args: tuple, key: int, what: Callable, install: Callable) -> Callable:
     """:func:`~htn.jshop.logic.compile.scanner`, warming (``scan_atoms``)."""
-    fast = _compiled(C._SCANNERS, (id(args), key), args)
+    fast = C._SCANNERS.get(args, (id(args), key))
     if fast is not None:
         return fast
     return warming(scan_atoms, lambda: C.scanner(args, key, what()), install, args, key)
@@ -115,7 +106,7 @@ def scanner(args: tuple, key: int, what: Callable, install: Callable) -> Callabl
 
 def substituter(args: tuple, what: Callable, install: Callable) -> Callable:
     """:func:`~htn.jshop.logic.compile.substituter`, warming."""
-    fast = _compiled(C._SUBSTITUTERS, id(args), args)
+    fast = C._SUBSTITUTERS.get(args)
     if fast is not None:
         return fast
     return warming(interpreted_substitution(args), lambda: C.substituter(args, what()), install,
@@ -141,7 +132,7 @@ def interpreted_substitution(args: tuple) -> Callable[[list], tuple]:
 
 def head_unifier(head: tuple, what: Callable, install: Callable) -> Callable:
     """:func:`~htn.jshop.logic.compile.head_unifier`, warming."""
-    fast = _compiled(C._UNIFIERS, id(head), head)
+    fast = C._UNIFIERS.get(head)
     if fast is not None:
         return fast
     n = len(head)

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 from htn.jshop.language import syntax as S
 from htn.jshop.language.terms import subst
+from htn.jshop.logic.caches import IdentityCache
 
 from .residual_code import compile_formula
 
@@ -112,31 +113,29 @@ class FormulaGrounder:
         self.static = static
         self.bits = bits
         self.relaxed = relaxed
-        self._sat: dict = {}
-        self._code: dict = {}     # id(formula) -> [formula, uses, compiled or None]
+        self._sat = IdentityCache(global_=False)     # formula -> its satisfier
+        self._code = IdentityCache(global_=False)    # formula -> [uses, compiled or None]
 
     def ground(self, e, env: list):
         """The residual of ``e`` under ``env``: walked while a formula is new,
         compiled (:mod:`~htn.jshop.search.residual_code`) once it has been
         grounded ``COMPILE_AFTER`` times."""
-        hit = self._code.get(id(e))
-        if hit is None or hit[0] is not e:
-            hit = self._code[id(e)] = [e, 0, None]
-        code = hit[2]
+        hit = self._code.get(e)
+        if hit is None:
+            hit = self._code.put(e, [0, None])
+        code = hit[1]
         if code is not None:
             return code(env)
-        hit[1] += 1
-        if hit[1] >= COMPILE_AFTER:
-            hit[2] = compile_formula(self, e, _HELPERS)
+        hit[0] += 1
+        if hit[0] >= COMPILE_AFTER:
+            hit[1] = compile_formula(self, e, _HELPERS)
         return self.walk(e, env)
 
     def satisfiers(self, e, env: list):
         """Bindings extending ``env`` that satisfy ``e``'s relaxation in the
         reachable facts (copies: the caller may keep them)."""
-        hit = self._sat.get(id(e))
-        if hit is None or hit[0] is not e:
-            hit = self._sat[id(e)] = (e, self.relaxed.expr(flat_and([relax(e)])))
-        for nb in hit[1](list(env)):
+        sat = self._sat.make(e, lambda: self.relaxed.expr(flat_and([relax(e)])))
+        for nb in sat(list(env)):
             yield list(nb)
 
     def walk(self, e, env: list):

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 from htn.jshop.language import syntax as S
 from htn.jshop.language.terms import subst, variables
+from htn.jshop.logic.caches import IdentityCache
 from htn.jshop.logic.compile import head_unifier
 
 from .ground_formulas import (COMPILE_AFTER, FormulaGrounder, NotGroundable, compile_residual,
@@ -148,7 +149,7 @@ class _Grounder:
                       for name, ms in self.methods.items()}
         self.executable: dict = {}      # (name, args) -> GroundAction or None
         self.head_bound: dict = {}
-        self.bodies: dict = {}          # id(method) -> [method, uses, compiled body or None]
+        self.bodies = IdentityCache(global_=False)   # method -> [uses, compiled body or None]
         todo, seen = list(roots), set(roots)
         while todo:
             yield
@@ -249,16 +250,16 @@ class _Grounder:
             residual = self.formulas.ground(branch.pre.expr, nb)
             if residual is False:
                 continue
-            make = code[2]
+            make = code[1]
             body = None
             if make is not None:
                 body = make(nb)
                 if any(None in args for _, args in body):
                     body = None
             else:
-                code[1] += 1
-                if code[1] == COMPILE_AFTER:
-                    code[2] = compile_body(items, getattr(m.head, "pos", None))
+                code[0] += 1
+                if code[0] == COMPILE_AFTER:
+                    code[1] = compile_body(items, getattr(m.head, "pos", None))
             if body is None:
                 body = tuple((x.name, subst(x.args, nb)) for x in items)
             if body not in groups:
@@ -283,14 +284,12 @@ class _Grounder:
                 yield GroundMethod(t, m, pre, ids, branch.tasks.order_flag)
 
     def _body_code(self, m: S.Method) -> list:
-        """``[method, uses, compiled subtask list or None]``: a method's body is
+        """``[uses, compiled subtask list or None]``: a method's body is
         compiled (:func:`compile_body`) once it has been instantiated
         ``COMPILE_AFTER`` times, unless its arguments are not all variables
         and constants."""
-        hit = self.bodies.get(id(m))
-        if hit is None or hit[0] is not m:
-            hit = self.bodies[id(m)] = [m, 0, None]
-        return hit
+        hit = self.bodies.get(m)
+        return hit if hit is not None else self.bodies.put(m, [0, None])
 
     def _executable(self, name: str, args: tuple) -> bool:
         """Whether the ground action can apply in some reachable state (kept
