@@ -20,43 +20,28 @@ The use cases are callable from here (each imported on first use, so that
     for p in plans: ...                         # plans with their task trees
     result = htn.run(p, domain=plans.domain, problem=plans.problem, robot="symbolic")
 
-:func:`plan`, :func:`run`, :func:`validate`, :func:`transform`,
+:func:`plan`, :func:`run`, :func:`validate`, :func:`transform_plan`,
 :func:`evaluate` and :func:`stats` (see :mod:`htn.api` for their
-signatures). ``htn.transform`` is also the package of the transformation
-framework (``htn.transform.framework``); calling it runs the use case.
+signatures). ``htn.transform`` is the package of the transformation
+framework (``htn.transform.framework``).
 
 The bundled example domains and problems are in :data:`EXAMPLES`; the
 install extras and the modules each brings are in :data:`EXTRAS`.
 """
-import types
-
-from . import transform as _transform_package
 from .installation import EXAMPLES, EXTRAS, missing_modules
 
-__all__ = ["EXAMPLES", "EXTRAS", "missing_modules", "plan", "run", "validate", "transform",
+__all__ = ["EXAMPLES", "EXTRAS", "missing_modules", "plan", "run", "validate", "transform_plan",
            "evaluate", "stats"]
 
 # the use cases by name: the module of htn.api that holds each (imported on first use)
 USE_CASES = {"plan": "htn.api.plan", "run": "htn.api.run", "validate": "htn.api.validate",
-             "transform": "htn.api.transform", "evaluate": "htn.api.evaluate",
+             "transform_plan": "htn.api.transform", "evaluate": "htn.api.evaluate",
              "stats": "htn.api.stats"}
 
 
 def _use_case(name: str):
     from importlib import import_module
     return getattr(import_module(USE_CASES[name]), name)
-
-
-class _CallablePackage(types.ModuleType):
-    """The class of ``htn.transform``: the package of the transformation
-    framework, which, called, runs the transform use case
-    (:func:`htn.api.transform.transform`)."""
-
-    def __call__(self, *args, **kwargs):
-        return _use_case("transform")(*args, **kwargs)
-
-
-_transform_package.__class__ = _CallablePackage
 
 
 def __getattr__(name):

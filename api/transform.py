@@ -52,7 +52,7 @@ class TransformResult:
                 + f"; tasks: {' '.join(self.tasks)}\n" + plan_text(self.plan))
 
 
-def transform(domain, problem, *, rules=None, metric: str = "navigation", functions=None,
+def transform_plan(domain, problem, *, rules=None, metric: str = "navigation", functions=None,
               on_warning: Optional[Callable[[str], None]] = None,
               on_phase: Optional[Callable[[str], None]] = None) -> TransformResult:
     """Plan ``problem`` (its first instance), apply the registered

@@ -41,7 +41,7 @@ def transform(domain, problem, rules, metric, output, as_json, timeout):
     step's precondition holds in sequence from the initial state; a rewrite
     that breaks the plan or costs more on --metric is rolled back.
     """
-    from htn.api.transform import UnknownRules, transform as transform_plan
+    from htn.api.transform import UnknownRules, transform_plan
 
     # a bad -o fails before the work; the file is replaced once all is done
     with atomic_write(output, "-o", (domain, problem)) if output else contextlib.nullcontext() as out:

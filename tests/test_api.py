@@ -33,8 +33,7 @@ def _modules_after(code: str) -> list[str]:
 
 def test_import_htn_loads_no_use_case_and_no_library():
     loaded = _modules_after("import htn")
-    assert [m for m in loaded if m.startswith("htn")] == ["htn", "htn.installation",
-                                                          "htn.transform"]
+    assert [m for m in loaded if m.startswith("htn")] == ["htn", "htn.installation"]
     assert not {"click", "rich", "lark", "py_trees"} & set(loaded)
 
 
@@ -47,10 +46,15 @@ def test_the_command_line_starts_without_the_use_cases():
 def test_the_use_cases_are_attributes_of_htn():
     assert htn.plan is __import__("htn.api.plan", fromlist=["plan"]).plan
     assert htn.run.__module__ == "htn.api.run"
-    assert {"plan", "run", "validate", "transform", "evaluate", "stats"} <= set(dir(htn))
-    # htn.transform is the framework's package and, called, the use case
+    assert {"plan", "run", "validate", "transform_plan", "evaluate", "stats"} <= set(dir(htn))
+    # htn.transform is the framework's package, a plain one
+    import importlib
+    import types
+
     from htn.transform import framework
-    assert callable(htn.transform) and htn.transform.framework is framework
+    package = importlib.import_module("htn.transform")
+    assert type(package) is types.ModuleType and package.framework is framework
+    assert not callable(package) and htn.transform is package
 
 
 def test_the_root_use_case_registry_makes_no_import_circle():
@@ -197,16 +201,16 @@ def test_validate_gives_a_verdict_per_plan():
 
 @pytest.mark.slow
 def test_transform_is_callable_and_gives_a_checked_plan(tmp_path):
-    done = htn.transform(KITCHEN, TRAY, rules="tray")
+    done = htn.transform_plan(KITCHEN, TRAY, rules="tray")
     assert done.document["applied"] == ["tray"]
     assert done.plan.tree is not None and done.tasks
     out = tmp_path / "t.txt"
     out.write_text(done.plan_file_text(str(out)))
     assert all(v.valid for v in htn.validate(KITCHEN, TRAY, out))
     with pytest.raises(HtnError, match="unknown rule"):
-        htn.transform(KITCHEN, TRAY, rules=["teleport"])
+        htn.transform_plan(KITCHEN, TRAY, rules=["teleport"])
     # the registered framework is left as it was
-    assert len(htn.transform(KITCHEN, TRAY).document["log"]) >= len(done.document["log"])
+    assert len(htn.transform_plan(KITCHEN, TRAY).document["log"]) >= len(done.document["log"])
 
 
 def test_stats_of_the_papers_scenarios():
