@@ -15,6 +15,7 @@ refuses the same input the same way, with the same located message.
 from __future__ import annotations
 
 import os
+import re
 from dataclasses import dataclass, field
 from typing import Optional
 
@@ -87,9 +88,11 @@ def read_inputs(domain, problem, table: FunctionTable) -> Inputs:
 def domain_for(problem) -> str:
     """The domain file of a problem (a path or a Problem read from one), by
     the name the problem gives its domain: ``NAME.jshop`` (``NAME.hddl`` or
-    ``domain.hddl`` for an HDDL problem) beside the problem, in
-    ``../domains/`` beside it, in ``domains/`` here, or the bundled one. None
-    found: an input error that names every place looked in."""
+    ``domain.hddl`` for an HDDL problem), or else a file of the language's
+    extension that defines a domain of that name (``(defdomain NAME``,
+    ``(define (domain NAME)``), beside the problem, in ``../domains/``
+    beside it, in ``domains/`` here, or the bundled one. None found: an
+    input error that names every place looked in."""
     if is_path(problem):
         problem = load_problem(os.fspath(problem))
     name = problem.domain_name
@@ -108,7 +111,38 @@ def domain_for(problem) -> str:
             path = os.path.normpath(os.path.join(base, file))
             if os.path.isfile(path):
                 return path
+        path = _defining(base, name, problem.language)
+        if path is not None:
+            return path
     shown = [os.path.join(p, "") for p in looked]
     raise HtnError(f"cannot find the domain file {' or '.join(files)}: looked in "
                    f"{', '.join(shown[:-1])} and {shown[-1]}; give it with --domain",
                    problem.file)
+
+
+HEAD = 65536        # bytes of a file read to see which domain it defines
+
+
+def _defining(folder: str, name: str, language: str):
+    """The first file (by name) in ``folder`` with the language's extension
+    whose text defines the domain ``name``, or None."""
+    ext = ".hddl" if language == "hddl" else ".jshop"
+    pattern = (rf"\(\s*define\s*\(\s*domain\s+{re.escape(name)}\s*\)" if language == "hddl"
+               else rf"\(\s*defdomain\s+{re.escape(name)}[\s(]")
+    try:
+        entries = sorted(os.listdir(folder))
+    except OSError:
+        return None
+    for entry in entries:
+        path = os.path.normpath(os.path.join(folder, entry))
+        if not entry.lower().endswith(ext) or not os.path.isfile(path):
+            continue
+        try:
+            with open(path, "rb") as fh:
+                head = fh.read(HEAD).decode("utf-8", "replace")
+        except OSError:
+            continue
+        head = re.sub(r";[^\n]*", "", head)        # comments
+        if re.search(pattern, head, re.IGNORECASE if language == "hddl" else 0):
+            return path
+    return None

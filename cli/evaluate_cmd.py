@@ -16,8 +16,9 @@ from .signals import STATE, deadline
 @click.command("evaluate")
 @click.argument("problem", type=click.Path(dir_okay=False))
 @click.option("--domain", type=click.Path(dir_okay=False),
-              help="Domain file [default: <domain name>.jshop beside PROBLEM, in ../domains/ "
-                   "beside it, in ./domains/, or the bundled one].")
+              help="Domain file [default: <domain name>.jshop, or the file that defines that "
+                   "domain, beside PROBLEM, in ../domains/ beside it, in ./domains/, or the "
+                   "bundled one].")
 @click.option("--runs", type=Count(1, MAX_RUNS), default=200, show_default=True,
               help="Runs of each plan.")
 @click.option("--seed", type=SEED, default=0, show_default=True,

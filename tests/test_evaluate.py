@@ -399,3 +399,20 @@ def test_output_options_are_checked_before_any_work(tmp_path):
     assert r.returncode == 2 and "cannot reach the Dask scheduler" in r.stderr, r.stderr
     assert len(r.stderr.strip().splitlines()) == 1
     assert sorted(os.listdir(tmp_path)) == ["a-file"]      # nothing written
+
+
+def test_the_domain_beside_a_problem_is_found_by_the_name_it_defines(tmp_path):
+    """``htn evaluate PROBLEM`` takes the file beside the problem that
+    defines the problem's domain, whatever the file is called."""
+    problem = tmp_path / "tray_three.jshop"
+    problem.write_text((ROOT / "problems" / "tray_three.jshop").read_text())
+    text = (ROOT / "domains" / "kitchen.jshop").read_text()
+    (tmp_path / "a-note.jshop").write_text("; (defdomain kitchen is only a comment here\n")
+    mine = tmp_path / "my-kitchen.jshop"
+    mine.write_text(text)
+    r = run_htn("evaluate", problem, "--runs", "2", "--json")
+    assert r.returncode == 0, r.stderr
+    # the copy is the one read: a slip in it is reported in it
+    mine.write_text(text.rstrip() + "\n(oops\n")
+    r = run_htn("evaluate", problem, "--runs", "2")
+    assert r.returncode == 2 and r.stderr.startswith(f"{mine}:"), r.stderr
