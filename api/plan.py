@@ -139,7 +139,7 @@ class PlanStream:
                         break
                 explainer = None
                 if self.record:
-                    from htn.jshop.plans.explain import Explainer
+                    from htn.jshop.checks.explain import Explainer
                     explainer = Explainer(keep_all=self.explain_all)
                     self.explanations.append(explainer)
                 planner = make_search(self.search, self.domain, inst, self.functions,
@@ -175,12 +175,12 @@ class PlanStream:
 
     def explain(self) -> list:
         """Why the search found what it found: one
-        :class:`~htn.jshop.plans.explain.Explainer` per problem instance, its
+        :class:`~htn.jshop.checks.explain.Explainer` per problem instance, its
         dead ends with the precondition literal that failed and its
         ``file:line:col``. Without ``explain=True`` the search is run again,
         recording them this time (planning without it pays nothing for them)."""
         if not self.explanations:
-            from htn.jshop.plans.explain import explain_search
+            from htn.jshop.checks.explain import explain_search
             self.explanations = [explain_search(self.domain, inst, self.functions,
                                                 keep_all=self.explain_all, **self.options)
                                  for inst in self.problem.instances]

@@ -9,7 +9,7 @@ and checks everything and builds the robot, and then :meth:`Execution.begin`
 
 The plan's task tree is the one its plan file holds (:mod:`htn.jshop.plans.planfile`),
 or ``Plan.tree`` for a plan object; a plan without one gets one by planning
-again (:func:`htn.executor.plan_tree.recover_tree`), which
+again (:func:`htn.jshop.checks.recover.recover_tree`), which
 :attr:`Execution.notes` says. Nothing here prints, exits or handles signals:
 Ctrl-C (a ``KeyboardInterrupt``) during the run halts it, and the result
 says ``interrupted``.

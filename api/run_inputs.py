@@ -16,12 +16,12 @@ from typing import Optional
 from htn.executor.config import load_retries, parse_overrides
 from htn.executor.log_header import (check_plan_digest, check_plan_present, check_unchanged,
                                      file_sha256, read_header)
-from htn.executor.plan_tree import RECOVER_PLANS, RECOVER_TIMEOUT, check_runnable, recover_tree
+from htn.jshop.checks.recover import RECOVER_PLANS, RECOVER_TIMEOUT, check_runnable, recover_tree
 from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import HtnError
 from htn.jshop.plans.plan import Plan
 from htn.jshop.plans.planfile import PlanFile, read_plan_file
-from htn.jshop.plans.validate import check_steps
+from htn.jshop.checks.validate import check_steps
 
 from .inputs import domain_and_problem, function_table, is_path, path_of
 

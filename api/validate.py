@@ -4,14 +4,14 @@ domain's operators (``htn validate``; JSHOP2 manual 5.2.1).
 A plan is valid when every step's precondition holds in the state its
 predecessors reach, no step deletes a protected atom, the plan's cost is the
 sum of its steps' costs and (HDDL) the problem's goal holds at the end
-(:mod:`htn.jshop.plans.validate`). A step that names no operator of the
+(:mod:`htn.jshop.checks.validate`). A step that names no operator of the
 domain, or with the wrong arity, is bad input (an :class:`HtnError`), not an
 invalid plan. Task trees in a plan file are not read: a plan file is
 validated as the JSHOP2 plan text it holds.
 
 A plan file in the IPC 2020 format (``htn plan -f ipc``) is checked as the
 competition's verifier does, decompositions included
-(:func:`validate_ipc`, :mod:`htn.jshop.plans.ipc_verify`).
+(:func:`validate_ipc`, :mod:`htn.jshop.checks.ipc_verify`).
 """
 from __future__ import annotations
 
@@ -22,7 +22,7 @@ from typing import Optional
 from htn.jshop.language.errors import HtnError
 from htn.jshop.plans.plan import Plan
 from htn.jshop.plans.planfile import PlanFile, read_plan_file
-from htn.jshop.plans.validate import Verdict, check_steps, validate_plan
+from htn.jshop.checks.validate import Verdict, check_steps, validate_plan
 
 from .inputs import domain_and_problem, function_table, is_path
 
@@ -100,8 +100,8 @@ def validate_ipc(domain, problem, plan, *, plan_index: Optional[int] = None,
     (``text``: its text, if read already): the actions replayed, every
     decomposition line checked against the domain's methods, every action
     reached from the root exactly once, and the goal, as pandaPIparser
-    ``--verify`` checks them (:func:`~htn.jshop.plans.ipc_verify.verify_ipc_plan`)."""
-    from htn.jshop.plans.ipc_verify import verify_ipc_text
+    ``--verify`` checks them (:func:`~htn.jshop.checks.ipc_verify.verify_ipc_plan`)."""
+    from htn.jshop.checks.ipc_verify import verify_ipc_text
     from htn.jshop.readers.source import read_source
     table = function_table(functions)
     dom, prob = domain_and_problem(domain, problem, table)

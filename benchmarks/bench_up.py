@@ -212,7 +212,7 @@ def _why(res) -> str:
 
 def _htn_validate(plan, files) -> tuple[bool, str]:
     from htn.jshop.plans.plan import Plan, Step
-    from htn.jshop.plans.validate import validate_plan
+    from htn.jshop.checks.validate import validate_plan
     from htn.jshop.readers.load import load_inputs
     domain, problem = load_inputs(str(files[0]), str(files[1]))
     steps = [Step("!" + a.action.name.lower(),

@@ -16,7 +16,7 @@ from hypothesis import strategies as st
 
 from htn.api.inputs import function_table, read_inputs
 from htn.jshop.plans.ipc import ipc_text
-from htn.jshop.plans.ipc_verify import verify_ipc_text
+from htn.jshop.checks.ipc_verify import verify_ipc_text
 from htn.jshop.search.best_first import BestFirst, committed
 
 PANDA = SHARED / "tools" / "pandaPIparser" / "pandaPIparser"

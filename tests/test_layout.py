@@ -134,3 +134,18 @@ def test_no_large_file_is_tracked_outside_docs_and_goldens():
            if not f.startswith(("docs/", "tests/golden/")) and (ROOT / f).is_file()
            and (ROOT / f).stat().st_size > MAX_TRACKED_BYTES]
     assert not big, f"tracked files over 256 kB (scratch output?): {big}"
+
+
+# the planner's rooms, lowest first: a room imports only rooms below it
+JSHOP_LAYERS = {"language": 0, "readers": 1, "logic": 1, "plans": 2, "search": 3, "checks": 4}
+
+
+def test_the_planners_rooms_import_only_rooms_below_them():
+    modules = package_modules()
+    rooms = {n: n.split(".")[2] for n in modules if n.count(".") >= 2 and n.startswith("htn.jshop.")}
+    assert set(rooms.values()) == set(JSHOP_LAYERS)
+    for name, room in rooms.items():
+        for m in imports_of(name, modules[name], modules):
+            other = rooms.get(m)
+            assert other is None or other == room or JSHOP_LAYERS[other] < JSHOP_LAYERS[room], \
+                f"{name} ({room}) imports {m} ({other})"

@@ -4,7 +4,7 @@ A hierarchical plan is valid (total-order HTN semantics, Höller et al.,
 AAAI 2020) when
 
 1. its action sequence is executable from the initial state and reaches the
-   goal: this is ``htn validate`` (:func:`htn.jshop.plans.validate.validate_plan`),
+   goal: this is ``htn validate`` (:func:`htn.jshop.checks.validate.validate_plan`),
    which replays the plan as the planner would (manual 5.2.1);
 2. its decomposition accounts for that sequence: every subtask of the initial
    task network is achieved by an instance of its action or decomposed by a
@@ -25,7 +25,7 @@ from typing import Any, Optional
 
 from htn.jshop.language.terms import Var
 from htn.jshop.plans.plan import Plan, Step
-from htn.jshop.plans.validate import check_steps, validate_plan
+from htn.jshop.checks.validate import check_steps, validate_plan
 
 from .convert import Conversion
 

@@ -1,4 +1,4 @@
-"""Plans and what is made of them: plans (:mod:`.plan`), task trees
-(:mod:`.tree`), plan files (:mod:`.planfile`), the IPC plan format
-(:mod:`.ipc`), validation (:mod:`.validate`), and why there is no plan
-(:mod:`.explain`, :mod:`.unsatisfied`)."""
+"""Plans and what is made of them, as data: plans (:mod:`.plan`), task
+trees (:mod:`.tree`, :mod:`.tree_text`), plan files (:mod:`.planfile`) and
+the IPC plan format (:mod:`.ipc`). What checks them by running the search
+is in :mod:`htn.jshop.checks`."""

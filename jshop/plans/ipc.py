@@ -20,7 +20,7 @@ printed as the HDDL files spell them (the verifier compares names exactly).
 Needs the plan's task tree (the planner records it with ``record_trees``).
 
 :func:`read_ipc_plans` reads the format back (``htn validate``); what it
-means for such a plan to be valid is :mod:`htn.jshop.plans.ipc_verify`'s.
+means for such a plan to be valid is :mod:`htn.jshop.checks.ipc_verify`'s.
 """
 from __future__ import annotations
 

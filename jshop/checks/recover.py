@@ -65,7 +65,7 @@ def check_runnable(domain: S.Domain, instance: S.ProblemInstance, plan,
     is not checked). A bad step is an input error at its line of the plan
     file (``lines``: the file's text, which locates a variable's column)."""
     from htn.jshop.plans.plan import Plan
-    from htn.jshop.plans.validate import validate_plan
+    from htn.jshop.checks.validate import validate_plan
     for s in plan.steps:
         var = next((v for v in map(_variable, s.args) if v is not None), None)
         if var is not None:

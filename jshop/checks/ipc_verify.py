@@ -12,7 +12,7 @@ pandaPIparser's ``--verify``), in this order:
    line a compound task (or the artificial ``__top``), each with its arity
    and with arguments that are objects of the parameters' types;
 3. **methods**: each decomposition line names a method of its task that it
-   instantiates (:mod:`htn.jshop.plans.ipc_match`: the task's arguments, the
+   instantiates (:mod:`htn.jshop.checks.ipc_match`: the task's arguments, the
    listed subtasks in an order the method allows, the parameters' types);
    the root ids instantiate the problem's initial task network the same way;
 4. **order**: for each ordering constraint ``a < b`` of an applied method,
@@ -39,7 +39,7 @@ from dataclasses import dataclass, field
 from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import HtnError
 
-from .ipc import IpcLine, IpcPlan
+from htn.jshop.plans.ipc import IpcLine, IpcPlan
 from .ipc_match import TOP, TOP_METHOD, Shapes, matchings, top_shape
 from .ipc_replay import Finding, Replay
 
@@ -282,7 +282,7 @@ def verify_ipc_text(domain: S.Domain, problem: S.Problem, text: str, file: str,
     """``[(IpcPlan, IpcVerdict)]`` for the IPC plans of a file's ``text`` (the
     ``plan_index``-th only, 1-based, if given); :class:`HtnError` for a file
     that cannot be read as IPC plans."""
-    from .ipc import read_ipc_plans
+    from htn.jshop.plans.ipc import read_ipc_plans
     plans = read_ipc_plans(text, file)
     if plan_index is not None:
         if plan_index > len(plans):

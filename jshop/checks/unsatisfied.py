@@ -1,7 +1,7 @@
 """Which literal of a precondition fails, shown as the source wrote it.
 
-``--explain`` (:mod:`htn.jshop.plans.explain`) and ``htn validate``
-(:mod:`htn.jshop.plans.validate`) both answer "why does this precondition not hold
+``--explain`` (:mod:`htn.jshop.checks.explain`) and ``htn validate``
+(:mod:`htn.jshop.checks.validate`) both answer "why does this precondition not hold
 here": the first conjunct, in evaluation order (manual 4.2: left to right),
 that has no satisfier under the bindings found for the conjuncts before it.
 """

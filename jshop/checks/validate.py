@@ -13,7 +13,7 @@ An HDDL problem's goal must also hold in the final state (HDDL, Höller et
 al. 2020). A plan in this (JSHOP2) format has no decomposition, so any
 applicable operator sequence with the right cost (and reaching the goal) is
 valid; a plan in the IPC 2020 format (``htn plan -f ipc``) carries its
-decomposition, which :mod:`htn.jshop.plans.ipc_verify` checks as well.
+decomposition, which :mod:`htn.jshop.checks.ipc_verify` checks as well.
 """
 from __future__ import annotations
 

@@ -10,7 +10,7 @@ of the method's variables; every bound variable must be an object of its
 type. The variables that neither the task nor the subtasks bind are
 existentially quantified in the method's precondition, which is tested
 later, in the state where the method is applied
-(:mod:`htn.jshop.plans.ipc_verify`).
+(:mod:`htn.jshop.checks.ipc_verify`).
 
 The problem's initial task network is the method ``__top_method`` of the
 artificial task ``__top`` (as the verifier and the IPC plan format have

@@ -1,4 +1,4 @@
-"""The execution check of an IPC plan (:mod:`htn.jshop.plans.ipc_verify`,
+"""The execution check of an IPC plan (:mod:`htn.jshop.checks.ipc_verify`,
 step 5): the actions in the order written, from the initial state, with each
 applied method's precondition tested where the method may be applied.
 
@@ -19,7 +19,7 @@ from __future__ import annotations
 from collections import deque
 from dataclasses import dataclass
 
-from .plan import Step
+from htn.jshop.plans.plan import Step
 from .unsatisfied import failing_literal, show
 from .validate import why_goal, why_step
 
