@@ -18,7 +18,7 @@ from htn.jshop.language.functions import FunctionTable
 from htn.jshop.readers.load import load_problem
 
 from .extras import require_extra, require_robot_extra
-from .files import check_output_file, check_output_folder, make_output_folder
+from htn.files import check_output_file, check_output_folder, make_output_folder
 from .inputs import domain_for, read_inputs
 
 

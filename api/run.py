@@ -27,7 +27,7 @@ from htn.robot.backends import RobotRequest, make_robot
 from htn.robot.interface import Robot
 
 from .extras import require_robot_extra
-from .files import check_output_file
+from htn.files import check_output_file
 from .run_inputs import LoggedRun, RunInputs, read_run_log, run_inputs
 
 __all__ = ["run", "prepare", "Execution", "RunResult", "read_run_log", "LoggedRun"]
@@ -190,7 +190,9 @@ class Execution:
         self.log.emit(None, None, "header", None, "", **run_header(
             i.plan_file, i.plan_sha256, i.plan_index, i.files["domain"], i.files["problem"],
             i.files["functions"], self.robot_name, self.seed, self.faults, i.limits,
-            self.replan, argv=argv))
+            self.replan, argv=argv, digests={"domain": i.domain.sha256 or None,
+                                             "problem": i.problem.sha256 or None,
+                                             "functions": i.functions.sha256}))
         self.dispatcher = TaskDispatcher(robot, i.domain, i.instance, i.plan.steps, i.limits,
                                          self.log, replan=self.replan, functions=i.functions,
                                          tree=i.tree)

@@ -15,13 +15,14 @@ from typing import Optional
 
 from htn.executor.config import load_retries, parse_overrides
 from htn.executor.log_header import (check_plan_digest, check_plan_present, check_unchanged,
-                                     file_sha256, read_header)
+                                     read_header)
 from htn.jshop.checks.recover import RECOVER_PLANS, RECOVER_TIMEOUT, check_runnable, recover_tree
+from htn.jshop.checks.validate import check_steps
 from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import HtnError
+from htn.jshop.language.functions import FunctionTable
 from htn.jshop.plans.plan import Plan
 from htn.jshop.plans.planfile import PlanFile, read_plan_file
-from htn.jshop.checks.validate import check_steps
 
 from .inputs import domain_and_problem, function_table, is_path, path_of
 
@@ -104,7 +105,7 @@ def run_inputs(plan, domain=None, problem=None, functions=None, plan_index: int 
                         f"planning again found none ({RECOVER_PLANS} plans, "
                         f"{RECOVER_TIMEOUT:g} s), so it runs as one sequence of actions"))
     files = {"domain": path_of(domain) or path_of(dom), "problem": path_of(problem) or
-             path_of(prob), "functions": path_of(functions) if is_path(functions) else None}
+             path_of(prob), "functions": table.source}
     return RunInputs(dom, prob, instance, chosen, table, limits, tree, where,
                      pf.sha256 if pf else None, plan_index, files, notes)
 
@@ -146,12 +147,15 @@ def checked_functions(named, given, where: str, line: Optional[int] = None,
                        f"no Python a data file names: give {option} {path} to run it",
                        where, at)
     if digest and is_path(given):
-        actual = file_sha256(os.fspath(given))
-        if actual != digest:
-            raise HtnError(f"{option} {os.fspath(given)} is not the functions file these plans "
-                           f"were made with ({path}): its SHA-256 is "
-                           f"{(actual or 'unreadable')[:12]}..., recorded "
-                           f"{digest[:12]}...", where, at)
+        # read once: the bytes checked are the bytes that run
+        def check(actual: str) -> None:
+            if actual != digest:
+                raise HtnError(f"{option} {os.fspath(given)} is not the functions file these "
+                               f"plans were made with ({path}): its SHA-256 is "
+                               f"{actual[:12]}..., recorded {digest[:12]}...", where, at)
+        table = FunctionTable()
+        table.load_file(os.fspath(given), check)
+        return table
     return given
 
 

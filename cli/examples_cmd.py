@@ -62,7 +62,7 @@ def examples(dest, force):
     if clash and not force:
         raise HtnError(f"{len(clash)} file(s) exist already, e.g. {clash[0]} "
                        "(use --force to overwrite)", dest)
-    from htn.api.files import check_target
+    from htn.files import check_target
     for src, dst in pairs:     # no device, FIFO or bundled file itself is written over
         if dst.exists() or dst.is_symlink():
             check_target(str(dst), None, [src])

@@ -1,6 +1,6 @@
 """Shared output helpers for the command line: messages on stderr, rich
 consoles that treat a closed pipe like any other write. (Output paths and
-files replaced only whole are :mod:`htn.api.files`, which the use cases share.)"""
+files replaced only whole are :mod:`htn.files`, which the use cases share.)"""
 from __future__ import annotations
 
 import sys

@@ -13,7 +13,7 @@ import time
 
 import click
 
-from htn.api.files import AtomicFile
+from htn.files import AtomicFile
 from htn.jshop.search.limits import DEFAULT_MAX_DEPTH
 from htn.jshop.search.searches import SEARCHES
 
@@ -121,7 +121,7 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
             for w in plans.warnings:
                 warn(w)
         if out:
-            out.write(header(output, domain, problem, functions))
+            out.write(header(output, domain, problem, functions, plans.functions.sha256))
         render = _Renderer(fmt, show_tree, domain, problem)
         # objects as the problem spells them (HDDL names are case-insensitive)
         render.spelling = {**plans.domain.spelling, **plans.problem.spelling}

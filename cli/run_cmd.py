@@ -8,7 +8,7 @@ import click
 
 from htn.api.extras import require_robot_extra
 from htn.jshop.language.errors import HtnError
-from htn.api.files import atomic_write, check_output_file, check_output_folder, make_output_folder
+from htn.files import atomic_write, check_output_file, check_output_folder, make_output_folder
 
 from .output import stdout_is_terminal, warn
 from .progress import Phase

@@ -7,7 +7,7 @@ import sys
 
 import click
 
-from htn.api.files import atomic_write
+from htn.files import atomic_write
 
 from .options import TIMEOUT_HELP, Timeout
 from .output import warn

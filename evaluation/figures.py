@@ -52,10 +52,14 @@ def plot(comp: Comparison, folder: str) -> list[str]:
 
 
 def _save(fig, stem: str) -> list[str]:
+    """The figure in every format, each file replaced whole (never a
+    half-drawn figure where an earlier one was)."""
+    from htn.files import atomic_write
     paths = []
     for fmt in FORMATS:
         path = f"{stem}.{fmt}"
-        fig.savefig(path, dpi=DPI, metadata=METADATA[fmt])
+        with atomic_write(path, "--plot", binary=True) as out:
+            fig.savefig(out.fh, format=fmt, dpi=DPI, metadata=METADATA[fmt])
         paths.append(path)
     return paths
 

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import json
 import math
-import os
 import time
 from typing import Callable, Optional
 
@@ -151,12 +150,11 @@ class RecordsFile:
         self.fh.flush()
 
     def finish(self, comp: Comparison) -> None:
+        from htn.files import atomic_write
         self.fh.close()
         ordered = [r for pair in zip(comp.original, comp.transformed) for r in pair]
-        partial = f"{self.path}.partial"
-        with open(partial, "w", encoding="utf-8") as fh:
-            fh.writelines(json.dumps(r) + "\n" for r in ordered)
-        os.replace(partial, self.path)
+        with atomic_write(self.path, "--records") as out:
+            out.write("".join(json.dumps(r) + "\n" for r in ordered))
 
     def close(self) -> None:
         self.fh.close()

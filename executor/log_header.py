@@ -33,11 +33,12 @@ def file_sha256(path: Optional[str]) -> Optional[str]:
 
 
 def run_header(plan_file, plan_sha256, plan_index, domain, problem, functions, robot, seed,
-               faults, retries, replan, argv) -> dict:
+               faults, retries, replan, argv, digests: dict) -> dict:
     """What a log's header records: enough to run the same thing again
     (``argv``: the command line as given, None for a program's call), with
-    the SHA-256 of the plan file (of the bytes the run read) and of the
-    domain, problem and functions files, and the versions it ran with."""
+    the SHA-256 of the plan file, domain, problem and functions file: of the
+    bytes the run read and parsed (``digests``: kind -> SHA-256; no file is
+    read again here), and the versions it ran with."""
     import platform
     from importlib.metadata import PackageNotFoundError, version
 
@@ -52,9 +53,12 @@ def run_header(plan_file, plan_sha256, plan_index, domain, problem, functions, r
     return {"htn": htn_version(), "argv": None if argv is None else list(argv),
             "plan": absolute(plan_file), "plan_sha256": plan_sha256,
             "plan_index": plan_index, "domain": absolute(domain),
-            "domain_sha256": file_sha256(domain), "problem": absolute(problem),
-            "problem_sha256": file_sha256(problem), "functions": absolute(functions),
-            "functions_sha256": file_sha256(functions), "robot": robot, "seed": seed,
+            "domain_sha256": digests.get("domain") if domain else None,
+            "problem": absolute(problem),
+            "problem_sha256": digests.get("problem") if problem else None,
+            "functions": absolute(functions),
+            "functions_sha256": digests.get("functions") if functions else None,
+            "robot": robot, "seed": seed,
             "faults": faults, "retries": dict(sorted(retries.items())), "replan": replan,
             "python": platform.python_version(), "pybullet": installed("pybullet")}
 

@@ -230,6 +230,6 @@ def _as_at_exit() -> None:
     caches = sys.modules.get("htn.jshop.logic.caches")
     if caches is not None:
         caches.clear_caches()
-    files = sys.modules.get("htn.api.files")     # AtomicFile's temporaries
+    files = sys.modules.get("htn.files")     # AtomicFile's temporaries
     if files is not None:
         files._remove_pending()

@@ -22,12 +22,12 @@ code that does not return (:func:`running_user_code` names it).
 """
 from __future__ import annotations
 
-import importlib.machinery
-import importlib.util
+import hashlib
 import inspect
 import math
 import operator
 import os
+import types
 from typing import Any, Callable, Optional
 
 from .errors import STOPS, HtnError, is_stop, raised_stop
@@ -318,6 +318,7 @@ class FunctionTable:
         self.calls: dict[str, Callable] = dict(STDLIB)
         self.user: dict[str, Callable] = {}
         self.source: str | None = None
+        self.sha256: str | None = None      # of the bytes of the file loaded
 
     def lookup(self, name: str) -> Callable | None:
         return self.calls.get(name.lower())
@@ -325,18 +326,27 @@ class FunctionTable:
     def comparator(self, name: str) -> Callable | None:
         return self.user.get(name.lower())
 
-    def load_file(self, path: str) -> None:
+    def load_file(self, path: str, check: Callable[[str], None] | None = None) -> None:
         """Load every public top-level function of a Python file (whatever
-        its name ends with: it is read as Python source)."""
+        its name ends with: it is read as Python source). The file is read
+        once: ``check(sha256)`` sees the SHA-256 of its bytes before they
+        run (and may refuse them), and the same bytes are compiled."""
         if not os.path.isfile(path):
             raise HtnError("functions file not found", path)
-        loader = importlib.machinery.SourceFileLoader("_htn_user_functions", path)
-        spec = importlib.util.spec_from_loader(loader.name, loader)
-        module = importlib.util.module_from_spec(spec)
+        try:
+            with open(path, "rb") as fh:
+                data = fh.read()
+        except OSError as exc:
+            raise HtnError(f"cannot read: {exc.strerror}", path) from None
+        digest = hashlib.sha256(data).hexdigest()
+        if check is not None:
+            check(digest)
+        module = types.ModuleType("_htn_user_functions")
+        module.__file__ = path
         stops = STOPS.count
         _RUNNING.append(f"the functions file {path}")
         try:
-            loader.exec_module(module)
+            exec(compile(data, path, "exec", dont_inherit=True), module.__dict__)
         except SyntaxError as exc:
             raise HtnError(f"syntax error: {_clip(str(exc.msg), 160)}", path, exc.lineno,
                            exc.offset) from None
@@ -347,7 +357,7 @@ class FunctionTable:
                 raise
             if STOPS.count != stops and STOPS.last is not None:
                 raise raised_stop(STOPS.last) from None
-            err = user_error("loading failed: it", exc, {path, loader.get_filename()})
+            err = user_error("loading failed: it", exc, {path})
             if err.file is None:
                 err.file = path
             raise err from None
@@ -355,7 +365,7 @@ class FunctionTable:
             _RUNNING.pop()
         if STOPS.count != stops and STOPS.last is not None:
             raise raised_stop(STOPS.last)
-        self.source = path
+        self.source, self.sha256 = path, digest
         for name, fn in vars(module).items():
             if name.startswith("_") or not inspect.isfunction(fn):
                 continue

@@ -261,6 +261,7 @@ class Domain:
     spelling: dict = field(default_factory=dict)    # lower-case name -> as written
     hddl: Any = None                                # the HDDL model it was read from
     pullup: bool = False                            # HDDL: methods test pulled-up conditions
+    sha256: str = ""                                # of the bytes it was parsed from
 
     def elements(self):
         for ops in self.operators.values():
@@ -320,6 +321,7 @@ class Problem:
     language: str = "jshop2"
     spelling: dict = field(default_factory=dict)    # lower-case name -> as written
     hddl: Any = None                                # the HDDL model it was read from
+    sha256: str = ""                                # of the bytes it was parsed from
 
 
 def root_method(instance: ProblemInstance) -> "Method":

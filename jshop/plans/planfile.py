@@ -74,8 +74,10 @@ from .tree_text import TREE_HEAD, TREE_NODE, read_tree, tree_text
 NAMED = ("domain", "problem", "functions")
 
 
-def header(out_path: str, domain: str, problem: str, functions: Optional[str] = None) -> str:
-    """The comment lines that name the files a plan was made from."""
+def header(out_path: str, domain: str, problem: str, functions: Optional[str] = None,
+           functions_sha256: Optional[str] = None) -> str:
+    """The comment lines that name the files a plan was made from
+    (``functions_sha256``: of the functions file's bytes as they were loaded)."""
     base = os.path.dirname(os.path.abspath(out_path))
     lines = ["; htn plan file: JSHOP2 plan format\n"]
     files = {"domain": domain, "problem": problem, "functions": functions}
@@ -85,16 +87,10 @@ def header(out_path: str, domain: str, problem: str, functions: Optional[str] = 
     for kind, path in files.items():
         if path:
             lines.append(f"; {kind} (absolute): {os.path.abspath(path)}\n")
-    if functions:
+    if functions and functions_sha256:
         # a plan file is data: htn run imports no file it names, it asks for
         # --functions and checks that this is the file the plans were made with
-        try:
-            with open(functions, "rb") as fh:
-                digest = hashlib.sha256(fh.read()).hexdigest()
-        except OSError:
-            digest = None
-        if digest:
-            lines.append(f"; functions sha256: {digest}\n")
+        lines.append(f"; functions sha256: {functions_sha256}\n")
     return "".join(lines)
 
 

@@ -235,7 +235,9 @@ def for_problem(domain: S.Domain, problem: S.Problem) -> S.Domain:
     if domain.hddl is None or not domain.pullup or \
             all(inst.tasks.ordered for inst in problem.instances):
         return domain
-    return domain_from_model(domain.hddl, pullup=False)
+    again = domain_from_model(domain.hddl, pullup=False)
+    again.sha256 = domain.sha256        # the same file
+    return again
 
 
 # ------------------------------------------------------------------ problem

@@ -7,6 +7,7 @@ loaded only for HDDL input.
 """
 from __future__ import annotations
 
+import hashlib
 import os
 import re
 
@@ -16,7 +17,7 @@ from htn.jshop.language.functions import FunctionTable
 
 from .checks import check_domain_name, check_inputs
 from .jshop2 import parse_jshop2
-from .source import check_nesting, check_not_empty, read_source
+from .source import check_nesting, check_not_empty, decode_source, read_bytes
 
 _HDDL_HEAD = re.compile(r"\A(?:\s|;[^\n]*\n)*\(\s*define\s*\(\s*(domain|problem)\b", re.I)
 
@@ -45,7 +46,12 @@ def parse_file(path: str, functions: FunctionTable | None = None, expect: str | 
         raise HtnError("no such file", path)
     if os.path.isdir(path):
         raise HtnError("is a directory, not a JSHOP2 file", path)
-    return parse_text(read_source(path), path, functions, expect)
+    # the file is read once: its text is parsed, and the SHA-256 of the same
+    # bytes is what a log's header records of it
+    data = read_bytes(path)
+    parsed = parse_text(decode_source(data, path), path, functions, expect)
+    parsed.sha256 = hashlib.sha256(data).hexdigest()
+    return parsed
 
 
 def load_domain(path: str, functions: FunctionTable | None = None) -> S.Domain:

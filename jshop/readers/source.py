@@ -16,12 +16,16 @@ MAX_NESTING = 1000      # levels of parentheses
 def read_source(path: str) -> str:
     """The text of a UTF-8 file (a byte-order mark is dropped); bytes that are
     not UTF-8 are an error at their line and column."""
+    return decode_source(read_bytes(path), path)
+
+
+def read_bytes(path: str) -> bytes:
+    """The bytes of an input file; a file that cannot be read is an error."""
     try:
         with open(path, "rb") as fh:
-            data = fh.read()
+            return fh.read()
     except OSError as exc:
         raise HtnError(f"cannot read: {exc.strerror}", path)
-    return decode_source(data, path)
 
 
 def decode_source(data: bytes, path: str) -> str:
