@@ -1,10 +1,11 @@
 """The ``htn`` engine of unified-planning: a oneshot planner and a plan validator.
 
 It solves UP hierarchical problems of the kind :mod:`htn.up.kind` declares
-with htn's JSHOP2 depth-first search (manual sections 4 and 5.2.3) under
-HDDL's semantics, after converting the problem in memory
-(:mod:`htn.up.convert`), and validates hierarchical plans
-(:mod:`htn.up.check`).
+with the search its ``search`` option names (JSHOP2's depth-first search,
+manual sections 4 and 5.2.3, under HDDL's semantics by default; greedy
+best-first or weighted A* on the grounded problem; or all of them as a
+portfolio), after converting the problem in memory (:mod:`htn.up.convert`),
+and validates hierarchical plans (:mod:`htn.up.check`).
 
 Options (UP's ``params``: ``OneshotPlanner(name="htn", params={...})``):
 
@@ -85,10 +86,13 @@ CREDITS = Credits(
     contact="the htn project (see its README)",
     website="the htn project's README (unified-planning section)",
     license="MIT",
-    short_description="htn: a JSHOP2-compatible total-order HTN planner that reads HDDL.",
+    short_description="htn: a JSHOP2-compatible HTN planner that reads HDDL, with "
+                      "depth-first and heuristic searches.",
     long_description="htn plans with JSHOP2's depth-first decomposition under HDDL's "
-                     "semantics (type predicates, precondition pull-up, loop check) and "
-                     "returns hierarchical plans.",
+                     "semantics (type predicates, precondition pull-up, loop check), or with "
+                     "greedy best-first or weighted A* search on the grounded problem (the "
+                     "relaxed composition heuristic), or a portfolio of them (the 'search' "
+                     "option), and returns hierarchical plans.",
 )
 
 
@@ -156,7 +160,8 @@ class HtnEngine(Engine, OneshotPlannerMixin, PlanValidatorMixin):
         started = time.perf_counter()
         logs: list = []
         if heuristic is not None:
-            warnings.warn("htn does not use a heuristic (depth-first decomposition)")
+            warnings.warn("htn does not use a heuristic given by the caller: its searches "
+                          "use their own (the 'search' option)")
             logs.append(LogMessage(LogLevel.WARNING, "heuristic ignored"))
         try:
             conv = checked(problem)

@@ -50,8 +50,7 @@ def search(engine, conv: Conversion, options: dict, started: float,
             stream.close()
     stats = planner.stats
     timed_out = stats.timed_out or (remaining is not None and remaining <= 0)
-    loops = getattr(planner, "loops", None)      # the depth-first search's loop check
-    cut = loops.cut if loops is not None else 0
+    cut = stats.loop_cuts
     complete = not timed_out and stats.bound is None and cut == 0 and (
         options["optimize"] or best is None)
     status = _status(best, timed_out, complete, stats.bound, options["optimize"])

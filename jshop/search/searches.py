@@ -17,6 +17,26 @@ Kept free of heavy imports: the command line reads the names for ``--help``.
 """
 from __future__ import annotations
 
+from typing import TYPE_CHECKING, Callable, Iterator, Optional, Protocol
+
+if TYPE_CHECKING:
+    from htn.jshop.plans.plan import Plan
+
+    from .stats import Stats
+
+
+class Search(Protocol):
+    """What every search is to its callers (``htn.api.plan``, the UP engine):
+    ``plans(timeout)`` streams plans (the first is the answer of a search
+    that is not enumerating), and ``stats`` says what it did, read once the
+    stream has ended (``stats.loop_cuts``: reductions a loop check refused;
+    0 for a search without one)."""
+
+    stats: "Stats"
+
+    def plans(self, timeout: Optional[float] = None) -> Iterator["Plan"]: ...
+
+
 SEARCHES = {
     "dfs": "depth-first, JSHOP2's order",
     "gbfs": "greedy best-first, relaxed composition heuristic (HDDL)",
@@ -25,20 +45,36 @@ SEARCHES = {
 }
 
 
-def make_search(name: str, domain, instance, functions=None, **options):
-    """A planner-like object for one problem instance: ``plans(timeout)``
-    streams plans, ``stats`` says what the search did."""
-    if name == "dfs":
-        from .planner import Planner
-        return Planner(domain, instance, functions, **options)
-    if name in ("gbfs", "wastar"):
+def _dfs(domain, instance, functions, **options) -> Search:
+    from .planner import Planner
+    return Planner(domain, instance, functions, **options)
+
+
+def _best_first(weighted: bool) -> Callable[..., Search]:
+    def make(domain, instance, functions, **options) -> Search:
         from .best_first import WASTAR_WEIGHT, BestFirst
-        return BestFirst(domain, instance, weight=WASTAR_WEIGHT if name == "wastar" else None,
-                         label=name, **options)
-    if name == "auto":
-        from .portfolio import Portfolio
-        return Portfolio(domain, instance, functions, **options)
-    raise ValueError(f"unknown search {name!r}; choose from {', '.join(SEARCHES)}")
+        return BestFirst(domain, instance, weight=WASTAR_WEIGHT if weighted else None,
+                         label="wastar" if weighted else "gbfs", **options)
+    return make
+
+
+def _auto(domain, instance, functions, **options) -> Search:
+    from .portfolio import Portfolio
+    return Portfolio(domain, instance, functions, **options)
+
+
+# name -> a factory (domain, instance, functions, **options) -> Search; each
+# imports its search when called, so that this table stays cheap to import
+FACTORIES: dict = {"dfs": _dfs, "gbfs": _best_first(False), "wastar": _best_first(True),
+                   "auto": _auto}
+
+
+def make_search(name: str, domain, instance, functions=None, **options) -> Search:
+    """The search ``name`` (see :data:`SEARCHES`) for one problem instance."""
+    factory = FACTORIES.get(name)
+    if factory is None:
+        raise ValueError(f"unknown search {name!r}; choose from {', '.join(SEARCHES)}")
+    return factory(domain, instance, functions, **options)
 
 
 def refusal(name: str, domain, all_plans: bool):
