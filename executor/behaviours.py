@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import inspect
 from dataclasses import dataclass, field
-from typing import Any, Optional
+from typing import Any, Optional, Protocol
 
 import py_trees
 from py_trees.common import OneShotPolicy, ParallelPolicy, Status
@@ -36,6 +36,26 @@ from htn.jshop.language.errors import HtnError
 from htn.robot.interface import SkillResult
 
 from .outcome import Outcome
+
+
+class Executor(Protocol):
+    """What an action's behaviours see of the task dispatcher: the robot,
+    the event log, and the reports the paper's state machines send it. They
+    report through these methods and never write its fields."""
+
+    robot: Any
+
+    def emit(self, ctx: "ActionContext", event: str, detail: str = "", **extra) -> None: ...
+
+    def begun(self, ctx: "ActionContext", first: bool) -> None:
+        """``ctx``'s action runs now (``first``: its first attempt)."""
+
+    def retrying(self, ctx: "ActionContext") -> None:
+        """``ctx``'s action was aborted and is tried again."""
+
+    def report(self, ctx: "ActionContext", ok: bool) -> None: ...
+
+    def apply_internal(self, step) -> bool: ...
 
 
 @dataclass
@@ -61,7 +81,7 @@ class ActionContext:
 class ActionBehaviour(py_trees.behaviour.Behaviour):
     """A behaviour of one action's subtree: it knows its context and the executor."""
 
-    def __init__(self, name: str, ctx: ActionContext, executor):
+    def __init__(self, name: str, ctx: ActionContext, executor: Executor):
         super().__init__(name)
         self.ctx, self.executor = ctx, executor
 
@@ -75,9 +95,8 @@ class Execute(ActionBehaviour):
     def initialise(self) -> None:
         ctx = self.ctx
         ctx.attempt += 1
-        self.executor.started += ctx.attempt == 1
         ctx.outcome, ctx.preempted = None, False
-        self.executor.running = ctx
+        self.executor.begun(ctx, ctx.attempt == 1)
         self.emit("start")
         self.ticking, self.result = None, None
         try:
@@ -180,8 +199,7 @@ class RetryAborted(py_trees.decorators.Retry):
             return self.decorated.status
         if ctx.outcome is Outcome.ABORTED and not ctx.preempted and retries_left(ctx):
             self.failures += 1
-            self.executor.retries += 1
-            self.executor.emit(ctx, Outcome.RETRYING.value, f"retry {ctx.attempt} of {ctx.limit}")
+            self.executor.retrying(ctx)
             return Status.RUNNING
         return Status.FAILURE
 
@@ -212,8 +230,7 @@ class ApplyInternal(ActionBehaviour):
         ctx = self.ctx
         if ctx.done:
             return Status.SUCCESS
-        self.executor.running = ctx
-        self.executor.started += 1
+        self.executor.begun(ctx, True)
         ok = self.executor.apply_internal(ctx.step)
         ctx.attempt, ctx.outcome = 1, Outcome.VERIFIED if ok else Outcome.FAILED
         self.emit(ctx.outcome.value, "internal operator applied to the belief state"
@@ -226,8 +243,7 @@ class Unavailable(ActionBehaviour):
     """A step no action state machine is registered for: it fails."""
 
     def update(self) -> Status:
-        self.executor.running = self.ctx
-        self.executor.started += 1
+        self.executor.begun(self.ctx, True)
         self.ctx.attempt, self.ctx.outcome = 1, Outcome.FAILED
         self.emit(Outcome.FAILED.value, f"no action state machine is registered for "
                                         f"{self.ctx.step.name}")

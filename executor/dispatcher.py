@@ -140,6 +140,17 @@ class TaskDispatcher:
         self.log.emit(None, None, "tree", None, tree_detail(nodes, len(replaces)),
                       nodes=nodes, parent=parent, replaces=list(replaces))
 
+    def begun(self, ctx: ActionContext, first: bool) -> None:
+        """An action's behaviours say it runs now (``first``: its first
+        attempt, which counts it as started)."""
+        self.running = ctx
+        self.started += first
+
+    def retrying(self, ctx: ActionContext) -> None:
+        """An aborted action is tried again (its retry limit allows it)."""
+        self.retries += 1
+        self.emit(ctx, Outcome.RETRYING.value, f"retry {ctx.attempt} of {ctx.limit}")
+
     def report(self, ctx: ActionContext, ok: bool) -> None:
         """The final outcome of an action (the paper's status report)."""
         if ok:
