@@ -149,3 +149,49 @@ def test_the_planners_rooms_import_only_rooms_below_them():
             other = rooms.get(m)
             assert other is None or other == room or JSHOP_LAYERS[other] < JSHOP_LAYERS[room], \
                 f"{name} ({room}) imports {m} ({other})"
+
+
+# docs/architecture.md's table: each room and the rooms it may import
+# (besides itself). A room is a top-level folder, or a room of htn.jshop.
+JSHOP = {f"jshop.{r}" for r in JSHOP_LAYERS}
+ROOMS = {
+    **{f"jshop.{r}": {f"jshop.{o}" for o, n in JSHOP_LAYERS.items() if n < rank}
+       for r, rank in JSHOP_LAYERS.items()},
+    "jshop": JSHOP,
+    "installation": {"jshop.language"},
+    "files": {"jshop.language"},
+    "robot": JSHOP,
+    "executor": {"robot", "installation", *JSHOP},
+    "transform": {"executor", "robot", *JSHOP},
+    "evaluation": {"transform", "executor", "robot", "files", *JSHOP},
+    "view": {"robot", *JSHOP},
+    "up": JSHOP,
+    "api": {"evaluation", "transform", "executor", "robot", "view", "up", "installation",
+            "files", *JSHOP},
+    "": {"installation"},              # htn itself: the use cases by name, on first use
+    "__main__": {"cli"},
+}
+
+
+def _room(module: str) -> str:
+    parts = module.split(".")[1:]
+    if not parts:
+        return ""
+    if parts[0] == "jshop" and len(parts) > 1:
+        return f"jshop.{parts[1]}"
+    return parts[0]
+
+
+def test_every_room_imports_only_what_the_architecture_page_allows():
+    modules = package_modules()
+    page = (ROOT / "docs" / "architecture.md").read_text()
+    for name, path in modules.items():
+        room = _room(name)
+        if room not in ROOMS:       # cli, and the data folders (domains, problems)
+            assert room in ("cli", "domains", "problems"), f"{room} is not on the page"
+            continue
+        if room and room != "__main__":
+            assert f"`{room.replace('.', '/')}" in page, f"{room} is not on the page"
+        for m in imports_of(name, path, modules):
+            other = _room(m)
+            assert other == room or other in ROOMS[room], f"{name} ({room}) imports {m}"
