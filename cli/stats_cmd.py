@@ -35,17 +35,33 @@ def stats(files, repeat, as_json, functions, timeout):
       htn stats
       htn stats domains/domestic.jshop problems/bring_coke.jshop problems/bring_two.jshop
     """
-    from htn.api.inputs import function_table
-    from htn.api.stats import PAPER, scenario_stats, scenarios
-
     if len(files) == 1:
         raise click.UsageError("give a DOMAIN and at least one PROBLEM (or no arguments)")
-    rows = []
-    shown: set = set()          # a domain's warnings once, however many problems
-    # --timeout bounds the whole command: each enumeration gets what is left
-    # (the planner stops by itself and the figures are partial), and the
-    # deadline a little after it catches a user function that never
-    # returns, which the planner cannot interrupt
+    rows = _figures(files, repeat, functions, timeout)
+    if as_json:
+        click.echo(json.dumps({"scenarios": [r.as_dict() for r in rows]}, indent=1))
+        return
+    out = console()
+    out.print(_table(rows, show_paper=not files))
+    done = min(r.repeats for r in rows)
+    out.print(f"[dim]time: median of {done} run(s)"
+              + (f" (of {repeat} asked: --timeout ran out)" if done < repeat else "")
+              + f"; parsing excluded; domain {rows[0].domain}[/dim]")
+    if any(r.timed_out for r in rows):
+        out.print("[yellow]some problems timed out; their counts are partial[/yellow]")
+
+
+def _figures(files, repeat: int, functions, timeout) -> list:
+    """Each scenario's figures, its inputs' warnings printed once per domain.
+    ``timeout`` bounds the whole command: each enumeration gets what is left
+    (the planner stops by itself and the figures are partial), and the
+    deadline a little after it catches a user function that never returns,
+    which the planner cannot interrupt."""
+    from htn.api.inputs import function_table
+    from htn.api.stats import scenario_stats, scenarios
+
+    rows: list = []
+    shown: set = set()
     started = STATE.started or time.perf_counter()
     until = None if timeout is None else started + timeout
     with deadline(None if timeout is None else timeout + GRACE, started):
@@ -62,13 +78,16 @@ def stats(files, repeat, as_json, functions, timeout):
                 if w not in shown:
                     shown.add(w)
                     click.echo(w, err=True)
-    if as_json:
-        click.echo(json.dumps({"scenarios": [r.as_dict() for r in rows]}, indent=1))
-        return
+    return rows
+
+
+def _table(rows: list, show_paper: bool):
+    """The figures as a rich table, the paper's beside them for its scenarios."""
     from rich import box
     from rich.table import Table
 
-    show_paper = not files
+    from htn.api.stats import PAPER
+
     t = Table(title="Plan generation (cf. Table 1 of the planning paper)", box=box.ROUNDED)
     t.add_column("", style="bold")
     for r in rows:
@@ -78,6 +97,10 @@ def stats(files, repeat, as_json, functions, timeout):
         ref = PAPER.get(Path(r.problem).stem) if show_paper else None
         return f"  [dim](paper {fmt.format(ref[key])})[/dim]" if ref else ""
 
+    def sizes(r):
+        ref = PAPER.get(Path(r.problem).stem) if show_paper else None
+        return f"  [dim](paper {ref['methods']} / {ref['operators']})[/dim]" if ref else ""
+
     t.add_row("solution plans", *[f"{r.plans}{paper(r, 'plans')}" for r in rows])
     t.add_row("distinct action sequences",
               *[f"{r.distinct_plans}{paper(r, 'distinct_plans')}" for r in rows])
@@ -86,17 +109,5 @@ def stats(files, repeat, as_json, functions, timeout):
     t.add_row("minimum plan length",
               *[f"{r.min_length if r.min_length is not None else '-'}{paper(r, 'min_length')}"
                 for r in rows])
-    t.add_row("methods / operators",
-              *[f"{r.methods} / {r.operators}"
-                + (f"  [dim](paper {PAPER[Path(r.problem).stem]['methods']} / "
-                   f"{PAPER[Path(r.problem).stem]['operators']})[/dim]"
-                   if show_paper and Path(r.problem).stem in PAPER else "") for r in rows])
-    out = console()
-    out.print(t)
-    done = min(r.repeats for r in rows)
-    out.print(f"[dim]time: median of {done} run(s)"
-              + (f" (of {repeat} asked: --timeout ran out)" if done < repeat else "")
-              + "; parsing excluded; "
-                  f"domain {rows[0].domain}[/dim]")
-    if any(r.timed_out for r in rows):
-        out.print("[yellow]some problems timed out; their counts are partial[/yellow]")
+    t.add_row("methods / operators", *[f"{r.methods} / {r.operators}{sizes(r)}" for r in rows])
+    return t
