@@ -1,5 +1,5 @@
 """The long hostile-user fuzz run (issue 34): the suite's generator
-(``tests/fuzz_inputs.py``, through ``tests/test_fuzz_inputs.py``) with fresh
+(``tests/fuzz_inputs.py``, through ``tests/e2e/test_fuzz_inputs.py``) with fresh
 random seeds, for as many inputs as asked, in chunks, on several lanes.
 
     python benchmarks/fuzz_long.py --inputs 100000 --lanes 2 --out fuzz-out
@@ -54,7 +54,7 @@ def main() -> int:
                    "HTN_FUZZ_PLANS": str((args.out / "plans").resolve())}
             r = subprocess.run(["nice", "-n", str(args.nice), sys.executable, "-m", "pytest",
                                 "-q", "-s", "-p", "no:cacheprovider",
-                                "tests/test_fuzz_inputs.py"],
+                                "tests/e2e/test_fuzz_inputs.py"],
                                cwd=ROOT, env=env, capture_output=True, text=True)
             with lock:
                 done["chunks"] += 1

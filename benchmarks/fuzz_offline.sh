@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# The offline fuzz run of issue 18: the fuzz tests (tests/test_fuzz.py and
-# tests/test_fuzz_hostile.py) with fresh random seeds, in chunks, in LANES
+# The offline fuzz run of issue 18: the fuzz tests (tests/e2e/test_fuzz.py and
+# tests/e2e/test_fuzz_hostile.py) with fresh random seeds, in chunks, in LANES
 # parallel lanes, pinned low with nice; each chunk's tally line (inputs and
 # exit codes) go to OUT/lane-*.txt, each chunk's whole output (failures)
 # to OUT/chunk-LANE-N.txt. Sum them with
@@ -18,7 +18,7 @@ lane() {
         echo "== lane $1 chunk $chunk $(date -u +%H:%M:%S)"
         HTN_FUZZ_EXAMPLES=$examples HTN_FUZZ_RANDOM=1 nice -n 15 \
             python -m pytest -q -s -p no:cacheprovider -m slow \
-            tests/test_fuzz.py tests/test_fuzz_hostile.py > "$out/chunk-$1-$chunk.txt" 2>&1
+            tests/e2e/test_fuzz.py tests/e2e/test_fuzz_hostile.py > "$out/chunk-$1-$chunk.txt" 2>&1
         grep -E "inputs;|passed|failed" "$out/chunk-$1-$chunk.txt"
     done
 }

@@ -1,5 +1,5 @@
 """The coffee robot of issue 19 (3 operators, 2 methods), in JSHOP2 and HDDL:
-a newcomer's first domain, the one docs/guide.md writes (tests/test_guide.py
+a newcomer's first domain, the one docs/guide.md writes (tests/e2e/test_guide.py
 checks that its copy is this one)."""
 
 COFFEE = """\

@@ -10,7 +10,7 @@ the robot's checks, at the moment each event is emitted:
   when its condition is broken: the base or an arm touches something, or an
   object held at the start of the action is no longer at a gripper.
 
-Used by ``tests/test_monitoring.py`` and ``benchmarks/bench_recovery.py``.
+Used by ``tests/robot/test_monitoring.py`` and ``benchmarks/bench_recovery.py``.
 """
 from __future__ import annotations
 

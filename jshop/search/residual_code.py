@@ -11,7 +11,7 @@ a static predicate is a set membership, a dynamic one a lookup of its bit,
 and a conjunction returns ``False`` at the first false item. What the
 compiler does not specialise (``forall``, equality, arguments that are not
 variables or constants) calls back the general walk, so the results are the
-same; ``tests/test_compiled_grounding.py`` compares the two on IPC instances.
+same; ``tests/jshop/test_compiled_grounding.py`` compares the two on IPC instances.
 """
 from __future__ import annotations
 

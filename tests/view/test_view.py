@@ -1,7 +1,7 @@
 """The browser view without a browser: the task tree in the log (``tree``
 events, ``node`` on every action event), reading logs for ``htn view``, the
 token, and the hand-over from the robot's thread that never waits for a page.
-The page itself is tested in a real browser: tests/test_view_browser.py."""
+The page itself is tested in a real browser: tests/view/test_view_browser.py."""
 from __future__ import annotations
 
 import json

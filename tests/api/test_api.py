@@ -58,7 +58,7 @@ def test_the_use_cases_are_attributes_of_htn():
 
 
 def test_the_root_use_case_registry_makes_no_import_circle():
-    from test_layout import cycles, imports_of, package_modules
+    from package_graph import cycles, imports_of, package_modules
     modules = package_modules()
     graph = {name: imports_of(name, path, modules) for name, path in modules.items()}
     graph["htn"] |= set(htn.USE_CASES.values())     # imported by name, on first use

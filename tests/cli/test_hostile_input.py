@@ -4,7 +4,7 @@ field by field, ``--timeout`` is a usage error unless it is a positive
 number (or inf) and bounds loading too, any exception of user code is one
 line at the user's own line, messages quote terms cut short, HDDL arity
 errors are located. (Process-level cases, a full disk, signals and the
-watchdog: test_hardening_process.py.)"""
+watchdog: test_stops_and_streams.py.)"""
 from __future__ import annotations
 
 import json

@@ -18,7 +18,7 @@ few hundred inputs in the time budget). For every input:
 CI runs a fixed, derandomized sample of ``HTN_FUZZ_EXAMPLES`` inputs (default
 500, about 25 s on two cores). Run it longer, with fresh random inputs, like this::
 
-    HTN_FUZZ_EXAMPLES=10000 HTN_FUZZ_RANDOM=1 python -m pytest tests/test_fuzz.py -s
+    HTN_FUZZ_EXAMPLES=10000 HTN_FUZZ_RANDOM=1 python -m pytest tests/e2e/test_fuzz.py -s
 
 (``-s`` shows the tally of inputs and exit codes at the end; ``HTN_FUZZ_SHOW=1``
 also prints the first line of each error, to see what the mutants provoke.)
