@@ -60,51 +60,59 @@ def evaluate(problem, domain, runs, seed, robot, faults, workers, scheduler, rec
       htn evaluate problems/tray_three.jshop --robot pybullet --faults slip=0.1 --runs 20
       htn evaluate problems/tray_three.jshop --scheduler tcp://10.0.0.5:8786
     """
-    from rich.console import Console
-    from rich.progress import Progress
-
     from htn.api.evaluate import evaluate as run_evaluation
     from htn.evaluation.cluster import ClusterError
 
-    console = Console(stderr=True)
-    bar = Progress(console=console, transient=True, disable=not console.is_terminal)
-    task = None
-    # what runs before the runs' progress bar (reading, planning, each rule's
-    # projections): a spinner with its name (on a terminal only)
-    phase = Phase("starting")
-    label = f"{robot} runs"
-
-    def on_start(n_workers: int, notes: list) -> None:
-        nonlocal label
-        for note in notes:
-            warn(f"warning: {note}")
-        label = f"{robot} runs on {n_workers} worker(s)"
-
-    def on_batch(new: list, done: float) -> None:
-        nonlocal task
-        if task is None:        # the first runs are in: the bar replaces the spinner
-            phase.end()
-            task = bar.add_task(label, total=runs)
-            bar.start()
-        bar.advance(task, done)
-
+    progress = _Progress(robot, runs)
     try:
-        with deadline(timeout, STATE.started), phase:
+        with deadline(timeout, STATE.started), progress.phase:
             result = run_evaluation(problem, domain=domain, runs=runs, seed=seed, robot=robot,
                                     faults=faults, workers=workers, scheduler=scheduler,
-                                    records=records, plot=plot_dir, on_start=on_start,
-                                    on_batch=on_batch, say=warn, on_warning=warn,
-                                    on_phase=phase.update)
+                                    records=records, plot=plot_dir, on_start=progress.start,
+                                    on_batch=progress.batch, say=warn, on_warning=warn,
+                                    on_phase=progress.phase.update)
     except ClusterError as exc:
         raise click.ClickException(str(exc)) from None
     finally:
-        bar.stop()
+        progress.stop()
     if as_json:
         click.echo(json.dumps(result.document(), indent=1))
         return
     _print_table(result.comparison, result.metrics, problem)
     for path in result.plots:
         click.echo(f"plot: {path}")
+
+
+class _Progress:
+    """What a terminal shows while an evaluation runs: a spinner naming what
+    runs before the runs (reading, planning, each rule's projections), then
+    a bar of the runs (on stderr; nothing when it is not a terminal)."""
+
+    def __init__(self, robot: str, runs: int):
+        from rich.console import Console
+        from rich.progress import Progress
+
+        console = Console(stderr=True)
+        self.bar = Progress(console=console, transient=True, disable=not console.is_terminal)
+        self.task = None
+        self.phase = Phase("starting")
+        self.robot, self.runs = robot, runs
+        self.label = f"{robot} runs"
+
+    def start(self, n_workers: int, notes: list) -> None:
+        for note in notes:
+            warn(f"warning: {note}")
+        self.label = f"{self.robot} runs on {n_workers} worker(s)"
+
+    def batch(self, new: list, done: float) -> None:
+        if self.task is None:       # the first runs are in: the bar replaces the spinner
+            self.phase.end()
+            self.task = self.bar.add_task(self.label, total=self.runs)
+            self.bar.start()
+        self.bar.advance(self.task, done)
+
+    def stop(self) -> None:
+        self.bar.stop()
 
 
 def _print_table(comp, stats: dict, problem: str) -> None:
