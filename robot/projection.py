@@ -24,8 +24,11 @@ import random
 from dataclasses import dataclass, field, fields, replace
 from typing import Optional
 
+from htn.jshop.language.errors import HtnError
+
 from .faults import parse_faults
 from .interface import Check, Robot, SkillResult, check, skill
+from .world import number_arg
 
 ARM_REST = {"left": (0.1, 0.35, 0.9), "right": (0.1, -0.35, 0.9)}   # relative to the base
 BASE_SPEED, ARM_SPEED, ACTION_TIME = 0.5, 0.25, 1.0
@@ -79,19 +82,25 @@ class ProjectedWorld:
 
 
 def world_from_atoms(atoms) -> ProjectedWorld:
+    """The projection's world from a state's atoms; an area's coordinates
+    that are no numbers, or an atom with too few arguments, is an error at
+    the atom."""
     w = ProjectedWorld()
     for a in atoms:
-        p, args = a.pred, a.args
-        if p in ("area", "location"):
-            w.places[args[0]] = (float(args[1]), float(args[2]))
-        elif p in ("at", "in", "object_on"):
-            w.where[args[0]] = args[1]
-        elif p == "container":
-            w.containers[args[0]] = args[1]
-        elif p == "tray":
-            w.trays[args[0]] = args[1]
-        elif p in ("robot-at", "robot_at"):
-            w.start = args[-1]
+        p, args, pos = a.pred, a.args, getattr(a, "pos", None)
+        try:
+            if p in ("area", "location"):
+                w.places[args[0]] = (number_arg(args, 1, p, pos), number_arg(args, 2, p, pos))
+            elif p in ("at", "in", "object_on"):
+                w.where[args[0]] = args[1]
+            elif p == "container":
+                w.containers[args[0]] = args[1]
+            elif p == "tray":
+                w.trays[args[0]] = args[1]
+            elif p in ("robot-at", "robot_at"):
+                w.start = args[-1]
+        except IndexError:
+            raise HtnError.at(pos, f"({p} ...) has too few arguments") from None
     return w
 
 

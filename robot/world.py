@@ -76,7 +76,9 @@ class World:
             raise HtnError(f"unknown location '{name}' (no (location {name} x y theta) fact)")
 
 
-def _num(args, i, what, pos) -> float:
+def number_arg(args, i, what, pos) -> float:
+    """Argument ``i`` of a ``(what ...)`` atom of the state, which must be a
+    number; else an error at the atom (an IndexError if there is none)."""
     v = args[i]
     if type(v) is not float:
         raise HtnError.at(pos, f"{what}: expected a number, got {v}")
@@ -90,11 +92,11 @@ def world_from_state(atoms) -> World:
         p, args, pos = a.pred, a.args, a.pos
         try:
             if p == "location":
-                w.places[args[0]] = Place(args[0], _num(args, 1, p, pos), _num(args, 2, p, pos),
-                                          math.radians(_num(args, 3, p, pos)))
+                w.places[args[0]] = Place(args[0], number_arg(args, 1, p, pos), number_arg(args, 2, p, pos),
+                                          math.radians(number_arg(args, 3, p, pos)))
             elif p == "furniture":
-                w.furniture[args[0]] = Furniture(args[0], args[1], _num(args, 2, p, pos),
-                                                 _num(args, 3, p, pos), args[4])
+                w.furniture[args[0]] = Furniture(args[0], args[1], number_arg(args, 2, p, pos),
+                                                 number_arg(args, 3, p, pos), args[4])
             elif p == "object":
                 w.things.setdefault(args[0], Thing(args[0], args[1])).kind = args[1]
             elif p == "object_on":
@@ -104,8 +106,8 @@ def world_from_state(atoms) -> World:
                 t.grasps = t.grasps + (args[1],)
             elif p == "person":
                 w.persons.setdefault(args[0], Person(args[0], 0.0, 0.0))
-                w.persons[args[0]].x = _num(args, 1, p, pos)
-                w.persons[args[0]].y = _num(args, 2, p, pos)
+                w.persons[args[0]].x = number_arg(args, 1, p, pos)
+                w.persons[args[0]].y = number_arg(args, 2, p, pos)
             elif p == "person_at":
                 w.persons.setdefault(args[0], Person(args[0], 0.0, 0.0)).at = args[1]
             elif p == "can_receive":
@@ -158,7 +160,7 @@ def kitchen_world_from_state(atoms) -> World:
             said[(p, args[0])] = pos
         try:
             if p == "area":
-                areas[args[0]] = (_num(args, 1, p, pos), _num(args, 2, p, pos))
+                areas[args[0]] = (number_arg(args, 1, p, pos), number_arg(args, 2, p, pos))
             elif p in ("at", "in"):   # on an area's table, in a container
                 w.things.setdefault(args[0], Thing(args[0], _kind(args[0]))).on = args[1]
             elif p == "container":

@@ -141,7 +141,8 @@ def tree_facts(ws: Workspace) -> list[tuple[str, tuple]]:
 
 def navigation_distance(instance: S.ProblemInstance, plan) -> float:
     """Sum of straight-line distances of the plan's !navigate steps."""
-    where = {a.args[0]: (a.args[1], a.args[2]) for a in instance.state if a.pred == "area"}
+    from htn.robot.projection import world_from_atoms      # area coordinates, checked
+    where = world_from_atoms([a for a in instance.state if a.pred == "area"]).places
     total = 0.0
     for s in plan.steps:
         if s.name == "!navigate" and s.args[0] in where and s.args[1] in where:

@@ -236,3 +236,32 @@ def test_task_tree_annotated_by_a_projected_run():
     assert all(n.outcome == "verified" for n in tree.walk() if n is not tree)
     d = tree.to_dict()["nodes"][1]         # the root's first child
     assert d["outcome"] == "verified" and "code_replacement" in d and "path" in d
+
+
+def test_an_area_without_numeric_coordinates_is_an_error_at_its_atom(tmp_path):
+    """Found by the long fuzz run: the projection read an area's coordinates
+    with float(), a traceback for ``transform``, ``run --robot projection``
+    and ``evaluate``."""
+    kitchen = ROOT / "domains" / "kitchen.jshop"
+    text = (ROOT / "problems" / "set_table_and_clean_up.jshop").read_text()
+    assert "(area sink_area 3.5 -0.5)" in text
+    problem = tmp_path / "p.jshop"
+    problem.write_text(text.replace("(area sink_area 3.5 -0.5)", "(area sink_area and -0.5)"))
+    plan = tmp_path / "plan.txt"
+    runs = [["transform", kitchen, problem], ["evaluate", problem, "--domain", kitchen,
+                                              "--runs", "2"]]
+    if run_htn("plan", kitchen, problem, "-o", plan).returncode == 0:
+        runs.append(["run", plan, "--robot", "projection"])
+    for argv in runs:
+        r = run_htn(*argv)
+        assert r.returncode == 2 and "Traceback" not in r.stderr, (argv, r.stderr)
+        assert r.stderr.startswith(f"{problem}:6:35: area: expected a number, got and"), \
+            (argv, r.stderr)
+
+
+def test_the_projection_refuses_an_area_atom_with_too_few_arguments():
+    from htn.robot.projection import world_from_atoms
+    atom = S.Atom("area", ("sink_area", 3.5), S.Pos("p.jshop", 6, 3))
+    with pytest.raises(HtnError) as err:
+        world_from_atoms([atom])
+    assert str(err.value).startswith("p.jshop:6:3: (area ...) has too few arguments")
