@@ -47,8 +47,8 @@ class Timeout(click.ParamType):
 
 
 class Count(click.ParamType):
-    """A whole number from ``low`` to ``high`` (written in decimal; a sign
-    is allowed where ``low`` is negative)."""
+    """A whole number from ``low`` to ``high``, written in decimal digits
+    (``1e3``, ``0x10``, ``1_000`` and fractions are not whole numbers here)."""
 
     name = "integer"
 
