@@ -91,12 +91,11 @@ def stats(files=(), *, repeat: int = 1, functions=None,
     return [scenario_stats(d, p, table, repeat, until=until) for d, p in scenarios(files)]
 
 
-def scenario_stats(domain_path: str, problem_path: str, functions=None, repeat: int = 1,
-                   timeout: Optional[float] = None, *,
+def scenario_stats(domain_path: str, problem_path: str, functions=None, repeat: int = 1, *,
                    until: Optional[float] = None) -> ScenarioStats:
     """Enumerate every plan ``repeat`` times; report the median wall time.
-    ``timeout`` bounds each enumeration, ``until`` (a ``time.perf_counter()``
-    value) all of them: an enumeration cut short is the last."""
+    ``until`` (a ``time.perf_counter()`` value) bounds all of them: an
+    enumeration cut short is the last."""
     functions = function_table(functions)
     inputs = read_inputs(domain_path, problem_path, functions)
     domain, problem = inputs.domain, inputs.problem
@@ -107,7 +106,8 @@ def scenario_stats(domain_path: str, problem_path: str, functions=None, repeat: 
         t0 = time.perf_counter()
         plans = []
         for inst in problem.instances:
-            budget = _budget(timeout, until)
+            # what is left of the time (at least a moment: the planner then stops at once)
+            budget = None if until is None else max(until - time.perf_counter(), 1e-6)
             planner = Planner(domain, inst, functions)
             plans.extend(tuple(p.lines()) for p in planner.plans(budget))
             timed_out = timed_out or planner.stats.timed_out
@@ -121,12 +121,3 @@ def scenario_stats(domain_path: str, problem_path: str, functions=None, repeat: 
         methods=domain.n_methods, operators=domain.n_operators, timed_out=timed_out,
         repeats=len(times),
         warnings=inputs.warnings)
-
-
-def _budget(timeout: Optional[float], until: Optional[float]) -> Optional[float]:
-    """Seconds an enumeration may take: ``timeout``, and no more than is left
-    until ``until`` (at least a moment: the planner then stops at once)."""
-    if until is None:
-        return timeout
-    left = max(until - time.perf_counter(), 1e-6)
-    return left if timeout is None else min(timeout, left)
