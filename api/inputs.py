@@ -39,12 +39,16 @@ def path_of(x) -> Optional[str]:
     return getattr(x, "file", None) or None
 
 
-def function_table(functions) -> FunctionTable:
+def function_table(functions, stops=None) -> FunctionTable:
     """A function table: ``functions`` itself, the functions of a Python file,
-    or an empty table for None."""
+    or an empty table for None. ``stops``: the command's
+    :class:`htn.process.Stops`, under which the user code runs (a table
+    given runs under them from now on)."""
     if isinstance(functions, FunctionTable):
+        if stops is not None:
+            functions.guard = stops
         return functions
-    table = FunctionTable()
+    table = FunctionTable(stops) if stops is not None else FunctionTable()
     if functions is not None:
         table.load_file(os.fspath(functions))
     return table

@@ -24,7 +24,8 @@ from .inputs import function_table, path_of, read_inputs
 def plan(domain, problem, *, plans: Optional[int] = 1, timeout: Optional[float] = None,
          functions=None, jshop2_compat: bool = False, max_depth: int = DEFAULT_MAX_DEPTH,
          max_memory: Optional[int] = None, explain: bool = False, explain_all: bool = False,
-         trees: bool = True, tree_paths: bool = True, search: str = "dfs") -> "PlanStream":
+         trees: bool = True, tree_paths: bool = True, search: str = "dfs",
+         stops=None) -> "PlanStream":
     """The plans of ``problem`` in ``domain`` (paths or loaded objects, see
     :mod:`htn.api.inputs`), as a stream in JSHOP2's order.
 
@@ -43,10 +44,11 @@ def plan(domain, problem, *, plans: Optional[int] = 1, timeout: Optional[float] 
     task tree (``Plan.tree``); ``tree_paths``: with node paths. ``search``:
     one of :data:`htn.jshop.search.searches.SEARCHES` (``dfs``, the default,
     is JSHOP2's depth-first search; the others read HDDL and find plans one
-    at a time, :class:`UnsupportedSearch` otherwise).
+    at a time, :class:`UnsupportedSearch` otherwise). ``stops``: the
+    command's :class:`htn.process.Stops` (the user functions run under them).
     """
     started = time.perf_counter()
-    table = function_table(functions)
+    table = function_table(functions, stops)
     inputs = read_inputs(domain, problem, table)
     dom, prob, warnings = inputs.domain, inputs.problem, list(inputs.warnings)
     why = refusal(search, dom, plans is None)

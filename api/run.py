@@ -58,7 +58,7 @@ class RunResult:
 def run(plan, *, robot, domain=None, problem=None, functions=None, plan_index: int = 1,
         faults: str = "", seed: int = 0, retries=None, replan: bool = False,
         log=None, on_event: Optional[Listener] = None, gui: bool = False,
-        argv: Optional[list] = None) -> RunResult:
+        argv: Optional[list] = None, stops=None) -> RunResult:
     """Execute ``plan`` on ``robot`` and return how it ended.
 
     ``plan``: a plan file's path (as ``htn plan -o`` writes it), a
@@ -81,10 +81,13 @@ def run(plan, *, robot, domain=None, problem=None, functions=None, plan_index: i
     ``header`` first; ``htn run --from-log`` repeats the run from it).
     ``on_event``: called with every event (a dict, as logged) as it happens.
     ``argv``: the command line the header records (None: a program's call).
+    ``stops``: the command's :class:`htn.process.Stops` (the user functions
+    run under them).
     """
     execution = prepare(plan, robot=robot, domain=domain, problem=problem,
                         functions=functions, plan_index=plan_index, faults=faults, seed=seed,
-                        retries=retries, replan=replan, log=log, on_event=on_event, gui=gui)
+                        retries=retries, replan=replan, log=log, on_event=on_event, gui=gui,
+                        stops=stops)
     with execution:
         execution.begin(argv)
         try:
@@ -95,7 +98,8 @@ def run(plan, *, robot, domain=None, problem=None, functions=None, plan_index: i
 
 def prepare(plan, *, robot, domain=None, problem=None, functions=None, plan_index: int = 1,
             faults: str = "", seed: int = 0, retries=None, replan: bool = False, log=None,
-            on_event: Optional[Listener] = None, gui: bool = False) -> "Execution":
+            on_event: Optional[Listener] = None, gui: bool = False,
+            stops=None) -> "Execution":
     """Everything :func:`run` does before the log begins: read and check the
     inputs (every step ground and applicable in turn, the retry limits, the
     task tree, the log's path), build the robot and check that every step has
@@ -114,7 +118,7 @@ def prepare(plan, *, robot, domain=None, problem=None, functions=None, plan_inde
     else:
         raise HtnError(f"robot: give a robot's name or a Robot object, not "
                        f"{type(robot).__name__}")
-    inputs = run_inputs(plan, domain, problem, functions, plan_index, retries)
+    inputs = run_inputs(plan, domain, problem, functions, plan_index, retries, stops)
     if isinstance(robot, str):
         name = robot
         robot = make_robot(name, RobotRequest(inputs.domain, inputs.instance, faults or "",
@@ -207,13 +211,16 @@ class Execution:
             self.begin()
         return self._result(self.dispatcher.run())
 
-    def halt(self, why: str = "") -> None:
+    def halt(self, why: str = "") -> bool:
         """Stop the run before its next tick (safe from a signal handler or
-        another thread); ``why`` is logged with the ``interrupted`` event."""
+        another thread); ``why`` is logged with the ``interrupted`` event.
+        True while a tick runs (the halt takes effect when it ends), else
+        False (a signal handler raises its interrupt too: see
+        :class:`htn.process.Stops`)."""
         if self.dispatcher is not None:
-            self.dispatcher.halt(why)
-        else:
-            self._halt = why or "stopped by the user"
+            return self.dispatcher.halt(why)
+        self._halt = why or "stopped by the user"
+        return False
 
     def interrupted(self, why: str = "") -> RunResult:
         """End the run as interrupted now (outside :meth:`execute`): the robot

@@ -57,14 +57,14 @@ def load_plan(plan) -> tuple[Optional[PlanFile], Optional[Plan]]:
 
 
 def run_inputs(plan, domain=None, problem=None, functions=None, plan_index: int = 1,
-               retries=None) -> RunInputs:
+               retries=None, stops=None) -> RunInputs:
     """Read and check everything a run of ``plan`` needs (see :func:`htn.api.run.run`)."""
     pf, given = load_plan(plan)
     where = pf.path if pf else None
     if pf is not None:
         domain = domain or pf.domain
         problem = problem or pf.problem
-        functions = checked_functions(pf.named_functions(), functions, where)
+        functions = checked_functions(pf.named_functions(), functions, where, stops=stops)
         if not domain or not problem:
             raise HtnError("the plan file names no domain or problem (write it with 'htn plan "
                            "-o', or give --domain and --problem)", where)
@@ -76,7 +76,7 @@ def run_inputs(plan, domain=None, problem=None, functions=None, plan_index: int 
         if domain is None or problem is None:
             raise HtnError("a plan object runs with a domain and a problem: give both")
         chosen = given
-    table = function_table(functions)
+    table = function_table(functions, stops)
     dom, prob = domain_and_problem(domain, problem, table)
     number = getattr(chosen, "instance", 0) if pf is None else 0
     instance = prob.instances[number if number < len(prob.instances) else 0]
@@ -132,7 +132,7 @@ def methods_of(domain, instance) -> dict:
 
 
 def checked_functions(named, given, where: str, line: Optional[int] = None,
-                      option: str = "--functions"):
+                      option: str = "--functions", stops=None):
     """The functions to run with: ``given`` (a path or a loaded table, from
     the user), checked against ``named`` ((path, line, SHA-256 or None): the
     file a plan file or a log says its plans were made with). A data file
@@ -153,7 +153,7 @@ def checked_functions(named, given, where: str, line: Optional[int] = None,
                 raise HtnError(f"{option} {os.fspath(given)} is not the functions file these "
                                f"plans were made with ({path}): its SHA-256 is "
                                f"{actual[:12]}..., recorded {digest[:12]}...", where, at)
-        table = FunctionTable()
+        table = FunctionTable(stops) if stops is not None else FunctionTable()
         table.load_file(os.fspath(given), check)
         return table
     return given
@@ -183,7 +183,7 @@ class LoggedRun:
                     replan=self.replan)
 
 
-def read_run_log(path, functions=None) -> LoggedRun:
+def read_run_log(path, functions=None, stops=None) -> LoggedRun:
     """The run a log records (its first event, the header): the plan file it
     ran, its domain and problem must be there and unchanged (their SHA-256),
     else an input error at the log's first line. ``functions``: the user's
@@ -197,7 +197,7 @@ def read_run_log(path, functions=None) -> LoggedRun:
     for kind in ("domain", "problem"):
         check_unchanged(rec, kind, path)
     named = (rec["functions"], 1, rec.get("functions_sha256")) if rec.get("functions") else None
-    functions = checked_functions(named, functions, path, 1)
+    functions = checked_functions(named, functions, path, 1, stops=stops)
     return LoggedRun(path, pf, rec["plan_index"], rec["domain"], rec["problem"],
                      functions, rec["robot"], rec["seed"], rec["faults"],
                      dict(rec["retries"] or {}), rec["replan"])

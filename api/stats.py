@@ -80,14 +80,14 @@ def scenarios(files=()) -> list[tuple[str, str]]:
 
 
 def stats(files=(), *, repeat: int = 1, functions=None,
-          timeout: Optional[float] = None) -> list[ScenarioStats]:
+          timeout: Optional[float] = None, stops=None) -> list[ScenarioStats]:
     """The statistics of each scenario of ``files`` (see :func:`scenarios`):
     every plan enumerated ``repeat`` times, the median time reported.
     ``timeout`` bounds the whole call (checked between expansions): an
     enumeration it cuts short is partial (``timed_out``), and no repeat
     starts after it."""
     until = None if timeout is None else time.perf_counter() + timeout
-    table = function_table(functions)
+    table = function_table(functions, stops)
     return [scenario_stats(d, p, table, repeat, until=until) for d, p in scenarios(files)]
 
 

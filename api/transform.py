@@ -54,7 +54,8 @@ class TransformResult:
 
 def transform_plan(domain, problem, *, rules=None, metric: str = "navigation", functions=None,
               on_warning: Optional[Callable[[str], None]] = None,
-              on_phase: Optional[Callable[[str], None]] = None) -> TransformResult:
+              on_phase: Optional[Callable[[str], None]] = None,
+              stops=None) -> TransformResult:
     """Plan ``problem`` (its first instance), apply the registered
     transformations in priority order (tray > container > both-hands, and any
     plugins'), or only ``rules`` (names, or one comma-separated text), and
@@ -79,7 +80,7 @@ def transform_plan(domain, problem, *, rules=None, metric: str = "navigation", f
         if unknown:
             raise UnknownRules(unknown, names)
     say = on_phase or (lambda text: None)
-    inputs = read_inputs(domain, problem, function_table(functions))
+    inputs = read_inputs(domain, problem, function_table(functions, stops))
     dom, prob = inputs.domain, inputs.problem
     for w in inputs.warnings if on_warning else ():
         on_warning(w)

@@ -55,13 +55,13 @@ class PlanVerdict:
 
 
 def validate(domain, problem, plan, *, plan_index: Optional[int] = None,
-             functions=None) -> list[PlanVerdict]:
+             functions=None, stops=None) -> list[PlanVerdict]:
     """The verdict on each plan of ``plan`` (a plan file's path, a
     :class:`~htn.jshop.plans.planfile.PlanFile`, a
     :class:`~htn.jshop.plans.plan.Plan` or a list of them), in order;
     ``plan_index`` (1-based) picks one plan of a file. ``domain``,
     ``problem``, ``functions``: paths or loaded objects (:mod:`htn.api.inputs`)."""
-    table = function_table(functions)
+    table = function_table(functions, stops)
     dom, prob = domain_and_problem(domain, problem, table)
     file = None
     if is_path(plan):
@@ -95,7 +95,7 @@ def ipc_text(path) -> Optional[str]:
 
 
 def validate_ipc(domain, problem, plan, *, plan_index: Optional[int] = None,
-                 functions=None, text: Optional[str] = None) -> list:
+                 functions=None, text: Optional[str] = None, stops=None) -> list:
     """``[(IpcPlan, IpcVerdict)]`` for each IPC plan of the file ``plan``
     (``text``: its text, if read already): the actions replayed, every
     decomposition line checked against the domain's methods, every action
@@ -103,7 +103,7 @@ def validate_ipc(domain, problem, plan, *, plan_index: Optional[int] = None,
     ``--verify`` checks them (:func:`~htn.jshop.checks.ipc_verify.verify_ipc_plan`)."""
     from htn.jshop.checks.ipc_verify import verify_ipc_text
     from htn.jshop.readers.source import read_source
-    table = function_table(functions)
+    table = function_table(functions, stops)
     dom, prob = domain_and_problem(domain, problem, table)
     file = os.fspath(plan)
     if text is None:

@@ -7,10 +7,11 @@ import os
 
 import click
 
-from .options import MAX_RUNS, MAX_WORKERS, SEED, TIMEOUT_HELP, Count, Timeout
+from htn.process import deadline
+
+from .options import MAX_RUNS, MAX_WORKERS, SEED, TIMEOUT_HELP, Count, Timeout, current_stops
 from .output import warn
 from .progress import Phase
-from .signals import STATE, deadline
 
 
 @click.command("evaluate")
@@ -64,8 +65,9 @@ def evaluate(problem, domain, runs, seed, robot, faults, workers, scheduler, rec
     from htn.evaluation.cluster import ClusterError
 
     progress = _Progress(robot, runs)
+    stops = current_stops()
     try:
-        with deadline(timeout, STATE.started), progress.phase:
+        with deadline(stops, timeout, stops.started), progress.phase:
             result = run_evaluation(problem, domain=domain, runs=runs, seed=seed, robot=robot,
                                     faults=faults, workers=workers, scheduler=scheduler,
                                     records=records, plot=plot_dir, on_start=progress.start,

@@ -4,7 +4,7 @@ This module only parses arguments, calls the library and prints. Errors in the
 user's input are :class:`htn.jshop.language.errors.HtnError`; they are caught once, in
 :func:`main`, and printed as ``file:line:col: message`` with exit code 2.
 Ctrl-C exits with 130, SIGTERM with 143 (both after the command's own clean-up,
-see :mod:`htn.cli.signals`), and a reader that closes the pipe early (``htn
+see :mod:`htn.process`), and a reader that closes the pipe early (``htn
 plan ... | head -1``) ends the command quietly with 0.
 """
 from __future__ import annotations
@@ -17,9 +17,9 @@ import click
 
 from htn.jshop.language.errors import HtnError
 
+from htn.process import DeadlineExceeded, Stops, command, silence_stdout
+
 from .output import fail
-from .signals import DeadlineExceeded, interrupt_exit, silence_stdout
-from .signals import command as signal_handling
 
 # errors writing to a stream (standard output): a full disk, a device that
 # fails, a read-only file system, a descriptor that user code closed
@@ -58,7 +58,7 @@ class HtnGroup(click.Group):
                 ctx.exit(0)
             raise
         except KeyboardInterrupt as exc:
-            interrupt_exit(exc)
+            ctx.ensure_object(Stops).interrupt_exit(exc)
 
 
 @click.group(cls=HtnGroup, context_settings=CONTEXT)
@@ -81,12 +81,15 @@ _COMMANDS = {"plan": "plan_cmd", "run": "run_cmd", "validate": "validate_cmd",
              "examples": "examples_cmd", "view": "view_cmd"}
 
 
-def main(argv=None) -> None:
-    """Console entry point: run the click group, turning input errors into exit 2."""
+def main(argv=None, stops: Stops | None = None) -> None:
+    """Run the click group, turning input errors into exit 2. ``stops``:
+    the process's own (:mod:`htn.cli.start`); else the command gets its
+    own, and its signal handlers last as long as it runs."""
     sys.setrecursionlimit(max(sys.getrecursionlimit(), 20000))
-    with signal_handling() as state:
+    with command(stops) as stops:
+        interrupt_exit = stops.interrupt_exit
         try:
-            code = cli.main(args=argv, prog_name="htn", standalone_mode=False)
+            code = cli.main(args=argv, prog_name="htn", standalone_mode=False, obj=stops)
             sys.stdout.flush()
         except HtnError as exc:
             fail(exc)
@@ -114,8 +117,8 @@ def main(argv=None) -> None:
             silence_stdout()
             fail(HtnError(f"cannot write: {exc.strerror or exc}", "standard output"))
             code = 2
-        if state.received is not None and not state.reported:
-            interrupt_exit(state.received)   # a signal the command did not report
+        if stops.received is not None and not stops.reported:
+            interrupt_exit(stops.received)   # a signal the command did not report
     sys.exit(code or 0)
 
 

@@ -15,8 +15,19 @@ import os
 
 import click
 
+from htn.process import Stops
+
 TIMEOUT_HELP = ("Wall-clock limit of the whole command in seconds, loading included "
                 "(user functions too); 'inf' for none.")
+
+
+
+def current_stops() -> Stops:
+    """The running command's stops: :func:`htn.cli.main.main` gives them
+    to click as the context's object (a command invoked without it gets
+    its own)."""
+    return click.get_current_context().ensure_object(Stops)
+
 
 MAX_COUNT = 2 ** 63 - 1     # what a machine word holds: C code (PyBullet, numpy) takes no more
 MAX_RUNS = 10 ** 6          # --repeat, --runs: a million runs is days of work already

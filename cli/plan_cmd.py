@@ -18,9 +18,10 @@ from htn.jshop.search.limits import DEFAULT_MAX_DEPTH
 from htn.jshop.search.searches import SEARCHES
 
 from .output import console, stdout_is_terminal, warn
-from .options import TIMEOUT_HELP, Count, Timeout, memory_mb
+from htn.process import DeadlineExceeded, deadline
+
+from .options import TIMEOUT_HELP, Count, Timeout, current_stops, memory_mb
 from .progress import Phase
-from .signals import STATE, DeadlineExceeded, deadline, held, interrupt_exit, raise_again
 
 FORMATS = ["text", "jshop", "json", "ipc"]
 
@@ -86,7 +87,8 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
     from htn.api.plan import UnsupportedSearch, plan as find_plans
     from htn.jshop.plans.planfile import header, plan_text
 
-    started = STATE.started or time.perf_counter()     # --timeout counts from the start
+    stops = current_stops()
+    started = stops.started     # --timeout counts from the start
     fmt = fmt or ("text" if stdout_is_terminal() else "jshop")
     # -o and --dot are checked before any work, and replaced only by a
     # complete new result: at least one whole plan (also after a timeout,
@@ -106,9 +108,9 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
         # a second; it is gone before anything is printed); loading counts
         # toward --timeout too
         try:
-            with deadline(timeout, started), Phase("reading the domain and the problem"):
+            with deadline(stops, timeout, started), Phase("reading the domain and the problem"):
                 plans = find_plans(domain, problem, plans=None if all_plans else n_plans,
-                                   timeout=timeout, functions=functions,
+                                   timeout=timeout, functions=functions, stops=stops,
                                    jshop2_compat=jshop2_compat, max_depth=max_depth,
                                    max_memory=max_memory, explain=explain or explain_all,
                                    explain_all=explain_all, search=search_name,
@@ -127,10 +129,10 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
         render.spelling = {**plans.domain.spelling, **plans.problem.spelling}
         stop = None
         try:
-            with deadline(timeout, started), plans, Phase("planning") as phase:
+            with deadline(stops, timeout, started), plans, Phase("planning") as phase:
                 for p in plans:
                     phase.end()
-                    with held():    # the files first: they outlive a closed stdout
+                    with stops.held():    # the files first: they outlive a closed stdout
                         if out:
                             out.write(plan_text(p))
                             out.flush()
@@ -138,7 +140,7 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
                             dot_out.add(p.tree)
                         written.count(p)
                         render.plan(p)
-                    raise_again()       # a Ctrl-C a finalizer swallowed
+                    stops.raise_again()       # a Ctrl-C a finalizer swallowed
         except DeadlineExceeded:
             plans.stats["timed_out"] = True
         except (KeyboardInterrupt, BrokenPipeError) as exc:
@@ -170,7 +172,7 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
     if totals["timed_out"]:
         warn(f"timed out after {timeout:g} s; {found} plan(s) found")
     if isinstance(stop, KeyboardInterrupt):
-        interrupt_exit(stop, f"{found} plan(s) found")
+        stops.interrupt_exit(stop, f"{found} plan(s) found")
     if not found:
         if fmt == "text":
             warn("no plan found")

@@ -9,14 +9,13 @@ import click
 from htn.api.extras import require_robot_extra
 from htn.jshop.language.errors import HtnError
 from htn.files import atomic_write, check_output_file, check_output_folder, make_output_folder
+from htn.process import DeadlineExceeded, deadline, silence_stdout
 
 from .output import stdout_is_terminal, warn
 from .progress import Phase
 from .run_checks import check_display
-from . import signals
-from .options import SEED, TIMEOUT_HELP, Count, Timeout
+from .options import SEED, TIMEOUT_HELP, Count, Timeout, current_stops
 from .run_lines import event_line
-from .signals import STATE, deadline, held, interrupt_exit, silence_stdout
 from .view_cmd import keep_up, start_run_view, view_options, wait_for_page
 
 RUN_OPTIONS = ("plan_file", "robot_name", "sim", "faults", "seed", "retries", "replan",
@@ -101,18 +100,19 @@ def run(ctx, plan_file, robot_name, sim, gui, snapshots, faults, seed, retries, 
     """
     if view_wait and not view:
         raise click.UsageError("--view-wait waits for the page of --view: give --view too")
+    stops = current_stops()
     try:
-        with deadline(timeout, STATE.started):
+        with deadline(stops, timeout, stops.started):
             _run(ctx, plan_file, robot_name, sim, gui, snapshots, faults, seed, retries,
                  replan, log_path, from_log, plan_index, domain, problem, functions, bt_dot,
-                 quiet, web=(view_host, view_port, view_wait) if view else None)
-    except (KeyboardInterrupt, signals.DeadlineExceeded) as exc:  # before the robot runs
-        interrupt_exit(exc, now=True)       # now: PyBullet may have been interrupted
+                 quiet, stops, web=(view_host, view_port, view_wait) if view else None)
+    except (KeyboardInterrupt, DeadlineExceeded) as exc:  # before the robot runs
+        stops.interrupt_exit(exc, now=True)       # now: PyBullet may have been interrupted
 
 
 def _run(ctx, plan_file, robot_name, sim, gui, snapshots, faults, seed, retries,
          replan, log_path, from_log, plan_index, domain, problem, functions, bt_dot, quiet,
-         web=None):
+         stops, web=None):
     from htn.api.run import prepare, read_run_log
     from htn.robot.backends import backends
     from htn.robot.interface import Robot
@@ -126,7 +126,7 @@ def _run(ctx, plan_file, robot_name, sim, gui, snapshots, faults, seed, retries,
             raise click.UsageError(f"--from-log takes the run from the log; do not give "
                                    f"{', '.join(given)} as well")
         # the plan, domain and problem files too, checked to be unchanged
-        logged = read_run_log(from_log, functions)
+        logged = read_run_log(from_log, functions, stops)
         plan, plan_file = logged.plan, logged.plan.path
         robot_name, seed, replan = logged.robot, logged.seed, logged.replan
         faults, plan_index, retries = logged.faults, logged.plan_index, logged.retries
@@ -157,7 +157,8 @@ def _run(ctx, plan_file, robot_name, sim, gui, snapshots, faults, seed, retries,
         with Phase(f"reading the plan and building the {robot_name} robot"):
             execution = prepare(plan, robot=robot_name, domain=domain, problem=problem,
                                 functions=functions, plan_index=plan_index, faults=faults or "",
-                                seed=seed, retries=retries, replan=replan, log=log_path, gui=gui)
+                                seed=seed, retries=retries, replan=replan, log=log_path, gui=gui,
+                                stops=stops)
     except HtnError as exc:
         raise _as_header_error(exc, from_log) from None
     if not quiet:
@@ -172,9 +173,9 @@ def _run(ctx, plan_file, robot_name, sim, gui, snapshots, faults, seed, retries,
             make_output_folder(snapshots, "--snapshots")
         # the log begins only together with the dispatcher that will end it
         # (an interrupt meanwhile arrives right after, see below)
-        with held():
+        with stops.held():
             dispatcher = execution.begin(argv=["htn", *sys.argv[1:]])
-            signals.on_emergency(lambda: _end_in_emergency(execution))
+            stops.on_emergency(lambda: _end_in_emergency(execution, stops))
         if bt_dot:
             _write_dot(dispatcher.root, bt_dot)
         view = None
@@ -191,10 +192,10 @@ def _run(ctx, plan_file, robot_name, sim, gui, snapshots, faults, seed, retries,
             viewer.attach(execution.log, dispatcher, robot)
             if web[2]:
                 wait_for_page(viewer)
-        signals.watch(dispatcher)
+        stops.watch(execution)
         with view or contextlib.nullcontext():
             summary = execution.execute().summary
-        signals.settle()       # the robot holds and the log is complete: shut down in order
+        stops.settle()       # the robot holds and the log is complete: shut down in order
         if bt_dot and summary.replans:
             _write_dot(dispatcher.root, bt_dot)
     except KeyboardInterrupt as exc:
@@ -202,7 +203,7 @@ def _run(ctx, plan_file, robot_name, sim, gui, snapshots, faults, seed, retries,
             raise
         # outside dispatcher.run() (e.g. while --bt-dot is written): the log
         # still ends with the outcome and a summary
-        signals.settle()
+        stops.settle()
         summary = execution.interrupted(str(exc)).summary
     except BaseException as exc:
         execution.fail(exc)
@@ -214,9 +215,9 @@ def _run(ctx, plan_file, robot_name, sim, gui, snapshots, faults, seed, retries,
     except BrokenPipeError:      # the reader went away: the exit code still tells
         silence_stdout()
     if summary.result == "interrupted":     # log closed, robot disconnected
-        interrupt_exit(STATE.received or STATE.raised, now=True)
+        stops.interrupt_exit(stops.cause, now=True)
     if viewer:                   # Ctrl-C ends the view; the exit code is the run's
-        keep_up(viewer, listen=signals.listen_again)
+        keep_up(viewer, listen=stops.listen_again)
     sys.exit(0 if summary.result == "verified" else 1)
 
 
@@ -239,14 +240,14 @@ def _as_header_error(exc, from_log):
     return HtnError(f'header field "{field}": {text}', from_log, 1)
 
 
-def _end_in_emergency(execution):
+def _end_in_emergency(execution, stops):
     """The watchdog ends the process (user code kept running after a stop):
     the log still ends with ``interrupted`` and its summary."""
     log = execution.log
     if log is None or log.ended:
         return None
     try:
-        execution.interrupted(str(STATE.raised or "stopped"))
+        execution.interrupted(str(stops.raised or "stopped"))
     except BaseException:       # noqa: BLE001 - the dispatcher is mid-tick: end the log itself
         log.emit(None, None, "interrupted", None, "ended by the watchdog")
         log.emit(None, None, "summary", None, "interrupted", result="interrupted")

@@ -3,7 +3,7 @@
 Its first act installs handlers that end the process quietly on Ctrl-C or
 SIGTERM (exit 130, 143, no traceback) while the command line is being
 imported; they use only ``os`` and ``signal``, which the interpreter has
-loaded already. Then :mod:`htn.cli.signals` takes over (see there: each
+loaded already. Then :mod:`htn.process` takes over (see there: each
 command handles signals, and after the command a signal ends the process
 at once), and the exit code of the command is the process's, unless a
 signal came that it did not report.
@@ -43,14 +43,15 @@ def main(argv=None):
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, _early)
     _whole_writes()
-    from . import signals
-    signals.begin_process()
+    from htn.process import Stops, begin_process, end_process
+    stops = Stops(owned=True)       # the process is htn's: a stop may end it
+    begin_process(stops)
     code = 0
     try:
         from .main import main as cli_main
-        cli_main(argv)
+        cli_main(argv, stops)
     except SystemExit as exc:
         code = exc.code
     except KeyboardInterrupt as exc:    # between the command's end and its exit phase
-        signals.interrupt_exit(exc, now=True)
-    signals.end_process(code)
+        stops.interrupt_exit(exc, now=True)
+    end_process(stops, code)

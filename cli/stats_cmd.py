@@ -7,9 +7,10 @@ from pathlib import Path
 
 import click
 
-from .options import MAX_RUNS, TIMEOUT_HELP, Count, Timeout
+from htn.process import DeadlineExceeded, deadline
+
+from .options import MAX_RUNS, TIMEOUT_HELP, Count, Timeout, current_stops
 from .output import console
-from .signals import STATE, DeadlineExceeded, deadline
 
 GRACE = 0.5     # seconds past --timeout before a user function is interrupted
 
@@ -62,11 +63,12 @@ def _figures(files, repeat: int, functions, timeout) -> list:
 
     rows: list = []
     shown: set = set()
-    started = STATE.started or time.perf_counter()
+    stops = current_stops()
+    started = stops.started
     until = None if timeout is None else started + timeout
-    with deadline(None if timeout is None else timeout + GRACE, started):
+    with deadline(stops, None if timeout is None else timeout + GRACE, started):
         pairs = scenarios(files)
-        table = function_table(functions)
+        table = function_table(functions, stops)
         for d, p in pairs:
             try:
                 rows.append(scenario_stats(d, p, table, repeat, until=until))

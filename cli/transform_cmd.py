@@ -9,10 +9,11 @@ import click
 
 from htn.files import atomic_write
 
-from .options import TIMEOUT_HELP, Timeout
+from htn.process import deadline
+
+from .options import TIMEOUT_HELP, Timeout, current_stops
 from .output import warn
 from .progress import Phase
-from .signals import STATE, deadline
 
 
 @click.command("transform")
@@ -48,10 +49,11 @@ def transform(domain, problem, rules, metric, output, as_json, timeout):
         try:
             # planning and each rule's projected runs take seconds: a spinner
             # says which (on a terminal, after a second)
-            with deadline(timeout, STATE.started), \
+            stops = current_stops()
+            with deadline(stops, timeout, stops.started), \
                     Phase("reading the domain and the problem") as phase:
                 done = transform_plan(domain, problem, rules=rules, metric=metric,
-                                      on_warning=warn, on_phase=phase.update)
+                                      on_warning=warn, on_phase=phase.update, stops=stops)
         except UnknownRules as exc:
             raise click.BadParameter(exc.message, param_hint="--rules") from None
         if out:

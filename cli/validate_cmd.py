@@ -5,7 +5,7 @@ import sys
 
 import click
 
-from .options import TIMEOUT_HELP, Count, Timeout
+from .options import TIMEOUT_HELP, Count, Timeout, current_stops
 
 
 @click.command("validate")
@@ -41,14 +41,15 @@ def validate(domain, problem, plan_file, plan_index, functions, timeout, quiet):
     """
     from htn.api.validate import ipc_text, validate as validate_plans
 
-    from .signals import STATE, deadline
-    with deadline(timeout, STATE.started):
+    from htn.process import deadline
+    stops = current_stops()
+    with deadline(stops, timeout, stops.started):
         text = ipc_text(plan_file)
         if text is not None:
             sys.exit(_validate_ipc(domain, problem, plan_file, text, plan_index, functions,
-                                   quiet))
+                                   quiet, stops))
         checked = validate_plans(domain, problem, plan_file, plan_index=plan_index,
-                                 functions=functions)
+                                 functions=functions, stops=stops)
     bad = 0
     for c in checked:
         label = f"plan {c.plan.index + 1}"
@@ -64,10 +65,10 @@ def validate(domain, problem, plan_file, plan_index, functions, timeout, quiet):
     sys.exit(1 if bad else 0)
 
 
-def _validate_ipc(domain, problem, plan_file, text, plan_index, functions, quiet) -> int:
+def _validate_ipc(domain, problem, plan_file, text, plan_index, functions, quiet, stops) -> int:
     from htn.api.validate import validate_ipc
     results = validate_ipc(domain, problem, plan_file, plan_index=plan_index,
-                           functions=functions, text=text)
+                           functions=functions, text=text, stops=stops)
     bad = 0
     for p, verdict in results:
         label = f"plan {p.index + 1}"

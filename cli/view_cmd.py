@@ -14,7 +14,7 @@ import click
 
 from htn.api.extras import require_extra
 
-from .options import PORT
+from .options import PORT, current_stops
 
 HOST_HELP = ("Address to serve the view on (default 127.0.0.1: this machine only; any "
              "other address lets other machines reach it, with the token, and is warned of)")
@@ -63,8 +63,7 @@ def keep_up(view, listen=None) -> None:
                    err=True)
         _serve_until_interrupted()
     except KeyboardInterrupt:
-        from .signals import consume
-        consume()
+        current_stops().consume()
     view.close()
 
 
@@ -77,12 +76,11 @@ def _announce(url: str, host: str) -> None:
 
 
 def _serve_until_interrupted() -> None:
-    from .signals import consume
     try:
         while True:
             time.sleep(3600)
     except KeyboardInterrupt:
-        consume()       # Ctrl-C is how the page is closed: the exit code is not its
+        current_stops().consume()       # Ctrl-C is how the page is closed: the exit code is not its
 
 
 @click.command("view")
@@ -123,7 +121,6 @@ def view(log_file, host, port):
                    err=True)
         _serve_until_interrupted()
     except KeyboardInterrupt:       # Ctrl-C is how a server stops: not an error
-        from .signals import consume
-        consume()
+        current_stops().consume()
     finally:
         server.close()

@@ -97,7 +97,7 @@ class TaskDispatcher:
         self.retries = self.replans = self.started = 0
         self._faults_seen = 0
         self._halt: Optional[str] = None
-        self.in_tick = False
+        self._in_tick = False
         self._carrying: tuple = (None, [])        # (action, attempt) -> what it carries
         self.carry = carry_predicate(domain.name)    # the domain's word for carrying
         self.carry_checks = self.carry is not None and "still_held" in robot.check_names()
@@ -200,10 +200,14 @@ class TaskDispatcher:
                           None, f["detail"], kind=f["kind"], sim_t=f["sim_t"], **where)
 
     # ------------------------------------------------------------ the tick loop
-    def halt(self, why: str = "") -> None:
-        """Stop the tree before its next tick (safe from a signal handler);
-        ``why`` is logged with the ``interrupted`` event."""
+    def halt(self, why: str = "") -> bool:
+        """Stop the tree before its next tick (safe from a signal handler or
+        another thread); ``why`` is logged with the ``interrupted`` event.
+        True while a tick runs: the halt takes effect when it ends. Else
+        False: a signal handler raises its interrupt too, which :meth:`run`
+        ends the same way (between two ticks, e.g. while repair plans)."""
         self._halt = why or STOPPED_BY_USER
+        return self._in_tick
 
     def run(self) -> RunSummary:
         try:
@@ -212,11 +216,11 @@ class TaskDispatcher:
                     return self.interrupted()
                 # the root alone: py_trees' BehaviourTree.tick would also visit
                 # every node of the whole tree on each tick
-                self.in_tick = True
+                self._in_tick = True
                 try:
                     self.root.tick_once()
                 finally:
-                    self.in_tick = False
+                    self._in_tick = False
                 self._flush_faults()
                 for listener in self.tick_listeners:
                     listener()
@@ -234,7 +238,7 @@ class TaskDispatcher:
         except KeyboardInterrupt as exc:
             # an interrupt between two ticks (e.g. while repair plans) halts
             # the same way; its message, if any, says why (SIGTERM's does:
-            # htn.cli.signals.Terminated)
+            # htn.process.Terminated)
             return self.interrupted(str(exc))
 
     def interrupted(self, why: str = "") -> RunSummary:

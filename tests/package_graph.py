@@ -8,8 +8,8 @@ from pathlib import Path
 from conftest import ROOT
 
 # the folders of the repository that are parts of the htn package
-PACKAGE_DIRS = ("", "api", "cli", "jshop", "executor", "robot", "transform", "evaluation",
-                "view", "up", "domains", "problems")
+PACKAGE_DIRS = ("", "api", "cli", "process", "jshop", "executor", "robot", "transform",
+                "evaluation", "view", "up", "domains", "problems")
 
 
 def package_modules() -> dict[str, Path]:

@@ -76,27 +76,14 @@ class WriteError(HtnError):
     kept (a file replaced whole) or ends on its last whole line (a log)."""
 
 
-class _Stops:
-    """The stops htn's signal handlers raised into the program
-    (:mod:`htn.cli.signals`: Ctrl-C, SIGTERM, ``--timeout``), counted, so that
-    code calling user functions can tell one the user's code caught and
-    dropped (:func:`htn.jshop.language.functions.run_user_code`)."""
-
-    def __init__(self):
-        self.count = 0
-        self.last: Optional[BaseException] = None
-
-
-STOPS = _Stops()
 STOP_MARK = "htn_stop"
 
 
-def raised_stop(exc: BaseException) -> BaseException:
-    """``exc``, marked as a stop that htn itself raises (see :func:`is_stop`)
-    and counted in :data:`STOPS`; the caller raises it."""
+def mark_stop(exc: BaseException) -> BaseException:
+    """``exc``, marked as a stop that htn itself raises (Ctrl-C, SIGTERM,
+    ``--timeout``: :class:`htn.process.Stops`, see :func:`is_stop`); the
+    caller raises it."""
     setattr(exc, STOP_MARK, True)
-    STOPS.count += 1
-    STOPS.last = exc
     return exc
 
 

@@ -16,9 +16,11 @@ error located at the line of the user's file that raised (else the caller
 reports it at the call's place in the domain,
 :func:`htn.jshop.language.terms.at_call`). Only the stops htn's own handlers
 raise (Ctrl-C, SIGTERM, ``--timeout``: :func:`~.errors.is_stop`) pass
-through; one that user code caught and dropped is raised again as soon as
-its function returns, and the watchdog (:mod:`htn.cli.watchdog`) ends user
-code that does not return (:func:`running_user_code` names it).
+through; under a command's stops (a table's ``guard``,
+:class:`htn.process.Stops`) one that user code caught and dropped is raised
+again as soon as its function returns, and the watchdog
+(:mod:`htn.process.watchdog`) ends user code that does not return (the guard
+names what runs).
 """
 from __future__ import annotations
 
@@ -30,7 +32,7 @@ import os
 import types
 from typing import Any, Callable, Optional
 
-from .errors import STOPS, HtnError, is_stop, raised_stop
+from .errors import HtnError, is_stop
 from .terms import NIL, Dotted, shown_term
 
 TRUE = 1.0
@@ -214,12 +216,26 @@ def _clip(text: str, limit: int) -> str:
     return text if len(text) <= limit else text[:limit - 3] + "..."
 
 
-_RUNNING: list = []     # what user code runs now (innermost last), for the watchdog
+class Guard:
+    """How user code runs: plainly. A command's :class:`htn.process.Stops`
+    is a guard too: it names the code that runs (for its watchdog) and
+    raises again a stop the code caught (:meth:`dropped`)."""
+
+    def enter(self, what: str) -> object:
+        """User code (``what``: ``function spin``) starts; the token is for
+        :meth:`dropped` and :meth:`leave`."""
+        return None
+
+    def leave(self, token: object) -> None:
+        """It returned or raised."""
+
+    def dropped(self, token: object) -> Optional[BaseException]:
+        """A stop raised into the user code since :meth:`enter` that it
+        caught (dropped, or turned into its own): the caller raises it."""
+        return None
 
 
-def running_user_code() -> Optional[str]:
-    """What user code runs now (``function spin``), if any."""
-    return _RUNNING[-1] if _RUNNING else None
+PLAIN = Guard()
 
 
 def _user_frame(exc: BaseException, files) -> tuple:
@@ -257,13 +273,12 @@ def user_error(what: str, exc: BaseException, files=()) -> HtnError:
     return err
 
 
-def run_user_code(what: str, fn: Callable, *args) -> Any:
+def run_user_code(what: str, fn: Callable, *args, guard: Guard = PLAIN) -> Any:
     """``fn(*args)``; anything it raises but htn's own stops becomes an
     :class:`HtnError` naming ``what`` ran, at the user's line that raised
     (else the caller adds the place of the call). A stop the function
-    caught and dropped is raised again when it returns."""
-    stops = STOPS.count
-    _RUNNING.append(what)
+    caught and dropped is raised again when it returns (``guard``)."""
+    token = guard.enter(what)
     try:
         result = fn(*args)
     except HtnError:
@@ -271,23 +286,25 @@ def run_user_code(what: str, fn: Callable, *args) -> Any:
     except BaseException as exc:  # noqa: BLE001 - the user's code failed: report, no traceback
         if is_stop(exc):
             raise
-        if STOPS.count != stops and STOPS.last is not None:
-            raise raised_stop(STOPS.last) from None     # it turned our stop into its own
+        stop = guard.dropped(token)
+        if stop is not None:
+            raise stop from None        # it turned our stop into its own
         code = getattr(fn, "__code__", None)
         raise user_error(what, exc, {code.co_filename} if code else ()) from None
     finally:
-        _RUNNING.pop()
-    if STOPS.count != stops and STOPS.last is not None:
-        raise raised_stop(STOPS.last)       # it swallowed a stop: the command stops all the same
+        guard.leave(token)
+    stop = guard.dropped(token)
+    if stop is not None:
+        raise stop      # it swallowed a stop: the command stops all the same
     return result
 
 
-def wrap_user_function(name: str, fn: Callable) -> Callable:
+def wrap_user_function(name: str, fn: Callable, table: "FunctionTable") -> Callable:
     what = f"function {name}"
 
     def call(args):
         result = run_user_code(what, fn, *[a if type(a) is str or type(a) is float
-                                           else to_python(a) for a in args])
+                                           else to_python(a) for a in args], guard=table.guard)
         try:
             return from_python(result)
         except (OverflowError, RecursionError, ValueError):  # huge, nested in itself, NaN int
@@ -297,10 +314,10 @@ def wrap_user_function(name: str, fn: Callable) -> Callable:
     return call
 
 
-def compare(name: str, fn: Callable, a: Any, b: Any) -> int:
+def compare(name: str, fn: Callable, a: Any, b: Any, guard: Guard = PLAIN) -> int:
     """A user comparator's verdict on two terms: negative, zero or positive
     (manual appendix B); anything but a number is an error."""
-    r = run_user_code(f"comparator {name}", fn, to_python(a), to_python(b))
+    r = run_user_code(f"comparator {name}", fn, to_python(a), to_python(b), guard=guard)
     n = None
     if not isinstance(r, bool) and isinstance(r, (int, float)):
         # the built-in value, without calling a subclass's methods
@@ -314,7 +331,8 @@ def compare(name: str, fn: Callable, a: Any, b: Any) -> int:
 class FunctionTable:
     """Maps call names (case-insensitive) to callables on term tuples."""
 
-    def __init__(self):
+    def __init__(self, guard: Guard = PLAIN):
+        self.guard = guard      # how user code runs (a command's stops)
         self.calls: dict[str, Callable] = dict(STDLIB)
         self.user: dict[str, Callable] = {}
         self.source: str | None = None
@@ -343,8 +361,8 @@ class FunctionTable:
             check(digest)
         module = types.ModuleType("_htn_user_functions")
         module.__file__ = path
-        stops = STOPS.count
-        _RUNNING.append(f"the functions file {path}")
+        guard = self.guard
+        token = guard.enter(f"the functions file {path}")
         try:
             exec(compile(data, path, "exec", dont_inherit=True), module.__dict__)
         except SyntaxError as exc:
@@ -355,16 +373,18 @@ class FunctionTable:
         except BaseException as exc:  # noqa: BLE001 - the file failed to load: one line
             if is_stop(exc):
                 raise
-            if STOPS.count != stops and STOPS.last is not None:
-                raise raised_stop(STOPS.last) from None
+            stop = guard.dropped(token)
+            if stop is not None:
+                raise stop from None
             err = user_error("loading failed: it", exc, {path})
             if err.file is None:
                 err.file = path
             raise err from None
         finally:
-            _RUNNING.pop()
-        if STOPS.count != stops and STOPS.last is not None:
-            raise raised_stop(STOPS.last)
+            guard.leave(token)
+        stop = guard.dropped(token)
+        if stop is not None:
+            raise stop
         self.source, self.sha256 = path, digest
         for name, fn in vars(module).items():
             if name.startswith("_") or not inspect.isfunction(fn):
@@ -372,4 +392,4 @@ class FunctionTable:
             if fn.__module__ != module.__name__:
                 continue  # imported helpers are not the file's own functions
             self.user[name.lower()] = fn
-            self.calls[name.lower()] = wrap_user_function(name, fn)
+            self.calls[name.lower()] = wrap_user_function(name, fn, self)

@@ -70,7 +70,7 @@ def sorted_by(sat, pre, functions):
 
         def cmp(a, b):
             try:
-                return compare(name, user, a[idx], b[idx])
+                return compare(name, user, a[idx], b[idx], functions.guard)
             except HtnError as exc:    # placed at the :sort-by that called it
                 raise PlanningError.at(pre.pos, exc.message) from None
 

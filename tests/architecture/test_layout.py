@@ -78,6 +78,7 @@ ROOMS = {
     "jshop": JSHOP,
     "installation": {"jshop.language"},
     "files": {"jshop.language"},
+    "process": {"jshop.language"},
     "robot": JSHOP,
     "executor": {"robot", "installation", *JSHOP},
     "transform": {"executor", "robot", *JSHOP},
@@ -118,8 +119,8 @@ def test_every_room_imports_only_what_the_architecture_page_allows():
 # the suite mirrors the rooms: a folder per room (and e2e/ for the corpus,
 # IPC and fuzz suites, architecture/ for these rules); a file is named after
 # its subject, not after the task or session that made it
-TEST_FOLDERS = {"jshop", "executor", "robot", "cli", "api", "view", "up", "transform",
-                "evaluation", "e2e", "architecture"}
+TEST_FOLDERS = {"jshop", "executor", "robot", "cli", "process", "api", "view", "up",
+                "transform", "evaluation", "e2e", "architecture"}
 HISTORY_WORDS = {"hardening", "newcomer", "pictures", "issue", "round", "session", "one"}
 
 

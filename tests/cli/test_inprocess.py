@@ -59,7 +59,7 @@ def test_a_command_that_leaves_a_handler_behind_fails_the_test(tmp_path):
 
 
 def test_a_signal_a_user_function_blocks_is_unblocked_by_htn(tmp_path):
-    # htn itself restores the mask its caller had (htn.cli.signals)
+    # htn itself restores the mask its caller had (htn.process)
     d, p, fns = tmp_path / "d.jshop", tmp_path / "p.jshop", tmp_path / "fns.py"
     d.write_text("(defdomain d ((:operator (!a) ((call block)) () ())))")
     p.write_text("(defproblem p d () ((!a)))")

@@ -1,8 +1,9 @@
 """The watchdog: a stop (Ctrl-C, SIGTERM, ``--timeout``) that the program
 does not act on is acted on for it.
 
-It starts with the first stop :mod:`htn.cli.signals` raises, as a daemon
-thread, and until the command ends it
+It starts with the first stop a command's :class:`~htn.process.stops.Stops`
+raises (only in htn's own process), as a daemon thread, and until the
+command ends it
 
 * raises the stop again, every :data:`EVERY` seconds, while Python has
   dropped it (a stop raised inside a finalizer or a weakref callback is
@@ -21,30 +22,22 @@ This module imports only the standard library.
 from __future__ import annotations
 
 import _thread
+import atexit
 import os
 import sys
 import threading
 import time
-from typing import Callable, Optional
 
 GRACE = 3.0      # seconds user code gets to stop after a stop
 HARD = 30.0      # seconds anything gets
 EVERY = 0.2
 
 
-def running_user_code() -> Optional[str]:
-    """What user code runs now (``function spin (funcs.py:3)``), if any."""
-    functions = sys.modules.get("htn.jshop.language.functions")
-    return functions.running_user_code() if functions is not None else None
-
-
 class Watchdog:
-    """``signal_of()``: the signal to raise a dropped stop again with (or
-    None); ``end(why)``: keep what is whole and end the process."""
+    """Watches one command's stops (a :class:`~htn.process.stops.Stops`)."""
 
-    def __init__(self, signal_of: Callable[[], Optional[int]], end: Callable[[str], None]):
-        self.signal_of = signal_of
-        self.end = end
+    def __init__(self, stops):
+        self.stops = stops
         self.since = time.monotonic()
         self.done = threading.Event()
         self._thread = threading.Thread(target=self._watch, name="htn-watchdog", daemon=True)
@@ -59,11 +52,11 @@ class Watchdog:
 
     def _watch(self) -> None:
         while not self.done.wait(EVERY):
-            signum = self.signal_of()
+            signum = self.stops.signal_to_raise_again()
             if signum is not None and not self.done.is_set():
                 _thread.interrupt_main(signum)
             waited = time.monotonic() - self.since
-            stuck = running_user_code()
+            stuck = self.stops.running_user_code()
             if stuck and waited >= GRACE:
                 return self._end(f"{stuck} did not stop within {GRACE:g} s: ended")
             if waited >= HARD:
@@ -71,7 +64,7 @@ class Watchdog:
 
     def _end(self, why: str) -> None:
         if not self.done.is_set():
-            self.end(why)
+            self.stops.emergency_exit(why)
 
 
 _DEVNULL: list = []
@@ -87,23 +80,37 @@ def backstop_after(after: float) -> bool:
     return True
 
 
-def leave_now(code) -> None:
-    """Exit with ``code`` as ``sys.exit(code)`` would (None: 0; a message:
-    printed, 1) but without the interpreter's shutdown (the exit hooks,
-    which remove temporaries, run first): the shutdown puts the default
-    signal handlers back, and a signal then kills the process (an
-    interrupted htn plan under load, 1 in 8; a finished htn run --sim)."""
-    import atexit
-    atexit._run_exitfuncs()
+def cancel_backstop() -> None:
+    import faulthandler
+    faulthandler.cancel_dump_traceback_later()
+
+
+def exit_code(code) -> int:
+    """The exit code ``sys.exit(code)`` gives (None: 0; a message: printed, 1)."""
     if code is not None and not isinstance(code, int):
         try:
             sys.stderr.write(f"{code}\n")
         except (OSError, ValueError):
             pass
-        code = 1
-    for stream in (sys.stdout, sys.stderr):
-        try:
-            stream.flush()
-        except (OSError, ValueError):
-            pass
-    os._exit(code or 0)
+        return 1
+    return code or 0
+
+
+def leave_last(stops) -> None:
+    """Register the exit hook that ends an owned process once its command
+    has ended (``stops.exit_code`` is set): the other exit hooks (which
+    remove temporaries) have run, but the interpreter's shutdown has not
+    yet put the default signal handlers back, after which a signal would
+    kill the process (an interrupted htn plan under load, 1 in 8; a finished
+    htn run --sim). Exit hooks run last registered first: registered at the
+    process's start, this one runs after those of every library imported."""
+    def leave() -> None:
+        if stops.exit_code is None:
+            return
+        for stream in (sys.stdout, sys.stderr):
+            try:
+                stream.flush()
+            except (OSError, ValueError):
+                pass
+        os._exit(stops.exit_code)
+    atexit.register(leave)
