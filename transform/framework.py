@@ -1,6 +1,8 @@
 """The plan transformation framework (Kazhoyan et al., Table I), over task trees.
 
-A plan's task tree is summarised as facts (:func:`tree_facts`); a
+A plan's task tree is summarised as facts (:func:`tree_facts`), read by the
+domain's operators that a rule set declares (a :class:`Vocabulary`; the
+built-in rules' is :data:`htn.transform.rules.KITCHEN`); a
 transformation is registered with an **applicability rule**: a query atom
 answered, with the JSHOP2 axioms of a rules file, by this planner's own logic
 engine (the paper uses Prolog). Each satisfier is an input schema for the
@@ -24,7 +26,7 @@ from __future__ import annotations
 
 import math
 import statistics
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, Optional
 
@@ -33,82 +35,24 @@ from htn.jshop.language.errors import HtnError
 from htn.jshop.logic.engine import Logic
 from htn.jshop.logic.state import State
 from htn.jshop.readers.load import parse_text
-from htn.jshop.search.planner import Planner
 
-RULES_FILE = Path(__file__).with_name("rules.jshop")
+from .rules import KITCHEN, RULES_FILE
+from .workspace import Unit, Vocabulary, Workspace
 
-
-# ------------------------------------------------------------------ workspace
-
-@dataclass
-class Unit:
-    """One entry of the top-level task list: task atoms that replace one or
-    more original top-level tasks (``paths``)."""
-    tasks: list                      # [S.TaskAtom]
-    paths: list                      # node paths of the original tasks it stands for
-    transformed_by: Optional[str] = None
-
-
-@dataclass
-class Workspace:
-    """A plan being transformed: domain, problem instance, top-level units,
-    and the plan and tree they currently give."""
-    domain: S.Domain
-    instance: S.ProblemInstance
-    units: list
-    plan: object = None
-    log: list = field(default_factory=list)     # (rule, status, detail)
-    frozen: set = field(default_factory=set)    # paths of rolled-back rewrites
-
-    @classmethod
-    def from_problem(cls, domain: S.Domain, instance: S.ProblemInstance) -> "Workspace":
-        plan = next(Planner(domain, instance, record_trees=True).plans(), None)
-        if plan is None:
-            raise HtnError.at(instance.pos, "the problem has no plan to transform")
-        units = []
-        for node, atom in zip(plan.tree.children, S.task_atoms(instance.tasks)):
-            units.append(Unit([atom], [node.path]))
-        return cls(domain, instance, units, plan)
-
-    def task_list(self) -> S.TaskList:
-        return S.TaskList([t for u in self.units for t in u.tasks])
-
-    def annotated_tree(self):
-        """The current plan's tree; each top-level node rewritten by a
-        transformation carries the replacement tasks in its code-replacement
-        slot (the paper's mechanism, here filled in for inspection)."""
-        from htn.jshop.language.terms import source_atom
-        tree = self.plan.tree
-        nodes = iter(tree.children)
-        for unit in self.units:
-            for node in [next(nodes) for _ in unit.tasks]:
-                if unit.transformed_by:
-                    node.code_replacement = [
-                        source_atom(t.name, t.args) for t in unit.tasks]
-        return tree
-
-    def replan(self, units=None):
-        """The first plan of ``units`` (default: the current ones), or None."""
-        units = self.units if units is None else units
-        tasks = S.TaskList([t for u in units for t in u.tasks])
-        inst = S.ProblemInstance(self.instance.state, tasks, self.instance.pos)
-        return next(Planner(self.domain, inst, record_trees=True).plans(timeout=30.0), None)
-
-    def unit_of(self, path: str) -> Unit:
-        for u in self.units:
-            if path in u.paths:
-                return u
-        raise KeyError(path)
+__all__ = ["Framework", "Transformation", "Unit", "Vocabulary", "Workspace", "METRICS",
+           "RULES_FILE", "navigation_distance", "projected", "tree_facts"]
 
 
 # ------------------------------------------------------------------ facts
 
-def tree_facts(ws: Workspace) -> list[tuple[str, tuple]]:
+def tree_facts(ws: Workspace, vocabulary: Vocabulary = KITCHEN) -> list[tuple[str, tuple]]:
     """Facts about the current task list and its plan, for applicability rules.
 
     Tasks are named by the path they had in the original plan's tree (the
     current tree renumbers ``:call N`` as tasks are rewritten); the current
-    tree's top-level nodes follow the task list one for one.
+    tree's top-level nodes follow the task list one for one. A transport is
+    ``one-arm`` when its steps of the ``vocabulary``'s handling operators name
+    one arm.
     """
     containers = {a.args[0]: a.args[1] for a in ws.instance.state if a.pred == "container"}
     facts: list = [("tray-at", a.args[:2]) for a in ws.instance.state if a.pred == "tray"]
@@ -131,7 +75,7 @@ def tree_facts(ws: Workspace) -> list[tuple[str, tuple]]:
             facts.append(("fetch-area", (path, src)))
         facts.append(("deliver-area", (path, dst)))
         arms = {ws.plan.steps[leaf.step].args[-1] for leaf in node.leaves()
-                if ws.plan.steps[leaf.step].name in ("!grasp", "!grasp-from", "!place")}
+                if ws.plan.steps[leaf.step].name in vocabulary.handling}
         if len(arms) == 1:
             facts.append(("one-arm", (path,)))
     return facts
@@ -139,13 +83,15 @@ def tree_facts(ws: Workspace) -> list[tuple[str, tuple]]:
 
 # ------------------------------------------------------------------ metrics
 
-def navigation_distance(instance: S.ProblemInstance, plan) -> float:
-    """Sum of straight-line distances of the plan's !navigate steps."""
+def navigation_distance(instance: S.ProblemInstance, plan,
+                        navigate: str = KITCHEN.navigate) -> float:
+    """Sum of straight-line distances of the plan's ``navigate`` steps (the
+    operator of a vocabulary that moves the robot between two areas)."""
     from htn.robot.projection import world_from_atoms      # area coordinates, checked
     where = world_from_atoms([a for a in instance.state if a.pred == "area"]).places
     total = 0.0
     for s in plan.steps:
-        if s.name == "!navigate" and s.args[0] in where and s.args[1] in where:
+        if s.name == navigate and s.args[0] in where and s.args[1] in where:
             (x0, y0), (x1, y1) = where[s.args[0]], where[s.args[1]]
             total += math.hypot(x1 - x0, y1 - y0)
     return total
@@ -191,8 +137,9 @@ class Transformation:
 class Framework:
     """Registered transformations, their priorities, and how to apply them."""
 
-    def __init__(self, rules_file: Path = RULES_FILE):
+    def __init__(self, rules_file: Path = RULES_FILE, vocabulary: Vocabulary = KITCHEN):
         self.rules_text = Path(rules_file).read_text()
+        self.vocabulary = vocabulary        # the operators its facts read the plan by
         self.transformations: list[Transformation] = []
         self.priorities: list[tuple[str, str]] = []     # (superior, inferior) names
 
@@ -293,7 +240,7 @@ class Framework:
         for v in _vars_of(method.branches[0].pre.expr):
             names.setdefault(v.name, v.index)
         state = State()
-        for pred, args in tree_facts(ws):
+        for pred, args in tree_facts(ws, self.vocabulary):
             state.add(pred, args)
         logic = Logic(domain, state)
         sat = logic.precondition(method.branches[0].pre)

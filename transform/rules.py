@@ -7,16 +7,29 @@ subtasks (searching, fetching, delivering, loading-tray, ...) are reused, so the
 planner re-plans the rewritten list with the domain's methods and operators:
 arms are chosen by the ``fetching`` method (the first free one), and the
 framework rolls a rewrite back if no valid plan results.
+
+The rule set declares what the generic framework needs to know of the
+domain: its applicability rules (:data:`RULES_FILE`) and the operators it
+reads the plans by (:data:`KITCHEN`), the defaults of
+:class:`~htn.transform.framework.Framework`.
 """
 from __future__ import annotations
 
 import itertools
 from collections import OrderedDict
+from pathlib import Path
 
 from htn.jshop.language import syntax as S
 from htn.jshop.language.terms import Var
 
-from .framework import Framework, Unit
+from .workspace import Unit, Vocabulary
+
+RULES_FILE = Path(__file__).with_name("rules.jshop")
+
+# the kitchen's operators that take or put down an object (the arm last) and
+# the one that moves the robot between two areas
+KITCHEN = Vocabulary(handling=frozenset({"!grasp", "!grasp-from", "!place"}),
+                     navigate="!navigate")
 
 _fresh = itertools.count(1)
 
@@ -106,8 +119,9 @@ def tray(ws, schemas):
     return f"{tray_}: {', '.join(order)}", order
 
 
-def register(fw: Framework) -> None:
-    """Register the three rules with priorities tray > container > both-hands."""
+def register(fw) -> None:
+    """Register the three rules with a :class:`~htn.transform.framework.Framework`,
+    priorities tray > container > both-hands."""
     fw.register_transformation(both_hands, "(both-hands ?first ?second)", "both-hands")
     fw.register_transformation(container, "(container-shared ?t ?c)", "container")
     fw.register_transformation(tray, "(tray-transport ?t ?tray ?from ?to)", "tray")
