@@ -19,7 +19,9 @@ from typing import Optional
 
 import numpy as np
 
+from .base import MobileBase
 from .interface import Caption
+from .physics import Physics
 
 SIZE = (800, 600)                 # width, height of a snapshot (pixels)
 BAND = (20, 24, 28, 200)          # the caption band's colour, a little transparent
@@ -30,11 +32,14 @@ FONT_SIZE = 17
 
 
 class OverviewCamera:
-    """A part of a PyBullet robot (needs ``p``, ``cid`` and ``base``)."""
+    """The camera that follows ``base``, looking from behind and above it."""
+
+    def __init__(self, physics: Physics, base: MobileBase):
+        self.physics, self.base = physics, base
 
     def _overview_rgb(self, width: int, height: int) -> np.ndarray:
-        p, c = self.p, self.cid
-        x, y, yaw = self.base
+        p, c = self.physics.p, self.physics.cid
+        x, y, yaw = self.base.pose
         eye = [x - 2.2 * math.cos(yaw) + 0.8, y - 2.2 * math.sin(yaw) - 0.8, 2.6]
         view = p.computeViewMatrix(eye, [x + 0.6 * math.cos(yaw), y + 0.6 * math.sin(yaw), 0.5],
                                    [0, 0, 1], physicsClientId=c)

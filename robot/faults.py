@@ -2,8 +2,9 @@
 kinds a robot back end can inject (no simulator needed to check them)."""
 from __future__ import annotations
 
+import random
 from dataclasses import dataclass, fields
-from typing import Iterable, Optional
+from typing import Callable, Iterable, Optional
 
 from htn.jshop.language.errors import HtnError
 
@@ -49,3 +50,32 @@ class Faults:
     @classmethod
     def parse(cls, text: Optional[str]) -> "Faults":
         return cls(**parse_faults(text, cls.kinds()))
+
+
+class FaultDraws:
+    """The seeded draws of a simulated robot's faults, and the record of those
+    injected. One random generator serves all the robot's parts (and the
+    perception noise): the order of the draws is the run's, so the same seed
+    gives the same run."""
+
+    def __init__(self, faults: Faults, seed: int, clock: Callable[[], float]):
+        self.faults = faults
+        self.rng = random.Random(seed)
+        self.injected: list[dict] = []     # kind, sim_t, detail: for the log and the tests
+        self._clock = clock
+        self._moved: set[str] = set()      # objects somebody already took away
+
+    def happens(self, kind: str) -> bool:
+        """Does fault ``kind`` happen now? Draws only when its probability is not 0."""
+        p = getattr(self.faults, kind)
+        return bool(p) and self.rng.random() < p
+
+    def moved_once(self, obj: str) -> bool:
+        """The ``moved`` fault: somebody takes ``obj`` away, once at most."""
+        if self.faults.moved and obj not in self._moved and self.happens("moved"):
+            self._moved.add(obj)
+            return True
+        return False
+
+    def inject(self, kind: str, detail: str) -> None:
+        self.injected.append({"kind": kind, "sim_t": round(self._clock(), 4), "detail": detail})

@@ -3,9 +3,9 @@
 The navigation and manipulation costs of the plan-transformations paper
 (Section IV-A: distances between key points of the base and gripper
 trajectories), measured here at every physics step of the motion instead of
-between key points. :class:`~htn.robot.physics.Physics` samples the odometer
-each time its clock advances, so every base and arm motion of both PyBullet
-robots is counted.
+between key points. The odometer samples after each step of the
+:class:`~htn.robot.physics.Physics` clock (its ``after_step`` hook), so every
+base and arm motion of both PyBullet robots is counted.
 """
 from __future__ import annotations
 
@@ -13,6 +13,8 @@ import math
 from typing import Optional
 
 from .arm import EE_LINK
+from .base import MobileBase
+from .physics import Physics
 
 
 class Odometry:
@@ -20,17 +22,19 @@ class Odometry:
     summed paths of the gripper frames relative to the base (m), so that
     driving with still arms adds nothing to it."""
 
-    def __init__(self):
+    def __init__(self, physics: Physics, base: MobileBase):
+        self._physics, self._base = physics, base
         self.base = 0.0
         self.grippers = 0.0
         self._last: Optional[tuple] = None     # base (x, y), grippers in the base frame
 
-    def sample(self, robot) -> None:
-        x, y, yaw = robot.base
+    def sample(self) -> None:
+        p, c = self._physics.p, self._physics.cid
+        x, y, yaw = self._base.pose
         cos, sin = math.cos(yaw), math.sin(yaw)
         grippers = []
-        for body, _ in robot._mounted():       # the arms ride on the base
-            gx, gy, gz = robot.p.getLinkState(body, EE_LINK, physicsClientId=robot.cid)[4]
+        for body, _ in self._base.mounted():       # the arms ride on the base
+            gx, gy, gz = p.getLinkState(body, EE_LINK, physicsClientId=c)[4]
             dx, dy = gx - x, gy - y
             grippers.append((cos * dx + sin * dy, cos * dy - sin * dx, gz))
         if self._last is not None:

@@ -11,50 +11,58 @@ import math
 
 import numpy as np
 
-from .interface import Check, check
+from .base import MobileBase
+from .faults import FaultDraws
+from .interface import Check
+from .physics import Physics
 
 CAMERA_HEIGHT = 1.45
 SEEN_PIXELS = 5
 
 
 class Perception:
-    """Looking with the head camera, and the detections it leaves."""
+    """Looking with the head camera (``pixels``: width, height of its image),
+    and the detections it leaves."""
 
-    CAMERA_PIXELS = (96, 72)   # width, height of the head camera's image
+    def __init__(self, physics: Physics, base: MobileBase, draws: FaultDraws,
+                 pixels: tuple[int, int]):
+        self.physics, self.base, self.draws = physics, base, draws
+        self.pixels = pixels
+        self.detections: dict[str, tuple] = {}     # object -> where it was seen
 
-    def _visible_pixels(self, name: str, target) -> int:
+    def visible_pixels(self, name: str, target) -> int:
         """Pixels of ``name`` in the head camera's segmentation image, looking at ``target``."""
-        p, c = self.p, self.cid
-        x, y, yaw = self.base
-        w_, h_ = self.CAMERA_PIXELS
+        p, c = self.physics.p, self.physics.cid
+        x, y, yaw = self.base.pose
+        w_, h_ = self.pixels
         eye = [x + 0.1 * math.cos(yaw), y + 0.1 * math.sin(yaw), CAMERA_HEIGHT]
         view = p.computeViewMatrix(eye, list(target), [0, 0, 1], physicsClientId=c)
         proj = p.computeProjectionMatrixFOV(70, 4 / 3, 0.1, 8.0, physicsClientId=c)
         img = p.getCameraImage(w_, h_, view, proj, renderer=p.ER_TINY_RENDERER,
                                physicsClientId=c)
         seg = np.asarray(img[4]).reshape(h_, w_)
-        return int(np.count_nonzero((seg & ((1 << 24) - 1)) == self.body_of[name]))
+        return int(np.count_nonzero((seg & ((1 << 24) - 1)) == self.physics.body_of[name]))
 
-    def _noisy_pos(self, name: str) -> tuple:
+    def noisy_pos(self, name: str) -> tuple:
         """Where perception puts a body: its position with a few millimetres of noise."""
-        return tuple(self._body_pos(name) + np.array(
-            [self.rng.gauss(0, 0.003), self.rng.gauss(0, 0.003), 0]))
+        rng = self.draws.rng
+        return tuple(self.physics.body_pos(name) + np.array(
+            [rng.gauss(0, 0.003), rng.gauss(0, 0.003), 0]))
 
-    def _look(self, obj: str, target) -> int:
+    def look(self, obj: str, target) -> int:
         """Look at ``target`` for ``obj``; record a detection when it is seen.
         Returns the pixels (0 after a detection fault)."""
-        pixels = self._visible_pixels(obj, target)
-        if self.faults.detect and self.rng.random() < self.faults.detect:
+        pixels = self.visible_pixels(obj, target)
+        if self.draws.happens("detect"):
             pixels = 0
-            self.inject("detect", f"{obj} missed")
+            self.draws.inject("detect", f"{obj} missed")
         if pixels >= SEEN_PIXELS:
-            self.detections[obj] = self._noisy_pos(obj)
+            self.detections[obj] = self.noisy_pos(obj)
         return pixels
 
-    @check("detection")
     def check_detection(self, obj: str) -> Check:
         det = self.detections.get(obj)
         if det is None:
             return Check(False, f"no detection of {obj}")
-        err = float(np.linalg.norm(np.array(det) - self._body_pos(obj)))
+        err = float(np.linalg.norm(np.array(det) - self.physics.body_pos(obj)))
         return Check(err < 0.03, f"detection {err:.3f} m from {obj}")

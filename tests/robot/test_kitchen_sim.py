@@ -99,9 +99,9 @@ def test_the_simulated_kitchen_ends_as_the_plan_predicts(which):
         # the four objects really stand on the sink area's table, upright
         for obj in ("bowl1", "bowl2", "spoon1", "spoon2"):
             assert robot.check_on(obj, "sink_area").ok
-            _, orn = robot.p.getBasePositionAndOrientation(robot.body_of[obj],
-                                                            physicsClientId=robot.cid)
-            assert abs(robot.p.getEulerFromQuaternion(orn)[0]) < 0.2
+            ph = robot.physics
+            _, orn = ph.p.getBasePositionAndOrientation(ph.body_of[obj], physicsClientId=ph.cid)
+            assert abs(ph.p.getEulerFromQuaternion(orn)[0]) < 0.2
     finally:
         robot.close()
 
@@ -148,9 +148,9 @@ def test_a_closed_drawer_hides_its_spoons_and_the_grasp_is_aborted():
         got = run_steps(robot, "set_table_and_clean_up",
                         ["(!open drawer)", "(!grasp-from spoon1 drawer left)", "(!close drawer)"])
         assert got == [Outcome.VERIFIED] * 3
-        assert robot.arm_held == {"left": "spoon1", "right": None}
+        assert robot.arms.hands == {"left": "spoon1", "right": None}
         # the other spoon moved with the drawer and back
-        assert robot._in_drawer("spoon2", robot.drawers["drawer"])
+        assert robot.drawers.holds("spoon2", robot.drawers["drawer"])
     finally:
         robot.close()
 
