@@ -13,12 +13,17 @@ import time
 from typing import Iterator, Optional
 
 from htn.jshop.language.errors import HtnError
+from htn.jshop.language.terms import java_double
 from htn.jshop.plans.plan import Plan
 from htn.jshop.readers.checks import compat_warning
 from htn.jshop.search.limits import DEFAULT_MAX_DEPTH
-from htn.jshop.search.searches import make_search, refusal
+from htn.jshop.search.searches import SEARCHES, make_search, refusal
 
 from .inputs import function_table, path_of, read_inputs
+
+# what the command line shows of plans and searches (it imports only htn.api)
+__all__ = ["plan", "PlanStream", "UnsupportedSearch", "ipc_text", "java_double", "SEARCHES",
+           "DEFAULT_MAX_DEPTH"]
 
 
 def plan(domain, problem, *, plans: Optional[int] = 1, timeout: Optional[float] = None,
@@ -60,6 +65,13 @@ def plan(domain, problem, *, plans: Optional[int] = 1, timeout: Optional[float] 
                    max_memory=max_memory << 20 if max_memory else None)
     return PlanStream(dom, prob, table, warnings, options, started, timeout, plans,
                       explain or explain_all, explain_all, trees, tree_paths, search)
+
+
+def ipc_text(plan: Plan, spelling: Optional[dict] = None) -> str:
+    """``plan`` in the IPC 2020 HTN plan format (actions and decompositions);
+    ``spelling``: names as the input wrote them."""
+    from htn.jshop.plans.ipc import ipc_text as text
+    return text(plan, spelling or {})
 
 
 class UnsupportedSearch(HtnError):

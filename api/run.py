@@ -27,7 +27,8 @@ from htn.robot.backends import RobotRequest, make_robot
 from htn.robot.interface import Robot
 
 from .extras import require_robot_extra
-from htn.files import check_output_file
+from .inputs import path_of
+from .run_outputs import RunOutputs
 from .run_inputs import LoggedRun, RunInputs, read_run_log, run_inputs
 
 __all__ = ["run", "prepare", "Execution", "RunResult", "read_run_log", "LoggedRun"]
@@ -96,19 +97,33 @@ def run(plan, *, robot, domain=None, problem=None, functions=None, plan_index: i
             return execution.interrupted(str(exc))
 
 
+def robots() -> list[str]:
+    """The names of the robot back ends (``htn run --robot NAME``), plugins' too."""
+    from htn.robot.backends import backends
+    return sorted(backends())
+
+
 def prepare(plan, *, robot, domain=None, problem=None, functions=None, plan_index: int = 1,
             faults: str = "", seed: int = 0, retries=None, replan: bool = False, log=None,
             on_event: Optional[Listener] = None, gui: bool = False,
-            stops=None) -> "Execution":
+            stops=None, bt_dot=None, snapshots=None, read=()) -> "Execution":
     """Everything :func:`run` does before the log begins: read and check the
     inputs (every step ground and applicable in turn, the retry limits, the
-    task tree, the log's path), build the robot and check that every step has
-    an action state machine on it. Nothing has moved yet; the caller then
+    task tree, the outputs' paths), build the robot and check that every step
+    has an action state machine on it. Nothing has moved yet; the caller then
     calls :meth:`Execution.begin` and :meth:`Execution.execute` (or closes
-    it), best in a ``with`` block."""
-    if log is not None:
-        log = str(log)
-        check_output_file(log, "--log")
+    it), best in a ``with`` block.
+
+    ``bt_dot``: a file for the behaviour tree in DOT, written when the run
+    begins and again after it if it was repaired; ``snapshots``: a folder
+    for a labelled camera image per action attempt (a robot with a camera);
+    ``read``: other files the caller read for this run (a log it repeats),
+    which no output may overwrite."""
+    outputs = RunOutputs(None if log is None else str(log), bt_dot and str(bt_dot),
+                         snapshots and str(snapshots))
+    log = outputs.log
+    outputs.check([path_of(plan) or getattr(plan, "path", None), path_of(domain),
+                   path_of(problem), path_of(functions), *read])
     if isinstance(robot, str):
         require_robot_extra(robot, f"the {robot} robot")
     elif isinstance(robot, Robot):
@@ -126,10 +141,11 @@ def prepare(plan, *, robot, domain=None, problem=None, functions=None, plan_inde
         owned = True
     else:
         name, owned = type(robot).__name__, False
-    execution = Execution(inputs, robot, name, owned, faults or "", seed, replan, log,
+    execution = Execution(inputs, robot, name, owned, faults or "", seed, replan, outputs,
                           on_event)
     try:
         execution.check_machines()
+        outputs.prepare_snapshots(robot, name)
     except BaseException:
         execution.close()
         raise
@@ -142,14 +158,15 @@ class Execution:
     ended it). :meth:`halt` stops it between two ticks, from anywhere."""
 
     def __init__(self, inputs: RunInputs, robot, robot_name: str, owned: bool, faults: str,
-                 seed: int, replan: bool, log_path: Optional[str],
+                 seed: int, replan: bool, outputs: RunOutputs,
                  on_event: Optional[Listener]):
         self.inputs = inputs
         self.robot = robot
         self.robot_name = robot_name
         self.owned = owned              # built here, so closed here
         self.faults, self.seed, self.replan = faults, seed, replan
-        self.log_path = log_path
+        self.outputs = outputs
+        self.log_path = outputs.log
         self.listeners: list = [on_event] if on_event else []
         self.log: Optional[EventLog] = None
         self.dispatcher: Optional[TaskDispatcher] = None
@@ -202,6 +219,10 @@ class Execution:
                                          tree=i.tree)
         if self._halt:
             self.dispatcher.halt(self._halt)
+        snapshots = self.outputs.snapshot_listener(robot)
+        if snapshots is not None:
+            self.listen(snapshots)
+        self.outputs.write_dot(self.dispatcher.root)
         return self.dispatcher
 
     def execute(self) -> RunResult:
@@ -209,7 +230,10 @@ class Execution:
         or is aborted (and cannot be repaired), or the run is halted."""
         if self.dispatcher is None:
             self.begin()
-        return self._result(self.dispatcher.run())
+        summary = self.dispatcher.run()
+        if summary.replans:     # the tree was repaired: its DOT again
+            self.outputs.write_dot(self.dispatcher.root)
+        return self._result(summary)
 
     def halt(self, why: str = "") -> bool:
         """Stop the run before its next tick (safe from a signal handler or

@@ -9,13 +9,11 @@ from __future__ import annotations
 
 import json
 import sys
-import time
 
 import click
 
-from htn.files import AtomicFile
-from htn.jshop.search.limits import DEFAULT_MAX_DEPTH
-from htn.jshop.search.searches import SEARCHES
+from htn.api.plan import DEFAULT_MAX_DEPTH, SEARCHES, UnsupportedSearch, plan as find_plans
+from htn.api.plan_files import PlanFiles
 
 from .output import console, stdout_is_terminal, warn
 from htn.process import DeadlineExceeded, deadline
@@ -84,77 +82,64 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
       htn plan DOMAIN PROBLEM --all --format jshop
       htn plan DOMAIN PROBLEM -o plan.txt && htn run plan.txt --sim
     """
-    from htn.api.plan import UnsupportedSearch, plan as find_plans
-    from htn.jshop.plans.planfile import header, plan_text
-
     stops = current_stops()
-    started = stops.started     # --timeout counts from the start
     fmt = fmt or ("text" if stdout_is_terminal() else "jshop")
+    trees = show_tree or bool(dot) or bool(output) or fmt in ("json", "ipc")
+    options = dict(plans=None if all_plans else n_plans, timeout=timeout, functions=functions,
+                   jshop2_compat=jshop2_compat, max_depth=max_depth, max_memory=max_memory,
+                   explain=explain or explain_all, explain_all=explain_all, search=search_name,
+                   trees=trees, tree_paths=show_tree or bool(dot) or fmt == "json", stops=stops)
     # -o and --dot are checked before any work, and replaced only by a
-    # complete new result: at least one whole plan (also after a timeout,
-    # Ctrl-C, SIGTERM or a closed stdout); otherwise an earlier file stays
-    sinks: list = []
-    written = _Written()
-    try:
-        inputs = (domain, problem, functions)
-        out = AtomicFile(output, "-o", inputs, [(dot, "--dot")] if dot else ()) \
-            if output else None
-        sinks.append(out)
-        dot_out = _DotFile(AtomicFile(dot, "--dot", inputs, [(output, "-o")] if output else ())) \
-            if dot else None
-        sinks.append(dot_out)
-        # reading a large HDDL instance, and the search before the first
-        # plan, can take seconds: a spinner says which (on a terminal, after
-        # a second; it is gone before anything is printed); loading counts
-        # toward --timeout too
-        try:
-            with deadline(stops, timeout, started), Phase("reading the domain and the problem"):
-                plans = find_plans(domain, problem, plans=None if all_plans else n_plans,
-                                   timeout=timeout, functions=functions, stops=stops,
-                                   jshop2_compat=jshop2_compat, max_depth=max_depth,
-                                   max_memory=max_memory, explain=explain or explain_all,
-                                   explain_all=explain_all, search=search_name,
-                                   trees=(show_tree or bool(dot) or bool(output)
-                                          or fmt in ("json", "ipc")),
-                                   tree_paths=show_tree or bool(dot) or fmt == "json")
-        except UnsupportedSearch as exc:
-            raise click.UsageError(exc.message) from None
+    # complete new result (htn.api.plan_files)
+    with PlanFiles(output, dot, (domain, problem, functions)) as files:
+        plans = _open(domain, problem, options, stops)
         if not quiet:
             for w in plans.warnings:
                 warn(w)
-        if out:
-            out.write(header(output, domain, problem, functions, plans.functions.sha256))
+        files.begin(plans)
         render = _Renderer(fmt, show_tree, domain, problem)
         # objects as the problem spells them (HDDL names are case-insensitive)
         render.spelling = {**plans.domain.spelling, **plans.problem.spelling}
-        stop = None
-        try:
-            with deadline(stops, timeout, started), plans, Phase("planning") as phase:
-                for p in plans:
-                    phase.end()
-                    with stops.held():    # the files first: they outlive a closed stdout
-                        if out:
-                            out.write(plan_text(p))
-                            out.flush()
-                        if dot_out and p.tree is not None:
-                            dot_out.add(p.tree)
-                        written.count(p)
-                        render.plan(p)
-                    stops.raise_again()       # a Ctrl-C a finalizer swallowed
-        except DeadlineExceeded:
-            plans.stats["timed_out"] = True
-        except (KeyboardInterrupt, BrokenPipeError) as exc:
-            plans.stats["interrupted"] = isinstance(exc, KeyboardInterrupt)
-            stop = exc
-        # what the streams and files hold: a plan counts once it is wholly written
-        totals = {**plans.stats, "plans_found": written.plans, "shortest_plan": written.shortest}
-        found = written.plans
-    finally:
-        for sink in filter(None, sinks):
-            if written.plans:
-                sink.commit()
-            else:
-                sink.discard()
+        stop = _stream(plans, files, render, stops, timeout)
+    _finish(plans, files, render, stop, stops, quiet, explain_all, timeout)
+
+
+def _open(domain, problem, options: dict, stops):
+    """The stream of plans (reading a large HDDL instance can take seconds:
+    a spinner says so, on a terminal, after a second; it counts toward
+    --timeout too)."""
+    try:
+        with deadline(stops, options["timeout"], stops.started), \
+                Phase("reading the domain and the problem"):
+            return find_plans(domain, problem, **options)
+    except UnsupportedSearch as exc:
+        raise click.UsageError(exc.message) from None
+
+
+def _stream(plans, files, render, stops, timeout):
+    """Write and print each plan as it is found; the stop that ended the
+    search early (Ctrl-C, SIGTERM, a closed stdout), if any."""
+    try:
+        with deadline(stops, timeout, stops.started), plans, Phase("planning") as phase:
+            for p in plans:
+                phase.end()
+                with stops.held():      # the files first: they outlive a closed stdout
+                    files.add(p)
+                    files.count(p)
+                    render.plan(p)
+                stops.raise_again()     # a Ctrl-C a finalizer swallowed
+    except DeadlineExceeded:
+        plans.stats["timed_out"] = True
+    except (KeyboardInterrupt, BrokenPipeError) as exc:
+        plans.stats["interrupted"] = isinstance(exc, KeyboardInterrupt)
+        return exc
+    return None
+
+
+def _finish(plans, files, render, stop, stops, quiet, explain_all, timeout) -> None:
+    """The statistics, the explanations, the warnings and the exit code."""
+    totals = files.totals(plans.stats)      # what the streams and files hold
+    found = files.plans
     if plans.bound is not None:
         warn(plans.bound)
     if isinstance(stop, BrokenPipeError):
@@ -164,7 +149,7 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
         plans.explain()
     if plans.explanations:
         totals["explain"] = [e.to_dict(full=explain_all) for e in plans.explanations]
-        if fmt != "json":
+        if render.fmt != "json":
             for e in plans.explanations:
                 for line in e.lines(full=explain_all):
                     warn(line)
@@ -174,60 +159,18 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
     if isinstance(stop, KeyboardInterrupt):
         stops.interrupt_exit(stop, f"{found} plan(s) found")
     if not found:
-        if fmt == "text":
-            warn("no plan found")
-        if totals.get("loop_cuts") and not quiet and not totals["timed_out"] and stop is None:
-            warn(f"the loop check cut {totals['loop_cuts']} reduction(s) that revisit a state: "
-                 "a plan that needs them may exist (--search auto searches without it)")
-        for path in (output, dot):
-            if path:
-                warn(f"{path}: not written (no plan)")
-        sys.exit(1)
+        _nothing_found(render.fmt, totals, quiet, stop, files.paths)
 
 
-class _Written:
-    """The plans written so far (to the files and the output stream)."""
-
-    def __init__(self):
-        self.plans = 0
-        self.shortest = None
-
-    def count(self, p) -> None:
-        self.plans += 1
-        if self.shortest is None or len(p.steps) < self.shortest:
-            self.shortest = len(p.steps)
-
-
-class _DotFile:
-    """Task trees streamed to a Graphviz file: one ``digraph task_tree`` for
-    a single plan, ``digraph plan_N`` for each of several (only the first
-    tree is held back, until it is known whether a second one comes)."""
-
-    def __init__(self, file):
-        self.file = file
-        self.count = 0
-        self.first = None
-
-    def add(self, tree) -> None:
-        self.count += 1
-        if self.count == 1:
-            self.first = tree.to_dot()
-            return
-        if self.count == 2:
-            self._write(1, self.first)
-            self.first = None
-        self._write(self.count, tree.to_dot())
-
-    def _write(self, i: int, text: str) -> None:
-        self.file.write(text.replace("digraph task_tree", f"digraph plan_{i}", 1))
-
-    def commit(self) -> None:
-        if self.first is not None:
-            self.file.write(self.first)
-        self.file.commit()
-
-    def discard(self) -> None:
-        self.file.discard()
+def _nothing_found(fmt, totals, quiet, stop, paths) -> None:
+    if fmt == "text":
+        warn("no plan found")
+    if totals.get("loop_cuts") and not quiet and not totals["timed_out"] and stop is None:
+        warn(f"the loop check cut {totals['loop_cuts']} reduction(s) that revisit a state: "
+             "a plan that needs them may exist (--search auto searches without it)")
+    for path in paths:
+        warn(f"{path}: not written (no plan)")
+    sys.exit(1)
 
 
 class _Renderer:
@@ -260,7 +203,7 @@ class _Renderer:
         elif self.fmt == "text":
             self._text_plan(p)
         elif self.fmt == "ipc":
-            from htn.jshop.plans.ipc import ipc_text
+            from htn.api.plan import ipc_text
             sys.stdout.write(ipc_text(p, self.spelling))
             sys.stdout.flush()
         else:
@@ -277,7 +220,7 @@ class _Renderer:
         from rich import box
         from rich.table import Table
 
-        from htn.jshop.language.terms import java_double
+        from htn.api.plan import java_double
         c = self.console
         c.print(f"[bold]Plan {self.count}[/bold]  cost {java_double(p.cost)}  "
                 f"{len(p.steps)} step{'s' if len(p.steps) != 1 else ''}")

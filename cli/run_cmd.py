@@ -8,7 +8,6 @@ import click
 
 from htn.api.extras import require_robot_extra
 from htn.jshop.language.errors import HtnError
-from htn.files import atomic_write, check_output_file, check_output_folder, make_output_folder
 from htn.process import DeadlineExceeded, deadline, silence_stdout
 
 from .output import stdout_is_terminal, warn
@@ -65,9 +64,7 @@ RUN_OPTIONS = ("plan_file", "robot_name", "sim", "faults", "seed", "retries", "r
 @click.option("-q", "--quiet", is_flag=True, help="Print only the summary.")
 @view_options
 @click.pass_context
-def run(ctx, plan_file, robot_name, sim, gui, snapshots, faults, seed, retries, replan,
-        log_path, from_log, plan_index, domain, problem, functions, timeout, bt_dot, quiet,
-        view, view_host, view_port, view_wait):
+def run(ctx, **options):
     """Execute PLAN_FILE (written by 'htn plan -o') with per-action monitoring.
 
     The plan's task tree (the one the plan file holds; planned again if it
@@ -98,120 +95,49 @@ def run(ctx, plan_file, robot_name, sim, gui, snapshots, faults, seed, retries, 
       htn run plan.txt --robot symbolic --faults effect=0.2
       htn run plan.txt --sim --view          # watch it in a browser (prints the URL)
     """
-    if view_wait and not view:
+    o = _Options(**options)
+    if o.view_wait and not o.view:
         raise click.UsageError("--view-wait waits for the page of --view: give --view too")
     stops = current_stops()
     try:
-        with deadline(stops, timeout, stops.started):
-            _run(ctx, plan_file, robot_name, sim, gui, snapshots, faults, seed, retries,
-                 replan, log_path, from_log, plan_index, domain, problem, functions, bt_dot,
-                 quiet, stops, web=(view_host, view_port, view_wait) if view else None)
+        with deadline(stops, o.timeout, stops.started):
+            _run(ctx, o, stops)
     except (KeyboardInterrupt, DeadlineExceeded) as exc:  # before the robot runs
         stops.interrupt_exit(exc, now=True)       # now: PyBullet may have been interrupted
 
 
-def _run(ctx, plan_file, robot_name, sim, gui, snapshots, faults, seed, retries,
-         replan, log_path, from_log, plan_index, domain, problem, functions, bt_dot, quiet,
-         stops, web=None):
-    from htn.api.run import prepare, read_run_log
-    from htn.robot.backends import backends
-    from htn.robot.interface import Robot
+class _Options:
+    """The options of ``htn run`` as attributes (click's names)."""
 
-    plan = plan_file
-    if from_log:
-        given = [max(p.opts, key=len) if isinstance(p, click.Option) else p.human_readable_name
-                 for p in ctx.command.params if p.name in RUN_OPTIONS and
-                 ctx.get_parameter_source(p.name) == click.core.ParameterSource.COMMANDLINE]
-        if given:
-            raise click.UsageError(f"--from-log takes the run from the log; do not give "
-                                   f"{', '.join(given)} as well")
-        # the plan, domain and problem files too, checked to be unchanged
-        logged = read_run_log(from_log, functions, stops)
-        plan, plan_file = logged.plan, logged.plan.path
-        robot_name, seed, replan = logged.robot, logged.seed, logged.replan
-        faults, plan_index, retries = logged.faults, logged.plan_index, logged.retries
-        domain, problem, functions = logged.domain, logged.problem, logged.functions
-    if plan_file is None:
-        raise click.UsageError("give a PLAN_FILE (or --from-log FILE.jsonl)")
-    if sim and robot_name not in (None, "pybullet"):
-        raise click.UsageError(f"--sim is --robot pybullet; it contradicts --robot {robot_name}")
-    robot_name = robot_name or ("pybullet" if sim else None)
-    if robot_name is None:
-        raise click.UsageError("choose a robot: --sim (PyBullet) or --robot NAME "
-                               f"(known: {', '.join(sorted(backends()))})")
-    require_robot_extra(robot_name, "htn run --sim" if sim else f"htn run --robot {robot_name}")
-    if gui:
+    def __init__(self, **options):
+        self.__dict__.update(options)
+
+
+def _run(ctx, o: _Options, stops) -> None:
+    from htn.api.run import prepare
+    plan = _from_log(ctx, o, stops) if o.from_log else o.plan_file
+    robot_name = _robot_name(o)
+    if o.gui:
         check_display()
-    inputs = [plan_file, domain, problem, functions, from_log]
-    outputs = [(p, o) for p, o in ((log_path, "--log"), (bt_dot, "--bt-dot"),
-                                   (snapshots, "--snapshots")) if p]
-    for path, option in outputs:
-        others = [x for x in outputs if x[1] != option]
-        if option == "--snapshots":
-            check_output_folder(path, option, inputs, others)
-        else:
-            check_output_file(path, option, inputs, others)
     # reading and checking everything, and building a simulated world, can
     # take seconds: a spinner says so (on a terminal, after a second)
     try:
         with Phase(f"reading the plan and building the {robot_name} robot"):
-            execution = prepare(plan, robot=robot_name, domain=domain, problem=problem,
-                                functions=functions, plan_index=plan_index, faults=faults or "",
-                                seed=seed, retries=retries, replan=replan, log=log_path, gui=gui,
-                                stops=stops)
+            execution = prepare(plan, robot=robot_name, domain=o.domain, problem=o.problem,
+                                functions=o.functions, plan_index=o.plan_index,
+                                faults=o.faults or "", seed=o.seed, retries=o.retries,
+                                replan=o.replan, log=o.log_path, gui=o.gui, stops=stops,
+                                bt_dot=o.bt_dot, snapshots=o.snapshots,
+                                read=[o.from_log] if o.from_log else [])
     except HtnError as exc:
-        raise _as_header_error(exc, from_log) from None
-    if not quiet:
+        raise _as_header_error(exc, o.from_log) from None
+    if not o.quiet:
         for note in execution.notes:
             warn(note)
-    viewer = start_run_view(web[0], web[1]) if web else None    # a port in use: input error
-    robot = execution.robot
+    viewer = start_run_view(o.view_host, o.view_port) if o.view else None  # a port in use: exit 2
+    summary = _execute(execution, viewer, o, stops)
     try:
-        if snapshots and type(robot).snapshot is Robot.snapshot:
-            raise click.UsageError(f"--snapshots: the {robot_name} robot has no camera")
-        if snapshots:   # only once the world could be built from the problem
-            make_output_folder(snapshots, "--snapshots")
-        # the log begins only together with the dispatcher that will end it
-        # (an interrupt meanwhile arrives right after, see below)
-        with stops.held():
-            dispatcher = execution.begin(argv=["htn", *sys.argv[1:]])
-            stops.on_emergency(lambda: _end_in_emergency(execution, stops))
-        if bt_dot:
-            _write_dot(dispatcher.root, bt_dot)
-        view = None
-        if not quiet:
-            if stdout_is_terminal():
-                from .tree_view import LiveTreeView
-                view = LiveTreeView(lambda: dispatcher)
-            else:
-                view = _PlainView()
-            execution.listen(view.event)
-        if snapshots:
-            execution.listen(_snapshotter(robot, snapshots))
-        if viewer:
-            viewer.attach(execution.log, dispatcher, robot)
-            if web[2]:
-                wait_for_page(viewer)
-        stops.watch(execution)
-        with view or contextlib.nullcontext():
-            summary = execution.execute().summary
-        stops.settle()       # the robot holds and the log is complete: shut down in order
-        if bt_dot and summary.replans:
-            _write_dot(dispatcher.root, bt_dot)
-    except KeyboardInterrupt as exc:
-        if execution.dispatcher is None:     # no log yet: nothing to end
-            raise
-        # outside dispatcher.run() (e.g. while --bt-dot is written): the log
-        # still ends with the outcome and a summary
-        stops.settle()
-        summary = execution.interrupted(str(exc)).summary
-    except BaseException as exc:
-        execution.fail(exc)
-        raise
-    finally:
-        execution.close()
-    try:
-        click.echo(summary_line(summary))
+        click.echo(summary.line())
     except BrokenPipeError:      # the reader went away: the exit code still tells
         silence_stdout()
     if summary.result == "interrupted":     # log closed, robot disconnected
@@ -219,6 +145,80 @@ def _run(ctx, plan_file, robot_name, sim, gui, snapshots, faults, seed, retries,
     if viewer:                   # Ctrl-C ends the view; the exit code is the run's
         keep_up(viewer, listen=stops.listen_again)
     sys.exit(0 if summary.result == "verified" else 1)
+
+
+def _from_log(ctx, o: _Options, stops):
+    """The run a log records (its plan, robot, seed, ...), which the
+    command line may not contradict."""
+    given = [max(p.opts, key=len) if isinstance(p, click.Option) else p.human_readable_name
+             for p in ctx.command.params if p.name in RUN_OPTIONS and
+             ctx.get_parameter_source(p.name) == click.core.ParameterSource.COMMANDLINE]
+    if given:
+        raise click.UsageError(f"--from-log takes the run from the log; do not give "
+                               f"{', '.join(given)} as well")
+    from htn.api.run import read_run_log
+    # the plan, domain and problem files too, checked to be unchanged
+    logged = read_run_log(o.from_log, o.functions, stops)
+    o.plan_file, o.robot_name, o.seed, o.replan = (logged.plan.path, logged.robot,
+                                                   logged.seed, logged.replan)
+    o.faults, o.plan_index, o.retries = logged.faults, logged.plan_index, logged.retries
+    o.domain, o.problem, o.functions = logged.domain, logged.problem, logged.functions
+    return logged.plan
+
+
+def _robot_name(o: _Options) -> str:
+    if o.plan_file is None:
+        raise click.UsageError("give a PLAN_FILE (or --from-log FILE.jsonl)")
+    if o.sim and o.robot_name not in (None, "pybullet"):
+        raise click.UsageError(f"--sim is --robot pybullet; it contradicts --robot "
+                               f"{o.robot_name}")
+    name = o.robot_name or ("pybullet" if o.sim else None)
+    if name is None:
+        from htn.api.run import robots
+        raise click.UsageError("choose a robot: --sim (PyBullet) or --robot NAME "
+                               f"(known: {', '.join(robots())})")
+    require_robot_extra(name, "htn run --sim" if o.sim else f"htn run --robot {name}")
+    return name
+
+
+def _execute(execution, viewer, o: _Options, stops):
+    """Begin the log, run the tree with the progress shown, end the log:
+    the run's summary (interrupted too)."""
+    try:
+        # the log begins only together with the dispatcher that will end it
+        # (an interrupt meanwhile arrives right after, see below)
+        with stops.held():
+            dispatcher = execution.begin(argv=["htn", *sys.argv[1:]])
+            stops.on_emergency(lambda: _end_in_emergency(execution, stops))
+        view = None
+        if not o.quiet:
+            if stdout_is_terminal():
+                from .tree_view import LiveTreeView
+                view = LiveTreeView(lambda: dispatcher)
+            else:
+                view = _PlainView()
+            execution.listen(view.event)
+        if viewer:
+            viewer.attach(execution.log, dispatcher, execution.robot)
+            if o.view_wait:
+                wait_for_page(viewer)
+        stops.watch(execution)
+        with view or contextlib.nullcontext():
+            summary = execution.execute().summary
+        stops.settle()       # the robot holds and the log is complete: shut down in order
+    except KeyboardInterrupt as exc:
+        if execution.dispatcher is None:     # no log yet: nothing to end
+            raise
+        # outside the ticks (e.g. while the view starts): the log still
+        # ends with the outcome and a summary
+        stops.settle()
+        summary = execution.interrupted(str(exc)).summary
+    except BaseException as exc:
+        execution.fail(exc)
+        raise
+    finally:
+        execution.close()
+    return summary
 
 
 # what the log's header gave instead of an option: its errors name the field
@@ -253,24 +253,6 @@ def _end_in_emergency(execution, stops):
         log.emit(None, None, "summary", None, "interrupted", result="interrupted")
     log.close()
     return None
-
-
-def summary_line(summary) -> str:
-    """``aborted: 3 of 8 steps verified, ...; aborted at step 4: (!grasp ...)``."""
-    return summary.line()
-
-
-def _write_dot(root, path: str) -> None:
-    """py_trees' DOT export of the tree, with readable names (executor/bt_dot.py)."""
-    from htn.executor.bt_dot import behaviour_tree_dot
-
-    with atomic_write(path, "--bt-dot") as fh:
-        fh.write(behaviour_tree_dot(root))
-
-
-def _snapshotter(robot, folder):
-    from htn.executor.snapshots import snapshot_listener
-    return snapshot_listener(robot, folder)
 
 
 class _PlainView:
