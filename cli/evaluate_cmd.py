@@ -7,6 +7,8 @@ import os
 
 import click
 
+from htn.api.evaluate import (METRIC_NAMES, ClusterError, EvaluateOptions, Progress,
+                              evaluate as run_evaluation, format_change, format_p)
 from htn.process import deadline
 
 from .options import MAX_RUNS, MAX_WORKERS, SEED, TIMEOUT_HELP, Count, Timeout, current_stops
@@ -61,18 +63,13 @@ def evaluate(problem, domain, runs, seed, robot, faults, workers, scheduler, rec
       htn evaluate problems/tray_three.jshop --robot pybullet --faults slip=0.1 --runs 20
       htn evaluate problems/tray_three.jshop --scheduler tcp://10.0.0.5:8786
     """
-    from htn.api.evaluate import evaluate as run_evaluation
-    from htn.evaluation.cluster import ClusterError
-
+    options = EvaluateOptions(runs=runs, seed=seed, robot=robot, faults=faults, workers=workers,
+                              scheduler=scheduler, records=records, plot=plot_dir)
     progress = _Progress(robot, runs)
     stops = current_stops()
     try:
-        with deadline(stops, timeout, stops.started), progress.phase:
-            result = run_evaluation(problem, domain=domain, runs=runs, seed=seed, robot=robot,
-                                    faults=faults, workers=workers, scheduler=scheduler,
-                                    records=records, plot=plot_dir, on_start=progress.start,
-                                    on_batch=progress.batch, say=warn, on_warning=warn,
-                                    on_phase=progress.phase.update)
+        with deadline(stops, timeout, stops.started), progress.spinner:
+            result = run_evaluation(problem, options, domain=domain, progress=progress)
     except ClusterError as exc:
         raise click.ClickException(str(exc)) from None
     finally:
@@ -80,56 +77,63 @@ def evaluate(problem, domain, runs, seed, robot, faults, workers, scheduler, rec
     if as_json:
         click.echo(json.dumps(result.document(), indent=1))
         return
-    _print_table(result.comparison, result.metrics, problem)
+    _print_table(result, problem)
     for path in result.plots:
         click.echo(f"plot: {path}")
 
 
-class _Progress:
+class _Progress(Progress):
     """What a terminal shows while an evaluation runs: a spinner naming what
     runs before the runs (reading, planning, each rule's projections), then
-    a bar of the runs (on stderr; nothing when it is not a terminal)."""
+    a bar of the runs (on stderr; nothing when it is not a terminal); the
+    cluster's notes, the evaluation's notes and warnings as lines on stderr."""
 
     def __init__(self, robot: str, runs: int):
         from rich.console import Console
-        from rich.progress import Progress
+        from rich.progress import Progress as Bar
 
         console = Console(stderr=True)
-        self.bar = Progress(console=console, transient=True, disable=not console.is_terminal)
+        self.bar = Bar(console=console, transient=True, disable=not console.is_terminal)
         self.task = None
-        self.phase = Phase("starting")
+        self.spinner = Phase("starting")
         self.robot, self.runs = robot, runs
         self.label = f"{robot} runs"
 
-    def start(self, n_workers: int, notes: list) -> None:
+    def started(self, workers: int, notes: list) -> None:
         for note in notes:
             warn(f"warning: {note}")
-        self.label = f"{self.robot} runs on {n_workers} worker(s)"
+        self.label = f"{self.robot} runs on {workers} worker(s)"
 
-    def batch(self, new: list, done: float) -> None:
+    def phase(self, text: str) -> None:
+        self.spinner.update(text)
+
+    def batch(self, records: list, runs: float) -> None:
         if self.task is None:       # the first runs are in: the bar replaces the spinner
-            self.phase.end()
+            self.spinner.end()
             self.task = self.bar.add_task(self.label, total=self.runs)
             self.bar.start()
-        self.bar.advance(self.task, done)
+        self.bar.advance(self.task, runs)
+
+    def note(self, text: str) -> None:
+        warn(text)
+
+    def warning(self, text: str) -> None:
+        warn(text)
 
     def stop(self) -> None:
         self.bar.stop()
 
 
-def _print_table(comp, stats: dict, problem: str) -> None:
+def _print_table(result, problem: str) -> None:
     from rich.console import Console
     from rich.table import Table
 
-    from htn.evaluation.runs import MEASURES
-    from htn.evaluation.statistics import METRIC_NAMES, applied_rules, format_change, format_p
+    comp, stats = result.comparison, result.metrics
 
     def cell(value, fmt: str) -> str:
         return "n/a" if value is None else fmt.format(value)
 
-    t = Table(title=f"{os.path.basename(problem)}: {comp.runs} "
-                    f"{MEASURES[comp.robot].description} run{'s' if comp.runs > 1 else ''} "
-                    f"of each plan; applied: {applied_rules(comp.applied)}",
+    t = Table(title=f"{os.path.basename(problem)}: {result.heading()}",
               caption="mean \u00b1 SD over runs; p: Welch's two-sided t-test")
     for col in ("metric", "original mean \u00b1 sd", "transformed mean \u00b1 sd", "change",
                 "p (Welch)"):

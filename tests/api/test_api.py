@@ -220,9 +220,16 @@ def test_stats_of_the_papers_scenarios():
 
 def test_evaluate_compares_the_plans_in_this_process():
     pytest.importorskip("scipy")
+    from htn.api.evaluate import Progress
     started, batches = [], []
-    result = htn.evaluate(TRAY, runs=4, on_start=lambda w, notes: started.append(w),
-                          on_batch=lambda records, runs: batches.append(runs))
+
+    class Seen(Progress):       # one progress object; what it leaves out does nothing
+        def started(self, workers, notes):
+            started.append(workers)
+
+        def batch(self, records, runs):
+            batches.append(runs)
+    result = htn.evaluate(TRAY, runs=4, progress=Seen())
     assert started == [1] and sum(batches) == 4
     doc = result.document()
     assert doc["runs"] == 4 and doc["applied"] and set(doc["metrics"]) >= {"navigation"}

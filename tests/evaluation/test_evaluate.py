@@ -416,3 +416,33 @@ def test_the_domain_beside_a_problem_is_found_by_the_name_it_defines(tmp_path):
     mine.write_text(text.rstrip() + "\n(oops\n")
     r = run_htn("evaluate", problem, "--runs", "2")
     assert r.returncode == 2 and r.stderr.startswith(f"{mine}:"), r.stderr
+
+
+def test_the_options_are_one_object_or_keywords_and_progress_one_object(tmp_path):
+    from htn.api.evaluate import EvaluateOptions, Progress, evaluate
+    problem, domain = ROOT / PROBLEM, ROOT / "domains" / "kitchen.jshop"
+    # the callbacks of old are no keywords of it: said before any work
+    with pytest.raises(TypeError, match="on_batch.*progress: one Progress object"):
+        evaluate(problem, runs=2, on_batch=print)
+    told = []
+
+    class Told(Progress):
+        def started(self, workers, notes):
+            told.append(("started", workers, notes))
+
+        def phase(self, text):
+            told.append(("phase", text))
+
+        def batch(self, records, runs):
+            told.append(("batch", len(records), runs))
+    options = EvaluateOptions(runs=3, seed=4, records=tmp_path / "runs.jsonl")
+    one = evaluate(problem, options, domain=domain, progress=Told())
+    # a keyword given beside the object is used over the object's own
+    two = evaluate(problem, options, domain=domain, runs=2)
+    assert (one.comparison.runs, two.comparison.runs) == (3, 2)
+    assert one.metrics == evaluate(problem, domain=domain, runs=3, seed=4).metrics
+    assert told[:2] == [("phase", "reading the problem and its domain"), ("started", 1, [])]
+    assert ("phase", "planning") in told and ("phase", "3 runs of each plan on the projection "
+                                                       "robot") in told
+    assert sum(t[2] for t in told if t[0] == "batch") == 3
+    assert len((tmp_path / "runs.jsonl").read_text().splitlines()) == 2 * 2    # two's runs
