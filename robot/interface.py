@@ -108,8 +108,9 @@ class Robot:
     _checks: dict = {}
 
     def __init_subclass__(cls, **kw):
-        # collect the marked methods of the whole class hierarchy, robot
-        # parts (mixins) included; a subclass's method overrides by name
+        # collect the marked methods of the whole class hierarchy; a
+        # subclass's method overrides by name (the parts a robot holds are
+        # objects: its own marked methods offer what they do)
         super().__init_subclass__(**kw)
         cls._skills, cls._checks = {}, {}
         for klass in reversed(cls.__mro__):
