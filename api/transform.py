@@ -16,6 +16,8 @@ from htn.jshop.language.errors import HtnError
 from htn.jshop.language.terms import source_atom
 from htn.jshop.plans.planfile import header, plan_text
 
+from htn.files import atomic_write
+
 from .inputs import function_table, path_of, read_inputs
 
 
@@ -55,7 +57,7 @@ class TransformResult:
 def transform_plan(domain, problem, *, rules=None, metric: str = "navigation", functions=None,
               on_warning: Optional[Callable[[str], None]] = None,
               on_phase: Optional[Callable[[str], None]] = None,
-              stops=None) -> TransformResult:
+              stops=None, output=None) -> TransformResult:
     """Plan ``problem`` (its first instance), apply the registered
     transformations in priority order (tray > container > both-hands, and any
     plugins'), or only ``rules`` (names, or one comma-separated text), and
@@ -65,7 +67,24 @@ def transform_plan(domain, problem, *, rules=None, metric: str = "navigation", f
 
     ``on_warning`` gets each located warning of the inputs' check (as
     :func:`htn.plan` has them), before planning; ``on_phase`` a few words
-    as each phase begins (planning, each rule's projections), for progress."""
+    as each phase begins (planning, each rule's projections), for progress.
+    ``stops``: the command's :class:`htn.process.Stops` (user functions run
+    under them). ``output``: a plan file for the transformed plan (the
+    rewritten task list, its tree: ``htn run`` executes it), checked before
+    any work and replaced only once all is done."""
+    if output is None:
+        return _transform(domain, problem, rules, metric, functions, on_warning, on_phase,
+                          stops)
+    output = str(output)
+    with atomic_write(output, "-o", (path_of(domain), path_of(problem))) as out:
+        done = _transform(domain, problem, rules, metric, functions, on_warning, on_phase,
+                          stops)
+        out.write(done.plan_file_text(output, path_of(domain), path_of(problem)))
+    return done
+
+
+def _transform(domain, problem, rules, metric, functions, on_warning, on_phase,
+               stops) -> TransformResult:
     from htn.transform.framework import METRICS, Workspace
     from htn.transform.registered import default_framework
 

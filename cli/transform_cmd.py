@@ -1,13 +1,10 @@
 """``htn transform DOMAIN PROBLEM``: apply plan transformations to a plan's task tree."""
 from __future__ import annotations
 
-import contextlib
 import json
 import sys
 
 import click
-
-from htn.files import atomic_write
 
 from htn.process import deadline
 
@@ -45,20 +42,16 @@ def transform(domain, problem, rules, metric, output, as_json, timeout):
     from htn.api.transform import UnknownRules, transform_plan
 
     # a bad -o fails before the work; the file is replaced once all is done
-    with atomic_write(output, "-o", (domain, problem)) if output else contextlib.nullcontext() as out:
-        try:
-            # planning and each rule's projected runs take seconds: a spinner
-            # says which (on a terminal, after a second)
-            stops = current_stops()
-            with deadline(stops, timeout, stops.started), \
-                    Phase("reading the domain and the problem") as phase:
-                done = transform_plan(domain, problem, rules=rules, metric=metric,
-                                      on_warning=warn, on_phase=phase.update, stops=stops)
-        except UnknownRules as exc:
-            raise click.BadParameter(exc.message, param_hint="--rules") from None
-        if out:
-            # the rewritten task list and the transformed plan's tree: htn run executes it
-            out.write(done.plan_file_text(output, domain, problem))
+    try:
+        # planning and each rule's projected runs take seconds: a spinner
+        # says which (on a terminal, after a second)
+        stops = current_stops()
+        with deadline(stops, timeout, stops.started), \
+                Phase("reading the domain and the problem") as phase:
+            done = transform_plan(domain, problem, rules=rules, metric=metric, on_warning=warn,
+                                  on_phase=phase.update, stops=stops, output=output)
+    except UnknownRules as exc:
+        raise click.BadParameter(exc.message, param_hint="--rules") from None
     result = done.document
     if as_json:
         click.echo(json.dumps(result, indent=1))
