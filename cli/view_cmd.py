@@ -12,7 +12,7 @@ import time
 
 import click
 
-from htn.api.extras import require_extra
+from htn.api.view import exposure_warning, read_view_log, serve_log, start_live_view
 
 from .options import PORT, current_stops
 
@@ -40,9 +40,7 @@ def view_options(command):
 
 def start_run_view(host: str, port: int, what: str = "htn run --view"):
     """Start the view of a run (before the robot moves) and print its URL."""
-    require_extra("view", what)
-    from htn.view.live import RunView
-    view = RunView(host, port).start()
+    view = start_live_view(host, port, what)
     _announce(view.url, host)
     return view
 
@@ -68,10 +66,9 @@ def keep_up(view, listen=None) -> None:
 
 
 def _announce(url: str, host: str) -> None:
-    from htn.view.server import is_loopback
-    if not is_loopback(host):
-        click.echo(f"warning: the view is served on {host}, reachable from other machines: "
-                   f"anyone with its URL (the token) can watch", err=True)
+    warning = exposure_warning(host)
+    if warning:
+        click.echo(f"warning: {warning}", err=True)
     click.echo(f"view: {url}", err=True)
 
 
@@ -106,21 +103,16 @@ def view(log_file, host, port):
       htn view run.jsonl
       htn view run.jsonl --host 0.0.0.0 --port 8765   # from another machine
     """
-    require_extra("view", "htn view")
-    from htn.view.hub import Hub
-    from htn.view.model import page_records, read_log, title_of
-    from htn.view.server import ViewServer
-    records, warning = read_log(log_file)
-    if warning:
-        click.echo(f"warning: {warning}", err=True)
-    hub = Hub("log", page_records(records), title=title_of(records[0]))
-    server = ViewServer(hub, host, port).start()
+    log = read_view_log(log_file, "htn view")
+    if log.warning:
+        click.echo(f"warning: {log.warning}", err=True)
+    page = serve_log(log, host, port, "htn view")
     try:
-        _announce(server.url, host)
-        click.echo(f"view: {len(records)} events of {log_file}; Ctrl-C stops the server",
+        _announce(page.url, host)
+        click.echo(f"view: {log.events} events of {log_file}; Ctrl-C stops the server",
                    err=True)
         _serve_until_interrupted()
     except KeyboardInterrupt:       # Ctrl-C is how a server stops: not an error
         current_stops().consume()
     finally:
-        server.close()
+        page.close()
