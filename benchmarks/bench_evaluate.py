@@ -1,9 +1,9 @@
 """Benchmark: ``htn evaluate`` on 1 and 2 workers, and what starting workers costs.
 
 Three measurements, each of the whole evaluation as ``htn evaluate`` does
-it once its inputs are read (the plans made and transformed, the runs on
-1 or 2 workers, the workers started and closed when they are: everything
-but the interpreter's own start-up):
+it (:func:`htn.api.evaluate.evaluate`: the inputs read and checked, the
+plans made and transformed, the runs on 1 or 2 workers, the workers started
+and closed when they are: everything but the interpreter's own start-up):
 
 * ``--startup``: starting and closing a local Dask cluster of N workers
   in a fresh process, as ``htn evaluate`` does (what
@@ -42,12 +42,19 @@ DOMAIN = str(ROOT / "domains" / "kitchen.jshop")
 
 def _evaluation(problem: str, runs: int, workers: int, robot: str = "projection"):
     """The whole evaluation of ``htn evaluate --workers N``; (seconds, comparison, notes)."""
-    from htn.evaluation.study import compare
-    notes: list[str] = []
+    from htn.api.evaluate import Progress, evaluate
+
+    class Notes(Progress):      # keeps the line that says why the runs stay in this process
+        def __init__(self):
+            self.lines: list[str] = []
+
+        def note(self, text: str) -> None:
+            self.lines.append(text)
+    notes = Notes()
     t0 = time.perf_counter()
-    comp = compare(DOMAIN, problem, runs, seed=0, workers=workers, robot=robot,
-                   say=notes.append)
-    return time.perf_counter() - t0, comp, notes
+    result = evaluate(problem, domain=DOMAIN, runs=runs, seed=0, workers=workers, robot=robot,
+                      progress=notes)
+    return time.perf_counter() - t0, result.comparison, notes.lines
 
 
 # one start in a fresh process, as each htn evaluate is: the first start of a

@@ -8,6 +8,9 @@ or an existing one. They are sent in batches and come back as batches
 finish; results are keyed by run, so a batch redone after a lost worker
 counts once, and put in run order. A run depends only on its seed, so the
 metrics for a given seed are the same on any number of workers.
+
+The one entry that opens a runner and runs a study is the evaluate use case
+(:func:`htn.api.evaluate.evaluate`); these are its steps.
 """
 from __future__ import annotations
 
@@ -18,7 +21,6 @@ from typing import Callable, Optional
 
 from htn.executor.config import load_retries
 
-from .cluster import open_runner
 from .placement import place, start_early
 from .runs import MEASURES, Study, run_batch
 from .statistics import Comparison
@@ -115,23 +117,6 @@ def start_workers_early(runner, robot: str, runs: int) -> None:
     planning if ``runs`` runs of the plan and its transformed version on
     ``robot`` are sure to be worth them (:func:`.placement.start_early`)."""
     start_early(runner, runs, 2, MEASURES[robot].least)
-
-
-def compare(domain_path: str, problem_path: str, runs: int, seed: int = 0, workers: int = 1,
-            on_batch: Optional[Callable[[list], None]] = None, robot: str = "projection",
-            faults: str = "", scheduler: Optional[str] = None,
-            say: Optional[Callable[[str], None]] = None) -> Comparison:
-    """Execute the plan and its transformed version ``runs`` times each on
-    ``workers`` processes (or the cluster at ``scheduler``) and compare them."""
-    with open_runner(workers, scheduler) as runner:
-        start_workers_early(runner, robot, runs)
-        study, applied = prepare_study(domain_path, problem_path, robot, faults)
-        return run_study(study, problem_path, applied, runs, seed, runner, on_batch, say)
-
-
-def plot(comp: Comparison, folder: str) -> list[str]:
-    from .figures import plot as figures
-    return figures(comp, folder)
 
 
 class RecordsFile:

@@ -212,12 +212,12 @@ def test_projection_is_deterministic_and_monitored():
 
 @pytest.mark.slow
 def test_evaluate_reproduces_the_papers_findings():
-    from htn.evaluation.study import compare
-    four = compare(DOMAIN, str(PROBLEMS / "transport_four.jshop"), runs=120, seed=0).metrics()
+    from htn.api.evaluate import evaluate
+    four = evaluate(PROBLEMS / "transport_four.jshop", domain=DOMAIN, runs=120, seed=0).metrics
     assert -40 < four["navigation"]["change_pct"] < -20 and four["navigation"]["p_value"] < 1e-3
     assert abs(four["manipulation"]["change_pct"]) < 10
     assert four["failures"]["change_pct"] > 0
-    tray = compare(DOMAIN, str(PROBLEMS / "tray_three.jshop"), runs=120, seed=0).metrics()
+    tray = evaluate(PROBLEMS / "tray_three.jshop", domain=DOMAIN, runs=120, seed=0).metrics
     assert tray["actions"]["change_pct"] > 20 and -15 < tray["navigation"]["change_pct"] < 0
 
 
