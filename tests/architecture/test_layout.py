@@ -2,6 +2,7 @@
 scratch output committed."""
 from __future__ import annotations
 
+import ast
 import subprocess
 
 import pytest
@@ -133,3 +134,37 @@ def test_the_tests_mirror_the_rooms():
         assert not HISTORY_WORDS & set(path.stem.split("_")), f"{path}: named after history"
     names = [p.name for p in tests.rglob("test_*.py")]
     assert len(names) == len(set(names)), "two test files share a name"
+
+
+# the command line parses, calls the use cases and prints
+CLI_MAY_IMPORT = ("htn.api", "htn.process", "htn.jshop.language.errors", "htn.cli")
+CLI_LONGEST = 50        # lines of a function, its docstring included
+
+
+def test_the_command_line_imports_only_the_use_cases_the_process_room_and_the_error():
+    modules = package_modules()
+    for name, path in modules.items():
+        if _room(name) != "cli":
+            continue
+        for m in imports_of(name, path, modules):
+            assert m == "htn" or any(m == a or m.startswith(a + ".") for a in CLI_MAY_IMPORT), \
+                f"{name} imports {m}"
+
+
+def test_no_function_of_the_command_line_is_longer_than_fifty_lines():
+    long = []
+    for path in sorted((ROOT / "cli").glob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text(), str(path))):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                lines = node.end_lineno - node.lineno + 1
+                if lines > CLI_LONGEST:
+                    long.append(f"{path.name}:{node.lineno} {node.name} ({lines} lines)")
+    assert not long, long
+
+
+def test_no_module_state_for_stopping_in_the_planner():
+    for path in (ROOT / "jshop").rglob("*.py"):
+        text = path.read_text()
+        assert "_run_exitfuncs" not in text and "STOPS" not in text, path
+    for path in package_modules().values():
+        assert "sys.modules.get(" not in path.read_text(), path
