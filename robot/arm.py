@@ -15,6 +15,7 @@ import numpy as np
 
 from .base import MobileBase, Offset
 from .faults import FaultDraws
+from .interface import Check
 from .physics import DT, Physics, yaw_quat
 
 EE_LINK = 11              # panda_grasptarget_hand
@@ -157,22 +158,23 @@ class Arm:
         self.release()
         self.set_fingers(0.04)
 
-    def holds_up(self, obj: str, tolerance: float) -> tuple[bool, str]:
+    def holds_up(self, obj: str, tolerance: float) -> Check:
         """The effect of a grasp: ``obj``, which this gripper holds, is held up
         by it: close to it (within ``tolerance``), above every table top, and attached."""
         pos = self.physics.body_pos(obj)
         d = float(np.linalg.norm(pos - self.ee()))
         lifted = pos[2] > max(self.physics.furniture_top.values(), default=0.0) + 0.1
         ok = d < tolerance and lifted and self.grip is not None
-        return ok, f"{obj} is {d:.3f} m from {self.label}" + ("" if lifted else ", not lifted")
+        return Check(ok, f"{obj} is {d:.3f} m from {self.label}"
+                     + ("" if lifted else ", not lifted"))
 
-    def still_holds(self, obj: str) -> tuple[bool, str]:
+    def still_holds(self, obj: str) -> Check:
         """While the robot carries ``obj`` (held by this gripper): still attached
         and near (held objects lag a few centimetres while the base accelerates)."""
         if self.grip is None:
-            return False, f"{obj} is in no gripper"
+            return Check(False, f"{obj} is in no gripper")
         d = float(np.linalg.norm(self.physics.body_pos(obj) - self.ee()))
-        return d < HOLD_SLACK, f"{obj} is {d:.3f} m from the gripper"
+        return Check(d < HOLD_SLACK, f"{obj} is {d:.3f} m from the gripper")
 
     @property
     def label(self) -> str:

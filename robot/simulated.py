@@ -114,7 +114,7 @@ class SimulatedRobot(Robot):
         arm = self._holding(obj)
         if arm is None:
             return Check(False, f"{obj} is in no gripper")
-        return Check(*arm.holds_up(obj, self.GRIP_TOLERANCE))
+        return arm.holds_up(obj, self.GRIP_TOLERANCE)
 
     @check("still_held")
     def check_still_held(self, obj: str) -> Check:
@@ -122,7 +122,7 @@ class SimulatedRobot(Robot):
         arm = self._holding(obj) if obj in self.physics.body_of else None
         if arm is None:
             return Check(False, f"{obj} is in no gripper")
-        return Check(*arm.still_holds(obj))
+        return arm.still_holds(obj)
 
     @check("detection")
     def check_detection(self, obj: str) -> Check:
