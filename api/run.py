@@ -26,7 +26,7 @@ from htn.jshop.language.errors import HtnError
 from htn.robot.backends import RobotRequest, make_robot
 from htn.robot.interface import Robot
 
-from .extras import require_robot_extra
+from .extras import check_display, require_robot_extra
 from .inputs import path_of
 from .run_outputs import RunOutputs
 from .run_inputs import LoggedRun, RunInputs, read_run_log, run_inputs
@@ -126,6 +126,8 @@ def prepare(plan, *, robot, domain=None, problem=None, functions=None, plan_inde
                    path_of(problem), path_of(functions), *read])
     if isinstance(robot, str):
         require_robot_extra(robot, f"the {robot} robot")
+        if gui:
+            check_display()
     elif isinstance(robot, Robot):
         if faults or gui:
             raise HtnError("faults and gui are for a robot built by name; a robot object "
@@ -253,6 +255,20 @@ class Execution:
 
     def _result(self, summary: RunSummary) -> RunResult:
         return RunResult(summary, self.log.events, self.dispatcher.plan_lines(), self.notes)
+
+    def end_now(self, why: str) -> None:
+        """End the log now, from another thread (a watchdog that ends the
+        process because user code kept running after a stop): its
+        ``interrupted`` event and summary, whatever the dispatcher is doing."""
+        log = self.log
+        if log is None or log.ended:
+            return
+        try:
+            self.interrupted(why)
+        except BaseException:       # noqa: BLE001 - the dispatcher is mid-tick: end the log itself
+            log.emit(None, None, "interrupted", None, "ended by the watchdog")
+            log.emit(None, None, "summary", None, "interrupted", result="interrupted")
+        log.close()
 
     def fail(self, exc: BaseException) -> None:
         """End the log with an ``error`` summary: ``exc`` stopped the run."""

@@ -12,9 +12,7 @@ from htn.process import DeadlineExceeded, deadline, silence_stdout
 
 from .output import stdout_is_terminal, warn
 from .progress import Phase
-from .run_checks import check_display
 from .options import SEED, TIMEOUT_HELP, Count, Timeout, current_stops
-from .run_lines import event_line
 from .view_cmd import keep_up, start_run_view, view_options, wait_for_page
 
 RUN_OPTIONS = ("plan_file", "robot_name", "sim", "faults", "seed", "retries", "replan",
@@ -117,8 +115,6 @@ def _run(ctx, o: _Options, stops) -> None:
     from htn.api.run import prepare
     plan = _from_log(ctx, o, stops) if o.from_log else o.plan_file
     robot_name = _robot_name(o)
-    if o.gui:
-        check_display()
     # reading and checking everything, and building a simulated world, can
     # take seconds: a spinner says so (on a terminal, after a second)
     try:
@@ -189,14 +185,11 @@ def _execute(execution, viewer, o: _Options, stops):
         # (an interrupt meanwhile arrives right after, see below)
         with stops.held():
             dispatcher = execution.begin(argv=["htn", *sys.argv[1:]])
-            stops.on_emergency(lambda: _end_in_emergency(execution, stops))
+            stops.on_emergency(lambda: execution.end_now(str(stops.raised or "stopped")))
         view = None
         if not o.quiet:
-            if stdout_is_terminal():
-                from .tree_view import LiveTreeView
-                view = LiveTreeView(lambda: dispatcher)
-            else:
-                view = _PlainView()
+            from .tree_view import LiveTreeView, PlainView
+            view = LiveTreeView(lambda: dispatcher) if stdout_is_terminal() else PlainView()
             execution.listen(view.event)
         if viewer:
             viewer.attach(execution.log, dispatcher, execution.robot)
@@ -238,41 +231,3 @@ def _as_header_error(exc, from_log):
         return exc
     text = rest if option in HEADER_OPTIONS else exc.message.split(" ", 2)[-1]
     return HtnError(f'header field "{field}": {text}', from_log, 1)
-
-
-def _end_in_emergency(execution, stops):
-    """The watchdog ends the process (user code kept running after a stop):
-    the log still ends with ``interrupted`` and its summary."""
-    log = execution.log
-    if log is None or log.ended:
-        return None
-    try:
-        execution.interrupted(str(stops.raised or "stopped"))
-    except BaseException:       # noqa: BLE001 - the dispatcher is mid-tick: end the log itself
-        log.emit(None, None, "interrupted", None, "ended by the watchdog")
-        log.emit(None, None, "summary", None, "interrupted", result="interrupted")
-    log.close()
-    return None
-
-
-class _PlainView:
-    """One line per action outcome, fault and repair (when stdout is not a terminal).
-
-    If the reader goes away (``htn run ... | head``) the lines go to
-    /dev/null and the run goes on: a robot does not stop because nobody
-    reads its progress. The log and the exit code tell how it ended."""
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc) -> None:
-        pass
-
-    def event(self, rec) -> None:
-        line = event_line(rec)
-        if line is None:
-            return
-        try:
-            click.echo(line)
-        except BrokenPipeError:
-            silence_stdout()

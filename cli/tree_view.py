@@ -1,16 +1,21 @@
-"""Rich rendering of task trees and of the behaviour tree being executed
-(display only; the trees live in ``jshop.tree`` and ``executor.task_bt``)."""
+"""What ``htn plan --tree`` and ``htn run`` show: rich task trees, the
+behaviour tree being executed (live, on a terminal) and the one line per
+event a pipe gets (display only; the trees live in ``htn.jshop.plans`` and
+``htn.executor``)."""
 from __future__ import annotations
 
 from collections import deque
+from typing import Optional
 
+import click
 from rich.console import Console, Group
 from rich.live import Live
 from rich.markup import escape
 from rich.text import Text
 from rich.tree import Tree
 
-from .run_lines import event_line
+from htn.process import silence_stdout
+
 
 STATUS_STYLE = {"✓": "green", "✕": "bold red", "*": "yellow", "-": "dim"}
 LINE_STYLE = {"verified": "green", "failed": "red", "aborted": "bold red", "fault": "yellow",
@@ -225,3 +230,46 @@ class LiveTreeView:
         below = bool(shown) and shown[-1][0] is not rows[-1]
         self.live.update(Group(Text(self.header, style="bold"), render_rows(shown, below)),
                          refresh=True)
+
+
+SHOWN = ("verified", "failed", "aborted", "retrying", "replanned", "replan_failed",
+         "interrupted", "fault")
+
+
+def event_line(rec: dict) -> Optional[str]:
+    """``' 3 verified    (!goto robby dock kitchen)  [try 1, t=2.0s] DETAIL'``
+    for an event of the run's log worth a line, else None (starts, ticks,
+    feedback: the live tree shows those)."""
+    if rec["event"] not in SHOWN:
+        return None
+    step = "" if rec["step"] is None else f"{rec['step']:>2} "
+    what = rec["action"] or ""
+    if rec["event"] == "fault":
+        return f"{step}{'fault':<11} {rec['kind']}: {rec['detail']}  [t={rec['sim_t']:.2f}s]"
+    if rec["event"] == "replanned":
+        what = rec["path"]
+    return (f"{step}{rec['event']:<11} {what}  "
+            f"[try {rec['attempt'] or '-'}, t={rec['sim_t']:.1f}s] {rec['detail']}")
+
+
+class PlainView:
+    """One line per action outcome, fault and repair (when stdout is not a terminal).
+
+    If the reader goes away (``htn run ... | head``) the lines go to
+    /dev/null and the run goes on: a robot does not stop because nobody
+    reads its progress. The log and the exit code tell how it ended."""
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc) -> None:
+        pass
+
+    def event(self, rec) -> None:
+        line = event_line(rec)
+        if line is None:
+            return
+        try:
+            click.echo(line)
+        except BrokenPipeError:
+            silence_stdout()
