@@ -18,6 +18,7 @@ from htn.jshop.plans.plan import Plan
 from htn.jshop.readers.checks import compat_warning
 from htn.jshop.search.limits import DEFAULT_MAX_DEPTH
 from htn.jshop.search.searches import SEARCHES, make_search, refusal
+from htn.jshop.search.stream import SearchStream
 
 from .inputs import function_table, path_of, read_inputs
 
@@ -79,15 +80,6 @@ class UnsupportedSearch(HtnError):
     JSHOP2 input, or with every plan asked for)."""
 
 
-def new_stats() -> dict:
-    """The statistics of a search over a problem's instances, before it starts
-    (their keys are those of ``htn plan -f json``'s statistics line)."""
-    return {"plans_found": 0, "search_ms": 0.0, "expansions": 0, "operator_applications": 0,
-            "backtracks": 0, "timed_out": False, "interrupted": False,
-            "depth_limit_reached": False, "memory_limit_reached": False,
-            "shortest_plan": None}
-
-
 class PlanStream:
     """The plans of every instance of a problem (a ``defproblem`` may hold
     several), streamed by iterating (once). Each plan is a
@@ -111,11 +103,16 @@ class PlanStream:
         self.explain_all = explain_all
         self.record = explain
         self.trees, self.tree_paths = trees, tree_paths
-        self.stats = new_stats()
-        self.bound: Optional[str] = None
         self.explanations: list = []     # one Explainer per instance searched (explain=True)
         self.search = search              # its name (see plan())
-        self._plans = self._search()
+        self._plans = SearchStream(problem.instances, self._make, started=started,
+                                   timeout=timeout, limit=limit)
+        self.stats = self._plans.stats
+
+    @property
+    def bound(self) -> Optional[str]:
+        bound = self._plans.bound
+        return None if bound is None else str(bound)
 
     @property
     def domain_file(self) -> Optional[str]:
@@ -126,7 +123,7 @@ class PlanStream:
         return path_of(self.problem)
 
     def __iter__(self) -> Iterator[Plan]:
-        return self._plans
+        return iter(self._plans)
 
     def __next__(self) -> Plan:
         return next(self._plans)
@@ -141,51 +138,15 @@ class PlanStream:
     def __exit__(self, *exc) -> None:
         self.close()
 
-    def _search(self) -> Iterator[Plan]:
-        stats = self.stats
-        try:
-            for k, inst in enumerate(self.problem.instances):
-                remaining = None
-                if self.timeout is not None:
-                    remaining = self.timeout - (time.perf_counter() - self.started)
-                    if remaining <= 0:
-                        stats["timed_out"] = True
-                        break
-                explainer = None
-                if self.record:
-                    from htn.jshop.checks.explain import Explainer
-                    explainer = Explainer(keep_all=self.explain_all)
-                    self.explanations.append(explainer)
-                planner = make_search(self.search, self.domain, inst, self.functions,
-                                      record_trees=self.trees, tree_paths=self.tree_paths,
-                                      explain=explainer, **self.options)
-                found = planner.plans(remaining)
-                try:
-                    for p in found:
-                        p.instance = k
-                        stats["plans_found"] += 1
-                        if stats["shortest_plan"] is None or len(p.steps) < stats["shortest_plan"]:
-                            stats["shortest_plan"] = len(p.steps)
-                        yield p
-                        if self.limit is not None and planner.stats.plans_found >= self.limit:
-                            break
-                finally:
-                    found.close()
-                    _add(stats, planner.stats.as_dict())
-                if planner.stats.timed_out:
-                    stats["timed_out"] = True
-                    break
-                if planner.stats.bound is not None:
-                    reached = planner.stats.as_dict()
-                    for key in ("depth_limit_reached", "memory_limit_reached"):
-                        stats[key] = reached[key]
-                    self.bound = str(planner.stats.bound)
-                    break
-        except KeyboardInterrupt:
-            stats["interrupted"] = True
-            raise
-        finally:
-            stats["search_ms"] = round(stats["search_ms"], 3)
+    def _make(self, k: int, instance):
+        explainer = None
+        if self.record:
+            from htn.jshop.checks.explain import Explainer
+            explainer = Explainer(keep_all=self.explain_all)
+            self.explanations.append(explainer)
+        return make_search(self.search, self.domain, instance, self.functions,
+                           record_trees=self.trees, tree_paths=self.tree_paths,
+                           explain=explainer, **self.options)
 
     def explain(self) -> list:
         """Why the search found what it found: one
@@ -200,12 +161,3 @@ class PlanStream:
                                  for inst in self.problem.instances]
         return self.explanations
 
-
-def _add(totals: dict, s: dict) -> None:
-    for key in ("expansions", "operator_applications", "backtracks"):
-        totals[key] += s[key]
-    totals["search_ms"] += s["search_ms"]
-    if "found_by" in s:       # --search auto: which search found the plans
-        totals["found_by"] = s["found_by"]
-    if "loop_cuts" in s:
-        totals["loop_cuts"] = totals.get("loop_cuts", 0) + s["loop_cuts"]

@@ -12,6 +12,7 @@ from unified_planning.engines import (LogLevel, LogMessage, PlanGenerationResult
 from htn.jshop.search.ground_formulas import NotGroundable
 from htn.jshop.search.limits import MemoryLimit
 from htn.jshop.search.searches import make_search
+from htn.jshop.search.stream import SearchStream
 
 from .convert import Conversion
 from .decompose import hierarchical_plan, sequential_plan
@@ -28,28 +29,25 @@ def search(engine, conv: Conversion, options: dict, started: float,
                           max_depth=options["max_depth"], loop_check=options["loop_check"],
                           max_memory=max_memory << 20 if max_memory else None)
     converted = time.perf_counter()
-    remaining = None if timeout is None else timeout - (converted - started)
+    plans = SearchStream([conv.instance], lambda k, instance: planner, started=started,
+                         timeout=timeout, limit=None if options["optimize"] else 1)
     best, found = None, 0
-    if remaining is None or remaining > 0:
-        stream = planner.plans(remaining)
-        try:
-            for p in stream:
-                found += 1
-                if best is None or p.cost < best.cost:
-                    best = p
-                if output_stream is not None:
-                    output_stream.write(f"htn: plan {found}: {len(p)} actions, cost "
-                                        f"{p.cost:g}\n")
-                if not options["optimize"]:
-                    break
-        except NotGroundable as e:  # gbfs, wastar: the problem cannot be grounded
-            logs.append(LogMessage(LogLevel.ERROR, f"htn: search {options['search']}: {e}"))
-            return PlanGenerationResult(Status.UNSUPPORTED_PROBLEM, None, engine.name,
-                                        log_messages=logs)
-        finally:
-            stream.close()
+    try:
+        for plan in plans:          # the cheapest plan, and a line for each
+            found += 1
+            if best is None or plan.cost < best.cost:
+                best = plan
+            if output_stream is not None:
+                output_stream.write(f"htn: plan {found}: {len(plan)} actions, cost "
+                                    f"{plan.cost:g}\n")
+    except NotGroundable as e:  # gbfs, wastar: the problem cannot be grounded
+        logs.append(LogMessage(LogLevel.ERROR, f"htn: search {options['search']}: {e}"))
+        return PlanGenerationResult(Status.UNSUPPORTED_PROBLEM, None, engine.name,
+                                    log_messages=logs)
+    finally:
+        plans.close()
     stats = planner.stats
-    timed_out = stats.timed_out or (remaining is not None and remaining <= 0)
+    timed_out = plans.stats["timed_out"]
     cut = stats.loop_cuts
     complete = not timed_out and stats.bound is None and cut == 0 and (
         options["optimize"] or best is None)
