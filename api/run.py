@@ -256,6 +256,14 @@ class Execution:
     def _result(self, summary: RunSummary) -> RunResult:
         return RunResult(summary, self.log.events, self.dispatcher.plan_lines(), self.notes)
 
+    def believed(self) -> list[tuple]:
+        """The facts the run believes now, ``(pred, args)`` pairs: the
+        initial state with every verified step's effects (and, after a
+        repair, what was observed); the problem's state before it begins."""
+        if self.dispatcher is None:
+            return [(a.pred, a.args) for a in self.inputs.instance.state]
+        return list(self.dispatcher.belief.state.facts())
+
     def end_now(self, why: str) -> None:
         """End the log now, from another thread (a watchdog that ends the
         process because user code kept running after a stop): its

@@ -163,6 +163,29 @@ def _operator_atoms(op: S.Operator) -> list:
     return out
 
 
+def predicate_arities(domain: S.Domain, problem: S.Problem | None = None) -> dict[str, set]:
+    """The predicates the domain speaks of (in preconditions, effects and
+    axioms; HDDL: its typing facts) and the problem's states, with the
+    numbers of arguments each is written with: what a fact may be."""
+    atoms: list = list(domain.facts)
+    for op in (o for ops in domain.operators.values() for o in ops):
+        atoms.extend(_operator_atoms(op)[1:])
+    for m in (x for ms in domain.methods.values() for x in ms):
+        for b in m.branches:
+            _expr_atoms(b.pre.expr, atoms)
+    for ax in (x for axs in domain.axioms.values() for x in axs):
+        atoms.append(ax.head)
+        for b in ax.branches:
+            _expr_atoms(b.pre.expr, atoms)
+    for inst in problem.instances if problem is not None else ():
+        atoms.extend(inst.state)
+    out: dict[str, set] = {}
+    for a in atoms:
+        if isinstance(a, S.Atom):
+            out.setdefault(a.pred, set()).add(len(a.args))
+    return out
+
+
 def _method_atoms(m: S.Method) -> list:
     out = [m.head]
     for b in m.branches:
