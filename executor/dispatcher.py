@@ -42,6 +42,11 @@ from .tree_events import NodeNumbers, tree_detail, tree_nodes
 STOPPED_BY_USER = "stopped by the user"     # why a run halted, unless told otherwise
 
 
+class Halted(KeyboardInterrupt):
+    """Raised when the next action would start after a halt: the run ends
+    as after an interrupt between two ticks (its message is the halt's reason)."""
+
+
 @dataclass
 class RunSummary:
     result: str              # verified | failed | aborted | interrupted
@@ -142,7 +147,12 @@ class TaskDispatcher:
 
     def begun(self, ctx: ActionContext, first: bool) -> None:
         """An action's behaviours say it runs now (``first``: its first
-        attempt, which counts it as started)."""
+        attempt, which counts it as started). A halted run starts no further
+        action, even within the tick that was running when it was halted
+        (the symbolic robot's actions all end in one tick): :class:`Halted`
+        ends the tick, and :meth:`run` ends the run as interrupted."""
+        if self._halt:
+            raise Halted(self._halt)
         self.running = ctx
         self.started += first
 
