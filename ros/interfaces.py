@@ -4,14 +4,14 @@ The package's source (``interfaces/htn_interfaces/``: ``package.xml``,
 ``CMakeLists.txt`` and the ``.msg``/``.srv``/``.action`` files) is a real ROS
 package that a team builds in its colcon workspace; when that build is
 importable (the workspace sourced), :func:`locate` uses it. For pip users,
-:func:`build` runs ``colcon build`` once against the ROS wheels of this Python
+:func:`build` builds it once with CMake against the ROS wheels of this Python
 (the ``ros`` extra) into a per-user cache, keyed by the ROS distribution, the
 Python version and a hash of the package's source, so that a changed ``.msg``
 is rebuilt and two Pythons never share compiled code::
 
     ~/.cache/htn/ros/jazzy-py311/<hash>/install      ($XDG_CACHE_HOME, $HTN_ROS_CACHE)
 
-How colcon is run against the wheels is :mod:`htn.ros.colcon`'s; this module
+How CMake is run against the wheels is :mod:`htn.ros.cmake`'s; this module
 decides when to build and where the result goes. A build happens in a
 temporary folder beside its final place and is renamed into it once it has
 succeeded, so a half-built package is never used; a lock file makes a second
@@ -51,8 +51,8 @@ from contextlib import contextmanager
 from pathlib import Path
 from types import SimpleNamespace
 
-from . import colcon
-from .colcon import InterfaceBuildError, Progress
+from . import cmake
+from .cmake import InterfaceBuildError, Progress
 
 PACKAGE = "htn_interfaces"
 SOURCE = Path(__file__).resolve().parent / "interfaces" / PACKAGE
@@ -145,13 +145,13 @@ def available() -> bool:
 
 def check(which=shutil.which) -> None:
     """Raise :class:`InterfaceBuildError` naming everything a build lacks
-    here (see :func:`htn.ros.colcon.check`)."""
-    colcon.check(distro(), PACKAGE, which)
+    here (see :func:`htn.ros.cmake.check`)."""
+    cmake.check(distro(), PACKAGE, which)
 
 
 def build(progress: Progress | None = None) -> Path:
     """The install prefix of the current source in the cache, built with
-    colcon first when it is not there (about 45 s on 2 cores, once); a no-op
+    CMake first when it is not there (about 25 s on 2 cores, once); a no-op
     when it is. ``progress`` receives one-line messages."""
     say = progress or (lambda message: None)
     target = cached_install()
@@ -165,15 +165,16 @@ def build(progress: Progress | None = None) -> Path:
             return target
         for stale in home.glob(".build-*"):      # left by a process that died building
             shutil.rmtree(stale, ignore_errors=True)
-        colcon.fix_exports()
+        cmake.fix_exports()
         work = Path(tempfile.mkdtemp(prefix=f".build-{target.parent.name}-", dir=home))
+        work.chmod(0o755)                        # mkdtemp's 0700 would stay on the entry
         kept = home / f"build-{target.parent.name}.log"      # a failed build's log
         say(f"building {PACKAGE} for ROS 2 {distro()} and Python {sys.version.split()[0]} "
-            f"(once, about a minute) in {home}")
+            f"(once, about half a minute) in {home}")
         try:
-            code = colcon.run(SOURCE, work, say)
+            code = cmake.run(SOURCE, work, say)
             if code != 0:
-                raise InterfaceBuildError(f"colcon build of {PACKAGE} failed (exit code "
+                raise InterfaceBuildError(f"the build of {PACKAGE} failed (exit code "
                                           f"{code}): see {kept}")
             for done in ("build", "src"):        # the objects: 14 MB nobody reads again
                 shutil.rmtree(work / done, ignore_errors=True)

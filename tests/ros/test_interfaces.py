@@ -1,7 +1,7 @@
 """htn_interfaces, the ROS 2 types of htn's node: found, or built once with
-colcon into the per-user cache (:mod:`htn.ros.interfaces`), and usable across
+CMake into the per-user cache (:mod:`htn.ros.interfaces`), and usable across
 processes. The build's bookkeeping (checks, the wheels' CMake fix, the cache,
-the lock) is tested everywhere with a stand-in for colcon; the real build and
+the lock) is tested everywhere with a stand-in for CMake; the real build and
 a two-process exchange need the ``ros`` extra and are skipped without it."""
 from __future__ import annotations
 
@@ -21,7 +21,7 @@ from pathlib import Path
 
 import pytest
 from conftest import ROOT
-from htn.ros import colcon, interfaces
+from htn.ros import cmake, interfaces
 from htn.ros.interfaces import InterfaceBuildError
 
 # the tests that need ROS carry the "ros" marker once pyproject registers it
@@ -33,16 +33,16 @@ needs_ros = pytest.mark.ros if any(m.startswith("ros:") for m in _MARKERS["marke
 
 @pytest.fixture
 def cache(tmp_path, monkeypatch):
-    """An empty cache of its own, for ROS 2 Jazzy, with colcon's checks passed."""
+    """An empty cache of its own, for ROS 2 Jazzy, with the build's checks passed."""
     monkeypatch.setenv("HTN_ROS_CACHE", str(tmp_path / "cache"))
     monkeypatch.setenv("ROS_DISTRO", "jazzy")
     monkeypatch.setattr(interfaces, "check", lambda: None)
-    monkeypatch.setattr(colcon, "fix_exports", lambda prefix=None: [])
+    monkeypatch.setattr(cmake, "fix_exports", lambda prefix=None: [])
     return tmp_path / "cache"
 
 
-def fake_colcon(code=0, entered=None, go_on=None):
-    """A stand-in for :func:`colcon.run`: makes an install (exit code 0) or
+def fake_cmake(code=0, entered=None, go_on=None):
+    """A stand-in for :func:`cmake.run`: makes an install (exit code 0) or
     fails with ``code``; counts its calls; may wait for ``go_on``."""
     calls = []
 
@@ -80,11 +80,11 @@ def test_the_source_is_a_ros_interface_package():
     xml = (source / "package.xml").read_text()
     assert '<package format="3">' in xml and "<name>htn_interfaces</name>" in xml
     assert "<member_of_group>rosidl_interface_packages</member_of_group>" in xml
-    cmake = (source / "CMakeLists.txt").read_text()
+    lists = (source / "CMakeLists.txt").read_text()
     files = sorted(p.relative_to(source).as_posix() for p in source.glob("*/*.*"))
     assert files == ["action/ExecuteTasks.action", "msg/Event.msg", "msg/Facts.msg",
                      "srv/GetState.srv", "srv/PlanTasks.srv", "srv/UpdateFacts.srv"]
-    assert all(f'"{f}"' in cmake for f in files)
+    assert all(f'"{f}"' in lists for f in files)
     for path in source.glob("*/*.*"):       # every field has its comment
         lines = path.read_text().splitlines()
         for i, line in enumerate(lines):
@@ -104,44 +104,44 @@ def test_a_missing_compiler_cmake_or_make_is_named_in_one_line(monkeypatch):
 
 
 def test_missing_python_headers_are_named(monkeypatch, tmp_path):
-    real = colcon.sysconfig.get_paths
-    monkeypatch.setattr(colcon.sysconfig, "get_paths",
+    real = cmake.sysconfig.get_paths
+    monkeypatch.setattr(cmake.sysconfig, "get_paths",
                         lambda *a, **k: {**real(*a, **k), "include": str(tmp_path)})
     with pytest.raises(InterfaceBuildError, match=rf"Python.h not in {re.escape(str(tmp_path))}"):
-        colcon.check("jazzy", "htn_interfaces", which=lambda name: "/usr/bin/" + name)
+        cmake.check("jazzy", "htn_interfaces", which=lambda name: "/usr/bin/" + name)
 
 
 def test_without_ros_the_message_says_which_extra_to_install(monkeypatch, tmp_path):
-    monkeypatch.setattr(colcon.sysconfig, "get_path", lambda name: str(tmp_path))
+    monkeypatch.setattr(cmake.sysconfig, "get_path", lambda name: str(tmp_path))
     with pytest.raises(InterfaceBuildError) as caught:
-        colcon.check("", "htn_interfaces", which=lambda name: "/usr/bin/" + name)
+        cmake.check("", "htn_interfaces", which=lambda name: "/usr/bin/" + name)
     assert "ROS 2" in str(caught.value) and "pip install 'htn[ros]'" in str(caught.value)
-    assert "colcon" in str(caught.value) and "ament_cmake" in str(caught.value)
+    assert "ament_cmake" in str(caught.value) and "rosidl_default_generators" in str(caught.value)
 
 
 def test_the_wheels_cmake_exports_get_this_machines_include_folders_once(tmp_path):
-    cmake = tmp_path / "share" / "x_msgs" / "cmake"
-    cmake.mkdir(parents=True)
-    path = cmake / "export_x_msgs__rosidl_generator_pyExport.cmake"
+    folder = tmp_path / "share" / "x_msgs" / "cmake"
+    folder.mkdir(parents=True)
+    path = folder / "export_x_msgs__rosidl_generator_pyExport.cmake"
     here = str(tmp_path)
     path.write_text(
         'set_target_properties(x PROPERTIES\n  INTERFACE_INCLUDE_DIRECTORIES '
         f'"/opt/python/cp311-cp311/include/python3.11;{here};'
         '/opt/python/cp311-cp311/lib/python3.11/site-packages/numpy/_core/include"\n)\n')
-    assert colcon.fix_exports(tmp_path) == [path]
+    assert cmake.fix_exports(tmp_path) == [path]
     folders = re.search(r'DIRECTORIES "([^"]*)"', path.read_text()).group(1).split(";")
-    assert folders[0] == colcon.sysconfig.get_paths()["include"]
+    assert folders[0] == cmake.sysconfig.get_paths()["include"]
     assert folders[1] == here                       # a folder that exists stays
     assert "/opt/python" not in path.read_text() or find_spec("numpy") is None
-    assert colcon.fix_exports(tmp_path) == []      # idempotent
-    assert not list(cmake.glob("*.htn-*"))
+    assert cmake.fix_exports(tmp_path) == []      # idempotent
+    assert not list(folder.glob("*.htn-*"))
 
 
 # --- the cache: built once, never half, one builder at a time ----------------------
 
 def test_a_build_is_published_whole_and_then_reused(cache, monkeypatch):
-    run = fake_colcon()
-    monkeypatch.setattr(colcon, "run", run)
+    run = fake_cmake()
+    monkeypatch.setattr(cmake, "run", run)
     said = []
     path = interfaces.build(progress=said.append)
     assert path == interfaces.cached_install() and path.is_dir()
@@ -152,7 +152,7 @@ def test_a_build_is_published_whole_and_then_reused(cache, monkeypatch):
 
 
 def test_a_failed_build_leaves_its_log_and_nothing_usable(cache, monkeypatch):
-    monkeypatch.setattr(colcon, "run", fake_colcon(code=2))
+    monkeypatch.setattr(cmake, "run", fake_cmake(code=2))
     with pytest.raises(InterfaceBuildError, match="exit code 2") as caught:
         interfaces.build()
     log = Path(re.search(r"see (\S+)$", str(caught.value)).group(1))
@@ -163,8 +163,8 @@ def test_a_failed_build_leaves_its_log_and_nothing_usable(cache, monkeypatch):
 
 def test_a_second_process_waits_for_the_first_build_and_uses_it(cache, monkeypatch):
     entered, go_on = threading.Event(), threading.Event()
-    run = fake_colcon(entered=entered, go_on=go_on)
-    monkeypatch.setattr(colcon, "run", run)
+    run = fake_cmake(entered=entered, go_on=go_on)
+    monkeypatch.setattr(cmake, "run", run)
     results, waiting = [], threading.Event()
 
     def second_says(message):
@@ -183,7 +183,7 @@ def test_a_second_process_waits_for_the_first_build_and_uses_it(cache, monkeypat
     assert len(run.calls) == 1 and results == [interfaces.cached_install()] * 2
 
 
-# --- the real thing: a colcon build, and two processes talking ---------------------
+# --- the real thing: a build, and two processes talking ----------------------------
 
 def ros_environment() -> dict[str, str]:
     """This worker's own ROS domain (0-101: Fast DDS derives its ports from
@@ -195,7 +195,7 @@ def ros_environment() -> dict[str, str]:
 
 @pytest.fixture(scope="module")
 def built():
-    """The install prefix of htn_interfaces, built (about 45 s, once per
+    """The install prefix of htn_interfaces, built (about 25 s, once per
     user) or found in the cache; skipped without the ros extra, or with the
     reason when this machine lacks a compiler, cmake or the Python headers."""
     if find_spec("rclpy") is None:
