@@ -8,6 +8,7 @@ from __future__ import annotations
 import json
 import os
 import re
+import shutil
 import signal
 import subprocess
 import sys
@@ -207,6 +208,29 @@ def built():
         if error.missing:
             pytest.skip(str(error))
         raise
+
+
+@needs_ros
+def test_a_sourced_workspaces_build_is_used_and_nothing_is_built(built, tmp_path):
+    """What a team's ``setup.bash`` sets (its prefix on PYTHONPATH and the
+    library path) is enough: :func:`locate` names that prefix, the types
+    import, and the (empty) cache stays empty."""
+    workspace = tmp_path / "ws" / "install"
+    shutil.copytree(built, workspace)
+    site = workspace / "lib" / interfaces.PY / "site-packages"
+    env = {**os.environ, "HTN_ROS_CACHE": str(tmp_path / "cache"),
+           "PYTHONPATH": str(site), "AMENT_PREFIX_PATH": str(workspace),
+           "LD_LIBRARY_PATH": os.pathsep.join([str(workspace / "lib"),
+                                               os.environ.get("LD_LIBRARY_PATH", "")])}
+    code = ("from htn.ros import interfaces\n"
+            "print(interfaces.locate())\n"
+            "t = interfaces.import_interfaces()\n"
+            "print(t.Facts(add=['(at robby kitchen)']).add)")
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
+                         timeout=60, check=False)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.splitlines() == [str(workspace), "['(at robby kitchen)']"]
+    assert not (tmp_path / "cache").exists()
 
 
 SERVER = textwrap.dedent('''
