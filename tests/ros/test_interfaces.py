@@ -12,7 +12,6 @@ import shutil
 import signal
 import subprocess
 import sys
-import textwrap
 import threading
 import time
 import tomllib
@@ -233,135 +232,7 @@ def test_a_sourced_workspaces_build_is_used_and_nothing_is_built(built, tmp_path
     assert not (tmp_path / "cache").exists()
 
 
-SERVER = textwrap.dedent('''
-    """A stand-in for htn's node in plain rclpy: the action and the services."""
-    import json, sys, time
-    import rclpy
-    from rclpy.action import ActionServer, CancelResponse
-    from rclpy.callback_groups import ReentrantCallbackGroup
-    from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
-    from htn_interfaces.action import ExecuteTasks
-    from htn_interfaces.msg import Event
-    from htn_interfaces.srv import GetState, UpdateFacts
-
-    NAME = sys.argv[1]
-    facts = {"(at robby kitchen)", "(at jenny sofa)", "(holding robby nothing)"}
-    PLAN = ["(!walk robby kitchen sofa)", "(!give robby jenny pringles)"]
-
-    def matches(pattern, fact):
-        p, f = pattern.strip("()").split(), fact.strip("()").split()
-        return len(p) == len(f) and all(a.startswith("?") or a == b for a, b in zip(p, f))
-
-    def event(step, kind):
-        record = {"t": time.time(), "sim_t": 0.5 * step, "step": step, "action": PLAN[step % 2],
-                  "event": kind, "attempt": 1}
-        return ExecuteTasks.Feedback(event=Event(
-            t=record["t"], sim_t=record["sim_t"], step=step, action=record["action"],
-            event=kind, attempt=1, detail="", record=json.dumps(record)))
-
-    def execute(goal):
-        tasks, options = goal.request.tasks, json.loads(goal.request.options or "{}")
-        if not tasks.startswith("("):
-            goal.succeed()
-            return ExecuteTasks.Result(outcome="refused", summary="refused",
-                                       error="<goal>:1:1: a task list starts with '('")
-        if options.get("until_cancelled"):       # events until the client has seen enough
-            step = 0
-            while not goal.is_cancel_requested:
-                goal.publish_feedback(event(step, "started"))
-                step += 1
-                time.sleep(0.02)                 # the pace of a (fake) robot
-            goal.canceled()
-            return ExecuteTasks.Result(outcome="preempted", summary="preempted", steps=step)
-        for step in range(len(PLAN)):
-            for kind in ("started", "succeeded"):
-                goal.publish_feedback(event(step, kind))
-        goal.succeed()
-        tree = {"task": tasks, "children": [{"action": a} for a in PLAN]}
-        return ExecuteTasks.Result(outcome="verified", summary="verified: 2 of 2 steps",
-                                   plan=PLAN, tree=json.dumps(tree), steps=2, verified=2)
-
-    def state(request, response):
-        response.facts = sorted(f for f in facts if not request.pattern
-                                or matches(request.pattern, f))
-        return response
-
-    def update(request, response):
-        facts.difference_update(request.facts.remove)
-        facts.update(request.facts.add)
-        response.ok, response.facts = True, len(facts)
-        return response
-
-    rclpy.init()
-    node = rclpy.create_node("server_" + NAME)
-    group = ReentrantCallbackGroup()
-    ActionServer(node, ExecuteTasks, f"/{NAME}/execute", execute, callback_group=group,
-                 cancel_callback=lambda goal: CancelResponse.ACCEPT)
-    node.create_service(GetState, f"/{NAME}/state", state, callback_group=group)
-    node.create_service(UpdateFacts, f"/{NAME}/update_facts", update, callback_group=group)
-    executor = MultiThreadedExecutor()
-    executor.add_node(node)
-    try:
-        executor.spin()
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        node.destroy_node()
-        rclpy.try_shutdown()
-''')
-
-CLIENT = textwrap.dedent('''
-    """The client: activates the build in its own process (htn.ros.interfaces),
-    sends goals, collects feedback and results, and calls the services."""
-    import json, sys, time
-    from htn.ros.interfaces import import_interfaces
-    t = import_interfaces()
-    import rclpy
-    from rclpy.action import ActionClient
-
-    NAME, TIMEOUT = sys.argv[1], 20.0
-    rclpy.init()
-    node = rclpy.create_node("client_" + NAME)
-
-    def wait(future):
-        rclpy.spin_until_future_complete(node, future, timeout_sec=TIMEOUT)
-        assert future.done(), "no answer within the timeout"
-        return future.result()
-
-    def goal(tasks, options="", until=None):
-        events = []
-        handle = wait(client.send_goal_async(
-            t.ExecuteTasks.Goal(tasks=tasks, options=options),
-            feedback_callback=lambda f: events.append(json.loads(f.feedback.event.record))))
-        assert handle.accepted
-        if until:
-            deadline = time.monotonic() + TIMEOUT
-            while len(events) < until and time.monotonic() < deadline:
-                rclpy.spin_once(node, timeout_sec=0.1)
-            wait(handle.cancel_goal_async())
-        r = wait(handle.get_result_async()).result
-        return {"outcome": r.outcome, "summary": r.summary, "error": r.error, "plan": list(r.plan),
-                "tree": json.loads(r.tree) if r.tree else None, "steps": r.steps,
-                "verified": r.verified, "events": events}
-
-    client = ActionClient(node, t.ExecuteTasks, f"/{NAME}/execute")
-    assert client.wait_for_server(timeout_sec=TIMEOUT), "no action server"
-    out = {"done": goal("((bring jenny pringles))"),
-           "cancelled": goal("(bring jenny pringles)", '{"until_cancelled": true}', until=3),
-           "refused": goal("bring jenny")}
-    state = node.create_client(t.GetState, f"/{NAME}/state")
-    update = node.create_client(t.UpdateFacts, f"/{NAME}/update_facts")
-    assert state.wait_for_service(timeout_sec=TIMEOUT) and update.wait_for_service(timeout_sec=TIMEOUT)
-    out["before"] = list(wait(state.call_async(t.GetState.Request(pattern="(at ?who ?where)"))).facts)
-    change = t.Facts(add=["(at jenny kitchen)"], remove=["(at jenny sofa)"], source="test")
-    answer = wait(update.call_async(t.UpdateFacts.Request(facts=change)))
-    out["update"] = [answer.ok, answer.error, answer.facts]
-    out["after"] = list(wait(state.call_async(t.GetState.Request(pattern="(at jenny ?where)"))).facts)
-    out["all"] = len(wait(state.call_async(t.GetState.Request())).facts)
-    print(json.dumps(out))
-    node.destroy_node()
-    rclpy.try_shutdown()
-''')
+HERE = Path(__file__).resolve().parent     # exchange_server.py, exchange_client.py
 
 
 @needs_ros
@@ -371,15 +242,13 @@ def test_a_goal_its_feedback_its_result_and_the_services_cross_two_processes(bui
     (activate's PYTHONPATH, LD_LIBRARY_PATH, AMENT_PREFIX_PATH); the client
     through ``import_interfaces`` in its own process (the library preload)."""
     name = f"htn_test_{uuid.uuid4().hex[:8]}"      # no cross-talk with other runs
-    (tmp_path / "server.py").write_text(SERVER)
-    (tmp_path / "client.py").write_text(CLIENT)
     ros = ros_environment()
     began = time.monotonic()
-    server = subprocess.Popen([sys.executable, str(tmp_path / "server.py"), name],
+    server = subprocess.Popen([sys.executable, str(HERE / "exchange_server.py"), name],
                               env={**os.environ, **interfaces.activate(built), **ros},
                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
-        client = subprocess.run([sys.executable, str(tmp_path / "client.py"), name],
+        client = subprocess.run([sys.executable, str(HERE / "exchange_client.py"), name],
                                 env={**os.environ, **ros}, capture_output=True, text=True,
                                 timeout=120, check=False)
     finally:
