@@ -9,7 +9,7 @@ from conftest import ROOT
 
 # the folders of the repository that are parts of the htn package
 PACKAGE_DIRS = ("", "api", "cli", "process", "jshop", "executor", "robot", "transform",
-                "evaluation", "view", "up", "domains", "problems")
+                "evaluation", "view", "up", "ros", "domains", "problems")
 
 
 def package_modules() -> dict[str, Path]:

@@ -1,0 +1,252 @@
+"""The htn planning-and-execution node: a managed (lifecycle) ROS 2 node
+around :class:`htn.api.agent.Agent`. Everything rclpy-specific of htn's
+node side is in this module; the planning, the executor and the world
+model are the use cases', unchanged.
+
+Interfaces (``htn_interfaces``, see ``ros/interfaces/``):
+
+* action ``~/execute`` (``ExecuteTasks``): the goal's tasks are planned from
+  the world model and run; each executor event is feedback and goes out on
+  ``~/events`` (``Event``; the action client drops feedback that comes after
+  the result, a topic does not); the result says verified / failed /
+  aborted / preempted / refused, with the summary line, the located error of
+  a refused goal and the plan with its task tree;
+* a cancel, or a new goal under ``on_new_goal="preempt"`` (the default),
+  halts the running goal at its current action: the robot holds its pose
+  and the goal ends ``preempted``; ``"reject"`` refuses the new goal while
+  one runs, ``"queue"`` runs it after;
+* services ``~/plan`` (``PlanTasks``: plan only), ``~/state`` (``GetState``:
+  the facts matching a pattern) and ``~/update_facts`` (``UpdateFacts``),
+  and the topic ``~/facts`` (``Facts``) for what other nodes observe: a fact
+  the domain does not know is refused with the reason, nothing is changed.
+
+Lifecycle: ``configure`` reads the domain and the problem and builds the
+robot (a located error fails the transition and is logged); ``activate``
+starts serving; ``deactivate`` preempts a running goal and stops serving.
+"""
+from __future__ import annotations
+
+import json
+import threading
+from dataclasses import dataclass
+from typing import Optional
+
+import rclpy
+from rclpy.action import ActionServer, CancelResponse, GoalResponse
+from rclpy.callback_groups import ReentrantCallbackGroup
+from rclpy.executors import MultiThreadedExecutor
+from rclpy.lifecycle import Node as LifecycleNode
+from rclpy.lifecycle import State, TransitionCallbackReturn
+
+from htn.api.agent import Agent, GoalResult
+from htn.jshop.language.errors import HtnError
+
+from .interfaces import import_interfaces
+
+POLICIES = ("preempt", "reject", "queue")
+
+
+@dataclass
+class NodeSettings:
+    """What ``htn ros node`` is told."""
+    domain: str
+    problem: Optional[str] = None
+    robot: str = "symbolic"
+    faults: str = ""
+    seed: int = 0
+    replan: bool = False
+    on_new_goal: str = "preempt"
+    log_dir: Optional[str] = None       # a JSON Lines log per goal, as htn run --log writes
+
+
+class HtnNode(LifecycleNode):
+    """The node; ``settings`` say what it plans with, and how."""
+
+    def __init__(self, settings: NodeSettings, name: str = "htn"):
+        super().__init__(name)
+        self.settings = settings
+        self.types = import_interfaces()
+        self.agent: Optional[Agent] = None
+        self.configure_error: Optional[str] = None
+        self._group = ReentrantCallbackGroup()
+        self._turn = threading.Lock()           # one goal runs at a time
+        self._waiting = 0                       # goals waiting for their turn
+        self._served: list = []
+        self._events = None
+        self._goals = 0
+
+    # ------------------------------------------------------------ lifecycle
+    def on_configure(self, state: State) -> TransitionCallbackReturn:
+        s = self.settings
+        try:
+            self.agent = Agent(s.domain, s.problem, robot=s.robot, faults=s.faults, seed=s.seed,
+                               replan=s.replan)
+        except HtnError as exc:
+            self.configure_error = str(exc)
+            self.get_logger().error(f"configure: {exc}")
+            return TransitionCallbackReturn.FAILURE
+        self._events = self.create_lifecycle_publisher(self.types.Event, "~/events", 100)
+        return TransitionCallbackReturn.SUCCESS
+
+    def on_activate(self, state: State) -> TransitionCallbackReturn:
+        t, g = self.types, self._group
+        self._served = [
+            ActionServer(self, t.ExecuteTasks, "~/execute", execute_callback=self._execute,
+                         goal_callback=self._goal, cancel_callback=self._cancel,
+                         callback_group=g),
+            self.create_service(t.PlanTasks, "~/plan", self._plan, callback_group=g),
+            self.create_service(t.GetState, "~/state", self._state, callback_group=g),
+            self.create_service(t.UpdateFacts, "~/update_facts", self._update, callback_group=g),
+            self.create_subscription(t.Facts, "~/facts", self._facts, 100, callback_group=g),
+        ]
+        return super().on_activate(state)
+
+    def on_deactivate(self, state: State) -> TransitionCallbackReturn:
+        if self.agent is not None:
+            self.agent.preempt("the node was deactivated")
+        self._stop_serving()
+        return super().on_deactivate(state)
+
+    def on_cleanup(self, state: State) -> TransitionCallbackReturn:
+        self._stop_serving()
+        self._close_robot()
+        return TransitionCallbackReturn.SUCCESS
+
+    def on_shutdown(self, state: State) -> TransitionCallbackReturn:
+        if self.agent is not None:
+            self.agent.preempt("the node shuts down")
+        self._stop_serving()
+        self._close_robot()
+        return TransitionCallbackReturn.SUCCESS
+
+    def _stop_serving(self) -> None:
+        for s in self._served:
+            if isinstance(s, ActionServer):
+                s.destroy()
+            elif hasattr(s, "srv_name"):
+                self.destroy_service(s)
+            else:
+                self.destroy_subscription(s)
+        self._served = []
+
+    def _close_robot(self) -> None:
+        if self.agent is not None:
+            self.agent.robot.close()
+            self.agent = None
+
+    # ------------------------------------------------------------ the action
+    def _goal(self, request) -> GoalResponse:
+        busy = self._turn.locked() or self._waiting
+        if busy and self.settings.on_new_goal == "reject":
+            self.get_logger().info("a goal is running: the new one is rejected")
+            return GoalResponse.REJECT
+        return GoalResponse.ACCEPT
+
+    def _cancel(self, goal_handle) -> CancelResponse:
+        self.agent.preempt("cancelled by the client")
+        return CancelResponse.ACCEPT
+
+    def _execute(self, goal_handle):
+        tasks = goal_handle.request.tasks
+        if self.settings.on_new_goal == "preempt":
+            self.agent.preempt("preempted by a newer goal")
+        self._waiting += 1
+        with self._turn:
+            self._waiting -= 1
+            self._goals += 1
+            log = None
+            if self.settings.log_dir:
+                log = f"{self.settings.log_dir}/goal-{self._goals:04d}.jsonl"
+            if goal_handle.is_cancel_requested:
+                outcome = GoalResult("preempted", "preempted before it started")
+            else:
+                outcome = self.agent.execute(tasks, log=log,
+                                             on_event=lambda rec: self._event(goal_handle, rec))
+        result = self._result(outcome)
+        if outcome.outcome == "preempted" and goal_handle.is_cancel_requested:
+            goal_handle.canceled()
+        elif outcome.outcome in ("refused", "failed", "aborted"):
+            goal_handle.abort()
+        else:
+            goal_handle.succeed()
+        return result
+
+    def _event(self, goal_handle, rec: dict) -> None:
+        msg = self.types.Event(t=float(rec.get("t") or 0.0), sim_t=float(rec.get("sim_t") or 0.0),
+                               step=rec["step"] if rec.get("step") is not None else -1,
+                               action=rec.get("action") or "", event=rec["event"],
+                               attempt=rec.get("attempt") or 0, detail=str(rec.get("detail") or ""),
+                               record=json.dumps(rec, default=str))
+        feedback = self.types.ExecuteTasks.Feedback(event=msg)
+        goal_handle.publish_feedback(feedback)
+        if self._events is not None and self._events.is_activated:
+            self._events.publish(msg)
+
+    def _result(self, r: GoalResult):
+        return self.types.ExecuteTasks.Result(outcome=r.outcome, summary=r.summary, error=r.error,
+                                              plan=list(r.plan), tree=r.tree, steps=r.steps,
+                                              verified=r.verified)
+
+    # ------------------------------------------------------------ services
+    def _plan(self, request, response):
+        try:
+            p = self.agent.plan(request.tasks)
+        except HtnError as exc:
+            response.ok, response.error = False, str(exc)
+            return response
+        if p is None:
+            response.ok, response.error = False, "no plan reaches the goal from the current state"
+            return response
+        response.ok, response.steps, response.cost = True, p.lines(), float(p.cost)
+        response.tree = json.dumps(p.tree.to_dict()) if p.tree is not None else ""
+        return response
+
+    def _state(self, request, response):
+        try:
+            response.facts = self.agent.world.query(request.pattern)
+        except HtnError as exc:
+            self.get_logger().warning(f"state: {exc}")
+            response.facts = []
+        return response
+
+    def _update(self, request, response):
+        f = request.facts
+        try:
+            response.facts = self.agent.world.update(f.add, f.remove, f.source or "facts")
+            response.ok = True
+        except HtnError as exc:
+            response.ok, response.error = False, str(exc)
+            response.facts = len(self.agent.world.facts())
+        return response
+
+    def _facts(self, msg) -> None:
+        try:
+            self.agent.world.update(msg.add, msg.remove, msg.source or "facts")
+        except HtnError as exc:
+            self.get_logger().warning(f"facts refused: {exc}")
+
+
+def serve(settings: NodeSettings, managed: bool = False, name: str = "htn") -> int:
+    """Run the node until it is shut down (Ctrl-C, SIGTERM). Not
+    ``managed``: it configures and activates itself, and a configure error
+    ends it with exit code 2."""
+    rclpy.init()
+    node = HtnNode(settings, name)
+    executor = MultiThreadedExecutor()
+    executor.add_node(node)
+    try:
+        if not managed:
+            if node.trigger_configure() != TransitionCallbackReturn.SUCCESS:
+                raise HtnError(node.configure_error or "the node could not be configured")
+            node.trigger_activate()
+        executor.spin()
+    except KeyboardInterrupt:
+        pass
+    finally:
+        if node.agent is not None:
+            node.agent.preempt("the node shuts down")
+        executor.shutdown()
+        node.destroy_node()
+        if rclpy.ok():
+            rclpy.shutdown()
+    return 0
