@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 from typing import Callable, Optional
 
 from htn.executor.dispatcher import RunSummary, TaskDispatcher
-from htn.executor.log import EventLog, run_header
+from htn.executor.log import EventLog, event_line, run_header
 from htn.executor.machines import machine_for
 from htn.jshop.language.errors import HtnError
 from htn.robot.backends import RobotRequest, make_robot
@@ -31,7 +31,7 @@ from .inputs import path_of
 from .run_outputs import RunOutputs
 from .run_inputs import LoggedRun, RunInputs, read_run_log, run_inputs
 
-__all__ = ["run", "prepare", "Execution", "RunResult", "read_run_log", "LoggedRun"]
+__all__ = ["run", "prepare", "Execution", "RunResult", "read_run_log", "LoggedRun", "event_line"]
 
 Listener = Callable[[dict], None]
 

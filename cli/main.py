@@ -36,7 +36,7 @@ class HtnGroup(click.Group):
     ``htn evaluate``'s statistics."""
 
     def list_commands(self, ctx):
-        return sorted({*super().list_commands(ctx), *_COMMANDS})
+        return sorted({*super().list_commands(ctx), *_COMMANDS, *_plugins()})
 
     def get_command(self, ctx, name):
         # an unknown name loads them all: click suggests the close ones it has
@@ -44,6 +44,9 @@ class HtnGroup(click.Group):
             if wanted not in self.commands:
                 module = importlib.import_module(f"htn.cli.{_COMMANDS[wanted]}")
                 self.add_command(getattr(module, wanted), wanted)
+        plugins = {} if name in _COMMANDS else _plugins()
+        if name not in self.commands and name in plugins:
+            self.add_command(plugins[name].load(), name)
         return super().get_command(ctx, name)
 
     def invoke(self, ctx):
@@ -79,6 +82,14 @@ def cli():
 _COMMANDS = {"plan": "plan_cmd", "run": "run_cmd", "validate": "validate_cmd",
              "stats": "stats_cmd", "transform": "transform_cmd", "evaluate": "evaluate_cmd",
              "examples": "examples_cmd", "view": "view_cmd"}
+
+
+def _plugins() -> dict:
+    """Command groups other parts of htn (``htn ros``, the ros extra) or other
+    packages add through the entry-point group ``htn.commands``: the command
+    line imports none of them until it is asked for one."""
+    from importlib.metadata import entry_points
+    return {ep.name: ep for ep in entry_points(group="htn.commands")}
 
 
 def main(argv=None, stops: Stops | None = None) -> None:

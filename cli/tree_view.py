@@ -5,8 +5,6 @@ event a pipe gets (display only; the trees live in ``htn.jshop.plans`` and
 from __future__ import annotations
 
 from collections import deque
-from typing import Optional
-
 import click
 from rich.console import Console, Group
 from rich.live import Live
@@ -209,6 +207,7 @@ class LiveTreeView:
         d = self.dispatcher()
         if d is None or rec["event"] in ("header", "summary", "tree"):
             return
+        from htn.api.run import event_line
         line = event_line(rec)
         if line is not None:        # printed above the live part, which is redrawn below
             self.console.print(Text(line, style=LINE_STYLE.get(rec["event"], "")))
@@ -232,26 +231,6 @@ class LiveTreeView:
                          refresh=True)
 
 
-SHOWN = ("verified", "failed", "aborted", "retrying", "replanned", "replan_failed",
-         "interrupted", "fault")
-
-
-def event_line(rec: dict) -> Optional[str]:
-    """``' 3 verified    (!goto robby dock kitchen)  [try 1, t=2.0s] DETAIL'``
-    for an event of the run's log worth a line, else None (starts, ticks,
-    feedback: the live tree shows those)."""
-    if rec["event"] not in SHOWN:
-        return None
-    step = "" if rec["step"] is None else f"{rec['step']:>2} "
-    what = rec["action"] or ""
-    if rec["event"] == "fault":
-        return f"{step}{'fault':<11} {rec['kind']}: {rec['detail']}  [t={rec['sim_t']:.2f}s]"
-    if rec["event"] == "replanned":
-        what = rec["path"]
-    return (f"{step}{rec['event']:<11} {what}  "
-            f"[try {rec['attempt'] or '-'}, t={rec['sim_t']:.1f}s] {rec['detail']}")
-
-
 class PlainView:
     """One line per action outcome, fault and repair (when stdout is not a terminal).
 
@@ -266,6 +245,7 @@ class PlainView:
         pass
 
     def event(self, rec) -> None:
+        from htn.api.run import event_line
         line = event_line(rec)
         if line is None:
             return

@@ -250,3 +250,66 @@ def serve(settings: NodeSettings, managed: bool = False, name: str = "htn") -> i
         if rclpy.ok():
             rclpy.shutdown()
     return 0
+
+
+def send_goal(tasks: str, *, on_event=None, cancel_after: Optional[float] = None,
+              wait: float = 30.0, node_name: str = "htn"):
+    """Send ``tasks`` to the node's ``/NODE/execute`` and wait for its
+    result (the ``ExecuteTasks`` result); ``on_event`` gets each event (a
+    dict, as logged) from the ``/NODE/events`` topic, in order and complete
+    (the action's feedback may be dropped after the result). A node that
+    is not there within ``wait`` seconds is an :class:`HtnError`.
+    ``cancel_after``: cancel the goal after that many seconds."""
+    import time
+
+    from rclpy.action import ActionClient
+
+    types = import_interfaces()
+    rclpy.init()
+    client = rclpy.create_node("htn_send")
+    try:
+        events: list = []
+        client.create_subscription(types.Event, f"/{node_name}/events",
+                                   lambda m: events.append(json.loads(m.record)), 100)
+        action = ActionClient(client, types.ExecuteTasks, f"/{node_name}/execute")
+        if not action.wait_for_server(timeout_sec=wait):
+            raise HtnError(f"no htn node answers on /{node_name}/execute within {wait:g} s "
+                           "(start one: htn ros node DOMAIN)")
+        # the events topic too, or the first events of the goal are lost
+        deadline = time.monotonic() + wait
+        while client.count_publishers(f"/{node_name}/events") == 0 \
+                and time.monotonic() < deadline:
+            rclpy.spin_once(client, timeout_sec=0.05)
+        sent = action.send_goal_async(types.ExecuteTasks.Goal(tasks=tasks))
+        rclpy.spin_until_future_complete(client, sent)
+        handle = sent.result()
+        if not handle.accepted:
+            raise HtnError("the node rejected the goal (a goal is running and it was started "
+                           "with --on-new-goal reject)")
+        done = handle.get_result_async()
+        cancel_at = None if cancel_after is None else time.monotonic() + cancel_after
+        shown = 0
+        while not done.done():
+            rclpy.spin_once(client, timeout_sec=0.02)
+            shown = _show(events, shown, on_event)
+            if cancel_at is not None and time.monotonic() >= cancel_at:
+                handle.cancel_goal_async()
+                cancel_at = None
+        result = done.result().result
+        # the summary event is the log's last: wait for it (briefly) before returning
+        until = time.monotonic() + 2.0
+        while result.outcome != "refused" and time.monotonic() < until \
+                and not any(e.get("event") == "summary" for e in events):
+            rclpy.spin_once(client, timeout_sec=0.02)
+        _show(events, shown, on_event)
+        return result
+    finally:
+        client.destroy_node()
+        rclpy.shutdown()
+
+
+def _show(events: list, shown: int, on_event) -> int:
+    for rec in events[shown:]:
+        if on_event is not None:
+            on_event(rec)
+    return len(events)

@@ -15,7 +15,7 @@ from importlib.util import find_spec
 import pytest
 from conftest import ROOT
 
-pytestmark = pytest.mark.slow
+pytestmark = [pytest.mark.slow, pytest.mark.ros]
 
 GOAL = "((bring_object jenny pringles guest))"
 
@@ -153,3 +153,26 @@ def test_facts_from_another_node_change_the_next_plan_and_bad_ones_are_refused(r
     assert not bad["ok"] and bad["error"].startswith("camera:1:1: unknown predicate 'flies'")
     assert good["ok"] and good["facts"] == bad["facts"]
     assert planned["ok"] and len(planned["steps"]) == 7     # no drive to the counter
+
+
+def test_htn_ros_send_prints_the_steps_and_exits_as_htn_run(ros, tmp_path):
+    node = subprocess.Popen([sys.executable, "-m", "htn", "ros", "node",
+                             str(ROOT / "domains" / "domestic.jshop"), "--problem",
+                             str(ROOT / "problems" / "bring_object.jshop")], env=ros, cwd=tmp_path,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        def send(*args):
+            return subprocess.run([sys.executable, "-m", "htn", "ros", "send", *args], env=ros,
+                                  cwd=ROOT, capture_output=True, text=True, timeout=120)
+        done = send("--from-problem", "problems/bring_object.jshop")
+        refused = send("((fly_to jenny moon))")
+    finally:
+        node.send_signal(2)
+        node.communicate(timeout=30)
+    assert done.returncode == 0, done.stderr
+    lines = done.stdout.splitlines()
+    assert [ln.split()[1] for ln in lines[:-1]] == ["verified"] * 8
+    assert lines[-1] == "verified: 8 of 8 steps verified, 0 retries, 0 replans, 8.0 s simulated"
+    assert refused.returncode == 2 and "Traceback" not in refused.stderr
+    assert refused.stderr.strip().endswith(
+        "goal:1:3: unknown task 'fly_to': the domain has no method for it")
