@@ -176,3 +176,42 @@ def test_htn_ros_send_prints_the_steps_and_exits_as_htn_run(ros, tmp_path):
     assert refused.returncode == 2 and "Traceback" not in refused.stderr
     assert refused.stderr.strip().endswith(
         "goal:1:3: unknown task 'fly_to': the domain has no method for it")
+
+
+@pytest.mark.sim
+def test_a_cancelled_goal_on_the_pybullet_robot_ends_preempted_and_the_robot_holds(ros, tmp_path):
+    pytest.importorskip("pybullet", reason="the sim extra is not installed")
+    node = subprocess.Popen([sys.executable, "-m", "htn", "ros", "node",
+                             str(ROOT / "domains" / "domestic.jshop"), "--problem",
+                             str(ROOT / "problems" / "bring_object.jshop"), "--robot", "pybullet",
+                             "--log-dir", str(tmp_path)], env=ros, cwd=tmp_path,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        cancelled = subprocess.run([sys.executable, "-m", "htn", "ros", "send", "--from-problem",
+                                    "problems/bring_object.jshop", "--cancel-after", "0.8"],
+                                   env=ros, cwd=ROOT, capture_output=True, text=True, timeout=120)
+        plan = subprocess.run([sys.executable, "-m", "htn", "ros", "send", "-q",
+                               "((bring_object jenny pringles guest))"],
+                              env=ros, cwd=ROOT, capture_output=True, text=True, timeout=120)
+    finally:
+        node.send_signal(2)
+        _, err = node.communicate(timeout=30)
+    assert "Traceback" not in err, err
+    assert cancelled.returncode == 1, cancelled.stderr
+    last = cancelled.stdout.splitlines()[-1]
+    assert last.startswith("preempted: "), cancelled.stdout
+    log = [json.loads(line) for line in (tmp_path / "goal-0001.jsonl").read_text().splitlines()]
+    interrupted = [e for e in log if e["event"] == "interrupted"]
+    assert len(interrupted) == 1 and "cancelled by the client" in interrupted[0]["detail"]
+    assert "the robot holds its pose" in interrupted[0]["detail"]
+    assert log[-1]["event"] == "summary"
+    # the robot stopped where it was: no action ran after the cancel
+    assert interrupted[0]["sim_t"] == log[-1]["sim_t"]
+    # the node goes on serving, planning from what the robot did: before the
+    # grasp the goal runs again to its end; with the pringles in the hand the
+    # domain has no method to bring them (it always fetches first): refused
+    grasped = any(e["event"] == "verified" and "(!grasp" in (e["action"] or "") for e in log)
+    if grasped:
+        assert plan.returncode == 2 and "no plan reaches the goal" in plan.stderr, plan.stderr
+    else:
+        assert plan.returncode == 0 and plan.stdout.startswith("verified"), plan.stderr
