@@ -35,6 +35,7 @@ GRAMMAR = Path(__file__).with_name("hddl.lark")
 
 @lru_cache(maxsize=1)
 def _lark() -> Lark:
+    lark_errors.check_lark()
     return Lark(GRAMMAR.read_text(), parser="lalr", propagate_positions=True,
                 maybe_placeholders=False, cache=True)
 

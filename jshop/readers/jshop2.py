@@ -32,6 +32,7 @@ GRAMMAR = Path(__file__).with_name("jshop2.lark")
 
 @lru_cache(maxsize=1)
 def _lark() -> Lark:
+    lark_errors.check_lark()
     return Lark(GRAMMAR.read_text(), parser="lalr", propagate_positions=True,
                 maybe_placeholders=False, start=["start", "task_atom"], cache=True)
 

@@ -191,3 +191,16 @@ def _eof(text: str, file: str) -> HtnError:
     lines = text.splitlines() or [""]
     return HtnError("unexpected end of file (missing ')'?)", file, len(lines),
                     len(lines[-1]) + 1)
+
+
+def check_lark() -> None:
+    """Refuse a ``lark`` module that is not lark 1.x, in one line with the
+    fix: ROS 2's wheels (the ros extra) bring ``lark-parser`` 0.12, which
+    installs a module of the same name over lark 1.x when pip installs it
+    later, and htn's grammars then fail deep inside the parser."""
+    import lark
+    version = getattr(lark, "__version__", "0")
+    if not version.split(".")[0].isdigit() or int(version.split(".")[0]) < 1:
+        raise HtnError(f"the installed 'lark' module is version {version} (lark-parser, "
+                       "which ROS 2's wheels bring), not lark 1.x: pip install "
+                       "--force-reinstall --no-deps 'lark>=1.1.9'")
