@@ -82,9 +82,15 @@ class Agent:
     def plan(self, tasks: str, source: str = "goal"):
         """The first plan of ``tasks`` from the current world model, or None
         if there is none (an :class:`HtnError` for a bad goal)."""
+        return self._first_plan(tasks, source)[0]
+
+    def _first_plan(self, tasks: str, source: str) -> tuple:
+        """(the first plan or None, the goal's problem it was planned in):
+        the goal read once, so the run checks the plan in the very state it
+        was made from, whatever facts arrive meanwhile."""
         stream = plan_goal(self.world, tasks, source=source, stops=self.stops)
         try:
-            return next(iter(stream), None)
+            return next(iter(stream), None), stream.problem
         finally:
             stream.close()
 
@@ -95,10 +101,9 @@ class Agent:
         the JSON Lines log of ``htn run``)."""
         from .run import prepare
         try:
-            plan = self.plan(tasks, source)
+            plan, problem = self._first_plan(tasks, source)
             if plan is None:
                 raise HtnError("no plan reaches the goal from the current state", source)
-            problem = self.world.problem(tasks, source)
         except HtnError as exc:
             return GoalResult("refused", f"refused: {exc.message}", error=str(exc))
         execution = prepare(plan, robot=self.robot, domain=self.world.domain, problem=problem,

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import contextlib
 import sys
+from types import SimpleNamespace
 
 import click
 
@@ -93,7 +94,7 @@ def run(ctx, **options):
       htn run plan.txt --robot symbolic --faults effect=0.2
       htn run plan.txt --sim --view          # watch it in a browser (prints the URL)
     """
-    o = _Options(**options)
+    o = SimpleNamespace(**options)      # the options as attributes (click's names)
     if o.view_wait and not o.view:
         raise click.UsageError("--view-wait waits for the page of --view: give --view too")
     stops = current_stops()
@@ -104,14 +105,7 @@ def run(ctx, **options):
         stops.interrupt_exit(exc, now=True)       # now: PyBullet may have been interrupted
 
 
-class _Options:
-    """The options of ``htn run`` as attributes (click's names)."""
-
-    def __init__(self, **options):
-        self.__dict__.update(options)
-
-
-def _run(ctx, o: _Options, stops) -> None:
+def _run(ctx, o: SimpleNamespace, stops) -> None:
     from htn.api.run import prepare
     plan = _from_log(ctx, o, stops) if o.from_log else o.plan_file
     robot_name = _robot_name(o)
@@ -143,7 +137,7 @@ def _run(ctx, o: _Options, stops) -> None:
     sys.exit(0 if summary.result == "verified" else 1)
 
 
-def _from_log(ctx, o: _Options, stops):
+def _from_log(ctx, o: SimpleNamespace, stops):
     """The run a log records (its plan, robot, seed, ...), which the
     command line may not contradict."""
     given = [max(p.opts, key=len) if isinstance(p, click.Option) else p.human_readable_name
@@ -162,7 +156,7 @@ def _from_log(ctx, o: _Options, stops):
     return logged.plan
 
 
-def _robot_name(o: _Options) -> str:
+def _robot_name(o: SimpleNamespace) -> str:
     if o.plan_file is None:
         raise click.UsageError("give a PLAN_FILE (or --from-log FILE.jsonl)")
     if o.sim and o.robot_name not in (None, "pybullet"):
@@ -177,7 +171,7 @@ def _robot_name(o: _Options) -> str:
     return name
 
 
-def _execute(execution, viewer, o: _Options, stops):
+def _execute(execution, viewer, o: SimpleNamespace, stops):
     """Begin the log, run the tree with the progress shown, end the log:
     the run's summary (interrupted too)."""
     try:
