@@ -100,6 +100,7 @@ class Agent:
         ``on_event`` gets every event as it is logged (and ``log``, a path,
         the JSON Lines log of ``htn run``)."""
         from .run import prepare
+        self._observe()
         try:
             plan, problem = self._first_plan(tasks, source)
             if plan is None:
@@ -123,6 +124,16 @@ class Agent:
             with self._lock:
                 self._running = None
         return self._result(plan, result)
+
+    def _observe(self) -> None:
+        """A robot that observes the world itself (``observes_world``: a
+        robot in another process, which may have been restarted or moved
+        meanwhile) is asked what it sees before a goal is planned; its
+        observation replaces the believed facts of the dynamic predicates."""
+        if getattr(self.robot, "observes_world", False):
+            facts = self.robot.observe()
+            if facts:
+                self.world.observed(facts)
 
     def preempt(self, why: str = PREEMPTED) -> bool:
         """Halt the goal being run at its current action (the robot holds

@@ -96,6 +96,18 @@ class WorldModel:
         with self._lock:
             self._facts = atoms
 
+    def observed(self, facts: Iterable[tuple]) -> None:
+        """The robot observed ``facts`` (``(pred, args)`` pairs, every fact
+        of the domain's dynamic predicates it perceives): they replace the
+        believed facts of those predicates; the static facts stay (as
+        repair builds its state, :func:`htn.executor.repair.observed_instance`)."""
+        dynamic = self.domain.dynamic_predicates()
+        seen = [S.Atom(p, tuple(args)) for p, args in facts]
+        with self._lock:
+            kept = {k: a for k, a in self._facts.items() if a.pred not in dynamic}
+            kept.update(((a.pred, a.args), a) for a in seen)
+            self._facts = kept
+
     # ------------------------------------------------------------ goals
     def problem(self, tasks: str, source: str = "goal") -> S.Problem:
         """A problem whose state is the facts believed now and whose task

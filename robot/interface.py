@@ -104,6 +104,7 @@ class Robot:
     executes_operator_model: bool = False
     steps_per_tick: int = 1            # physics steps a skill advances per tick
     instantaneous: bool = False        # every skill ends as it starts: nothing to hold-monitor
+    observes_world: bool = False       # a long-lived planner asks observe() before each goal
     _skills: dict = {}
     _checks: dict = {}
 

@@ -37,8 +37,10 @@ def ros():
 @click.argument("domain", type=click.Path(dir_okay=False))
 @click.option("--problem", type=click.Path(dir_okay=False),
               help="The world model's first state (its facts); default: empty.")
-@click.option("--robot", default="symbolic", show_default=True,
-              help="The robot back end the goals run on (symbolic, pybullet, ...).")
+@click.option("--robot", default="auto", show_default=True,
+              help="The robot back end the goals run on: ros (the robot's action servers, "
+                   "named in the mapping file DOMAIN.ros.toml beside the domain), symbolic, "
+                   "pybullet, ...; auto: ros where that file exists, else symbolic.")
 @click.option("--faults", default="", metavar="KIND=P,...", help="As htn run --faults.")
 @click.option("--seed", type=int, default=0, show_default=True, help="As htn run --seed.")
 @click.option("--replan", is_flag=True, help="As htn run --replan.")

@@ -51,12 +51,21 @@ class NodeSettings:
     """What ``htn ros node`` is told."""
     domain: str
     problem: Optional[str] = None
-    robot: str = "symbolic"
+    robot: str = "auto"                 # auto: ros where a mapping file lies beside the domain
     faults: str = ""
     seed: int = 0
     replan: bool = False
     on_new_goal: str = "preempt"
     log_dir: Optional[str] = None       # a JSON Lines log per goal, as htn run --log writes
+
+
+def robot_for(name: str, domain: str) -> str:
+    """The robot back end ``name``; ``auto``: ``ros`` (the robot's own action
+    servers) where a mapping file lies beside the domain, else ``symbolic``."""
+    if name != "auto":
+        return name
+    from .mapping import beside
+    return "ros" if beside(domain) is not None else "symbolic"
 
 
 class HtnNode(LifecycleNode):
@@ -79,7 +88,7 @@ class HtnNode(LifecycleNode):
     def on_configure(self, state: State) -> TransitionCallbackReturn:
         s = self.settings
         try:
-            self.agent = Agent(s.domain, s.problem, robot=s.robot, faults=s.faults, seed=s.seed,
+            self.agent = Agent(s.domain, s.problem, robot=robot_for(s.robot, s.domain), faults=s.faults, seed=s.seed,
                                replan=s.replan)
         except HtnError as exc:
             self.configure_error = str(exc)
