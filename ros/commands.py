@@ -116,3 +116,6 @@ def _tasks_of(path: str) -> str:
     prob = load_problem(path)
     atoms = S.task_atoms(prob.instances[0].tasks)
     return "(" + " ".join(source_atom(t.name, t.args) for t in atoms) + ")"
+
+from .robot_commands import robot  # noqa: E402  (the group above, its commands in their modules)
+ros.add_command(robot)

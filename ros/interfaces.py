@@ -1,15 +1,17 @@
-"""Finding, or building once, ``htn_interfaces``: the ROS 2 types of htn's node.
+"""Finding, or building once, the ROS 2 interface packages htn ships:
+``htn_interfaces`` (the types of htn's nodes) and ``nav2_msgs`` (Nav2's
+``NavigateToPose`` alone, as Jazzy defines it, for where Nav2 is not installed).
 
-The package's source (``interfaces/htn_interfaces/``: ``package.xml``,
+A package's source (``interfaces/<package>/``: ``package.xml``,
 ``CMakeLists.txt`` and the ``.msg``/``.srv``/``.action`` files) is a real ROS
-package that a team builds in its colcon workspace; when that build is
-importable (the workspace sourced), :func:`locate` uses it. For pip users,
-:func:`build` builds it once with CMake against the ROS wheels of this Python
-(the ``ros`` extra) into a per-user cache, keyed by the ROS distribution, the
-Python version and a hash of the package's source, so that a changed ``.msg``
-is rebuilt and two Pythons never share compiled code::
+package that a team builds in its colcon workspace; when a build of it is
+importable (the workspace sourced, or a ROS install with Nav2), :func:`locate`
+uses it. For pip users, :func:`build` builds it once with CMake against the ROS
+wheels of this Python (the ``ros`` extra) into a per-user cache, keyed by the
+ROS distribution, the Python version and a hash of the package's source, so
+that a changed ``.msg`` is rebuilt and two Pythons never share compiled code::
 
-    ~/.cache/htn/ros/jazzy-py311/<hash>/install      ($XDG_CACHE_HOME, $HTN_ROS_CACHE)
+    ~/.cache/htn/ros/jazzy-py311/<package>-<hash>/install   ($XDG_CACHE_HOME, $HTN_ROS_CACHE)
 
 How CMake is run against the wheels is :mod:`htn.ros.cmake`'s; this module
 decides when to build and where the result goes. A build happens in a
@@ -55,8 +57,10 @@ from . import cmake
 from .cmake import InterfaceBuildError, Progress
 
 PACKAGE = "htn_interfaces"
-SOURCE = Path(__file__).resolve().parent / "interfaces" / PACKAGE
-"""The package's source, as shipped (a team copies or links it into its workspace)."""
+SOURCES = Path(__file__).resolve().parent / "interfaces"
+"""The packages' sources, as shipped (a team copies or links them into its workspace)."""
+SOURCE = SOURCES / PACKAGE
+SHIPPED = ("htn_interfaces", "nav2_msgs")
 
 PY = f"python{sys.version_info.major}.{sys.version_info.minor}"
 
@@ -82,18 +86,19 @@ def _wheel_distro() -> str:
     return ""
 
 
-def source_hash() -> str:
+def source_hash(package: str = PACKAGE) -> str:
     """A hash of the package's source files (names and contents): a changed
     type is a new cache entry, never a stale build."""
     digest = hashlib.sha256()
-    for path in _source_files():
-        digest.update(path.relative_to(SOURCE).as_posix().encode() + b"\0")
+    root = SOURCES / package
+    for path in _source_files(root):
+        digest.update(path.relative_to(root).as_posix().encode() + b"\0")
         digest.update(path.read_bytes() + b"\0")
     return digest.hexdigest()[:16]
 
 
-def _source_files() -> list[Path]:
-    return sorted(p for p in SOURCE.rglob("*") if p.is_file() and "__pycache__" not in p.parts)
+def _source_files(root: Path) -> list[Path]:
+    return sorted(p for p in root.rglob("*") if p.is_file() and "__pycache__" not in p.parts)
 
 
 def cache_root() -> Path:
@@ -111,56 +116,56 @@ def cache_dir() -> Path:
     return cache_root() / f"{name}-py{sys.version_info.major}{sys.version_info.minor}"
 
 
-def cached_install() -> Path:
+def cached_install(package: str = PACKAGE) -> Path:
     """Where :func:`build` puts (or has put) the install of the current source."""
-    return cache_dir() / source_hash() / "install"
+    return cache_dir() / f"{package}-{source_hash(package)}" / "install"
 
 
-def workspace_prefix() -> Path | None:
-    """The install prefix of an importable ``htn_interfaces`` (a sourced colcon
+def workspace_prefix(package: str = PACKAGE) -> Path | None:
+    """The install prefix of an importable ``package`` (a sourced colcon
     workspace, or a build already activated in this process), else None. The
-    package lives in ``<prefix>/lib/pythonX.Y/site-packages/htn_interfaces``."""
-    spec = importlib.util.find_spec(PACKAGE)
+    package lives in ``<prefix>/lib/pythonX.Y/site-packages/<package>``."""
+    spec = importlib.util.find_spec(package)
     if spec is None or not spec.submodule_search_locations:
         return None
     return Path(next(iter(spec.submodule_search_locations))).resolve().parents[3]
 
 
-def locate() -> Path | None:
+def locate(package: str = PACKAGE) -> Path | None:
     """The install prefix to use: an importable workspace build first, else the
     cache's build of the current source; None when neither exists yet."""
-    found = workspace_prefix()
+    found = workspace_prefix(package)
     if found is not None:
         return found
-    cached = cached_install()
+    cached = cached_install(package)
     return cached if cached.is_dir() else None
 
 
-def available() -> bool:
-    """True when ``htn_interfaces`` can be used without building it."""
-    return locate() is not None
+def available(package: str = PACKAGE) -> bool:
+    """True when ``package`` can be used without building it."""
+    return locate(package) is not None
 
 
 # --- the build --------------------------------------------------------------------
 
-def check(which=shutil.which) -> None:
+def check(which=shutil.which, package: str = PACKAGE) -> None:
     """Raise :class:`InterfaceBuildError` naming everything a build lacks
     here (see :func:`htn.ros.cmake.check`)."""
-    cmake.check(distro(), PACKAGE, which)
+    cmake.check(distro(), package, which)
 
 
-def build(progress: Progress | None = None) -> Path:
+def build(progress: Progress | None = None, package: str = PACKAGE) -> Path:
     """The install prefix of the current source in the cache, built with
     CMake first when it is not there (about 25 s on 2 cores, once); a no-op
     when it is. ``progress`` receives one-line messages."""
     say = progress or (lambda message: None)
-    target = cached_install()
+    target = cached_install(package)
     if target.is_dir():
         return target
-    check()
+    check(package=package)
     home = target.parent.parent
     home.mkdir(parents=True, exist_ok=True)
-    with _locked(home / ".lock", say):
+    with _locked(home / ".lock", say, package):
         if target.is_dir():                      # built by the process we waited for
             return target
         for stale in home.glob(".build-*"):      # left by a process that died building
@@ -169,12 +174,12 @@ def build(progress: Progress | None = None) -> Path:
         work = Path(tempfile.mkdtemp(prefix=f".build-{target.parent.name}-", dir=home))
         work.chmod(0o755)                        # mkdtemp's 0700 would stay on the entry
         kept = home / f"build-{target.parent.name}.log"      # a failed build's log
-        say(f"building {PACKAGE} for ROS 2 {distro()} and Python {sys.version.split()[0]} "
+        say(f"building {package} for ROS 2 {distro()} and Python {sys.version.split()[0]} "
             f"(once, about half a minute) in {home}")
         try:
-            code = cmake.run(SOURCE, work, say)
+            code = cmake.run(SOURCES / package, work, say)
             if code != 0:
-                raise InterfaceBuildError(f"the build of {PACKAGE} failed (exit code "
+                raise InterfaceBuildError(f"the build of {package} failed (exit code "
                                           f"{code}): see {kept}")
             for done in ("build", "src"):        # the objects: 14 MB nobody reads again
                 shutil.rmtree(work / done, ignore_errors=True)
@@ -185,24 +190,24 @@ def build(progress: Progress | None = None) -> Path:
                 shutil.copy(work / "build.log", kept)
             shutil.rmtree(work, ignore_errors=True)
             raise
-    say(f"{PACKAGE} built: {target}")
+    say(f"{package} built: {target}")
     return target
 
 
 @contextmanager
-def _locked(path: Path, say: Progress):
+def _locked(path: Path, say: Progress, package: str):
     with open(path, "w") as lock:
         try:
             fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
-            say(f"waiting for another process building {PACKAGE} (lock {path})")
+            say(f"waiting for another process building {package} (lock {path})")
             fcntl.flock(lock, fcntl.LOCK_EX)
         yield
 
 
 # --- using a build ------------------------------------------------------------------
 
-def activate(path: Path | str) -> dict[str, str]:
+def activate(path: Path | str, package: str = PACKAGE) -> dict[str, str]:
     """Make the build at the install prefix ``path`` importable in this
     process (its ``site-packages`` on ``sys.path``, its libraries loaded, see
     the module's docstring) and return what a child process's environment
@@ -213,12 +218,12 @@ def activate(path: Path | str) -> dict[str, str]:
     path = Path(path)
     site = path / "lib" / PY / "site-packages"
     lib = path / "lib"
-    if not (site / PACKAGE).is_dir():
-        raise InterfaceBuildError(f"no {PACKAGE} for {PY} in {site}")
+    if not (site / package).is_dir():
+        raise InterfaceBuildError(f"no {package} for {PY} in {site}")
     if str(site) not in sys.path:
         sys.path.insert(0, str(site))
         importlib.invalidate_caches()
-    _preload(sorted(lib.glob(f"lib{PACKAGE}__*.so")))
+    _preload(sorted(lib.glob(f"lib{package}__*.so")))
 
     def first(folder: Path, name: str) -> str:
         rest = [p for p in os.environ.get(name, "").split(os.pathsep) if p and p != str(folder)]
@@ -247,10 +252,10 @@ def _preload(libraries: list[Path]) -> None:
         pending = list(errors)
 
 
-def ensure(progress: Progress | None = None) -> dict[str, str]:
+def ensure(progress: Progress | None = None, package: str = PACKAGE) -> dict[str, str]:
     """:func:`locate` or :func:`build`, then :func:`activate`: what the node
     calls before importing the types. Returns the children's environment."""
-    return activate(locate() or build(progress))
+    return activate(locate(package) or build(progress, package), package)
 
 
 @functools.cache
@@ -265,4 +270,29 @@ def import_interfaces(progress: Progress | None = None) -> SimpleNamespace:
     action = importlib.import_module(f"{PACKAGE}.action")
     return SimpleNamespace(Event=msg.Event, Facts=msg.Facts, ExecuteTasks=action.ExecuteTasks,
                            PlanTasks=srv.PlanTasks, GetState=srv.GetState,
-                           UpdateFacts=srv.UpdateFacts)
+                           UpdateFacts=srv.UpdateFacts, Skill=action.Skill, Check=srv.Check)
+
+
+def import_type(name: str, progress: Progress | None = None):
+    """The ROS type ``name`` (``geometry_msgs/msg/PoseStamped``,
+    ``nav2_msgs/action/NavigateToPose``): from an importable package (the
+    wheels, a sourced workspace), else from one htn ships, built once
+    (:func:`ensure`). An unknown package or type is an
+    :class:`InterfaceBuildError` saying so."""
+    parts = name.split("/")
+    if len(parts) != 3 or parts[1] not in ("msg", "srv", "action") or not all(parts):
+        raise InterfaceBuildError(f"'{name}' is not a ROS type name (package/msg|srv|action/Name)")
+    package, kind, type_name = parts
+    if package in SHIPPED:
+        if package == PACKAGE:
+            import_interfaces(progress)
+        elif workspace_prefix(package) is None:
+            ensure(progress, package)
+    elif importlib.util.find_spec(package) is None:
+        raise InterfaceBuildError(f"unknown ROS type {name}: no package {package} is installed "
+                                  "(source its workspace, or install its wheel)")
+    module = importlib.import_module(f"{package}.{kind}")
+    found = getattr(module, type_name, None)
+    if found is None:
+        raise InterfaceBuildError(f"unknown ROS type {name}: {package}.{kind} has no {type_name}")
+    return found
