@@ -1,7 +1,8 @@
 """The view use cases: the browser view of a finished log (``htn view LOG``)
 and of a run going on (``htn run PLAN --view``).
 
-* :func:`read_view_log` then :func:`serve_log` - a log of ``htn run --log``,
+* :func:`read_view_log` then :func:`serve_log` - a log of ``htn run --log``
+  (or one goal of a rosbag2 bag of ``htn ros record``, :mod:`htn.view.bag`),
   read and checked, then served as a page with a scrubber; the
   :class:`LogPage` returned holds its URL and stays up until
   :meth:`LogPage.close`;
@@ -25,6 +26,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Optional, Union
 
+from htn.jshop.language.errors import HtnError
+
 from .extras import require_extra
 
 DEFAULT_HOST = "127.0.0.1"
@@ -36,6 +39,7 @@ class ViewLog:
     path: str
     records: list = field(repr=False)
     warning: Optional[str] = None       # a last line cut short, left out
+    note: Optional[str] = None          # a bag's: which of its goals this is
 
     @property
     def events(self) -> int:
@@ -43,12 +47,22 @@ class ViewLog:
         return len(self.records)
 
 
-def read_view_log(log_file: str, what: str = "htn view") -> ViewLog:
+def read_view_log(log_file: str, what: str = "htn view", goal: Optional[int] = None) -> ViewLog:
     """The log ``log_file`` read for :func:`serve_log`: every line a JSON
     event, the first its header, else an input error at that line; a last
     line cut short is left out with a warning (:attr:`ViewLog.warning`).
-    ``what`` names what needs the view extra in the error without it."""
+    A rosbag2 bag of ``htn ros record`` (a folder, a ``.db3`` or ``.mcap``
+    file) gives the records of its goal ``goal`` (1-based; default: the
+    last), which :attr:`ViewLog.note` names. ``what`` names what needs the
+    view extra in the error without it."""
     require_extra("view", what)
+    from htn.view.bag import is_bag, read_bag
+    if is_bag(log_file):
+        bag = read_bag(log_file, goal)
+        return ViewLog(str(log_file), bag.records, bag.warning, bag.note)
+    if goal is not None:
+        raise HtnError("--goal chooses a goal of a rosbag2 bag (htn ros record); a log holds "
+                       "one run", str(log_file))
     from htn.view.model import read_log
     records, warning = read_log(str(log_file))
     return ViewLog(str(log_file), records, warning)

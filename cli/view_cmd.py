@@ -1,4 +1,5 @@
-"""``htn view run.jsonl``, and the ``--view`` options of ``htn run``: the browser view.
+"""``htn view run.jsonl`` (or a bag of ``htn ros record``), and the ``--view``
+options of ``htn run``: the browser view.
 
 The page (served by :mod:`htn.view.server` on 127.0.0.1 unless told otherwise)
 shows the task tree with each node's outcome, the running action, the camera
@@ -14,7 +15,7 @@ import click
 
 from htn.api.view import exposure_warning, read_view_log, serve_log, start_live_view
 
-from .options import PORT, current_stops
+from .options import PORT, Count, current_stops
 
 HOST_HELP = ("Address to serve the view on (default 127.0.0.1: this machine only; any "
              "other address lets other machines reach it, with the token, and is warned of)")
@@ -81,12 +82,16 @@ def _serve_until_interrupted() -> None:
 
 
 @click.command("view")
-@click.argument("log_file", type=click.Path(dir_okay=False))
+@click.argument("log_file", type=click.Path())
 @click.option("--host", default="127.0.0.1", metavar="HOST", help=HOST_HELP + ".")
 @click.option("--port", type=PORT, default=0, metavar="PORT",
               help="Port to serve on (default: a free one).")
-def view(log_file, host, port):
-    """Show the log of a run (htn run --log FILE.jsonl) in a browser.
+@click.option("--goal", type=Count(1), metavar="N",
+              help="Of a rosbag2 bag holding several goals: the Nth (default: the last).")
+def view(log_file, host, port, goal):
+    """Show the log of a run (htn run --log FILE.jsonl) in a browser; or a
+    goal of a rosbag2 bag that htn ros record wrote (its folder, or its
+    .db3 or .mcap file).
 
     Serves a page, on this machine only unless --host says otherwise, and
     prints its URL (with a random token: requests without it get 403). The
@@ -102,14 +107,16 @@ def view(log_file, host, port):
       htn run plan.txt --sim --faults slip=0.3 --log run.jsonl
       htn view run.jsonl
       htn view run.jsonl --host 0.0.0.0 --port 8765   # from another machine
+      htn view session.bag --goal 2                    # htn ros record session.bag
     """
-    log = read_view_log(log_file, "htn view")
+    log = read_view_log(log_file, "htn view", goal)
     if log.warning:
         click.echo(f"warning: {log.warning}", err=True)
     page = serve_log(log, host, port, "htn view")
     try:
         _announce(page.url, host)
-        click.echo(f"view: {log.events} events of {log_file}; Ctrl-C stops the server",
+        of = f" ({log.note})" if log.note else ""
+        click.echo(f"view: {log.events} events of {log_file}{of}; Ctrl-C stops the server",
                    err=True)
         _serve_until_interrupted()
     except KeyboardInterrupt:       # Ctrl-C is how a server stops: not an error
