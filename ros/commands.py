@@ -119,3 +119,7 @@ def _tasks_of(path: str) -> str:
 
 from .robot_commands import robot  # noqa: E402  (the group above, its commands in their modules)
 ros.add_command(robot)
+
+
+from .record_commands import record  # noqa: E402
+ros.add_command(record)
