@@ -12,7 +12,9 @@ or ``Plan.tree`` for a plan object; a plan without one gets one by planning
 again (:func:`htn.jshop.checks.recover.recover_tree`), which
 :attr:`Execution.notes` says. Nothing here prints, exits or handles signals:
 Ctrl-C (a ``KeyboardInterrupt``) during the run halts it, and the result
-says ``interrupted``.
+says ``interrupted``; a program that halts it for another goal
+(:meth:`Execution.halt` with ``outcome="preempted"``, as
+:class:`htn.api.agent.Agent` does) makes it say ``preempted``.
 """
 from __future__ import annotations
 
@@ -48,7 +50,7 @@ class RunResult:
 
     @property
     def result(self) -> str:
-        """``verified``, ``failed``, ``aborted`` or ``interrupted``."""
+        """``verified``, ``failed``, ``aborted``, ``interrupted`` or ``preempted``."""
         return self.summary.result
 
     @property
@@ -172,7 +174,9 @@ class Execution:
         self.listeners: list = [on_event] if on_event else []
         self.log: Optional[EventLog] = None
         self.dispatcher: Optional[TaskDispatcher] = None
-        self._halt: Optional[str] = None
+        self._halt: Optional[tuple] = None         # (why, outcome), before it begins
+        self._adopted: Optional[tuple] = None      # (count, detail), see adopt()
+        self._extra: dict = {}                     # see annotate()
         self._closed = False
 
     @property
@@ -219,8 +223,11 @@ class Execution:
         self.dispatcher = TaskDispatcher(robot, i.domain, i.instance, i.plan.steps, i.limits,
                                          self.log, replan=self.replan, functions=i.functions,
                                          tree=i.tree)
+        self.dispatcher.summary_extra.update(self._extra)
+        if self._adopted:
+            self.dispatcher.adopt(*self._adopted)
         if self._halt:
-            self.dispatcher.halt(self._halt)
+            self.dispatcher.halt(*self._halt)
         snapshots = self.outputs.snapshot_listener(robot)
         if snapshots is not None:
             self.listen(snapshots)
@@ -237,16 +244,57 @@ class Execution:
             self.outputs.write_dot(self.dispatcher.root)
         return self._result(summary)
 
-    def halt(self, why: str = "") -> bool:
+    def halt(self, why: str = "", outcome: str = "interrupted", after=None) -> bool:
         """Stop the run before its next tick (safe from a signal handler or
-        another thread); ``why`` is logged with the ``interrupted`` event.
+        another thread); ``why`` is logged with the ``interrupted`` event
+        and the summary, whose result is ``outcome``: ``interrupted`` (a
+        user's stop) or ``preempted`` (a program halts it for another goal).
+        ``after``: the context of the running action (from
+        :meth:`running_action`), which then goes on to its end; the run
+        halts before the next action begins.
         True while a tick runs (the halt takes effect when it ends), else
         False (a signal handler raises its interrupt too: see
         :class:`htn.process.Stops`)."""
         if self.dispatcher is not None:
-            return self.dispatcher.halt(why)
-        self._halt = why or "stopped by the user"
+            return self.dispatcher.halt(why, outcome, after)
+        self._halt = (why or "stopped by the user", outcome)
         return False
+
+    def running_action(self) -> Optional[tuple]:
+        """``(context, facts)`` of the action running now (its context, with
+        ``text``, the step; the facts the run believed as it began, ``(pred,
+        args)`` pairs), or None; safe from any thread."""
+        return None if self.dispatcher is None else self.dispatcher.running_action()
+
+    def last_verified(self):
+        """The context of the step verified last, or None."""
+        done = self.dispatcher.done if self.dispatcher is not None else []
+        return done[-1] if done else None
+
+    def adopt(self, count: int, detail: str) -> None:
+        """Before :meth:`begin`: the plan's first ``count`` steps were
+        executed and verified already (an action that went on from a
+        preempted run): the run logs them ``verified`` (with ``detail``) and
+        starts after them; the plan is checked from the state before them."""
+        self._adopted = (count, detail)
+
+    def annotate(self, **fields) -> None:
+        """Before :meth:`begin`: more fields for the log's ``summary`` event."""
+        self._extra.update(fields)
+
+    def pending_tasks(self) -> list[str]:
+        """The plan's top-level tasks not completed (a task partially
+        executed counts as not completed), as source text: what a run that
+        goes on from this one's end must still do."""
+        from htn.executor.repair import pending_tasks
+        from htn.jshop.language import syntax as S
+        from htn.jshop.language.terms import source_atom
+        if self.dispatcher is None:
+            tasks = S.task_atoms(self.inputs.instance.tasks)
+        else:
+            d = self.dispatcher
+            tasks = S.task_atoms(pending_tasks(d.root, d.tree_known, d.instance.tasks))
+        return [source_atom(t.name, t.args) for t in tasks]
 
     def interrupted(self, why: str = "") -> RunResult:
         """End the run as interrupted now (outside :meth:`execute`): the robot

@@ -14,7 +14,11 @@ in the paper). With ``replan=True`` the dispatcher repairs instead and goes
 on: first by trying the step again, if its retry limit allows and it still
 applies in the observed state, else by re-planning in the task tree
 (:mod:`htn.executor.repair`). :meth:`TaskDispatcher.halt`
-(Ctrl-C, SIGTERM) stops the tree between two ticks.
+(Ctrl-C, SIGTERM) stops the tree between two ticks, and the run ends
+``interrupted``; a program that halts it for another goal (a robot node's
+newer goal, or a cancel) says so, and the run ends ``preempted``. Such a
+halt may let the running action go on to its end (``after``): the run then
+halts before the next action begins.
 
 Events go to an :class:`~htn.executor.log.EventLog`; ``step`` is the action's
 1-based position in the plan as executed (steps verified before it, plus
@@ -22,9 +26,11 @@ one). Each fault the robot injects becomes a ``fault`` event as it happens.
 """
 from __future__ import annotations
 
+import threading
 from dataclasses import dataclass
 from typing import Optional
 
+import py_trees
 from py_trees.common import Status
 
 from htn.jshop.language import syntax as S
@@ -40,6 +46,7 @@ from .task_bt import actions, build, flat_tree
 from .tree_events import NodeNumbers, tree_detail, tree_nodes
 
 STOPPED_BY_USER = "stopped by the user"     # why a run halted, unless told otherwise
+INTERRUPTED, PREEMPTED = "interrupted", "preempted"     # what a halted run's summary says
 
 
 class Halted(KeyboardInterrupt):
@@ -49,7 +56,7 @@ class Halted(KeyboardInterrupt):
 
 @dataclass
 class RunSummary:
-    result: str              # verified | failed | aborted | interrupted
+    result: str              # verified | failed | aborted | interrupted | preempted
     steps: int               # steps of the plan (as repaired), executed or not
     verified: int
     retries: int
@@ -59,9 +66,13 @@ class RunSummary:
     failed_at: Optional[int] = None      # its 1-based step
     executed: int = 0                    # steps started (each once, however many attempts)
     advice: Optional[str] = None         # what might have saved it (retries used up)
+    reason: Optional[str] = None         # why it was halted (interrupted, preempted)
 
     def as_dict(self) -> dict:
-        return dict(self.__dict__)
+        d = dict(self.__dict__)
+        if d["reason"] is None:         # only a halted run's summary says why
+            del d["reason"]
+        return d
 
     def line(self) -> str:
         """``aborted: 3 of 8 steps verified, ...; aborted at step 4: (!grasp ...)``,
@@ -102,7 +113,11 @@ class TaskDispatcher:
         self.retries = self.replans = self.started = 0
         self._faults_seen = 0
         self._halt: Optional[str] = None
+        self._halt_as = INTERRUPTED         # what the summary of a halted run says
+        self._halt_later: Optional[tuple] = None   # (why, as): halt when the next action begins
+        self._lock = threading.Lock()       # running and the belief, as another thread sees them
         self._in_tick = False
+        self.summary_extra: dict = {}       # more fields for the summary event
         self._carrying: tuple = (None, [])        # (action, attempt) -> what it carries
         self.carry = carry_predicate(domain.name)    # the domain's word for carrying
         self.carry_checks = self.carry is not None and "still_held" in robot.check_names()
@@ -150,10 +165,13 @@ class TaskDispatcher:
         attempt, which counts it as started). A halted run starts no further
         action, even within the tick that was running when it was halted
         (the symbolic robot's actions all end in one tick): :class:`Halted`
-        ends the tick, and :meth:`run` ends the run as interrupted."""
-        if self._halt:
-            raise Halted(self._halt)
-        self.running = ctx
+        ends the tick, and :meth:`run` ends the run as interrupted (or preempted)."""
+        with self._lock:
+            if self._halt_later is not None and not self._halt:
+                (self._halt, self._halt_as), self._halt_later = self._halt_later, None
+            if self._halt:
+                raise Halted(self._halt)
+            self.running = ctx
         self.started += first
 
     def retrying(self, ctx: ActionContext) -> None:
@@ -164,16 +182,44 @@ class TaskDispatcher:
     def report(self, ctx: ActionContext, ok: bool) -> None:
         """The final outcome of an action (the paper's status report)."""
         if ok:
-            if not ctx.step.internal:
-                self.belief.apply_step(ctx.step.name, tuple(ctx.step.args))
-            ctx.done = True
-            self.done.append(ctx)
-            ctx.number = len(self.done)
+            with self._lock:
+                if not ctx.step.internal:
+                    self.belief.apply_step(ctx.step.name, tuple(ctx.step.args))
+                ctx.done = True
+                self.done.append(ctx)
+                ctx.number = len(self.done)
         else:
             self.failed = ctx
 
+    def adopt(self, count: int, detail: str) -> None:
+        """The first ``count`` steps of the plan were executed and verified
+        before this run began (an action that went on from a preempted
+        run): each is logged ``verified`` with ``detail`` (and
+        ``adopted``), applied to the belief state and never run here."""
+        for top in [b for b in self.root.iterate() if hasattr(b, "htn_action")][:count]:
+            ctx = top.htn_action
+            ctx.attempt, ctx.outcome = 1, Outcome.VERIFIED
+            self.started += 1
+            self.report(ctx, True)
+            if isinstance(top, py_trees.decorators.OneShot):
+                top.final_status = Status.SUCCESS       # it bounces: success, not run
+            self.emit(ctx, Outcome.VERIFIED.value, detail, adopted=True)
+
+    def running_action(self) -> Optional[tuple]:
+        """``(its context, the belief state's facts as it began)`` of the
+        action running now, or None (between actions, an internal step, an
+        action that has ended, a halted run): what another thread needs to
+        decide whether a new plan may go on from it (safe from any thread)."""
+        with self._lock:
+            ctx = self.running
+            if ctx is None or ctx.done or ctx.outcome is not None or ctx.step.internal \
+                    or self._halt or self._halt_later:
+                return None
+            return ctx, list(self.belief.state.facts())
+
     def apply_internal(self, step) -> bool:
-        ok = self.belief.apply_step(step.name, tuple(step.args))
+        with self._lock:
+            ok = self.belief.apply_step(step.name, tuple(step.args))
         if ok:
             self.robot.apply_internal(step.name, tuple(step.args))
         return ok
@@ -210,13 +256,25 @@ class TaskDispatcher:
                           None, f["detail"], kind=f["kind"], sim_t=f["sim_t"], **where)
 
     # ------------------------------------------------------------ the tick loop
-    def halt(self, why: str = "") -> bool:
+    def halt(self, why: str = "", outcome: str = INTERRUPTED, after=None) -> bool:
         """Stop the tree before its next tick (safe from a signal handler or
-        another thread); ``why`` is logged with the ``interrupted`` event.
+        another thread); ``why`` is logged with the ``interrupted`` event
+        and in the summary, whose result is ``outcome`` (``interrupted``;
+        ``preempted`` when a program halts it for another goal). ``after``:
+        an action's context: while that action runs, it goes on to its end
+        (verified, or failed, or repaired as usual) and the run halts before
+        the next action begins (or ends as it would, if none is left); if it
+        is no longer running, the run halts now.
         True while a tick runs: the halt takes effect when it ends. Else
         False: a signal handler raises its interrupt too, which :meth:`run`
         ends the same way (between two ticks, e.g. while repair plans)."""
-        self._halt = why or STOPPED_BY_USER
+        why = why or STOPPED_BY_USER
+        with self._lock:
+            if after is not None and not self._halt and self.running is after \
+                    and not after.done and after.outcome is None:
+                self._halt_later = (why, outcome)
+            else:
+                self._halt, self._halt_as = why, outcome
         return self._in_tick
 
     def run(self) -> RunSummary:
@@ -245,6 +303,8 @@ class TaskDispatcher:
                     advice = None if ctx.outcome is not Outcome.ABORTED or ctx.preempted \
                         or retries_left(ctx) else out_of_retries(ctx)
                     return self._summary(ctx.outcome.value, ctx, advice)
+        except Halted:          # the next action would have begun after a halt
+            return self.interrupted()
         except KeyboardInterrupt as exc:
             # an interrupt between two ticks (e.g. while repair plans) halts
             # the same way; its message, if any, says why (SIGTERM's does:
@@ -252,11 +312,12 @@ class TaskDispatcher:
             return self.interrupted(str(exc))
 
     def interrupted(self, why: str = "") -> RunSummary:
-        """End the run as interrupted, now (the tree halted, or an interrupt
-        came between ticks or before the first one): running behaviours
-        terminate, so the skill is preempted; the robot holds its pose; the
-        log gets the ``interrupted`` event (``why``, or the halt's reason)
-        and the summary."""
+        """End the run now (the tree halted, or an interrupt came between
+        ticks or before the first one): running behaviours terminate, so the
+        skill is preempted; the robot holds its pose; the log gets the
+        ``interrupted`` event (``why``, or the halt's reason) and the
+        summary, whose result is ``interrupted`` (``why``: an interrupt) or
+        what :meth:`halt` was told (``preempted``)."""
         if why:
             self.halt(why)
         self.root.stop(Status.INVALID)
@@ -266,20 +327,21 @@ class TaskDispatcher:
         why = self._halt or STOPPED_BY_USER
         self.emit(ctx, "interrupted", f"{why}; the robot holds its pose" if self.started
                   else f"{why} before the first step")
-        return self._summary("interrupted", ctx)
+        return self._summary(self._halt_as, ctx, reason=why)
 
     def plan_lines(self) -> list[str]:
         """The plan as executed and repaired: verified steps, then the pending ones."""
         return [c.text for c in self.done] + [a.text for a in actions(self.root) if not a.done]
 
     def _summary(self, result: str, ctx: Optional[ActionContext] = None,
-                 advice: Optional[str] = None) -> RunSummary:
+                 advice: Optional[str] = None, reason: Optional[str] = None) -> RunSummary:
         pending = sum(1 for a in actions(self.root) if not a.done)
         summary = RunSummary(result, len(self.done) + pending, len(self.done), self.retries,
                              self.replans, round(self.robot.sim_time, 3),
                              ctx.text if ctx else None, self.number(ctx) if ctx else None,
-                             self.started, advice)
-        self.log.emit(None, None, "summary", None, result, **summary.as_dict())
+                             self.started, advice, reason)
+        self.log.emit(None, None, "summary", None, result, **summary.as_dict(),
+                      **self.summary_extra)
         return summary
 
     # ------------------------------------------------------------ repair

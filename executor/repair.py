@@ -81,8 +81,16 @@ def candidates(shot, root, tree_known: bool, problem_tasks: S.TaskList):
                 yield seq, later, S.TaskList([_task_of(b) for b in later])
             continue
         pending = [c for c in root.children if not _done(c)]
-        tasks = S.TaskList([_task_of(c) for c in pending]) if tree_known else problem_tasks
-        yield seq, pending, tasks
+        yield seq, pending, pending_tasks(root, tree_known, problem_tasks)
+
+
+def pending_tasks(root, tree_known: bool, problem_tasks: S.TaskList) -> S.TaskList:
+    """The top-level tasks of the behaviour tree ``root`` not yet done (one
+    partially executed is not done), as a task list to plan again; without
+    the plan's task tree, the problem's tasks."""
+    if not tree_known:
+        return problem_tasks
+    return S.TaskList([_task_of(c) for c in root.children if not _done(c)])
 
 
 def find_repair(shot, root, tree_known: bool, domain, observed: S.ProblemInstance,

@@ -395,6 +395,61 @@ def test_a_halt_before_the_first_tick_starts_nothing(model):
     assert d.log.events[-2]["detail"] == "stopped by the user before the first step"
 
 
+def test_a_halt_for_another_goal_ends_the_run_preempted_and_says_why(model):
+    robot = ScriptedRobot(skills={"pick": [Run(steps=50)]})
+    d = dispatcher(model, robot)
+    robot.on_step = lambda r: r.steps == 2 and d.halt("a newer goal", "preempted")
+    summary = d.run()
+    assert (summary.result, summary.reason, summary.failed_step) == \
+        ("preempted", "a newer goal", "(!pick cup)")
+    assert summary.line().startswith("preempted: 0 of 6 steps verified")
+    halted, last = d.log.events[-2:]
+    assert halted["detail"] == "a newer goal; the robot holds its pose"
+    assert (last["event"], last["result"], last["reason"]) == ("summary", "preempted",
+                                                               "a newer goal")
+
+
+def test_a_halt_after_the_running_action_lets_it_end_and_stops_before_the_next(model):
+    robot = ScriptedRobot(skills={"pick": [Run(steps=5)], "place": [Run(steps=5)]})
+    d = dispatcher(model, robot)
+    seen = []
+
+    def newer_goal(r):
+        if r.steps == 2:
+            ctx, facts = d.running_action()
+            seen.append((ctx.text, sorted(facts)))
+            d.halt("a newer goal", "preempted", after=ctx)
+            assert d.running_action() is None       # halted: nothing more goes on from it
+    robot.on_step = newer_goal
+    summary = d.run()
+    assert seen == [("(!pick cup)", [("on", ("book", "table")), ("on", ("cup", "table"))])]
+    assert robot.calls["place"] == 0 and robot.steps == 5       # the pick went on to its end
+    assert (summary.result, summary.verified, summary.failed_step) == ("preempted", 1, None)
+    assert d.log.events[-2]["step"] is None     # halted between two actions
+
+
+def test_a_halt_after_an_action_that_has_ended_halts_at_once(model):
+    robot = ScriptedRobot(skills={"pick": [Run(steps=1)], "place": [Run(steps=50)]})
+    d = dispatcher(model, robot)
+    pick = actions(d.root)[0]
+    robot.on_step = lambda r: r.calls["place"] and d.halt("a newer goal", "preempted", after=pick)
+    summary = d.run()
+    assert robot.trace[-3] == ("preempted", "place", 1)
+    assert (summary.result, summary.failed_step) == ("preempted", "(!place cup)")
+
+
+def test_adopted_steps_are_logged_verified_and_not_run_again(model):
+    robot = ScriptedRobot()
+    d = dispatcher(model, robot)
+    d.adopt(1, "verified in the run before")
+    summary = d.run()
+    assert robot.calls["pick"] == 1         # the book's; the cup's was adopted
+    assert of_action(d, "(!pick cup)") == [("verified", 1)]
+    adopted = next(e for e in d.log.events if e["action"] == "(!pick cup)")
+    assert adopted["adopted"] and adopted["step"] == 1
+    assert (summary.result, summary.verified, summary.executed) == ("verified", 6, 6)
+
+
 # ------------------------------------------------------------------ repair
 
 def test_repair_grafts_a_new_plan_for_the_enclosing_task_from_the_observed_world(model):
