@@ -9,19 +9,34 @@ A goal ends in one of five outcomes:
 
 * ``verified``, ``failed``, ``aborted``: as ``htn run``;
 * ``preempted``: :meth:`Agent.preempt` halted it (a cancel, or a newer
-  goal): the running action's skill is stopped and the robot holds its
-  pose; the steps verified so far stay in the world model;
+  goal), while it ran or was being planned: the running action's skill is
+  stopped and the robot holds its pose; the steps verified so far stay in
+  the world model; the log's summary says ``preempted`` and why, and
+  :attr:`GoalResult.remaining` holds the tasks it did not complete;
 * ``refused``: the goal could not be planned (a located error in its text,
   or no plan from the current state); nothing moved.
 
-One goal runs at a time; :meth:`execute` is meant to be called from one
-thread, :meth:`preempt` and :meth:`plan` from any.
+A newer goal that preempts a goal (``preempt(why, next_goal=tasks)``) is
+planned from what the running goal believes at that moment; where its plan
+starts with the very action that runs now (the same ground step), that
+action goes on instead of being cancelled and started again: the running
+goal halts when it ends (before its next action), and the newer goal's run
+(:meth:`execute` of the same tasks) takes it as its first step, verified.
+
+A preempted goal can be resumed (:meth:`resume`) after the goal that
+preempted it: the top-level tasks of its task list that it did not complete
+are planned again from the world model (what was verified meanwhile; a task
+partially executed is planned whole, from the state it was left in) and run;
+its steps verified before stay done.
+
+One goal runs at a time; :meth:`execute` and :meth:`resume` are meant to be
+called from one thread, :meth:`preempt` and :meth:`plan` from any.
 """
 from __future__ import annotations
 
 import json
 import threading
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Callable, Optional
 
 from htn.jshop.language.errors import HtnError
@@ -42,10 +57,35 @@ class GoalResult:
     steps: int = 0
     verified: int = 0
     log: list = field(default_factory=list)      # every event, as logged
+    remaining: str = ""          # preempted: the top-level tasks not completed, a task list
+    tasks: str = ""              # the goal's task list, as given
+    retries: int = 0
+    replans: int = 0
+    resumed: int = 0             # how often it was resumed after a preemption
 
     @property
     def ok(self) -> bool:
         return self.outcome == "verified"
+
+    @property
+    def done(self) -> list:
+        """The steps verified (the first ``verified`` of ``plan``)."""
+        return self.plan[:self.verified]
+
+
+@dataclass
+class _Handover:
+    """A newer goal whose plan starts with the action running now: that
+    action goes on, and the goal's run takes it as verified."""
+    tasks: str
+    plan: object
+    problem: object
+    execution: object            # the run it goes on from
+    ctx: object                  # the action that goes on
+
+    def went_on(self) -> bool:
+        """Was that action the last one its run verified?"""
+        return self.execution.last_verified() is self.ctx
 
 
 class Agent:
@@ -64,8 +104,10 @@ class Agent:
         self.retries, self.replan, self.stops = retries, replan, stops
         self.robot_name = robot if isinstance(robot, str) else type(robot).__name__
         self.robot = self._robot(robot, faults, seed) if isinstance(robot, str) else robot
+        self._busy = False               # a goal is being planned or run
         self._running = None             # the Execution of the goal being run
         self._preempted: Optional[str] = None
+        self._handover: Optional[_Handover] = None
         self._lock = threading.Lock()
         _warm_up()
 
@@ -84,11 +126,21 @@ class Agent:
         if there is none (an :class:`HtnError` for a bad goal)."""
         return self._first_plan(tasks, source)[0]
 
-    def _first_plan(self, tasks: str, source: str) -> tuple:
+    def _first_plan(self, tasks: str, source: str, facts=None) -> tuple:
         """(the first plan or None, the goal's problem it was planned in):
         the goal read once, so the run checks the plan in the very state it
-        was made from, whatever facts arrive meanwhile."""
-        stream = plan_goal(self.world, tasks, source=source, stops=self.stops)
+        was made from, whatever facts arrive meanwhile. ``facts``: plan from
+        these ``(pred, args)`` pairs, not from the world model."""
+        if facts is None:
+            stream = plan_goal(self.world, tasks, source=source, stops=self.stops)
+        else:
+            from htn.jshop.language import syntax as S
+
+            from .plan import plan
+            problem = self.world.problem(tasks, source)
+            problem.instances[0].state = [S.Atom(p, tuple(args)) for p, args in facts]
+            stream = plan(self.world.domain, problem, functions=self.world.functions,
+                          stops=self.stops)
         try:
             return next(iter(stream), None), stream.problem
         finally:
@@ -98,21 +150,60 @@ class Agent:
                 on_event: Optional[Callable[[dict], None]] = None) -> GoalResult:
         """Plan ``tasks`` from the world model and run the plan on the robot;
         ``on_event`` gets every event as it is logged (and ``log``, a path,
-        the JSON Lines log of ``htn run``)."""
+        the JSON Lines log of ``htn run``). Where the goal preempted the one
+        before with ``preempt(next_goal=tasks)`` and the action that went on
+        was verified, the plan made then is run, that action as its first
+        step, verified (the log says ``adopted``)."""
+        return self._run(tasks, source, log, on_event)
+
+    def resume(self, result: GoalResult, *, log=None,
+               on_event: Optional[Callable[[dict], None]] = None) -> GoalResult:
+        """Go on with the preempted goal ``result``: plan its remaining
+        tasks (:attr:`GoalResult.remaining`) from the world model and run
+        them. The result is the whole goal's: its plan is the steps verified
+        before and the new plan's, its counts and summary line are the
+        goal's (the line says it was resumed), and the log's summary event
+        says ``resumed`` (the tasks, how many steps were verified before).
+        A state the domain has no plan for ends it ``refused``, saying so;
+        preempted again, it can be resumed again."""
+        if not result.remaining:
+            raise ValueError(f"a {result.outcome} goal with no tasks left has nothing to resume")
+        return self._run(result.remaining, "goal", log, on_event, result)
+
+    def _run(self, tasks: str, source: str, log, on_event, before: Optional[GoalResult] = None
+             ) -> GoalResult:
         from .run import prepare
-        self._observe()
-        try:
-            plan, problem = self._first_plan(tasks, source)
-            if plan is None:
-                raise HtnError("no plan reaches the goal from the current state", source)
-        except HtnError as exc:
-            return GoalResult("refused", f"refused: {exc.message}", error=str(exc))
-        execution = prepare(plan, robot=self.robot, domain=self.world.domain, problem=problem,
-                            retries=self.retries, replan=self.replan, log=log,
-                            on_event=on_event, stops=self.stops)
         with self._lock:
-            self._running, self._preempted = execution, None
+            self._busy, self._preempted = True, None
+            handover, self._handover = self._handover, None
         try:
+            adopted = None
+            try:
+                if before is None and handover is not None and handover.tasks == tasks \
+                        and handover.went_on():
+                    plan, problem, adopted = handover.plan, handover.problem, handover.ctx.text
+                else:
+                    self._observe()
+                    plan, problem = self._first_plan(tasks, source)
+                if plan is None:
+                    raise HtnError("no plan reaches the goal from the current state" if before
+                                   is None else f"resuming {tasks}: no plan reaches these tasks "
+                                   "from the current state", source)
+            except HtnError as exc:
+                return self._refused(exc, tasks, before)
+            execution = prepare(plan, robot=self.robot, domain=self.world.domain,
+                                problem=problem, retries=self.retries, replan=self.replan,
+                                log=log, on_event=on_event, stops=self.stops)
+            if adopted:
+                execution.adopt(1, "went on from the goal it preempted, and was verified there")
+            if before is not None:
+                execution.annotate(resumed={"tasks": tasks, "times": before.resumed + 1,
+                                            "verified_before": before.verified,
+                                            "goal": before.tasks or tasks})
+            with self._lock:
+                self._running = execution
+                if self._preempted is not None:     # while it was being planned
+                    execution.halt(self._preempted, "preempted")
             with execution:
                 execution.begin()
                 try:
@@ -120,10 +211,13 @@ class Agent:
                 except KeyboardInterrupt as exc:    # outside the ticks: the log ends in order
                     result = execution.interrupted(str(exc))
                 self.world.believe(execution.believed())
+            remaining = ""
+            if result.result == "preempted":
+                remaining = "(" + " ".join(execution.pending_tasks()) + ")"
         finally:
             with self._lock:
-                self._running = None
-        return self._result(plan, result)
+                self._running, self._busy = None, False
+        return self._result(plan, result, tasks, remaining, before)
 
     def _observe(self) -> None:
         """A robot that observes the world itself (``observes_world``: a
@@ -135,27 +229,79 @@ class Agent:
             if facts:
                 self.world.observed(facts)
 
-    def preempt(self, why: str = PREEMPTED) -> bool:
+    def preempt(self, why: str = PREEMPTED, *, next_goal: Optional[str] = None) -> bool:
         """Halt the goal being run at its current action (the robot holds
-        its pose); it ends ``preempted``. False if none runs."""
+        its pose), or the goal being planned before its first step; it ends
+        ``preempted`` (the log's summary too, with ``why``). False if no
+        goal is being planned or run.
+
+        ``next_goal``: the task list of the goal that preempts it (run next
+        with :meth:`execute`). It is planned now from what the running goal
+        believes; if that plan starts with the action running now, the
+        action goes on to its end and the goal halts before its next action
+        (ending as it would if that action was its last, or failed); the
+        next goal's run then takes that action as its verified first step.
+        Otherwise (or if the next goal has no plan) the goal halts now."""
+        keep = self._keep(next_goal) if next_goal else None
         with self._lock:
-            if self._running is None:
+            if not self._busy:
                 return False
             self._preempted = why
-            self._running.halt(why)
+            run = self._running
+            if run is not None:
+                if keep is not None and keep.execution is run:
+                    self._handover = keep
+                    run.halt(why, "preempted", after=keep.ctx)
+                else:
+                    run.halt(why, "preempted")
             return True
 
-    def _result(self, plan, result) -> GoalResult:
+    def _keep(self, tasks: str) -> Optional[_Handover]:
+        """The handover of the action running now to the goal ``tasks``,
+        if its plan from the running goal's belief starts with that action."""
+        with self._lock:
+            run = self._running
+        now = run.running_action() if run is not None else None
+        if now is None:
+            return None
+        ctx, facts = now
+        try:
+            plan, problem = self._first_plan(tasks, "goal", facts)
+        except HtnError:
+            return None
+        if plan is None or not plan.steps or str(plan.steps[0]) != ctx.text:
+            return None
+        return _Handover(tasks, plan, problem, run, ctx)
+
+    def _refused(self, exc: HtnError, tasks: str, before: Optional[GoalResult]) -> GoalResult:
+        if before is None:
+            return GoalResult("refused", f"refused: {exc.message}", error=str(exc), tasks=tasks)
+        return replace(before, outcome="refused", summary=f"refused: {exc.message}",
+                       error=str(exc), plan=before.done, steps=before.verified, log=[],
+                       remaining="")
+
+    def _result(self, plan, result, tasks: str, remaining: str,
+                before: Optional[GoalResult]) -> GoalResult:
         s = result.summary
-        outcome = s.result
-        if outcome == "interrupted" and self._preempted is not None:
-            outcome = "preempted"
-        line = s.line()
-        if outcome == "preempted":
-            line = "preempted" + line[len("interrupted"):]
         tree = json.dumps(plan.tree.to_dict()) if plan.tree is not None else ""
-        return GoalResult(outcome, line, plan=list(result.plan), tree=tree, steps=s.steps,
-                          verified=s.verified, log=list(result.events))
+        if before is None:
+            return GoalResult(s.result, s.line(), plan=list(result.plan), tree=tree,
+                              steps=s.steps, verified=s.verified, log=list(result.events),
+                              remaining=remaining, tasks=tasks, retries=s.retries,
+                              replans=s.replans)
+        # resumed: the goal's counts, the steps verified before it included
+        k = before.verified
+        whole = replace(s, steps=s.steps + k, verified=s.verified + k,
+                        retries=s.retries + before.retries, replans=s.replans + before.replans,
+                        executed=s.executed + k,
+                        failed_at=None if s.failed_at is None else s.failed_at + k)
+        times = before.resumed + 1
+        line = (f"{whole.line()}; resumed{'' if times == 1 else f' {times} times'} after a "
+                f"preemption, {k} step{'' if k == 1 else 's'} verified before")
+        return GoalResult(s.result, line, plan=before.done + list(result.plan), tree=tree,
+                          steps=whole.steps, verified=whole.verified, log=list(result.events),
+                          remaining=remaining, tasks=before.tasks, retries=whole.retries,
+                          replans=whole.replans, resumed=times)
 
 
 def _warm_up() -> None:
