@@ -47,20 +47,30 @@ def ros():
 @click.option("--on-new-goal", type=click.Choice(["preempt", "reject", "queue"]),
               default="preempt", show_default=True,
               help="A goal that comes while one runs: preempt the running one (it halts at "
-                   "its current action), reject the new one, or run it after.")
+                   "its current action; where the new goal's plan starts with that very "
+                   "action, the action goes on and the new goal takes it as done), reject the "
+                   "new one, or run it after.")
+@click.option("--resume", is_flag=True,
+              help="A goal preempted by a newer goal (--on-new-goal preempt) does not end: "
+                   "it waits, and once the newer goal has ended (verified, refused or "
+                   "cancelled) its remaining top-level tasks are planned again from the world "
+                   "model and run (a task begun is planned whole, from where it stopped), the "
+                   "steps it verified staying done; its result is the whole goal's. If the "
+                   "newer goal fails or aborts, the waiting goals end preempted.")
 @click.option("--managed", is_flag=True,
               help="Leave configure and activate to a lifecycle manager.")
 @click.option("--log-dir", type=click.Path(file_okay=False),
               help="Write each goal's run as htn run --log does (htn view shows it).")
 @click.option("--name", default="htn", show_default=True, help="The node's name.")
-def node(domain, problem, robot, faults, seed, replan, on_new_goal, managed, log_dir, name):
+def node(domain, problem, robot, faults, seed, replan, on_new_goal, resume, managed, log_dir,
+         name):
     """Serve goals for DOMAIN: the action ~/execute (plan from the world
     model, run with monitors, retries and repair, each event as feedback and
     on ~/events), the services ~/plan, ~/state and ~/update_facts, and the
     topic ~/facts. Ctrl-C stops it."""
     from .node import NodeSettings, serve
     sys.exit(serve(NodeSettings(domain, problem, robot, faults, seed, replan, on_new_goal,
-                                log_dir), managed=managed, name=name))
+                                log_dir, resume), managed=managed, name=name))
 
 
 @ros.command("send")

@@ -47,8 +47,9 @@ def ros():
 NODE = textwrap.dedent('''
     import sys
     from htn.ros.node import NodeSettings, serve
-    domain, problem, robot, log_dir = sys.argv[1:5]
-    sys.exit(serve(NodeSettings(domain, problem, robot=robot, log_dir=log_dir or None)))
+    domain, problem, robot, log_dir, resume = sys.argv[1:6]
+    sys.exit(serve(NodeSettings(domain, problem, robot=robot, log_dir=log_dir or None,
+                                resume=resume == "resume")))
 ''')
 
 CLIENT = textwrap.dedent('''
@@ -76,6 +77,13 @@ CLIENT = textwrap.dedent('''
         rclpy.spin_until_future_complete(node, future, timeout_sec=30)
         return future.result()
 
+    def ended(sent):
+        done = sent.result().get_result_async()
+        rclpy.spin_until_future_complete(node, done, timeout_sec=120)
+        r = done.result().result
+        return dict(outcome=r.outcome, summary=r.summary, error=r.error, plan=list(r.plan),
+                    steps=r.steps, verified=r.verified, status=done.result().status)
+
     for line in sys.stdin:
         kind, _, text = line.rstrip("\\n").partition(" ")
         if kind == "cancel":        # cancel once the second action has started
@@ -91,6 +99,16 @@ CLIENT = textwrap.dedent('''
             r = done.result().result
             out = dict(outcome=r.outcome, summary=r.summary, status=done.result().status,
                        cancelling=len(canceling.result().goals_canceling))
+        elif kind == "preempt":     # FIRST || SECOND: the second once the first's 2nd action runs
+            first, second = text.split(" || ")
+            since = len(events)
+            sent = action.send_goal_async(T.ExecuteTasks.Goal(tasks=first))
+            rclpy.spin_until_future_complete(node, sent, timeout_sec=30)
+            while events[since:].count("start") < 2:
+                rclpy.spin_once(node, timeout_sec=0.005)
+            newer = action.send_goal_async(T.ExecuteTasks.Goal(tasks=second))
+            rclpy.spin_until_future_complete(node, newer, timeout_sec=30)
+            out = dict(first=ended(sent), second=ended(newer), events=events[since:])
         elif kind == "execute":
             feedback = []
             sent = action.send_goal_async(T.ExecuteTasks.Goal(tasks=text),
@@ -118,11 +136,13 @@ CLIENT = textwrap.dedent('''
 ''')
 
 
-def talk(env, requests: list[str], robot: str = "symbolic", log_dir: str = "") -> list[dict]:
+def talk(env, requests: list[str], robot: str = "symbolic", log_dir: str = "",
+         resume: bool = False) -> list[dict]:
     """Start the node on the domestic domain and bring_object, send
     ``requests`` from a client process, stop the node; the answers."""
     node = subprocess.Popen([sys.executable, "-c", NODE, str(ROOT / "domains" / "domestic.jshop"),
-                             str(ROOT / "problems" / "bring_object.jshop"), robot, log_dir],
+                             str(ROOT / "problems" / "bring_object.jshop"), robot, log_dir,
+                             "resume" if resume else ""],
                             env=env, cwd=ROOT,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
@@ -177,7 +197,8 @@ def test_facts_from_another_node_change_the_next_plan_and_bad_ones_are_refused(r
 def test_htn_ros_send_prints_the_steps_and_exits_as_htn_run(ros, tmp_path):
     node = subprocess.Popen([sys.executable, "-m", "htn", "ros", "node",
                              str(ROOT / "domains" / "domestic.jshop"), "--problem",
-                             str(ROOT / "problems" / "bring_object.jshop")], env=ros, cwd=tmp_path,
+                             str(ROOT / "problems" / "bring_object.jshop"), "--robot", "symbolic"],
+                            env=ros, cwd=tmp_path,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         def send(*args):
@@ -214,3 +235,55 @@ def test_a_cancelled_goal_on_the_pybullet_robot_ends_preempted_and_the_robot_hol
     # the same goal again is planned from where the robot stopped (mid-drive:
     # its pose is no location, so the plan drives on from the one it left)
     assert again["outcome"] == "verified", again
+
+
+def events_of(path) -> list[dict]:
+    return [json.loads(line) for line in path.read_text().splitlines()]
+
+
+@pytest.mark.sim
+def test_a_newer_goal_preempts_and_with_resume_both_goals_end_verified(ros, tmp_path):
+    """Issue 36's acceptance: the first goal, preempted by a second one,
+    resumes after it from the observed state, its done steps staying done.
+    First, the second goal starts with the drive running now: the drive goes
+    on and the second goal takes it as its first step, verified; then one
+    that does not: the first goal halts mid-drive."""
+    pytest.importorskip("pybullet", reason="the sim extra is not installed")
+    went_on, halted = talk(ros, [f"preempt {GOAL} || ((go_to jenny counter_front))",
+                                 ("preempt ((bring_object jenny coke guest)) || "
+                                  "((go_to jenny entrance))")],
+                           robot="pybullet", log_dir=str(tmp_path), resume=True)
+    first, second = went_on["first"], went_on["second"]
+    assert second["outcome"] == "verified" and second["status"] == 4, second
+    assert second["plan"] == ["(!move_base jenny home_base counter_front)"]
+    assert first["outcome"] == "verified" and first["status"] == 4, first
+    assert first["summary"].endswith("; resumed after a preemption, 2 steps verified before")
+    assert first["plan"][:2] == ["(!say jenny task_accepted)",
+                                 "(!move_base jenny home_base counter_front)"]
+    # re-planned from the counter, where the drive the second goal took over ended
+    assert first["plan"][2:4] == ["(!say jenny task_accepted)",
+                                  "(!detect_object jenny pringles kitchen_counter)"]
+    assert first["verified"] == first["steps"] == 2 + 7
+    assert went_on["events"].count("waiting") == 1
+    # the logs: the first run preempted, the second's drive adopted, the first resumed
+    log = events_of(tmp_path / "goal-0001.jsonl")
+    assert [e["step"] for e in log if e["event"] == "start"] == [1, 2]   # the drive once
+    assert log[-1]["result"] == "preempted" and log[-1]["reason"] == "preempted by a newer goal"
+    assert log[-2]["event"] == "interrupted" and log[-2]["step"] is None  # after the drive
+    log = events_of(tmp_path / "goal-0002.jsonl")
+    assert [(e["event"], e.get("adopted")) for e in log if e["step"] == 1] == [("verified", True)]
+    log = events_of(tmp_path / "goal-0001-resumed-1.jsonl")
+    assert log[-1]["result"] == "verified" and log[-1]["resumed"]["verified_before"] == 2
+
+    first, second = halted["first"], halted["second"]
+    assert second["outcome"] == "verified" and second["plan"] == [
+        "(!move_base jenny sofa_front entrance)"], second
+    assert first["outcome"] == "verified", first
+    assert "resumed after a preemption, 1 step verified before" in first["summary"]
+    assert first["plan"][1:3] == ["(!say jenny task_accepted)",
+                                  "(!move_base jenny entrance dining_front)"]
+    log = events_of(tmp_path / "goal-0003.jsonl")
+    assert log[-2]["event"] == "interrupted" and log[-2]["step"] == 2     # mid-drive
+    assert log[-2]["detail"] == "preempted by a newer goal; the robot holds its pose"
+    assert log[-1]["result"] == "preempted"
+    assert events_of(tmp_path / "goal-0003-resumed-1.jsonl")[-1]["result"] == "verified"
