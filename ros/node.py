@@ -15,20 +15,14 @@ Interfaces (``htn_interfaces``, see ``ros/interfaces/``):
   halts the running goal at its current action: the robot holds its pose
   and the goal ends ``preempted`` (its log too); ``"reject"`` refuses the
   new goal while one runs, ``"queue"`` runs it after. Where the new goal's
-  plan (from what the running goal believes) starts with the very action
-  running now, that action goes on to its end instead of being cancelled
-  and started again: the running goal halts before its next action, and the
-  new goal's run takes it as its first step, verified;
+  plan starts with the very action running now, that action goes on and
+  the new goal takes it as its first step, verified;
 * ``resume`` (``htn ros node --resume``): a goal preempted by a newer goal
-  does not end: its feedback says it waits (an event ``waiting``), and once
-  the newer goal has ended (verified, refused, or cancelled by its client)
-  its remaining top-level tasks are planned again from the world model and
-  run, the steps it verified staying done; its result is then the whole
-  goal's, as usual, its summary saying it was resumed. Goals preempted in
-  turn resume newest first, and only when no new goal waits. If the newer
-  goal ends failed or aborted (the robot holds where something went wrong),
-  the waiting goals are not resumed: they end ``preempted``, saying why; so
-  do they when cancelled while they wait, or when the node is deactivated;
+  does not end: it waits (its feedback says so), and once the newer goal
+  has ended (verified, refused or cancelled) its remaining top-level tasks
+  are planned again from the world model and run, the steps it verified
+  staying done; its result is then the whole goal's, its summary saying it
+  was resumed; not after a newer goal that failed (see :mod:`htn.ros.goals`);
 * services ``~/plan`` (``PlanTasks``: plan only), ``~/state`` (``GetState``:
   the facts matching a pattern) and ``~/update_facts`` (``UpdateFacts``),
   and the topic ``~/facts`` (``Facts``) for what other nodes observe: a fact
@@ -41,8 +35,7 @@ starts serving; ``deactivate`` preempts a running goal and stops serving.
 from __future__ import annotations
 
 import json
-import threading
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Optional
 
 import rclpy
@@ -55,11 +48,10 @@ from rclpy.lifecycle import State, TransitionCallbackReturn
 from htn.api.agent import Agent, GoalResult
 from htn.jshop.language.errors import HtnError
 
+from .goals import Turns
 from .interfaces import import_interfaces
 
 POLICIES = ("preempt", "reject", "queue")
-NEWER = "preempted by a newer goal"
-CANCELLED = "cancelled by the client"
 THREADS = 16        # callbacks at once: goals waiting for their turn or to resume block one each
 
 
@@ -75,24 +67,6 @@ class NodeSettings:
     on_new_goal: str = "preempt"
     log_dir: Optional[str] = None       # a JSON Lines log per goal, as htn run --log writes
     resume: bool = False                # a goal preempted by a newer one goes on after it
-
-
-class _Goal:
-    """A goal of the action as the node serves it: its handle, its number
-    (its log's), and what other threads tell it."""
-
-    def __init__(self, handle):
-        self.handle = handle
-        self.tasks: str = handle.request.tasks
-        self.number = 0
-        self.halt: Optional[str] = None     # a halt its run has yet to take (see HtnNode._halt)
-        self.why: Optional[str] = None      # why it was last asked to halt
-        self.waits = False                  # preempted, it waits to resume
-        self.wake = threading.Event()       # ... and its turn came, or it ends (drop)
-        self.drop: Optional[str] = None     # why it is not resumed
-
-    def cancelled(self) -> bool:
-        return self.handle.is_cancel_requested
 
 
 def robot_for(name: str, domain: str) -> str:
@@ -114,15 +88,9 @@ class HtnNode(LifecycleNode):
         self.agent: Optional[Agent] = None
         self.configure_error: Optional[str] = None
         self._group = ReentrantCallbackGroup()
-        self._turn = threading.Lock()           # one goal runs at a time
-        self._gate = threading.Lock()           # the fields below, between goals' threads
-        self._waiting = 0                       # new goals waiting for their turn
-        self._current: Optional[_Goal] = None   # the goal whose turn it is
-        self._resumable: list = []              # preempted goals waiting to resume, newest last
-        self._serving = False                   # active: preempted goals may wait to resume
+        self.turns: Optional[Turns] = None      # the goals, one at a time
         self._served: list = []
         self._events = None
-        self._goals = 0
 
     # ------------------------------------------------------------ lifecycle
     def on_configure(self, state: State) -> TransitionCallbackReturn:
@@ -134,6 +102,7 @@ class HtnNode(LifecycleNode):
             self.configure_error = str(exc)
             self.get_logger().error(f"configure: {exc}")
             return TransitionCallbackReturn.FAILURE
+        self.turns = Turns(self.agent, s.on_new_goal, s.resume, s.log_dir, self._event)
         self._events = self.create_lifecycle_publisher(self.types.Event, "~/events", 100)
         return TransitionCallbackReturn.SUCCESS
 
@@ -148,14 +117,13 @@ class HtnNode(LifecycleNode):
             self.create_service(t.UpdateFacts, "~/update_facts", self._update, callback_group=g),
             self.create_subscription(t.Facts, "~/facts", self._facts, 100, callback_group=g),
         ]
-        with self._gate:
-            self._serving = True
+        self.turns.serving()
         return super().on_activate(state)
 
     def on_deactivate(self, state: State) -> TransitionCallbackReturn:
         if self.agent is not None:
             self.agent.preempt("the node was deactivated")
-        self.drop_waiting("the node was deactivated")
+            self.turns.drop_waiting("the node was deactivated")
         self._stop_serving()
         return super().on_deactivate(state)
 
@@ -167,7 +135,7 @@ class HtnNode(LifecycleNode):
     def on_shutdown(self, state: State) -> TransitionCallbackReturn:
         if self.agent is not None:
             self.agent.preempt("the node shuts down")
-        self.drop_waiting("the node shuts down")
+            self.turns.drop_waiting("the node shuts down")
         self._stop_serving()
         self._close_robot()
         return TransitionCallbackReturn.SUCCESS
@@ -185,55 +153,21 @@ class HtnNode(LifecycleNode):
     def _close_robot(self) -> None:
         if self.agent is not None:
             self.agent.robot.close()
-            self.agent = None
+            self.agent, self.turns = None, None
 
     # ------------------------------------------------------------ the action
     def _goal(self, request) -> GoalResponse:
-        busy = self._turn.locked() or self._waiting
-        if busy and self.settings.on_new_goal == "reject":
+        if self.turns.busy() and self.settings.on_new_goal == "reject":
             self.get_logger().info("a goal is running: the new one is rejected")
             return GoalResponse.REJECT
         return GoalResponse.ACCEPT
 
     def _cancel(self, goal_handle) -> CancelResponse:
-        """Cancel that goal only: halt it if it runs, end it if it waits to
-        resume (a goal waiting for its first turn ends when it comes)."""
-        with self._gate:
-            current = self._current
-            waiting = [g for g in self._resumable if g.handle is goal_handle]
-            for g in waiting:
-                self._resumable.remove(g)
-                g.drop = "cancelled by the client while it waited to resume"
-                g.wake.set()
-        if current is not None and current.handle is goal_handle:
-            self._halt(current, CANCELLED)
+        self.turns.cancel(goal_handle)
         return CancelResponse.ACCEPT
 
-    def _halt(self, goal: _Goal, why: str, next_goal: Optional[str] = None) -> None:
-        """Preempt ``goal``'s run (``next_goal``: the tasks of the goal that
-        preempts it, whose plan may go on with the running action); if it
-        has not begun yet, its run takes the halt with its first event."""
-        goal.why = why
-        if not self.agent.preempt(why, next_goal=next_goal):
-            goal.halt = why
-
     def _execute(self, goal_handle):
-        goal = _Goal(goal_handle)
-        with self._gate:
-            self._waiting += 1
-            running = self._current
-        if self.settings.on_new_goal == "preempt" and running is not None:
-            self._halt(running, NEWER, next_goal=goal.tasks)
-        outcome = self._take_turn(goal, None)
-        while goal.waits:
-            self._event(goal_handle, {"event": "waiting", "detail": (
-                f"{NEWER} after {outcome.verified} verified step(s): its remaining tasks "
-                f"{outcome.remaining} resume when the newer goal has ended")})
-            goal.wake.wait()
-            if goal.drop is not None:
-                outcome = replace(outcome, summary=f"{outcome.summary}; not resumed: {goal.drop}")
-                break
-            outcome = self._take_turn(goal, outcome) or outcome
+        outcome = self.turns.serve(goal_handle)
         result = self._result(outcome)
         if outcome.outcome == "preempted" and goal_handle.is_cancel_requested:
             goal_handle.canceled()
@@ -242,77 +176,6 @@ class HtnNode(LifecycleNode):
         else:
             goal_handle.succeed()
         return result
-
-    def _take_turn(self, goal: _Goal, before: Optional[GoalResult]) -> Optional[GoalResult]:
-        """Run ``goal`` (``before``: resume it, preempted as that) when its
-        turn comes; then decide who goes on (see the module's docstring).
-        None: a resumed goal gave way to a new goal waiting, and waits again."""
-        with self._turn:
-            with self._gate:
-                if before is not None and self._waiting:    # a new goal goes first
-                    goal.wake.clear()
-                    self._resumable.append(goal)
-                    return None
-                goal.waits = False
-                if before is None:
-                    self._waiting -= 1
-                    self._goals += 1
-                    goal.number = self._goals
-                self._current, goal.halt, goal.why = goal, None, None
-            try:
-                outcome = self._run(goal, before)
-            finally:
-                with self._gate:
-                    self._current = None
-            self._after(goal, outcome)
-            return outcome
-
-    def _run(self, goal: _Goal, before: Optional[GoalResult]) -> GoalResult:
-        if goal.cancelled():
-            return before or GoalResult("preempted", "preempted before it started")
-        log = None
-        if self.settings.log_dir:
-            again = f"-resumed-{before.resumed + 1}" if before is not None else ""
-            log = f"{self.settings.log_dir}/goal-{goal.number:04d}{again}.jsonl"
-
-        def on_event(rec):
-            if goal.halt is not None:       # asked before its run had begun
-                why, goal.halt = goal.halt, None
-                self.agent.preempt(why)
-            self._event(goal.handle, rec)
-        if before is None:
-            return self.agent.execute(goal.tasks, log=log, on_event=on_event)
-        return self.agent.resume(before, log=log, on_event=on_event)
-
-    def _after(self, goal: _Goal, outcome: GoalResult) -> None:
-        """After ``goal``'s run: it waits to resume (preempted by a newer
-        goal, with ``resume``), or it has ended; then the newest waiting
-        goal is woken, unless a new goal waits (it wakes it when it ends),
-        or the ended goal failed (the waiting goals end)."""
-        with self._gate:
-            if self.settings.resume and self._serving and outcome.outcome == "preempted" \
-                    and outcome.remaining and goal.why == NEWER and not goal.cancelled():
-                goal.waits = True
-                goal.wake.clear()
-                self._resumable.append(goal)
-            elif outcome.outcome in ("failed", "aborted"):
-                self._drop(f"the goal after it ended {outcome.outcome}")
-            if self._resumable and not self._waiting:
-                self._resumable.pop().wake.set()
-
-    def _drop(self, why: str) -> None:
-        for g in self._resumable:
-            g.drop = why
-            g.wake.set()
-        self._resumable = []
-
-    def drop_waiting(self, why: str) -> None:
-        """End every goal waiting to resume (``preempted``, saying ``why``
-        it is not resumed); no goal waits to resume until the node is
-        activated again."""
-        with self._gate:
-            self._serving = False
-            self._drop(why)
 
     def _event(self, goal_handle, rec: dict) -> None:
         """``rec`` (an event of the goal's run, as logged, or the node's
@@ -390,7 +253,7 @@ def serve(settings: NodeSettings, managed: bool = False, name: str = "htn") -> i
     finally:
         if node.agent is not None:
             node.agent.preempt("the node shuts down")
-        node.drop_waiting("the node shuts down")
+            node.turns.drop_waiting("the node shuts down")
         executor.shutdown()
         node.destroy_node()
         if rclpy.ok():
