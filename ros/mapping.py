@@ -7,7 +7,7 @@ It lies beside the domain, named after it (``domains/domestic.jshop`` →
     namespace = "/robot"     # names without a leading / are under it
     observe = "observe"      # htn_interfaces/srv/GetState: what the robot sees ("": nothing)
     pose = "pose"            # geometry_msgs/msg/PoseStamped: where it is; its stamp is its clock
-    wait = 2.0               # seconds a skill waits for its server before it fails
+    wait = 5.0               # seconds a skill or check waits for its server before it fails
 
     [skills.move_base]       # the skill the action machines call (robot.act("move_base", place))
     action = "/navigate_to_pose"
@@ -91,7 +91,7 @@ class Mapping:
     namespace: str = "/robot"
     observe: str = "observe"
     pose: str = "pose"
-    wait: float = 2.0
+    wait: float = 5.0
     skills: dict = field(default_factory=dict)     # name -> Call
     checks: dict = field(default_factory=dict)     # name -> Call
 

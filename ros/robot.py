@@ -38,6 +38,7 @@ from .interfaces import InterfaceBuildError, import_interfaces, import_type
 
 TICK = 0.005        # s a tick waits for a result before the executor goes on
 SILENT = 1.5        # s without a pose message that mean the robot has gone
+RETRY = 0.25        # s before a service call without answer is sent again
 
 
 def make_robot(request):
@@ -79,7 +80,7 @@ class RosRobot(Robot):
         self._actions: dict[str, ActionClient] = {}
         self._services: dict = {}
         self._topics: dict = {}               # topic check name -> last message
-        self._goals: dict = {}                # id -> goal handle not yet finished
+        self._goals: dict = {}                # id -> a goal's sending future, until it ends
         if table.pose:
             from geometry_msgs.msg import PoseStamped
             self.node.create_subscription(PoseStamped, table.full(table.pose), self._pose, 10)
@@ -158,7 +159,7 @@ class RosRobot(Robot):
             yield
             time.sleep(TICK)
         sent = client.send_goal_async(goal, feedback_callback=self._feedback)
-        handle = None
+        self._goals[id(sent)] = sent       # until it ends: hold() cancels it
         try:
             ready = _event(sent)
             while not sent.done():
@@ -168,8 +169,8 @@ class RosRobot(Robot):
                 ready.wait(TICK)
             handle = sent.result()
             if not handle.accepted:
+                self._goals.pop(id(sent), None)
                 return SkillResult(False, f"the action server {call.name} rejected the goal")
-            self._goals[id(handle)] = handle
             done = handle.get_result_async()
             ready = _event(done)
             while not done.done():
@@ -177,11 +178,11 @@ class RosRobot(Robot):
                     return SkillResult(False, f"the action server {call.name} went away")
                 yield
                 ready.wait(TICK)
-            self._goals.pop(id(handle), None)
+            self._goals.pop(id(sent), None)
             return self._ended(call, done.result())
         finally:
-            if handle is not None and self._goals.pop(id(handle), None) is not None:
-                handle.cancel_goal_async()       # halted (or the server went): cancel the goal
+            if self._goals.pop(id(sent), None) is not None:
+                _cancel(sent)        # halted, or the server went: cancel the goal, sent or not
 
     def _feedback(self, msg) -> None:
         sim_t = getattr(msg.feedback, "sim_t", None)
@@ -225,14 +226,20 @@ class RosRobot(Robot):
             if time.monotonic() > until:
                 return None
             time.sleep(TICK)
-        future = client.call_async(request)
-        ready = _event(future)
-        while not future.done():
-            if time.monotonic() > until + self.mapping.wait or not client.service_is_ready():
-                client.remove_pending_request(future)
+        # asked again when no answer comes within a retry interval: a
+        # service is "ready" once its server is discovered, which may be
+        # before the server has matched this client's reply channel (the
+        # first request is then lost); checks have no side effects
+        end, retry = until + self.mapping.wait, RETRY
+        while time.monotonic() < end:
+            future = client.call_async(request)
+            if _event(future).wait(min(retry, max(0.0, end - time.monotonic()))):
+                return future.result()
+            client.remove_pending_request(future)
+            if not client.service_is_ready():
                 return None
-            ready.wait(0.05)
-        return future.result()
+            retry *= 2
+        return None
 
     def _topic_check(self, name: str, call) -> Check:
         if name not in self._topics:
@@ -264,9 +271,9 @@ class RosRobot(Robot):
         return seen
 
     def hold(self) -> None:
-        for key, handle in list(self._goals.items()):
+        for key, sent in list(self._goals.items()):
             self._goals.pop(key, None)
-            handle.cancel_goal_async()
+            _cancel(sent)
 
     def close(self) -> None:
         self.hold()
@@ -276,6 +283,20 @@ class RosRobot(Robot):
         self.node.destroy_node()
         if self._owns_rclpy and rclpy.ok():
             rclpy.shutdown()
+
+
+def _cancel(sent) -> None:
+    """Cancel the goal whose sending is the future ``sent``: now if the
+    server has answered, else as soon as it does (a goal halted before it
+    was accepted must not run on)."""
+    def cancel(future) -> None:
+        handle = future.result()
+        if handle is not None and handle.accepted:
+            handle.cancel_goal_async()
+    if sent.done():
+        cancel(sent)
+    else:
+        sent.add_done_callback(cancel)
 
 
 def _event(future) -> threading.Event:
