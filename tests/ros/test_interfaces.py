@@ -36,7 +36,7 @@ def cache(tmp_path, monkeypatch):
     """An empty cache of its own, for ROS 2 Jazzy, with the build's checks passed."""
     monkeypatch.setenv("HTN_ROS_CACHE", str(tmp_path / "cache"))
     monkeypatch.setenv("ROS_DISTRO", "jazzy")
-    monkeypatch.setattr(interfaces, "check", lambda: None)
+    monkeypatch.setattr(interfaces, "check", lambda package=interfaces.PACKAGE: None)
     monkeypatch.setattr(cmake, "fix_exports", lambda prefix=None: [])
     return tmp_path / "cache"
 
@@ -70,7 +70,11 @@ def test_the_cache_is_per_user_per_ros_and_python_and_per_source(monkeypatch, tm
     py = f"py{sys.version_info.major}{sys.version_info.minor}"
     assert interfaces.cache_dir() == tmp_path / "htn" / "ros" / f"kilted-{py}"
     assert re.fullmatch(r"[0-9a-f]{16}", interfaces.source_hash())
-    assert interfaces.cached_install() == interfaces.cache_dir() / interfaces.source_hash() / "install"
+    assert interfaces.cached_install() == \
+        interfaces.cache_dir() / f"htn_interfaces-{interfaces.source_hash()}" / "install"
+    nav2 = interfaces.cached_install("nav2_msgs")
+    assert nav2 == interfaces.cache_dir() / f"nav2_msgs-{interfaces.source_hash('nav2_msgs')}" / "install"
+    assert interfaces.source_hash("nav2_msgs") != interfaces.source_hash()
     monkeypatch.setenv("HTN_ROS_CACHE", str(tmp_path / "ci"))
     assert interfaces.cache_dir() == tmp_path / "ci" / f"kilted-{py}"
 
@@ -82,14 +86,29 @@ def test_the_source_is_a_ros_interface_package():
     assert "<member_of_group>rosidl_interface_packages</member_of_group>" in xml
     lists = (source / "CMakeLists.txt").read_text()
     files = sorted(p.relative_to(source).as_posix() for p in source.glob("*/*.*"))
-    assert files == ["action/ExecuteTasks.action", "msg/Event.msg", "msg/Facts.msg",
-                     "srv/GetState.srv", "srv/PlanTasks.srv", "srv/UpdateFacts.srv"]
+    assert files == ["action/ExecuteTasks.action", "action/Skill.action", "msg/Event.msg",
+                     "msg/Facts.msg", "srv/Check.srv", "srv/GetState.srv", "srv/PlanTasks.srv",
+                     "srv/UpdateFacts.srv"]
     assert all(f'"{f}"' in lists for f in files)
     for path in source.glob("*/*.*"):       # every field has its comment
         lines = path.read_text().splitlines()
         for i, line in enumerate(lines):
             if line and not line.startswith(("#", "---")):
                 assert lines[i - 1].startswith("#"), f"{path.name}: {line} has no comment"
+
+
+def test_nav2_msgs_is_jazzys_navigate_to_pose_alone():
+    source = interfaces.SOURCES / "nav2_msgs"
+    assert "<name>nav2_msgs</name>" in (source / "package.xml").read_text()
+    assert '"action/NavigateToPose.action"' in (source / "CMakeLists.txt").read_text()
+    fields = [ln.split()[:2] for ln in (source / "action" / "NavigateToPose.action")
+              .read_text().splitlines() if ln and not ln.startswith("#") and "=" not in ln]
+    assert fields == [["geometry_msgs/PoseStamped", "pose"], ["string", "behavior_tree"], ["---"],
+                      ["uint16", "error_code"], ["string", "error_msg"], ["---"],
+                      ["geometry_msgs/PoseStamped", "current_pose"],
+                      ["builtin_interfaces/Duration", "navigation_time"],
+                      ["builtin_interfaces/Duration", "estimated_time_remaining"],
+                      ["int16", "number_of_recoveries"], ["float32", "distance_remaining"]]
 
 
 def test_a_missing_compiler_cmake_or_make_is_named_in_one_line(monkeypatch):
