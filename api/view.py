@@ -118,6 +118,15 @@ def start_live_view(host: str = DEFAULT_HOST, port: int = 0, what: str = "htn ru
     return RunView(host, port).start()
 
 
+def start_goals_view(host: str = DEFAULT_HOST, port: int = 0, what: str = "htn ros node --view"):
+    """Start the view of a robot node's goals on ``host``:``port``: a started
+    :class:`htn.view.live.GoalsView` (its ``url``; ``event`` for each event
+    of the goal being run, ``close``)."""
+    require_extra("view", what)
+    from htn.view.live import GoalsView
+    return GoalsView(host, port).start()
+
+
 def exposure_warning(host: str) -> Optional[str]:
     """What to warn of when serving on ``host``: None for an address only
     this machine reaches (loopback), else that anyone with the URL can watch."""

@@ -61,16 +61,23 @@ def ros():
               help="Leave configure and activate to a lifecycle manager.")
 @click.option("--log-dir", type=click.Path(file_okay=False),
               help="Write each goal's run as htn run --log does (htn view shows it).")
+@click.option("--view", is_flag=True,
+              help="Watch the goals in a browser (the view extra): prints the URL; each goal's "
+                   "run is shown as htn run --view shows one, the page moving on to the next goal.")
+@click.option("--view-port", type=click.IntRange(0, 65535), default=0, show_default=True,
+              help="The view's port (0: a free one); it is served on 127.0.0.1.")
 @click.option("--name", default="htn", show_default=True, help="The node's name.")
 def node(domain, problem, robot, faults, seed, replan, on_new_goal, resume, managed, log_dir,
-         name):
+         view, view_port, name):
     """Serve goals for DOMAIN: the action ~/execute (plan from the world
     model, run with monitors, retries and repair, each event as feedback and
     on ~/events), the services ~/plan, ~/state and ~/update_facts, and the
     topic ~/facts. Ctrl-C stops it."""
     from .node import NodeSettings, serve
-    sys.exit(serve(NodeSettings(domain, problem, robot, faults, seed, replan, on_new_goal,
-                                log_dir, resume), managed=managed, name=name))
+    settings = NodeSettings(domain, problem, robot, faults, seed, replan, on_new_goal, log_dir,
+                            resume, ("127.0.0.1", view_port) if view else None)
+    sys.exit(serve(settings, managed=managed, name=name,
+                   on_view=lambda url: click.echo(f"view: {url}", err=True)))
 
 
 @ros.command("send")

@@ -67,6 +67,7 @@ class NodeSettings:
     on_new_goal: str = "preempt"
     log_dir: Optional[str] = None       # a JSON Lines log per goal, as htn run --log writes
     resume: bool = False                # a goal preempted by a newer one goes on after it
+    view: Optional[tuple] = None        # (host, port): the browser view of the goals
 
 
 def robot_for(name: str, domain: str) -> str:
@@ -91,13 +92,20 @@ class HtnNode(LifecycleNode):
         self.turns: Optional[Turns] = None      # the goals, one at a time
         self._served: list = []
         self._events = None
+        self.view = None                        # the browser view of the goals, --view
 
     # ------------------------------------------------------------ lifecycle
     def on_configure(self, state: State) -> TransitionCallbackReturn:
         s = self.settings
         try:
-            self.agent = Agent(s.domain, s.problem, robot=robot_for(s.robot, s.domain), faults=s.faults, seed=s.seed,
-                               replan=s.replan)
+            if s.log_dir:
+                _log_folder(s.log_dir)
+            self.agent = Agent(s.domain, s.problem, robot=robot_for(s.robot, s.domain),
+                               faults=s.faults, seed=s.seed, replan=s.replan)
+            if s.view is not None and self.view is None:
+                from htn.api.view import start_goals_view
+                self.view = start_goals_view(*s.view)
+                self.get_logger().info(f"the view of the goals: {self.view.url}")
         except HtnError as exc:
             self.configure_error = str(exc)
             self.get_logger().error(f"configure: {exc}")
@@ -189,6 +197,8 @@ class HtnNode(LifecycleNode):
         goal_handle.publish_feedback(feedback)
         if self._events is not None and self._events.is_activated:
             self._events.publish(msg)
+        if self.view is not None:
+            self.view.event(rec)
 
     def _result(self, r: GoalResult):
         return self.types.ExecuteTasks.Result(outcome=r.outcome, summary=r.summary, error=r.error,
@@ -234,7 +244,18 @@ class HtnNode(LifecycleNode):
             self.get_logger().warning(f"facts refused: {exc}")
 
 
-def serve(settings: NodeSettings, managed: bool = False, name: str = "htn") -> int:
+def _log_folder(path: str) -> None:
+    """The folder of the goals' logs, made if missing (a one-line error if
+    it cannot be, or is a file)."""
+    import os
+    try:
+        os.makedirs(path, exist_ok=True)
+    except OSError as exc:
+        raise HtnError(f"--log-dir: cannot make the folder: {exc.strerror or exc}", path)
+
+
+def serve(settings: NodeSettings, managed: bool = False, name: str = "htn",
+          on_view=None) -> int:
     """Run the node until it is shut down (Ctrl-C, SIGTERM). Not
     ``managed``: it configures and activates itself, and a configure error
     ends it with exit code 2."""
@@ -247,6 +268,8 @@ def serve(settings: NodeSettings, managed: bool = False, name: str = "htn") -> i
             if node.trigger_configure() != TransitionCallbackReturn.SUCCESS:
                 raise HtnError(node.configure_error or "the node could not be configured")
             node.trigger_activate()
+        if node.view is not None and on_view is not None:
+            on_view(node.view.url)
         executor.spin()
     except KeyboardInterrupt:
         pass
@@ -255,6 +278,8 @@ def serve(settings: NodeSettings, managed: bool = False, name: str = "htn") -> i
             node.agent.preempt("the node shuts down")
             node.turns.drop_waiting("the node shuts down")
         executor.shutdown()
+        if node.view is not None:
+            node.view.close()
         node.destroy_node()
         if rclpy.ok():
             rclpy.shutdown()

@@ -58,6 +58,7 @@ class Hub:
         self._pages: set = set()
         self._poked = False
         self._closed = False
+        self.next_goal = False               # closed because another run begins (a node's goals)
         self._texts: dict = {}
         self.begun = mode != "live"           # a live run's pages wait for begin()
         self.watching = threading.Event()    # set once a page has shown what it got
@@ -81,8 +82,10 @@ class Hub:
         self.begun = True
         self._poke(force=True)
 
-    def close(self) -> None:
-        """No more events: the pages' senders end (their pages say the view is closed)."""
+    def close(self, next_goal: bool = False) -> None:
+        """No more events: the pages' senders end (their pages say the view is
+        closed; ``next_goal``: they are told to load the next run instead)."""
+        self.next_goal = next_goal
         self._closed = True
         self._poke(force=True)
 
@@ -121,6 +124,8 @@ class Hub:
                 page.wake.clear()
                 await self._send_new(page, send_text, send_bytes)
                 if self._closed:
+                    if self.next_goal:
+                        await send_text('{"type": "next"}')
                     return
                 await page.wake.wait()
         finally:

@@ -93,3 +93,33 @@ class RunView:
 
     def close(self) -> None:
         self.server.close()
+
+
+class GoalsView:
+    """The browser view of a robot node's goals (``htn ros node --view``):
+    each goal's run as ``htn run --view`` shows one, fed by its events; a page
+    open when the next goal begins loads that goal's run."""
+
+    def __init__(self, host: str = "127.0.0.1", port: int = 0):
+        self.server = ViewServer(Hub("live"), host, port)
+
+    @property
+    def url(self) -> str:
+        return self.server.url
+
+    def start(self) -> "GoalsView":
+        self.server.start()
+        return self
+
+    def event(self, record: dict) -> None:
+        """One event of the goal being run (its ``header`` begins a new run)."""
+        if record.get("event") == "header":
+            hub = Hub("live")
+            hub.begin([record], title_of(record), False,
+                      time.time() - float(record.get("t") or 0.0))
+            self.server.switch(hub)
+        else:
+            self.server.hub.publish(record)
+
+    def close(self) -> None:
+        self.server.close()

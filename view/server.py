@@ -69,8 +69,10 @@ class TokenGate:
         await self.app(scope, receive, send)
 
 
-def make_app(hub: Hub, token: str):
-    """The ASGI application: the page, its assets, its WebSocket, behind the token."""
+def make_app(source, token: str):
+    """The ASGI application: the page, its assets, its WebSocket, behind the
+    token; ``source.hub`` is the hub a new page is served from (a server may
+    move on to another run's hub, :meth:`ViewServer.switch`)."""
     from starlette.applications import Starlette
     from starlette.responses import HTMLResponse
     from starlette.routing import Mount, Route, WebSocketRoute
@@ -81,11 +83,12 @@ def make_app(hub: Hub, token: str):
 
     async def index(request):
         text = page.replace("{{TOKEN}}", html.escape(token)).replace(
-            "{{TITLE}}", html.escape(hub.title or "htn view"))
+            "{{TITLE}}", html.escape(source.hub.title or "htn view"))
         return HTMLResponse(text, headers=HEADERS)
 
     async def websocket(ws):
         await ws.accept()
+        hub = source.hub
 
         async def drain():          # what the page says, until it goes
             try:
@@ -127,6 +130,7 @@ class ViewServer:
         self.sock = _listen(host, port)
         self.port = self.sock.getsockname()[1]
         self._server = None
+        self.loop: Optional[asyncio.AbstractEventLoop] = None
         self._thread: Optional[threading.Thread] = None
 
     @property
@@ -140,7 +144,7 @@ class ViewServer:
 
     def start(self, timeout: float = 10.0) -> "ViewServer":
         import uvicorn
-        config = uvicorn.Config(make_app(self.hub, self.token), log_level="warning",
+        config = uvicorn.Config(make_app(self, self.token), log_level="warning",
                                 access_log=False, lifespan="off", ws=_ws_protocol(),
                                 timeout_graceful_shutdown=1, log_config=None,
                                 ws_per_message_deflate=False)   # loopback: nothing to save
@@ -150,18 +154,25 @@ class ViewServer:
         def serve():
             loop = asyncio.new_event_loop()
             asyncio.set_event_loop(loop)
-            self.hub.loop = loop
+            self.hub.loop = self.loop = loop
             loop.call_soon(ready.set)
             try:
                 loop.run_until_complete(self._server.serve(sockets=[self.sock]))
             finally:
-                self.hub.loop = None
+                self.hub.loop = self.loop = None
                 loop.close()
         self._thread = threading.Thread(target=serve, name="htn-view", daemon=True)
         self._thread.start()
         if not ready.wait(timeout):
             raise HtnError("the view's web server did not start")
         return self
+
+    def switch(self, hub: Hub) -> None:
+        """Serve ``hub`` from now on (the next goal of a node): the pages of
+        the one before are told to load the page again."""
+        old, hub.loop = self.hub, self.loop
+        self.hub = hub
+        old.close(next_goal=True)
 
     def close(self, timeout: float = 3.0) -> None:
         """Close the pages' connections and stop the server."""

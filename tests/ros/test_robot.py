@@ -277,3 +277,46 @@ def test_robot_ros_sends_the_mapped_poses_to_a_plain_navigate_to_pose_server(ros
     assert goals == [{"frame": "map", "x": 2.2, "y": 1.5, "yaw": 0.0},
                      {"frame": "map", "x": -2.0, "y": 1.5, "yaw": pytest.approx(90.0)}]
     assert ran.stdout.splitlines()[-1].startswith("verified: 2 of 2 steps verified")
+
+
+def test_the_nodes_view_shows_each_goal_and_tells_an_open_page_of_the_next(ros, procs, tmp_path):
+    """--view: a page connected during the first goal gets its events, then
+    "next" when the second begins; a page loaded then gets the second goal.
+    --log-dir makes its folder."""
+    pytest.importorskip("uvicorn", reason="the view extra is not installed")
+    from websockets.sync.client import connect
+    logs = tmp_path / "runs" / "today"
+    served = node(procs, "--robot", "symbolic", "--view", "--log-dir", logs)
+    line, end = "", time.monotonic() + 60
+    while not line.startswith("view: ") and time.monotonic() < end:
+        ready, _, _ = select.select([served.stderr], [], [], 1.0)
+        line = served.stderr.readline() if ready else ""
+        if ready and not line:
+            break
+    match = re.fullmatch(r"view: http://127\.0\.0\.1:(\d+)/\?token=([\w-]+)\n", line)
+    assert match, line + (served.stderr.read() if served.poll() is not None else "")
+    url = "ws://127.0.0.1:{}/ws?token={}".format(*match.groups())
+
+    def events(ws, until: str) -> list:
+        got = []
+        while not got or got[-1].get("event") != until:
+            message = json.loads(ws.recv(timeout=30))
+            if message["type"] == "next":
+                got.append({"event": "next"})
+            elif message["type"] == "events":
+                got += message["events"]
+        return got
+    first = send(procs, "((inform jenny hello))")
+    assert first.returncode == 0, first.stderr + first.stdout
+    with connect(url, open_timeout=10, max_size=None) as ws:
+        assert json.loads(ws.recv(timeout=10))["mode"] == "live"
+        shown = events(ws, "summary")
+        assert shown[0]["event"] == "header" and "(!say jenny hello)" in json.dumps(shown)
+        second = send(procs, "((inform jenny goodbye))")
+        assert second.returncode == 0, second.stderr + second.stdout
+        assert events(ws, "next")[-1] == {"event": "next"}
+    with connect(url, open_timeout=10, max_size=None) as ws:
+        json.loads(ws.recv(timeout=10))
+        shown = events(ws, "summary")
+        assert "(!say jenny goodbye)" in json.dumps(shown) and "hello" not in json.dumps(shown)
+    assert sorted(p.name for p in logs.iterdir()) == ["goal-0001.jsonl", "goal-0002.jsonl"]

@@ -37,8 +37,11 @@
   const ws = new WebSocket(`${proto}://${location.host}/ws${location.search}`);
   ws.binaryType = "blob";
   ws.onopen = () => setConn("live", "connected");
-  ws.onclose = () => setConn("closed", hello.mode === "log" ? "server stopped" :
-                                       "view closed: what is shown is final");
+  let nextGoal = false;          // a node's view: the next goal's run begins
+  ws.onclose = () => {
+    if (nextGoal) { setConn("live", "the next goal begins"); setTimeout(() => location.reload(), 300); return; }
+    setConn("closed", hello.mode === "log" ? "server stopped" : "view closed: what is shown is final");
+  };
   ws.onmessage = msg => {
     if (typeof msg.data !== "string") { showFrame(msg.data); return; }
     const m = JSON.parse(msg.data);
@@ -54,6 +57,8 @@
       receive(m.events, m.from, m.sent);
     } else if (m.type === "frame") {
       frameInfo = m;
+    } else if (m.type === "next") {
+      nextGoal = true;
     }
   };
 
