@@ -189,11 +189,12 @@ class Agent:
                     raise HtnError("no plan reaches the goal from the current state" if before
                                    is None else f"resuming {tasks}: no plan reaches these tasks "
                                    "from the current state", source)
+                # a log that cannot be written (a folder gone) refuses the goal too
+                execution = prepare(plan, robot=self.robot, domain=self.world.domain,
+                                    problem=problem, retries=self.retries, replan=self.replan,
+                                    log=log, on_event=on_event, stops=self.stops)
             except HtnError as exc:
                 return self._refused(exc, tasks, before)
-            execution = prepare(plan, robot=self.robot, domain=self.world.domain,
-                                problem=problem, retries=self.retries, replan=self.replan,
-                                log=log, on_event=on_event, stops=self.stops)
             if adopted:
                 execution.adopt(1, "went on from the goal it preempted, and was verified there")
             if before is not None:
