@@ -92,6 +92,12 @@ def _lazy(ep) -> Callable:
     def factory(req: RobotRequest):
         try:
             make = ep.load()
+        except ModuleNotFoundError as exc:
+            if ep.dist is not None and ep.dist.name == "htn":   # htn's own: its extra, same name
+                raise HtnError(f"--robot {ep.name} needs the {ep.name} extra: pip install "
+                               f"'htn[{ep.name}]'")
+            raise HtnError(f"robot plugin '{ep.name}' ({ep.value}) failed to load: "
+                           f"{type(exc).__name__}: {exc}")
         except Exception as exc:   # a broken plugin: say which, no traceback
             raise HtnError(f"robot plugin '{ep.name}' ({ep.value}) failed to load: "
                            f"{type(exc).__name__}: {exc}")

@@ -12,8 +12,8 @@ import click
 from htn.jshop.language.errors import HtnError
 
 MISSING = ("needs the ros extra (ROS 2 Jazzy from PyPI): pip install 'htn[ros]'; the first "
-           "use builds the interface package htn_interfaces once (a C compiler, cmake and the "
-           "Python headers are needed)")
+           "use builds its interface packages once (a C compiler, cmake and the Python headers "
+           "are needed)")
 
 
 @click.group("ros")

@@ -113,6 +113,13 @@ def test_the_core_install_plans_runs_and_names_missing_extras(core, elsewhere):
     r = core.run("htn", "evaluate", "problems/tray_three.jshop", cwd=elsewhere)
     assert r.returncode == 2
     assert r.stderr == "htn evaluate needs the eval extra: pip install 'htn[eval]'\n"
+    r = core.run("htn", "ros", "--help", cwd=elsewhere)
+    assert r.returncode == 0 and "Needs the ros extra: pip install 'htn[ros]'" in r.stdout
+    r = core.run("htn", "ros", "node", "domains/domestic.jshop", cwd=elsewhere)
+    assert r.returncode == 2 and r.stderr.startswith("htn ros needs the ros extra")
+    r = core.run("htn", "run", "plan.txt", "--robot", "ros", cwd=elsewhere)
+    assert r.returncode == 2
+    assert r.stderr == "--robot ros needs the ros extra: pip install 'htn[ros]'\n"
     r = core.run(core.bin / "python", "-m", "htn", "--version", cwd=elsewhere)
     assert r.returncode == 0 and r.stdout.startswith("htn, version")
 

@@ -166,9 +166,10 @@ def test_goals_through_ros_end_as_htn_run_and_the_world_model_keeps_what_they_di
     alone = htn.run(next(iter(htn.plan(domain, problem))), robot="symbolic", domain=domain,
                     problem=problem)
     answers = talk(ros, [f"plan {GOAL}", f"execute {GOAL}", "execute ((fly_to jenny moon))",
-                         "execute ((bring_object jenny pringles))", "state (has ?who ?what)",
+                         "execute ((bring_object jenny pringles))",
+                         "execute ((bring_object jenny pringles guest)", "state (has ?who ?what)",
                          f"execute {GOAL}"])
-    planned, done, unknown, arity, state, again = answers
+    planned, done, unknown, arity, syntax, state, again = answers
     assert planned["ok"] and len(planned["steps"]) == 8
     assert done["outcome"] == "verified" and done["status"] == 4      # SUCCEEDED
     assert done["plan"] == alone.plan and done["verified"] == done["steps"] == 8
@@ -179,6 +180,7 @@ def test_goals_through_ros_end_as_htn_run_and_the_world_model_keeps_what_they_di
     assert unknown["outcome"] == "refused" and unknown["status"] == 6   # ABORTED
     assert unknown["error"].startswith("goal:1:3: unknown task 'fly_to'")
     assert arity["error"].startswith("goal:1:3: 'bring_object' takes 3 arguments, given 2")
+    assert syntax["outcome"] == "refused" and syntax["error"] == "goal:1:1: this '(' is never closed"
     assert state["facts"] == ["(has guest pringles)"]
     # planned from the world model: the pringles were handed over already
     assert again["outcome"] == "refused" and "no plan" in again["error"]
