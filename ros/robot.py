@@ -23,7 +23,6 @@ from __future__ import annotations
 import json
 import threading
 import time
-from typing import Optional
 
 import rclpy
 from action_msgs.msg import GoalStatus

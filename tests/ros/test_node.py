@@ -5,14 +5,12 @@ queried and updated. Skipped without the ros extra."""
 from __future__ import annotations
 
 import json
-import os
-import re
 import subprocess
 import sys
 import textwrap
-from importlib.util import find_spec
 
 import pytest
+import rosenv
 from conftest import ROOT
 
 pytestmark = [pytest.mark.slow, pytest.mark.ros]
@@ -20,28 +18,9 @@ pytestmark = [pytest.mark.slow, pytest.mark.ros]
 GOAL = "((bring_object jenny pringles guest))"
 
 
-def ros_environment() -> dict[str, str]:
-    """This worker's own ROS domain (0-101) and discovery on this host only
-    (a different id from tests/ros/test_interfaces.py's worker: +50)."""
-    worker = os.environ.get("PYTEST_XDIST_WORKER", "gw0")
-    domain = (int(re.sub(r"\D", "", worker) or 0) + 50) % 102
-    return {**os.environ, "ROS_DOMAIN_ID": str(domain),
-            "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"}
-
-
 @pytest.fixture(scope="module")
 def ros():
-    if find_spec("rclpy") is None:
-        pytest.skip("the ros extra is not installed (pip install -e '.[ros]'): no rclpy")
-    from htn.ros import interfaces
-    from htn.ros.interfaces import InterfaceBuildError
-    try:
-        interfaces.locate() or interfaces.build(progress=lambda m: print(m, file=sys.stderr))
-    except InterfaceBuildError as error:
-        if error.missing:
-            pytest.skip(str(error))
-        raise
-    return ros_environment()
+    return rosenv.ready("test_node")
 
 
 NODE = textwrap.dedent('''

@@ -9,7 +9,6 @@ skipped without the ros extra)."""
 from __future__ import annotations
 
 import json
-import os
 import re
 import signal
 import subprocess
@@ -18,6 +17,7 @@ from importlib.util import find_spec
 
 import pytest
 
+import rosenv
 from conftest import ROOT, run_htn, start_htn, wait_until
 from htn import missing_modules
 from htn.jshop.language.errors import HtnError
@@ -240,28 +240,9 @@ def test_an_output_that_exists_is_refused_and_left_as_it_was(tmp_path):
     assert r.returncode == 2 and "no such folder" in r.stderr
 
 
-def ros_environment() -> dict[str, str]:
-    """This worker's own ROS domain (0-101) and discovery on this host only
-    (+25: apart from tests/ros/test_node.py's +50 and test_interfaces.py's)."""
-    worker = os.environ.get("PYTEST_XDIST_WORKER", "gw0")
-    domain = (int(re.sub(r"\D", "", worker) or 0) + 25) % 102
-    return {**os.environ, "ROS_DOMAIN_ID": str(domain),
-            "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"}
-
-
 @pytest.fixture(scope="module")
 def ros():
-    if find_spec("rclpy") is None:
-        pytest.skip("the ros extra is not installed (pip install -e '.[ros]'): no rclpy")
-    from htn.ros import interfaces
-    from htn.ros.interfaces import InterfaceBuildError
-    try:
-        interfaces.locate() or interfaces.build(progress=lambda m: print(m, file=sys.stderr))
-    except InterfaceBuildError as error:
-        if error.missing:
-            pytest.skip(str(error))
-        raise
-    return ros_environment()
+    return rosenv.ready("test_record")
 
 
 FACTS_PUBLISHER = """

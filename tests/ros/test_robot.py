@@ -6,7 +6,6 @@ the ros extra (and without PyBullet where the simulated robot is needed)."""
 from __future__ import annotations
 
 import json
-import os
 import re
 import select
 import signal
@@ -14,9 +13,9 @@ import subprocess
 import sys
 import textwrap
 import time
-from importlib.util import find_spec
 
 import pytest
+import rosenv
 from conftest import ROOT, htn_command, wait_until
 
 pytestmark = [pytest.mark.slow, pytest.mark.ros]
@@ -26,24 +25,7 @@ DOMAIN, PROBLEM = ROOT / "domains" / "domestic.jshop", ROOT / "problems" / "brin
 
 @pytest.fixture(scope="module")
 def ros():
-    """This worker's own ROS domain (+75 from tests/ros/test_interfaces.py's),
-    discovery on this host only; both interface packages built."""
-    if find_spec("rclpy") is None:
-        pytest.skip("the ros extra is not installed (pip install -e '.[ros]'): no rclpy")
-    from htn.ros import interfaces
-    from htn.ros.interfaces import InterfaceBuildError
-    try:
-        for package in interfaces.SHIPPED:
-            interfaces.locate(package) or interfaces.build(lambda m: print(m, file=sys.stderr),
-                                                           package)
-    except InterfaceBuildError as error:
-        if error.missing:
-            pytest.skip(str(error))
-        raise
-    worker = os.environ.get("PYTEST_XDIST_WORKER", "gw0")
-    domain = (int(re.sub(r"\D", "", worker) or 0) + 75) % 102
-    return {**os.environ, "ROS_DOMAIN_ID": str(domain),
-            "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"}
+    return rosenv.ready("test_robot")
 
 
 @pytest.fixture
