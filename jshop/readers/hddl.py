@@ -19,7 +19,7 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Optional
 
-from lark import Lark, Token, v_args
+from lark import Lark, Token
 from lark.exceptions import VisitError
 from lark.visitors import Transformer_NonRecursive
 
@@ -28,6 +28,7 @@ from htn.jshop.language.errors import HtnError
 from htn.jshop.language.terms import Var
 
 from . import lark_errors
+from .lark_compat import with_meta
 from .hddl_model import (ActionDef, EffectCost, EffectForall, EffectWhen, Exists, HDomain,
                          HProblem, MethodDef, Network, Param, Subtask, TaskDef)
 
@@ -99,68 +100,68 @@ class Builder(Transformer_NonRecursive):
         return ("effect", items[0])
 
     # ---------------------------------------------------------------- formulas
-    @v_args(meta=True)
+    @with_meta
     def atom(self, meta, items):
         name, *args = items
         return S.Atom(str(name), tuple(self._arg(a) for a in args), self.pos(meta))
 
-    @v_args(meta=True)
+    @with_meta
     def empty(self, meta, items):
         return S.And([], self.pos(meta))
 
-    @v_args(meta=True)
+    @with_meta
     def conjunction(self, meta, items):
         return S.And(list(items), self.pos(meta))
 
-    @v_args(meta=True)
+    @with_meta
     def disjunction(self, meta, items):
         return S.Or(list(items), self.pos(meta))
 
-    @v_args(meta=True)
+    @with_meta
     def negation(self, meta, items):
         return S.Not(items[0], self.pos(meta))
 
-    @v_args(meta=True)
+    @with_meta
     def implication(self, meta, items):
         return S.Or([S.Not(items[0], self.pos(meta)), items[1]], self.pos(meta))
 
-    @v_args(meta=True)
+    @with_meta
     def exists(self, meta, items):
         return Exists(items[0], items[1], self.pos(meta))
 
-    @v_args(meta=True)
+    @with_meta
     def forall(self, meta, items):
         return S.ForAll(items[0], None, items[1], self.pos(meta))
 
-    @v_args(meta=True)
+    @with_meta
     def equality(self, meta, items):
         return S.Equal(self._arg(items[0]), self._arg(items[1]), self.pos(meta))
 
     # ---------------------------------------------------------------- effects
-    @v_args(meta=True)
+    @with_meta
     def effect_empty(self, meta, items):
         return []
 
-    @v_args(meta=True)
+    @with_meta
     def effect_and(self, meta, items):
         out = []
         for x in items:
             out += x if isinstance(x, list) else [x]
         return out
 
-    @v_args(meta=True)
+    @with_meta
     def effect_not(self, meta, items):
         return S.Not(items[0], self.pos(meta))
 
-    @v_args(meta=True)
+    @with_meta
     def effect_forall(self, meta, items):
         return EffectForall(items[0], items[1], self.pos(meta))
 
-    @v_args(meta=True)
+    @with_meta
     def effect_when(self, meta, items):
         return EffectWhen([], items[0], items[1], self.pos(meta))
 
-    @v_args(meta=True)
+    @with_meta
     def effect_increase(self, meta, items):
         name, *rest = items
         amount = rest[-1]
@@ -172,7 +173,7 @@ class Builder(Transformer_NonRecursive):
         return EffectCost(float(amount), self.pos(meta))
 
     # ---------------------------------------------------------------- task networks
-    @v_args(meta=True)
+    @with_meta
     def task_atom(self, meta, items):
         name, *args = items
         return Subtask(None, str(name), tuple(self._arg(a) for a in args), self.tpos(name))
@@ -211,7 +212,7 @@ class Builder(Transformer_NonRecursive):
     def constraints(self, items):
         return ("constraints", items[0])
 
-    @v_args(meta=True)
+    @with_meta
     def task_network(self, meta, items):
         net = Network(pos=self.pos(meta))
         for kind, *rest in items:
@@ -233,7 +234,7 @@ class Builder(Transformer_NonRecursive):
     def constants(self, items):
         return ("constants", items[0])
 
-    @v_args(meta=True)
+    @with_meta
     def predicate_def(self, meta, items):
         return S.Pos(self.file, meta.line, meta.column), str(items[0]), items[1]
 
@@ -243,27 +244,27 @@ class Builder(Transformer_NonRecursive):
     def functions(self, items):
         return ("functions", None)
 
-    @v_args(meta=True)
+    @with_meta
     def task_def(self, meta, items):
         name, *rest = items
         parts = dict(rest)
         return TaskDef(str(name), parts.get("parameters", []), self.tpos(name))
 
-    @v_args(meta=True)
+    @with_meta
     def method(self, meta, items):
         name, (_, params), task, *rest = items
         parts = dict(x for x in rest if isinstance(x, tuple))
         return MethodDef(str(name), params, task, parts.get("precondition"), rest[-1],
                          self.tpos(name))
 
-    @v_args(meta=True)
+    @with_meta
     def action(self, meta, items):
         name, *rest = items
         parts = dict(rest)
         return ActionDef(str(name), parts.get("parameters", []), parts.get("precondition"),
                          parts.get("effect", []), self.tpos(name))
 
-    @v_args(meta=True)
+    @with_meta
     def domain(self, meta, items):
         name, *parts = items
         d = HDomain(str(name), file=self.file, pos=self.pos(meta))
@@ -294,7 +295,7 @@ class Builder(Transformer_NonRecursive):
     def objects(self, items):
         return ("objects", items[0])
 
-    @v_args(meta=True)
+    @with_meta
     def htn(self, meta, items):
         params = items[0][1] if len(items) == 2 else []
         return ("htn", params, items[-1])
@@ -314,7 +315,7 @@ class Builder(Transformer_NonRecursive):
     def metric(self, items):
         return ("metric", None)
 
-    @v_args(meta=True)
+    @with_meta
     def problem(self, meta, items):
         name, dname, *parts = items
         p = HProblem(str(name), str(dname), file=self.file, pos=self.pos(meta))

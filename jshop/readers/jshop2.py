@@ -13,7 +13,7 @@ from __future__ import annotations
 from functools import lru_cache
 from pathlib import Path
 
-from lark import Lark, Token, v_args
+from lark import Lark, Token
 from lark.exceptions import UnexpectedInput, VisitError
 from lark.visitors import Transformer_NonRecursive
 
@@ -24,6 +24,7 @@ from htn.jshop.language.terms import NIL, CallTerm, Var, make_list, variables
 from htn.jshop.language.walk import walk_tasks
 
 from . import jshop2_hints, lark_errors
+from .lark_compat import with_meta
 from .numbering import index_var, number_axiom, number_method, number_operator
 from .source import check_nesting
 
@@ -85,7 +86,7 @@ class Builder(Transformer_NonRecursive):
     def function(self, items):
         return items[0]
 
-    @v_args(meta=True)
+    @with_meta
     def call(self, meta, items):
         tok, *args = items
         name = str(tok).lower()
@@ -100,7 +101,7 @@ class Builder(Transformer_NonRecursive):
         return CallTerm(shown, func, tuple(args), self.pos(meta))
 
     # ---------------------------------------------------------------- logic
-    @v_args(meta=True)
+    @with_meta
     def atom(self, meta, items):
         name, *args = items
         return S.Atom(str(name).lower(), tuple(args), self.pos(meta))
@@ -108,23 +109,23 @@ class Builder(Transformer_NonRecursive):
     def var_atom(self, items):
         return S.VarAtom(Var(str(items[0]).lower()), self.tpos(items[0]))
 
-    @v_args(meta=True)
+    @with_meta
     def and_expr(self, meta, items):
         if len(items) == 1:
             return items[0]
         return S.And(list(items), self.pos(meta))
 
-    @v_args(meta=True)
+    @with_meta
     def or_expr(self, meta, items):
         if len(items) == 1:
             return items[0]
         return S.Or(list(items), self.pos(meta))
 
-    @v_args(meta=True)
+    @with_meta
     def not_expr(self, meta, items):
         return S.Not(items[0], self.pos(meta))
 
-    @v_args(meta=True)
+    @with_meta
     def imply_expr(self, meta, items):
         # JSHOP2 compiles (imply Y Z) to (or (not Y) Z)
         y, z = items
@@ -133,28 +134,28 @@ class Builder(Transformer_NonRecursive):
     def forall_vars(self, items):
         return [Var(str(t).lower()) for t in items]
 
-    @v_args(meta=True)
+    @with_meta
     def forall_expr(self, meta, items):
         vs, cond, then = items
         return S.ForAll(vs, cond, then, self.pos(meta))
 
-    @v_args(meta=True)
+    @with_meta
     def assign_expr(self, meta, items):
         return S.Assign(Var(str(items[0]).lower()), items[1], self.pos(meta))
 
-    @v_args(meta=True)
+    @with_meta
     def call_expr(self, meta, items):
         return S.CallExpr(items[0], self.pos(meta))
 
-    @v_args(meta=True)
+    @with_meta
     def precondition(self, meta, items):
         return S.Precondition(items[0], pos=self.pos(meta))
 
-    @v_args(meta=True)
+    @with_meta
     def first_pre(self, meta, items):
         return S.Precondition(items[0], first=True, pos=self.pos(meta))
 
-    @v_args(meta=True)
+    @with_meta
     def sort_pre(self, meta, items):
         var = Var(str(items[0]).lower())
         if len(items) == 3:
@@ -168,7 +169,7 @@ class Builder(Transformer_NonRecursive):
         return S.Precondition(expr, sort_var=var, comparator=cmp, pos=self.pos(meta))
 
     # ---------------------------------------------------------------- tasks
-    @v_args(meta=True)
+    @with_meta
     def task_atom(self, meta, items):
         immediate = False
         if isinstance(items[0], Token) and items[0].type == "IMMEDIATE":
@@ -177,7 +178,7 @@ class Builder(Transformer_NonRecursive):
         name, *args = items
         return S.TaskAtom(str(name).lower(), tuple(args), immediate, self.tpos(name))
 
-    @v_args(meta=True)
+    @with_meta
     def tasklist(self, meta, items):
         ordered = True
         if items and isinstance(items[0], Token) and items[0].type == "UNORDERED":
@@ -192,20 +193,20 @@ class Builder(Transformer_NonRecursive):
     def effect_var(self, items):
         return S.Effects(var=Var(str(items[0]).lower()))
 
-    @v_args(meta=True)
+    @with_meta
     def protection(self, meta, items):
         return S.Protection(items[0], self.pos(meta))
 
     def effect_atoms(self, items):
         return list(items)
 
-    @v_args(meta=True)
+    @with_meta
     def effect_forall(self, meta, items):
         vs, cond, atoms = items
         return S.EffectForAll(vs, cond, atoms, self.pos(meta))
 
     # ---------------------------------------------------------------- elements
-    @v_args(meta=True)
+    @with_meta
     def operator(self, meta, items):
         name, *rest = items
         # rest: head terms..., precondition, del, add, [cost]
@@ -217,13 +218,13 @@ class Builder(Transformer_NonRecursive):
         op.nvars = number_operator(op)
         return op
 
-    @v_args(meta=True)
+    @with_meta
     def branch(self, meta, items):
         label = str(items[0]) if isinstance(items[0], Token) else None
         pre, tasks = items[-2], items[-1]
         return S.Branch(label, pre, tasks, self.pos(meta))
 
-    @v_args(meta=True)
+    @with_meta
     def method(self, meta, items):
         name = items[0]
         args = tuple(x for x in items[1:] if not isinstance(x, S.Branch))
@@ -237,12 +238,12 @@ class Builder(Transformer_NonRecursive):
         m.nvars = number_method(m)
         return m
 
-    @v_args(meta=True)
+    @with_meta
     def axiom_branch(self, meta, items):
         label = str(items[0]) if isinstance(items[0], Token) else None
         return S.AxiomBranch(label, items[-1], self.pos(meta))
 
-    @v_args(meta=True)
+    @with_meta
     def axiom(self, meta, items):
         head, *branches = items
         if isinstance(head, S.VarAtom):
@@ -255,7 +256,7 @@ class Builder(Transformer_NonRecursive):
         ax.nvars = number_axiom(ax)
         return ax
 
-    @v_args(meta=True)
+    @with_meta
     def domain(self, meta, items):
         name, *elements = items
         d = S.Domain(str(name).lower(), file=self.file, pos=self.pos(meta))
@@ -272,7 +273,7 @@ class Builder(Transformer_NonRecursive):
     def initial_state(self, items):
         return list(items)
 
-    @v_args(meta=True)
+    @with_meta
     def instance(self, meta, items):
         state, tasks = items
         for a in state:
@@ -282,7 +283,7 @@ class Builder(Transformer_NonRecursive):
         walk_tasks(tasks, lambda v: index_var(scope, v))
         return S.ProblemInstance(state, tasks, self.pos(meta))
 
-    @v_args(meta=True)
+    @with_meta
     def problem(self, meta, items):
         name, dname, *instances = items
         return S.Problem(str(name).lower(), str(dname).lower(), instances,

@@ -194,13 +194,13 @@ def _eof(text: str, file: str) -> HtnError:
 
 
 def check_lark() -> None:
-    """Refuse a ``lark`` module that is not lark 1.x, in one line with the
-    fix: ROS 2's wheels (the ros extra) bring ``lark-parser`` 0.12, which
-    installs a module of the same name over lark 1.x when pip installs it
-    later, and htn's grammars then fail deep inside the parser."""
+    """Refuse a ``lark`` module older than 0.12, in one line with the fix.
+    lark 1.x is what htn declares; lark-parser 0.12, which ROS 2's wheels
+    bring (and pip installs over lark 1.x's files), works as well
+    (:mod:`htn.jshop.readers.lark_compat`)."""
     import lark
     version = getattr(lark, "__version__", "0")
-    if not version.split(".")[0].isdigit() or int(version.split(".")[0]) < 1:
-        raise HtnError(f"the installed 'lark' module is version {version} (lark-parser, "
-                       "which ROS 2's wheels bring), not lark 1.x: pip install "
-                       "--force-reinstall --no-deps 'lark>=1.1.9'")
+    parts = [int(p) if p.isdigit() else 0 for p in version.split(".")[:2]] + [0, 0]
+    if (parts[0], parts[1]) < (0, 12):
+        raise HtnError(f"the installed 'lark' module is version {version}, older than htn "
+                       "reads with: pip install --force-reinstall --no-deps 'lark>=1.1.9'")
