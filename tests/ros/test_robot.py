@@ -201,12 +201,14 @@ def test_a_killed_robot_node_fails_the_goal_with_the_reason_and_a_new_one_serves
 
 
 NAV2 = textwrap.dedent('''
-    """A stand-in for Nav2 in plain rclpy: NavigateToPose at /navigate_to_pose,
-    the base_at and no_collision checks as services; each goal printed."""
+    """A stand-in for Nav2 in plain rclpy: NavigateToPose at /nav/navigate_to_pose,
+    the base_at check as a service, a bumper that touches nothing on a topic;
+    each goal printed."""
     import json, math
     import rclpy
     from rclpy.action import ActionServer
     from rclpy.executors import MultiThreadedExecutor
+    from std_msgs.msg import Bool
     from htn.ros.interfaces import import_interfaces, import_type
 
     NavigateToPose = import_type("nav2_msgs/action/NavigateToPose")
@@ -226,9 +228,10 @@ NAV2 = textwrap.dedent('''
     def check(request, response):
         response.ok, response.detail = True, "seen by the stand-in"
         return response
-    ActionServer(node, NavigateToPose, "/navigate_to_pose", navigate)
+    ActionServer(node, NavigateToPose, "/nav/navigate_to_pose", navigate)
     node.create_service(Check, "/robot/check/base_at", check)
-    node.create_service(Check, "/robot/check/no_collision", check)
+    bumper = node.create_publisher(Bool, "/robot/bumper", 10)
+    node.create_timer(0.05, lambda: bumper.publish(Bool(data=False)))
     executor = MultiThreadedExecutor()
     executor.add_node(node)
     print("ready", flush=True)
@@ -239,14 +242,38 @@ NAV2 = textwrap.dedent('''
 ''')
 
 
+MAPPING = """
+[skills.move_base]
+action = "/nav/navigate_to_pose"
+type = "nav2_msgs/action/NavigateToPose"
+where = "(location $1 ?x ?y ?yaw)"
+[skills.move_base.goal]
+"pose.header.frame_id" = "map"
+"pose.pose.position.x" = "?x"
+"pose.pose.position.y" = "?y"
+"pose.pose.orientation" = "yaw_degrees(?yaw)"
+
+[checks.no_collision]
+topic = "bumper"
+type = "std_msgs/msg/Bool"
+field = "data"
+equals = false
+"""
+
+
 def test_robot_ros_sends_the_mapped_poses_to_a_plain_navigate_to_pose_server(ros, procs, tmp_path):
+    """A mapping file of the test's own beside a copy of the domain: driving
+    to a NavigateToPose server under another name, no_collision a topic."""
+    domain = tmp_path / "home.jshop"
+    domain.write_text(DOMAIN.read_text())
+    (tmp_path / "home.ros.toml").write_text(MAPPING)
     text = PROBLEM.read_text().replace(
         "((bring_object jenny pringles guest))",
         "((!move_base jenny home_base counter_front) (!move_base jenny counter_front sofa_front))")
     problem = tmp_path / "drive.jshop"
     problem.write_text(text)
     plan = tmp_path / "plan.txt"
-    assert procs.run("plan", DOMAIN, problem, "-o", plan).returncode == 0
+    assert procs.run("plan", domain, problem, "-o", plan).returncode == 0
     nav2 = subprocess.Popen([sys.executable, "-c", NAV2], env=ros, text=True,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     procs.started.append(nav2)
@@ -259,6 +286,8 @@ def test_robot_ros_sends_the_mapped_poses_to_a_plain_navigate_to_pose_server(ros
     assert goals == [{"frame": "map", "x": 2.2, "y": 1.5, "yaw": 0.0},
                      {"frame": "map", "x": -2.0, "y": 1.5, "yaw": pytest.approx(90.0)}]
     assert ran.stdout.splitlines()[-1].startswith("verified: 2 of 2 steps verified")
+    # the monitor: base_at answered by its service, no_collision by the topic
+    assert "seen by the stand-in; /robot/bumper data = False" in ran.stdout, ran.stdout
 
 
 def test_the_nodes_view_shows_each_goal_and_tells_an_open_page_of_the_next(ros, procs, tmp_path):
