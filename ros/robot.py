@@ -38,6 +38,7 @@ from .interfaces import InterfaceBuildError, import_interfaces, import_type
 TICK = 0.005        # s a tick waits for a result before the executor goes on
 SILENT = 1.5        # s without a pose message that mean the robot has gone
 RETRY = 0.25        # s before a service call without answer is sent again
+ENDED = (GoalStatus.STATUS_SUCCEEDED, GoalStatus.STATUS_ABORTED, GoalStatus.STATUS_CANCELED)
 
 
 def make_robot(request):
@@ -160,10 +161,13 @@ class RosRobot(Robot):
         sent = client.send_goal_async(goal, feedback_callback=self._feedback)
         self._goals[id(sent)] = sent       # until it ends: hold() cancels it
         try:
-            ready = _event(sent)
+            ready, until = _event(sent), time.monotonic() + self.mapping.wait
             while not sent.done():
                 if not client.server_is_ready() or self._silent():
                     return SkillResult(False, f"the action server {call.name} went away")
+                if time.monotonic() > until:
+                    return SkillResult(False, f"the action server {call.name} did not answer "
+                                              f"the goal within {self.mapping.wait:g} s")
                 yield
                 ready.wait(TICK)
             handle = sent.result()
@@ -171,10 +175,16 @@ class RosRobot(Robot):
                 self._goals.pop(id(sent), None)
                 return SkillResult(False, f"the action server {call.name} rejected the goal")
             done = handle.get_result_async()
-            ready = _event(done)
+            ready, asked = _event(done), time.monotonic()
             while not done.done():
                 if not client.server_is_ready() or self._silent():
                     return SkillResult(False, f"the action server {call.name} went away")
+                if handle.status in ENDED and time.monotonic() - asked > 4 * RETRY:
+                    # the goal has ended (its status says so) but its result has
+                    # not come: the request may have gone out before the server
+                    # matched this client's reply channel; ask again
+                    done = handle.get_result_async()
+                    ready, asked = _event(done), time.monotonic()
                 yield
                 ready.wait(TICK)
             self._goals.pop(id(sent), None)
