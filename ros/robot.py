@@ -135,10 +135,12 @@ class RosRobot(Robot):
                 self._services[call.name] = client
             return client
 
-    def _silent(self) -> bool:
-        """The robot's pose topic, heard before, has been silent too long."""
+    def _silent(self, since: float) -> bool:
+        """The robot's pose topic, heard before, has been silent too long,
+        counting from ``since`` at the earliest (when the skill began: a
+        robot node started again is not silent before it could speak)."""
         return bool(self.mapping.pose) and self._heard > 0 \
-            and time.monotonic() - self._heard > SILENT
+            and time.monotonic() - max(self._heard, since) > SILENT
 
     # ------------------------------------------------------------ skills
     def act(self, name: str, *args):
@@ -158,12 +160,13 @@ class RosRobot(Robot):
                                           f"{self.mapping.wait:g} s)")
             yield
             time.sleep(TICK)
+        began = time.monotonic()
         sent = client.send_goal_async(goal, feedback_callback=self._feedback)
         self._goals[id(sent)] = sent       # until it ends: hold() cancels it
         try:
             ready, until = _event(sent), time.monotonic() + self.mapping.wait
             while not sent.done():
-                if not client.server_is_ready() or self._silent():
+                if not client.server_is_ready() or self._silent(began):
                     return SkillResult(False, f"the action server {call.name} went away")
                 if time.monotonic() > until:
                     return SkillResult(False, f"the action server {call.name} did not answer "
@@ -177,7 +180,7 @@ class RosRobot(Robot):
             done = handle.get_result_async()
             ready, asked = _event(done), time.monotonic()
             while not done.done():
-                if not client.server_is_ready() or self._silent():
+                if not client.server_is_ready() or self._silent(began):
                     return SkillResult(False, f"the action server {call.name} went away")
                 if handle.status in ENDED and time.monotonic() - asked > 4 * RETRY:
                     # the goal has ended (its status says so) but its result has
@@ -302,10 +305,25 @@ def _cancel(sent) -> None:
         handle = future.result()
         if handle is not None and handle.accepted:
             handle.cancel_goal_async()
+            _cancel_again(handle, tries=5)
     if sent.done():
         cancel(sent)
     else:
         sent.add_done_callback(cancel)
+
+
+def _cancel_again(handle, tries: int) -> None:
+    """Send the cancel again while the goal's status still says it runs (a
+    request can be dropped when the server has not yet matched this client's
+    reply channel: a robot must not drive on), every 0.3 s, ``tries`` times."""
+    def check() -> None:
+        if handle.status in (GoalStatus.STATUS_ACCEPTED, GoalStatus.STATUS_EXECUTING):
+            handle.cancel_goal_async()
+            if tries > 1:
+                _cancel_again(handle, tries - 1)
+    timer = threading.Timer(0.3, check)
+    timer.daemon = True
+    timer.start()
 
 
 def _event(future) -> threading.Event:
