@@ -50,6 +50,7 @@ from htn.jshop.language.errors import HtnError
 
 from .goals import Turns
 from .interfaces import import_interfaces
+from .shutdown import end_within
 
 POLICIES = ("preempt", "reject", "queue")
 THREADS = 16        # callbacks at once: goals waiting for their turn or to resume block one each
@@ -274,10 +275,11 @@ def serve(settings: NodeSettings, managed: bool = False, name: str = "htn",
     except KeyboardInterrupt:
         pass
     finally:
+        end_within("htn ros node")
         if node.agent is not None:
             node.agent.preempt("the node shuts down")
             node.turns.drop_waiting("the node shuts down")
-        executor.shutdown()
+        executor.shutdown(timeout_sec=5.0)
         if node.view is not None:
             node.view.close()
         node.destroy_node()

@@ -39,6 +39,7 @@ from htn.jshop.language.terms import source_atom
 from htn.robot.interface import SkillResult
 
 from .interfaces import import_interfaces, import_type
+from .shutdown import end_within
 
 NAVIGATE = "/navigate_to_pose"
 POSE_HZ = 20.0
@@ -245,7 +246,8 @@ def serve(settings: RobotSettings, name: str = "htn_robot_sim", on_ready=None) -
     except KeyboardInterrupt:
         pass
     finally:
-        executor.shutdown()
+        end_within("htn ros robot")
+        executor.shutdown(timeout_sec=5.0)
         node.destroy_node()
         robot.close()
         if rclpy.ok():
