@@ -177,7 +177,7 @@ class Agent:
             self._busy, self._preempted = True, None
             handover, self._handover = self._handover, None
         try:
-            adopted = None
+            adopted, since = None, self.world.mark()   # facts reported from now on outlive the run
             try:
                 if before is None and handover is not None and handover.tasks == tasks \
                         and handover.went_on():
@@ -211,7 +211,7 @@ class Agent:
                     result = execution.execute()
                 except KeyboardInterrupt as exc:    # outside the ticks: the log ends in order
                     result = execution.interrupted(str(exc))
-                self.world.believe(execution.believed())
+                self.world.believe(execution.believed(), since)
             remaining = ""
             if result.result == "preempted":
                 remaining = "(" + " ".join(execution.pending_tasks()) + ")"

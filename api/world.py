@@ -50,6 +50,8 @@ class WorldModel:
         self.arities = predicate_arities(self.domain, prob)
         self._lock = threading.Lock()
         self._facts: dict[tuple, S.Atom] = {}
+        self._updates: list[tuple] = []        # (deleted, added) atoms of each update()
+        self._forgotten = 0                     # updates dropped from the list, settled
         for atom in prob.instances[0].state if prob is not None else ():
             self._facts[(atom.pred, atom.args)] = atom
 
@@ -83,18 +85,35 @@ class WorldModel:
         gone = [a for text in delete for a in self._parse_atoms(text, source)]
         new = [a for text in add for a in self._parse_atoms(text, source)]
         with self._lock:
-            for a in gone:
-                self._facts.pop((a.pred, a.args), None)
-            for a in new:
-                self._facts[(a.pred, a.args)] = a
+            self._apply(gone, new)
+            self._updates.append((gone, new))
             return len(self._facts)
 
-    def believe(self, facts: Iterable[tuple]) -> None:
+    def _apply(self, gone, new) -> None:
+        for a in gone:
+            self._facts.pop((a.pred, a.args), None)
+        for a in new:
+            self._facts[(a.pred, a.args)] = a
+
+    def mark(self) -> int:
+        """Where the updates from other programs stand now (see :meth:`believe`)."""
+        with self._lock:
+            return self._forgotten + len(self._updates)
+
+    def believe(self, facts: Iterable[tuple], since: Optional[int] = None) -> None:
         """The facts are now these ``(pred, args)`` pairs (what a run
-        verified: the executor's belief state when it ended)."""
+        verified: the executor's belief state when it ended), with the
+        updates other programs made after the :meth:`mark` ``since`` applied
+        again on top (what they reported while the run went on is not lost)."""
         atoms = {(p, tuple(args)): S.Atom(p, tuple(args)) for p, args in facts}
         with self._lock:
             self._facts = atoms
+            if since is not None:
+                for gone, new in self._updates[max(0, since - self._forgotten):]:
+                    self._apply(gone, new)
+            # one run at a time: the updates before now are in the facts for good
+            self._forgotten += len(self._updates)
+            self._updates.clear()
 
     def observed(self, facts: Iterable[tuple]) -> None:
         """The robot observed ``facts`` (``(pred, args)`` pairs, every fact

@@ -95,3 +95,21 @@ def test_an_hddl_domain_is_refused_with_the_reason():
         pytest.skip("the shared corpus is not beside the checkout")
     with pytest.raises(HtnError, match="JSHOP2 domains only"):
         WorldModel(hddl)
+
+
+def test_facts_reported_while_a_goal_runs_outlive_the_runs_belief():
+    """What other programs report while a goal runs is applied again on top
+    of what the run verified, not overwritten by it."""
+    from htn.api.agent import Agent
+    agent = Agent(DOMAIN, PROBLEM)
+    seen = []
+
+    def on_event(rec):
+        if rec["event"] == "start" and not seen:
+            seen.append(agent.world.update(["(object_on coke kitchen_counter)"],
+                                           ["(object_on pringles kitchen_counter)"], "camera"))
+    result = agent.execute("((inform jenny hello))", on_event=on_event)
+    assert result.outcome == "verified" and seen
+    facts = agent.world.query("(object_on ?o ?f)")
+    assert "(object_on coke kitchen_counter)" in facts
+    assert "(object_on pringles kitchen_counter)" not in facts
