@@ -51,6 +51,10 @@ SUFFIX = ".ros.toml"
 _TOP = {"namespace", "observe", "pose", "wait", "skills", "checks"}
 _SKILL = {"action", "type", "where", "goal"}
 _CHECK = {"service", "type", "request", "topic", "field", "equals", "where"}
+# a skill's and a check's: the key naming it, its kind of type, the default
+# type, the key of its fields, the default name's prefix
+_SERVED = {"skills": ("action", "action", SKILL_TYPE, "goal", "skill"),
+           "checks": ("service", "srv", CHECK_TYPE, "request", "check")}
 _FUNCTION = re.compile(r"(yaw|yaw_degrees)\((.*)\)\Z")
 
 
@@ -177,15 +181,7 @@ def _call(kind: str, name: str, spec: dict, m: Mapping, fail) -> Call:
     where = spec.get("where", "")
     if where:
         _pattern(where, fail)
-    if kind == "skills":
-        if typ is not None and "/action/" not in typ:
-            fail(f"a skill is an action: type '{typ}' is not one")
-        fields = spec.get("goal", {"args": "$*"} if typ in (None, SKILL_TYPE) else {})
-        if not isinstance(fields, dict):
-            fail("'goal' must be a table of field = value")
-        _check_fields(fields, fail)
-        return Call(m.full(spec.get("action", f"skill/{name}")), typ or SKILL_TYPE, fields, where)
-    if "topic" in spec:
+    if kind == "checks" and "topic" in spec:
         if "service" in spec or "request" in spec:
             fail("a check is a service or a topic, not both")
         if typ is None or "/msg/" not in typ:
@@ -193,13 +189,16 @@ def _call(kind: str, name: str, spec: dict, m: Mapping, fail) -> Call:
         if "field" not in spec or "equals" not in spec:
             fail("a topic check needs 'field' (a dotted path) and 'equals' (the value meaning ok)")
         return Call(m.full(spec["topic"]), typ, {}, where, spec["field"], spec["equals"])
-    if typ is not None and "/srv/" not in typ:
-        fail(f"a check is a service or a topic: type '{typ}' is neither")
-    fields = spec.get("request", {"args": "$*"} if typ in (None, CHECK_TYPE) else {})
+    # a skill is an action, a check a service: their names, types and fields
+    served, part, default_type, fields_key, prefix = _SERVED[kind]
+    if typ is not None and f"/{part}/" not in typ:
+        fail(f"type '{typ}' is not " + ("an action" if kind == "skills" else
+                                        "a service (a check is a service or a topic)"))
+    fields = spec.get(fields_key, {"args": "$*"} if typ in (None, default_type) else {})
     if not isinstance(fields, dict):
-        fail("'request' must be a table of field = value")
+        fail(f"'{fields_key}' must be a table of field = value")
     _check_fields(fields, fail)
-    return Call(m.full(spec.get("service", f"check/{name}")), typ or CHECK_TYPE, fields, where)
+    return Call(m.full(spec.get(served, f"{prefix}/{name}")), typ or default_type, fields, where)
 
 
 def _check_fields(fields: dict, fail) -> None:

@@ -161,12 +161,15 @@ class RosRobot(Robot):
             yield
             time.sleep(TICK)
         began = time.monotonic()
+
+        def gone() -> bool:
+            return not client.server_is_ready() or self._silent(began)
         sent = client.send_goal_async(goal, feedback_callback=self._feedback)
         self._goals[id(sent)] = sent       # until it ends: hold() cancels it
         try:
             ready, until = _event(sent), time.monotonic() + self.mapping.wait
             while not sent.done():
-                if not client.server_is_ready() or self._silent(began):
+                if gone():
                     return SkillResult(False, f"the action server {call.name} went away")
                 if time.monotonic() > until:
                     return SkillResult(False, f"the action server {call.name} did not answer "
@@ -180,7 +183,7 @@ class RosRobot(Robot):
             done = handle.get_result_async()
             ready, asked = _event(done), time.monotonic()
             while not done.done():
-                if not client.server_is_ready() or self._silent(began):
+                if gone():
                     return SkillResult(False, f"the action server {call.name} went away")
                 if handle.status in ENDED and time.monotonic() - asked > 4 * RETRY:
                     # the goal has ended (its status says so) but its result has
