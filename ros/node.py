@@ -83,9 +83,9 @@ def robot_for(name: str, domain: str) -> str:
 class HtnNode(LifecycleNode):
     """The node; ``settings`` say what it plans with, and how."""
 
-    def __init__(self, settings: NodeSettings, name: str = "htn"):
+    def __init__(self, settings: NodeSettings, name: str = "htn", managed: bool = True):
         super().__init__(name)
-        self.settings = settings
+        self.settings, self.managed = settings, managed
         self.types = import_interfaces()
         self.agent: Optional[Agent] = None
         self.configure_error: Optional[str] = None
@@ -109,7 +109,8 @@ class HtnNode(LifecycleNode):
                 self.get_logger().info(f"the view of the goals: {self.view.url}")
         except HtnError as exc:
             self.configure_error = str(exc)
-            self.get_logger().error(f"configure: {exc}")
+            if self.managed:        # else serve() ends the process with it, in one line
+                self.get_logger().error(f"configure: {exc}")
             return TransitionCallbackReturn.FAILURE
         self.turns = Turns(self.agent, s.on_new_goal, s.resume, s.log_dir, self._event)
         self._events = self.create_lifecycle_publisher(self.types.Event, "~/events", 100)
@@ -261,7 +262,7 @@ def serve(settings: NodeSettings, managed: bool = False, name: str = "htn",
     ``managed``: it configures and activates itself, and a configure error
     ends it with exit code 2."""
     rclpy.init()
-    node = HtnNode(settings, name)
+    node = HtnNode(settings, name, managed)
     executor = MultiThreadedExecutor(num_threads=THREADS)
     executor.add_node(node)
     try:
