@@ -79,6 +79,32 @@ def elsewhere(tmp_path) -> Path:
     return folder
 
 
+# the package data a command reads at run time, as the checkout holds it
+DATA = ["jshop/readers/*.lark", "domains/*.jshop", "domains/*.toml", "problems/*.jshop",
+        "transform/*.jshop", "view/static/*", "ros/interfaces/*/package.xml",
+        "ros/interfaces/*/CMakeLists.txt", "ros/interfaces/*/*/*.msg",
+        "ros/interfaces/*/*/*.srv", "ros/interfaces/*/*/*.action"]
+
+
+def test_the_wheel_holds_the_package_data_and_nothing_of_the_tests_or_benchmarks(wheel):
+    import zipfile
+    names = set(zipfile.ZipFile(wheel).namelist())
+    data = sorted(f"htn/{p.relative_to(ROOT).as_posix()}" for pattern in DATA
+                  for p in ROOT.glob(pattern) if p.is_file())
+    assert len(data) >= 30 and [d for d in data if d not in names] == []
+    extra = [n for n in names if n.startswith("htn/") and not n.endswith(".py")
+             and n not in data]
+    assert extra == []
+    outside = ("tests/", "benchmarks/", "docs/", "examples/", ".ci/", "build/")
+    assert [n for n in names if n.startswith(outside) or n.startswith(
+        tuple(f"htn/{o}" for o in outside))] == []
+    assert sorted({n.split("/")[0] for n in names}) == ["htn", f"htn-{_version(wheel)}.dist-info"]
+
+
+def _version(wheel: Path) -> str:
+    return wheel.name.split("-")[1]
+
+
 def test_the_wheel_installs_one_import_package(core):
     r = core.run(core.bin / "python", "-c", textwrap.dedent("""
         import json
