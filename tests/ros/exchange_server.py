@@ -71,6 +71,8 @@ def update(request, response):
     return response
 
 
+from htn.ros.shutdown import end_within  # noqa: E402
+
 rclpy.init()
 node = rclpy.create_node("server_" + NAME)
 group = ReentrantCallbackGroup()
@@ -85,5 +87,7 @@ try:
 except (KeyboardInterrupt, ExternalShutdownException):
     pass
 finally:
+    end_within("exchange_server")     # rclpy's threads may stall the interpreter's exit
+    executor.shutdown(timeout_sec=5.0)
     node.destroy_node()
     rclpy.try_shutdown()

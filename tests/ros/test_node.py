@@ -153,9 +153,11 @@ def test_goals_through_ros_end_as_htn_run_and_the_world_model_keeps_what_they_di
     assert done["outcome"] == "verified" and done["status"] == 4      # SUCCEEDED
     assert done["plan"] == alone.plan and done["verified"] == done["steps"] == 8
     assert done["summary"] == alone.summary.line() and done["tree"]
-    # feedback as it happens (the action client drops what comes after the
-    # result: the complete stream is ~/events, which htn ros send reads)
-    assert done["feedback"][:2] == ["header", "tree"]
+    # feedback as it happens, in the run's order: the action client may miss
+    # what comes before its feedback subscription is matched and after the
+    # result (the complete stream is ~/events, which htn ros send reads)
+    logged = iter([e["event"] for e in alone.events])
+    assert done["feedback"] and all(name in logged for name in done["feedback"])
     assert unknown["outcome"] == "refused" and unknown["status"] == 6   # ABORTED
     assert unknown["error"].startswith("goal:1:3: unknown task 'fly_to'")
     assert arity["error"].startswith("goal:1:3: 'bring_object' takes 3 arguments, given 2")
