@@ -29,7 +29,8 @@ def missing_modules(extra: str) -> list[str]:
 def version() -> str:
     """htn's version, as installed (``0+unknown`` when run from a source tree
     that was never installed)."""
-    from importlib.metadata import PackageNotFoundError, version as installed
+    from importlib.metadata import PackageNotFoundError
+    from importlib.metadata import version as installed
     try:
         return installed("htn")
     except PackageNotFoundError:

@@ -27,7 +27,7 @@ def require_robot_extra(robot: str, what: str) -> None:
 def check_display() -> None:
     """A PyBullet window (``gui``) needs an X server that answers: check it
     (PyBullet itself exits without a word when it cannot open one)."""
-    import socket       # only for a window: not at start-up
+    import socket  # only for a window: not at start-up
     disp = os.environ.get("DISPLAY")
     if not disp:
         raise HtnError("--gui needs a display (DISPLAY is not set); run headless without it")

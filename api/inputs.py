@@ -26,6 +26,7 @@ from htn.jshop.language.functions import FunctionTable
 from htn.jshop.readers.checks import check_inputs
 from htn.jshop.readers.load import load_domain, load_problem, paired
 
+
 def is_path(x) -> bool:
     return isinstance(x, (str, os.PathLike))
 

@@ -30,8 +30,8 @@ from htn.robot.interface import Robot
 
 from .extras import check_display, require_robot_extra
 from .inputs import path_of
-from .run_outputs import RunOutputs
 from .run_inputs import LoggedRun, RunInputs, read_run_log, run_inputs
+from .run_outputs import RunOutputs
 
 __all__ = ["run", "prepare", "Execution", "RunResult", "read_run_log", "LoggedRun", "event_line"]
 

@@ -14,8 +14,12 @@ from dataclasses import dataclass
 from typing import Optional
 
 from htn.executor.config import load_retries, parse_overrides
-from htn.executor.log_header import (check_plan_digest, check_plan_present, check_unchanged,
-                                     read_header)
+from htn.executor.log_header import (
+    check_plan_digest,
+    check_plan_present,
+    check_unchanged,
+    read_header,
+)
 from htn.jshop.checks.recover import RECOVER_PLANS, RECOVER_TIMEOUT, check_runnable, recover_tree
 from htn.jshop.checks.validate import check_steps
 from htn.jshop.language import syntax as S

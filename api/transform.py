@@ -11,12 +11,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Callable, Optional
 
+from htn.files import atomic_write
 from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import HtnError
 from htn.jshop.language.terms import source_atom
 from htn.jshop.plans.planfile import header, plan_text
-
-from htn.files import atomic_write
 
 from .inputs import function_table, path_of, read_inputs
 

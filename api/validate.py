@@ -19,10 +19,10 @@ import os
 from dataclasses import dataclass
 from typing import Optional
 
+from htn.jshop.checks.validate import Verdict, check_steps, validate_plan
 from htn.jshop.language.errors import HtnError
 from htn.jshop.plans.plan import Plan
 from htn.jshop.plans.planfile import PlanFile, read_plan_file
-from htn.jshop.checks.validate import Verdict, check_steps, validate_plan
 
 from .inputs import domain_and_problem, function_table, is_path
 

@@ -76,6 +76,7 @@ print(t1 - t0, time.perf_counter() - t1)
 def _startup(repeats: int, sizes=(1, 2, 4)) -> None:
     import subprocess
     import sys
+
     from htn.evaluation.cluster import start_seconds
     for n in sizes:
         starts, closes = [], []

@@ -498,6 +498,7 @@ def main() -> None:
     os.environ["ROS_DOMAIN_ID"] = str(args.domain_id or (94 if ros_robot else 93))
     os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
     import rclpy
+
     from htn.ros.interfaces import import_interfaces
     T = import_interfaces()
     names = ["plan service round trip (ms)", "goal sent -> accepted (ms)",

@@ -58,8 +58,8 @@ IPC = SHARED / "corpus" / "ipc2020-to"
 
 def up_test_cases() -> list:
     """(name, problem, None) for UP's hierarchical test cases."""
-    import up_test_cases
     import unified_planning.test as up_test
+    import up_test_cases
     from unified_planning.model.htn import HierarchicalProblem
     sys.path.insert(0, os.path.dirname(up_test_cases.__file__))   # as report.py runs
     import builtin.hierarchical as hierarchical
@@ -211,8 +211,8 @@ def _why(res) -> str:
 
 
 def _htn_validate(plan, files) -> tuple[bool, str]:
-    from htn.jshop.plans.plan import Plan, Step
     from htn.jshop.checks.validate import validate_plan
+    from htn.jshop.plans.plan import Plan, Step
     from htn.jshop.readers.load import load_inputs
     domain, problem = load_inputs(str(files[0]), str(files[1]))
     steps = [Step("!" + a.action.name.lower(),
@@ -224,8 +224,9 @@ def _htn_validate(plan, files) -> tuple[bool, str]:
 
 def engines() -> tuple[list, list]:
     """The engines to compare, and notes on any left out."""
-    import htn.up  # noqa: F401  (registers htn)
     from unified_planning.shortcuts import get_environment
+
+    import htn.up  # noqa: F401  (registers htn)
     names, notes = ["htn"], []
     try:
         import up_aries  # noqa: F401

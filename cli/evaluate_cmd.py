@@ -7,8 +7,15 @@ import os
 
 import click
 
-from htn.api.evaluate import (METRIC_NAMES, ClusterError, EvaluateOptions, Progress,
-                              evaluate as run_evaluation, format_change, format_p)
+from htn.api.evaluate import (
+    METRIC_NAMES,
+    ClusterError,
+    EvaluateOptions,
+    Progress,
+    format_change,
+    format_p,
+)
+from htn.api.evaluate import evaluate as run_evaluation
 from htn.process import deadline
 
 from .options import MAX_RUNS, MAX_WORKERS, SEED, TIMEOUT_HELP, Count, Timeout, current_stops

@@ -16,7 +16,6 @@ import sys
 import click
 
 from htn.jshop.language.errors import HtnError
-
 from htn.process import DeadlineExceeded, Stops, command, silence_stdout
 
 from .output import fail

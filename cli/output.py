@@ -7,7 +7,6 @@ import sys
 
 import click
 
-
 MESSAGE_LIMIT = 1000    # characters: each quoted term is cut to 200 already
 
 

@@ -12,13 +12,13 @@ import sys
 
 import click
 
-from htn.api.plan import DEFAULT_MAX_DEPTH, SEARCHES, UnsupportedSearch, plan as find_plans
+from htn.api.plan import DEFAULT_MAX_DEPTH, SEARCHES, UnsupportedSearch
+from htn.api.plan import plan as find_plans
 from htn.api.plan_files import PlanFiles
-
-from .output import console, stdout_is_terminal, warn
 from htn.process import DeadlineExceeded, deadline
 
 from .options import TIMEOUT_HELP, Count, Timeout, current_stops, memory_mb
+from .output import console, stdout_is_terminal, warn
 from .progress import Phase
 
 FORMATS = ["text", "jshop", "json", "ipc"]

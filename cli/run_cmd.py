@@ -11,9 +11,9 @@ from htn.api.extras import require_robot_extra
 from htn.jshop.language.errors import HtnError
 from htn.process import DeadlineExceeded, deadline, silence_stdout
 
+from .options import SEED, TIMEOUT_HELP, Count, Timeout, current_stops
 from .output import stdout_is_terminal, warn
 from .progress import Phase
-from .options import SEED, TIMEOUT_HELP, Count, Timeout, current_stops
 from .view_cmd import keep_up, start_run_view, view_options, wait_for_page
 
 RUN_OPTIONS = ("plan_file", "robot_name", "sim", "faults", "seed", "retries", "replan",

@@ -5,6 +5,7 @@ event a pipe gets (display only; the trees live in ``htn.jshop.plans`` and
 from __future__ import annotations
 
 from collections import deque
+
 import click
 from rich.console import Console, Group
 from rich.live import Live
@@ -13,7 +14,6 @@ from rich.text import Text
 from rich.tree import Tree
 
 from htn.process import silence_stdout
-
 
 STATUS_STYLE = {"✓": "green", "✕": "bold red", "*": "yellow", "-": "dim"}
 LINE_STYLE = {"verified": "green", "failed": "red", "aborted": "bold red", "fault": "yellow",

@@ -39,8 +39,8 @@ def validate(domain, problem, plan_file, plan_index, functions, timeout, quiet):
       htn plan DOMAIN PROBLEM -o plan.txt && htn validate DOMAIN PROBLEM plan.txt
       htn validate basic problem plans-all.txt
     """
-    from htn.api.validate import ipc_text, validate as validate_plans
-
+    from htn.api.validate import ipc_text
+    from htn.api.validate import validate as validate_plans
     from htn.process import deadline
     stops = current_stops()
     with deadline(stops, timeout, stops.started):

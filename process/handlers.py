@@ -26,8 +26,17 @@ from typing import Optional
 
 from htn.jshop.language.errors import is_stop
 
-from .stops import (COMMAND, EXIT, START, DeadlineExceeded, Stops, TimedOut, flush_stdout,
-                    interrupt, timeout_reason)
+from .stops import (
+    COMMAND,
+    EXIT,
+    START,
+    DeadlineExceeded,
+    Stops,
+    TimedOut,
+    flush_stdout,
+    interrupt,
+    timeout_reason,
+)
 from .watchdog import GRACE, backstop_after, cancel_backstop, exit_code, leave_last
 
 MAX_TIMER = 1e8          # seconds (three years): a longer --timeout is no limit

@@ -135,8 +135,10 @@ def _tasks_of(path: str) -> str:
     return "(" + " ".join(source_atom(t.name, t.args) for t in atoms) + ")"
 
 from .robot_commands import robot  # noqa: E402  (the group above, its commands in their modules)
+
 ros.add_command(robot)
 
 
 from .record_commands import record  # noqa: E402
+
 ros.add_command(record)

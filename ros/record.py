@@ -77,7 +77,7 @@ def check_output(output: str) -> Path:
 def typestore():
     """Jazzy's types with htn_interfaces' messages registered (for the
     connections' definitions and hashes)."""
-    from rosbags.typesys import Stores, get_typestore, get_types_from_msg
+    from rosbags.typesys import Stores, get_types_from_msg, get_typestore
     store = get_typestore(Stores.ROS2_JAZZY)
     found: dict = {}
     for path in sorted((SOURCE / "msg").glob("*.msg")):

@@ -10,6 +10,7 @@ import time
 from pathlib import Path
 
 import pytest
+
 from inprocess import run_cli
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -87,7 +87,7 @@ def navigation_distance(instance: S.ProblemInstance, plan,
                         navigate: str = KITCHEN.navigate) -> float:
     """Sum of straight-line distances of the plan's ``navigate`` steps (the
     operator of a vocabulary that moves the robot between two areas)."""
-    from htn.robot.projection import world_from_atoms      # area coordinates, checked
+    from htn.robot.projection import world_from_atoms  # area coordinates, checked
     where = world_from_atoms([a for a in instance.state if a.pred == "area"]).places
     total = 0.0
     for s in plan.steps:

@@ -23,9 +23,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, Optional
 
+from htn.jshop.checks.validate import check_steps, validate_plan
 from htn.jshop.language.terms import Var
 from htn.jshop.plans.plan import Plan, Step
-from htn.jshop.checks.validate import check_steps, validate_plan
 
 from .convert import Conversion
 

@@ -26,8 +26,17 @@ from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import HtnError
 from htn.jshop.language.terms import Var
 from htn.jshop.readers.hddl_domain import attach_roots, domain_from_model, problem_from_model
-from htn.jshop.readers.hddl_model import (ActionDef, EffectCost, HDomain, HProblem, MethodDef,
-                                          Network, Param, Subtask, TaskDef)
+from htn.jshop.readers.hddl_model import (
+    ActionDef,
+    EffectCost,
+    HDomain,
+    HProblem,
+    MethodDef,
+    Network,
+    Param,
+    Subtask,
+    TaskDef,
+)
 from htn.jshop.readers.hddl_order import linearise
 
 from .formulas import Expressions, Unsupported, param, var_name

@@ -52,9 +52,16 @@ import time
 import warnings
 from typing import IO, Callable, Optional
 
-from unified_planning.engines import (Credits, Engine, LogLevel, LogMessage,
-                                      PlanGenerationResult, PlanGenerationResultStatus as Status,
-                                      ValidationResult, ValidationResultStatus)
+from unified_planning.engines import (
+    Credits,
+    Engine,
+    LogLevel,
+    LogMessage,
+    PlanGenerationResult,
+    ValidationResult,
+    ValidationResultStatus,
+)
+from unified_planning.engines import PlanGenerationResultStatus as Status
 from unified_planning.engines.mixins import OneshotPlannerMixin, PlanValidatorMixin
 from unified_planning.engines.mixins.oneshot_planner import OptimalityGuarantee
 from unified_planning.engines.results import FailedValidationReason

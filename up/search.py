@@ -6,8 +6,8 @@ from __future__ import annotations
 import time
 from typing import IO, Optional
 
-from unified_planning.engines import (LogLevel, LogMessage, PlanGenerationResult,
-                                      PlanGenerationResultStatus as Status)
+from unified_planning.engines import LogLevel, LogMessage, PlanGenerationResult
+from unified_planning.engines import PlanGenerationResultStatus as Status
 
 from htn.jshop.search.ground_formulas import NotGroundable
 from htn.jshop.search.limits import MemoryLimit

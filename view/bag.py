@@ -151,7 +151,7 @@ def _storage(path: str) -> tuple[Path, list[str]]:
 def _decoder(conn, path: str):
     """``data -> message`` for the connection's type, from the bag's own
     message definition (else htn's ``Event.msg``)."""
-    from rosbags.typesys import Stores, get_typestore, get_types_from_msg
+    from rosbags.typesys import Stores, get_types_from_msg, get_typestore
     text = getattr(conn.msgdef, "data", "") if conn.msgdef is not None else ""
     if not text or text.startswith("=" * 80):       # none, or IDL: htn's own definition
         try:

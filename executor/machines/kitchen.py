@@ -5,7 +5,6 @@ from __future__ import annotations
 from .base import ActionMachine, action, all_of, carried_by
 from .domestic import no_collision
 
-
 # (holding ROBOT-OR-ARM OBJECT): what the robot carries, checked while it acts
 carried_by("holding", domain="kitchen")
 

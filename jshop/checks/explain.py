@@ -27,7 +27,8 @@ from typing import Optional
 from htn.jshop.language import syntax as S
 from htn.jshop.language.terms import atom_str, source_atom
 
-from .unsatisfied import failing_literal, show as _show
+from .unsatisfied import failing_literal
+from .unsatisfied import show as _show
 
 
 @dataclass

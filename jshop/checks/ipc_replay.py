@@ -20,6 +20,7 @@ from collections import deque
 from dataclasses import dataclass
 
 from htn.jshop.plans.plan import Step
+
 from .unsatisfied import failing_literal, show
 from .validate import why_goal, why_step
 

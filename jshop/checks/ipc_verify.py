@@ -38,8 +38,8 @@ from dataclasses import dataclass, field
 
 from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import HtnError
-
 from htn.jshop.plans.ipc import IpcLine, IpcPlan
+
 from .ipc_match import TOP, TOP_METHOD, Shapes, matchings, top_shape
 from .ipc_replay import Finding, Replay
 

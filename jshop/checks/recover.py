@@ -64,8 +64,8 @@ def check_runnable(domain: S.Domain, instance: S.ProblemInstance, plan,
     sequence from the problem's initial state (manual 5.2.1; the plan's cost
     is not checked). A bad step is an input error at its line of the plan
     file (``lines``: the file's text, which locates a variable's column)."""
-    from htn.jshop.plans.plan import Plan
     from htn.jshop.checks.validate import validate_plan
+    from htn.jshop.plans.plan import Plan
     for s in plan.steps:
         var = next((v for v in map(_variable, s.args) if v is not None), None)
         if var is not None:

@@ -24,7 +24,8 @@ from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import HtnError
 from htn.jshop.language.terms import atom_str, subst, term_str
 
-from .unsatisfied import failing_literal, show as _show
+from .unsatisfied import failing_literal
+from .unsatisfied import show as _show
 
 
 @dataclass

@@ -18,12 +18,20 @@ from typing import Callable, Iterator
 
 from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import PlanningError
-from htn.jshop.language.terms import (Var, atom_from_term, is_ground, source_atom, source_str,
-                                      subst, unify, variables)
+from htn.jshop.language.terms import (
+    Var,
+    atom_from_term,
+    is_ground,
+    source_atom,
+    source_str,
+    subst,
+    unify,
+    variables,
+)
 
+from . import warming as warm
 from .caches import cache
 from .codegen import described
-from . import warming as warm
 from .compile import GENERIC
 from .conjuncts import always, arities
 from .java_sort import sorted_by

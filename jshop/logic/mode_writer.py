@@ -9,8 +9,20 @@ from htn.jshop.language.terms import CallTerm, Var, is_ground
 
 from .codegen import define
 from .compile import NESTED_CONJUNCTS
-from .conjuncts import (ASSIGN, ATOM, AXIOM, CALL, GENERAL, NOT_ATOM, NOT_AXIOM, Literal, call_at,
-                        call_nested, has_call, term_vars)
+from .conjuncts import (
+    ASSIGN,
+    ATOM,
+    AXIOM,
+    CALL,
+    GENERAL,
+    NOT_ATOM,
+    NOT_AXIOM,
+    Literal,
+    call_at,
+    call_nested,
+    has_call,
+    term_vars,
+)
 
 
 class CodeWriter:

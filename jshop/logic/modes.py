@@ -37,12 +37,12 @@ from htn.jshop.language import syntax as S
 from htn.jshop.language.terms import Var, is_ground
 from htn.jshop.language.walk import walk_expr
 
+from . import warming
 from .caches import cache
-from .codegen import described, define
+from .codegen import define, described
 from .compile import conjunction
 from .conjuncts import ATOM, AXIOM, GENERAL, NOT_ATOM, NOT_AXIOM, Literal, flatten
 from .mode_writer import CodeWriter
-from . import warming
 
 MAX_LITERALS = 40     # longer conjunctions stay on the general path (indentation)
 MAX_VARS = 60         # a mode is a bit mask over the conjunction's variables
@@ -61,7 +61,7 @@ def compile_conjunction(logic, e: S.And, entry: frozenset = None, what: str = No
     if hit is None:     # the same for every planner of the domain
         items = flatten(e.items)
         lits = [Literal(x, logic.domain.axioms) for x in items]
-        hit = _LITERALS.put(e, (items, lits, sorted(set().union(*(l.vars for l in lits)))))
+        hit = _LITERALS.put(e, (items, lits, sorted(set().union(*(lit.vars for lit in lits)))))
     items, lits, names = hit
     general = [logic.expr(x) for x in items]
     gen = conjunction(general) if len(general) > 1 else general[0]

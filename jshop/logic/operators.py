@@ -21,9 +21,9 @@ from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import PlanningError
 from htn.jshop.language.terms import atom_from_term, shown_term, source_atom
 
+from . import warming as warm
 from .caches import cache
 from .codegen import described
-from . import warming as warm
 from .state import Change
 
 _ATOM, _VAR_ATOM, _PROTECT, _FORALL = range(4)

@@ -8,10 +8,9 @@ from typing import Callable
 from htn.jshop.language.terms import Var, source_atom
 
 from .caches import cache
-from .codegen import described, define
+from .codegen import define, described
 from .compile import flat_args, substituter
 from .warming import interpreted_substitution, warming
-
 
 _TASK_LISTS = cache()
 

@@ -28,7 +28,6 @@ from htn.jshop.language.terms import source_atom, variables
 from htn.jshop.language.walk import walk_expr, walk_term
 
 
-
 @dataclass
 class Warning_:
     pos: S.Pos | None

@@ -28,9 +28,21 @@ from htn.jshop.language.errors import HtnError
 from htn.jshop.language.terms import Var
 
 from . import lark_errors
+from .hddl_model import (
+    ActionDef,
+    EffectCost,
+    EffectForall,
+    EffectWhen,
+    Exists,
+    HDomain,
+    HProblem,
+    MethodDef,
+    Network,
+    Param,
+    Subtask,
+    TaskDef,
+)
 from .lark_compat import with_meta
-from .hddl_model import (ActionDef, EffectCost, EffectForall, EffectWhen, Exists, HDomain,
-                         HProblem, MethodDef, Network, Param, Subtask, TaskDef)
 
 GRAMMAR = Path(__file__).with_name("hddl.lark")
 

@@ -44,11 +44,21 @@ from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import HtnError
 from htn.jshop.language.terms import Var, variables
 
-from .hddl_checks import (check_domain, check_method, type_ancestors, unique_labels,
-                          unique_params)
+from .hddl_checks import check_domain, check_method, type_ancestors, unique_labels, unique_params
 from .hddl_formulas import Formulas, Scope, order_conjuncts, type_condition, type_predicate
-from .hddl_model import (TOP, TOP_METHOD, ActionDef, EffectCost, EffectForall, EffectWhen,
-                         Exists, HDomain, HProblem, MethodDef, Subtask)
+from .hddl_model import (
+    TOP,
+    TOP_METHOD,
+    ActionDef,
+    EffectCost,
+    EffectForall,
+    EffectWhen,
+    Exists,
+    HDomain,
+    HProblem,
+    MethodDef,
+    Subtask,
+)
 from .hddl_order import is_total, subtask_order
 from .pullup import pulled_conditions
 

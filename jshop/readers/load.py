@@ -91,8 +91,12 @@ def paired(dom: S.Domain, prob: S.Problem) -> tuple[S.Domain, S.Problem]:
     (``ProblemInstance.root``)."""
     check_domain_name(dom, prob)
     if dom.hddl is not None:
-        from .hddl_domain import (attach_roots, check_problem_symbols, for_problem,
-                                  resolve_problem_tasks)
+        from .hddl_domain import (
+            attach_roots,
+            check_problem_symbols,
+            for_problem,
+            resolve_problem_tasks,
+        )
         check_problem_symbols(dom, prob)
         resolve_problem_tasks(dom, prob)
         dom = for_problem(dom, prob)

@@ -42,7 +42,6 @@ from .limits import MemoryGuard, MemoryLimit
 from .stats import Stats
 from .task_networks import body_items, firsts, item_at, replace
 
-
 WASTAR_WEIGHT = 2.0      # --search wastar: f = g + 2 h
 
 class BestFirst:

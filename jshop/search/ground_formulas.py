@@ -23,7 +23,6 @@ from htn.jshop.logic.caches import IdentityCache
 
 from .residual_code import compile_formula
 
-
 COMPILE_AFTER = 32     # groundings of a formula before it is compiled
 
 

@@ -26,10 +26,9 @@ from htn.jshop.language.terms import subst, variables
 from htn.jshop.logic.caches import IdentityCache
 from htn.jshop.logic.compile import head_unifier
 
-from .ground_formulas import (COMPILE_AFTER, FormulaGrounder, NotGroundable, compile_residual,
-                              disj)
-from .residual_code import compile_body
+from .ground_formulas import COMPILE_AFTER, FormulaGrounder, NotGroundable, compile_residual, disj
 from .reachability import reachable
+from .residual_code import compile_body
 
 # the goal of a model where grounding found it false in every reachable state
 # (no fact has every bit: no state satisfies it)

@@ -49,12 +49,12 @@ from htn.jshop.logic.state import Change, HashedState, State
 from htn.jshop.plans.plan import Plan, Step
 from htn.jshop.plans.tree import snapshot
 
+from .ancestry import loop_check_for
 from .goals import GoalGuard
 from .limits import DEFAULT_MAX_DEPTH, DepthLimit, MemoryGuard, MemoryLimit
 from .network import Node, bind_tasks, deepest_task, first_in_order, first_tasks, undo_marks
 from .stats import Stats
 from .steps import method_entry, operator_entry
-from .ancestry import loop_check_for
 
 _PLAN = object()
 

@@ -11,11 +11,12 @@ import sys
 import pytest
 
 import htn
-from conftest import ROOT
 from htn.api.run import prepare, read_run_log
 from htn.jshop.language.errors import HtnError
 from htn.jshop.readers.load import load_inputs
 from htn.robot.symbolic import SymbolicRobot
+
+from conftest import ROOT
 
 DOMAIN = ROOT / "domains" / "domestic.jshop"
 BRING = ROOT / "problems" / "bring_object.jshop"

@@ -9,6 +9,7 @@ import subprocess
 import sys
 
 import pytest
+
 from conftest import ROOT
 
 EXAMPLE = ROOT / "examples" / "plan_and_run.py"

@@ -12,11 +12,18 @@ import urllib.request
 
 import pytest
 
-from conftest import ROOT
 from htn import missing_modules
-from htn.api.view import (LogPage, ViewLog, exposure_warning, read_view_log, serve_log,
-                          start_live_view)
+from htn.api.view import (
+    LogPage,
+    ViewLog,
+    exposure_warning,
+    read_view_log,
+    serve_log,
+    start_live_view,
+)
 from htn.jshop.language.errors import HtnError
+
+from conftest import ROOT
 
 needs_view = pytest.mark.skipif(bool(missing_modules("view")),
                                 reason="needs the view extra: pip install 'htn[view]'")

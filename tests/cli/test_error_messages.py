@@ -14,6 +14,7 @@ import pytest
 
 from coffee import COFFEE, COFFEE_HDDL, MORNING, MORNING_HDDL
 
+
 def _plan(tmp_path, domain, problem, ext="jshop"):
     from htn.cli.main import main
     d, p = tmp_path / f"coffee.{ext}", tmp_path / f"morning.{ext}"

@@ -7,6 +7,7 @@ import signal
 import warnings
 
 import pytest
+
 from conftest import ROOT, run_htn, run_htn_process
 from inprocess import LeakedState
 

@@ -10,12 +10,13 @@ import re
 
 import pytest
 
-from conftest import ROOT, run_htn
 from htn.api.run import prepare, read_run_log
 from htn.cli.main import main
 from htn.jshop.language.terms import Var
 from htn.jshop.plans.planfile import read_plan_file
 from htn.jshop.search.planner import Planner
+
+from conftest import ROOT, run_htn
 
 DOMAIN = ROOT / "domains" / "domestic.jshop"
 BRING = ROOT / "problems" / "bring_object.jshop"

@@ -12,9 +12,9 @@ import time
 from contextlib import contextmanager
 
 import pytest
+from test_output import files  # the endless domain, written beside its problem
 
 from conftest import ROOT, run_htn, run_htn_process, start_htn, wait_until
-from test_output import files      # the endless domain, written beside its problem
 
 CALLS = """(defdomain d (
   (:operator (!go ?x) () () ((at ?x)))

@@ -5,8 +5,9 @@ import json
 
 import pytest
 
-from conftest import CORPUS, ROOT, needs_corpus, run_htn
 from htn.jshop import Planner, load_domain, load_problem
+
+from conftest import CORPUS, ROOT, needs_corpus, run_htn
 
 DOMAIN = ROOT / "domains" / "domestic.jshop"
 

@@ -34,9 +34,11 @@ from collections import Counter
 from pathlib import Path
 
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
 from conftest import CORPUS, FUNCTIONS, ROOT, SHARED, corpus_available, run_htn
 from fuzz_mutations import mutants
-from hypothesis import HealthCheck, given, settings, strategies as st
 
 sys.setrecursionlimit(max(sys.getrecursionlimit(), 20000))   # as htn's main() does
 EXAMPLES = int(os.environ.get("HTN_FUZZ_EXAMPLES", "500"))

@@ -35,8 +35,10 @@ import time
 from collections import Counter
 
 import pytest
+from hypothesis import HealthCheck, Phase, given, settings
+from hypothesis import strategies as st
+
 from conftest import run_htn, run_htn_process
-from hypothesis import HealthCheck, Phase, given, settings, strategies as st
 
 EXAMPLES = int(os.environ.get("HTN_FUZZ_EXAMPLES", "200"))
 RANDOM = bool(os.environ.get("HTN_FUZZ_RANDOM"))

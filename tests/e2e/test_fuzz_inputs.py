@@ -19,9 +19,10 @@ from collections import Counter
 from pathlib import Path
 
 import pytest
+from hypothesis import HealthCheck, Phase, given, settings
+
 from conftest import run_htn
 from fuzz_inputs import HDDL, JSHOP2, inputs, verdict
-from hypothesis import HealthCheck, Phase, given, settings
 
 EXAMPLES = int(os.environ.get("HTN_FUZZ_INPUTS", "200"))
 RANDOM = bool(os.environ.get("HTN_FUZZ_RANDOM"))

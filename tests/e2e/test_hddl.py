@@ -10,6 +10,7 @@ import json
 from pathlib import Path
 
 import pytest
+
 from conftest import SHARED, run_htn
 
 SAMPLE = SHARED / "corpus" / "ipc2020-to"

@@ -10,9 +10,9 @@ from __future__ import annotations
 
 import json
 
-from conftest import run_htn
-
 from test_hddl import check_ipc_decomposition
+
+from conftest import run_htn
 
 
 def _plan(tmp_path, oracle, domain: str, problem: str, *extra):

@@ -12,8 +12,10 @@ import re
 import sys
 
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
 from conftest import SHARED, run_htn
-from hypothesis import HealthCheck, given, settings, strategies as st
 
 VERDICTS = SHARED / "corpus" / "ipc-verdicts"
 sys.setrecursionlimit(max(sys.getrecursionlimit(), 20000))   # as htn's main() does

@@ -14,6 +14,7 @@ import textwrap
 from pathlib import Path
 
 import pytest
+
 from conftest import ROOT
 
 BASIC_PLAN = "Plan cost: 2.0\n\n(!drop kiwi)\n(!pickup banjo)\n--------------------\n"

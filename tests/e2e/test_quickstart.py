@@ -14,6 +14,7 @@ import subprocess
 from pathlib import Path
 
 import pytest
+
 from conftest import ROOT
 
 SYSTEM_PYTHON = Path("/usr/bin/python3")

@@ -12,9 +12,9 @@ import json
 import subprocess
 
 import pytest
-from conftest import SHARED, run_htn
-
 from test_hddl import check_ipc_decomposition
+
+from conftest import SHARED, run_htn
 
 PANDA = SHARED / "tools" / "pandaPIparser" / "pandaPIparser"
 TOTAL = SHARED / "corpus" / "ipc2020-to"

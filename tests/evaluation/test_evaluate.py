@@ -15,6 +15,7 @@ from contextlib import contextmanager
 from pathlib import Path
 
 import pytest
+
 from conftest import ROOT, run_htn, run_htn_process, start_htn, wait_until
 
 PROBLEM = "problems/transport_four.jshop"

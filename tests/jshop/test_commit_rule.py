@@ -10,14 +10,15 @@ import subprocess
 import tempfile
 from pathlib import Path
 
-from conftest import SHARED
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from htn.api.inputs import function_table, read_inputs
-from htn.jshop.plans.ipc import ipc_text
 from htn.jshop.checks.ipc_verify import verify_ipc_text
+from htn.jshop.plans.ipc import ipc_text
 from htn.jshop.search.best_first import BestFirst, committed
+
+from conftest import SHARED
 
 PANDA = SHARED / "tools" / "pandaPIparser" / "pandaPIparser"
 FACTS = ["p0", "p1", "p2", "p3"]

@@ -7,13 +7,14 @@ from __future__ import annotations
 import hashlib
 
 import pytest
-from conftest import SHARED
 
 from htn.jshop.readers.load import load_inputs
 from htn.jshop.search import ground_formulas, grounding
 from htn.jshop.search.best_first import BestFirst
 from htn.jshop.search.heuristics import INF, _bits
 from htn.jshop.search.task_networks import tasks
+
+from conftest import SHARED
 
 CORPUS = SHARED / "corpus"
 INSTANCES = [  # forall, or, not, equality, conditional effects, partial order

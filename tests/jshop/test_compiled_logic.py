@@ -17,10 +17,11 @@ from __future__ import annotations
 
 import linecache
 import os
-from contextlib import contextmanager
 import traceback
+from contextlib import contextmanager
 
-from hypothesis import HealthCheck, given, settings, strategies as st
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import HtnError

@@ -6,13 +6,14 @@ from __future__ import annotations
 import re
 
 import pytest
-from conftest import SHARED
 
 from htn.jshop.readers.load import load_inputs
 from htn.jshop.search import best_first, grounding
 from htn.jshop.search.best_first import BestFirst
 from htn.jshop.search.goal_chain import GoalChain
 from htn.jshop.search.task_networks import body_items, replace
+
+from conftest import SHARED
 
 CORPUS = SHARED / "corpus"
 

@@ -10,10 +10,11 @@ import sys
 
 import lark
 import pytest
-from conftest import ROOT, SHARED, htn_command
 
 from htn.jshop.language.errors import HtnError
 from htn.jshop.readers import hddl, jshop2, lark_errors
+
+from conftest import ROOT, SHARED, htn_command
 
 
 @pytest.mark.parametrize("version", ["0.11.3", "0.7.8", "unknown"])

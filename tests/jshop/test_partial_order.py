@@ -9,11 +9,12 @@ import json
 import subprocess
 
 import pytest
-from conftest import SHARED, run_htn
 
 from htn.jshop.language.syntax import PartialOrder
 from htn.jshop.readers.hddl import parse_model
 from htn.jshop.readers.hddl_order import subtask_order
+
+from conftest import SHARED, run_htn
 
 PANDA = SHARED / "tools" / "pandaPIparser" / "pandaPIparser"
 SEARCHES = ["dfs", "gbfs", "wastar", "auto"]

@@ -4,10 +4,11 @@ binding of every action at every turn, on IPC instances of both orders."""
 from __future__ import annotations
 
 import pytest
-from conftest import SHARED
 
 from htn.jshop.readers.load import load_inputs
 from htn.jshop.search.reachability import reachable
+
+from conftest import SHARED
 
 CORPUS = SHARED / "corpus"
 INSTANCES = [  # (domain, problem) under the corpus: conditional effects, types, many actions

@@ -4,13 +4,12 @@ operators at the memory budget, each with a message naming the task, exit
 code 1, in bounded memory; a long plan is bounded by neither."""
 from __future__ import annotations
 
-import pytest
-
 import json
-
 import resource
 import subprocess
 import sys
+
+import pytest
 
 from conftest import ROOT, run_htn
 

@@ -7,13 +7,14 @@ import signal
 
 import pytest
 
-from conftest import ROOT, interrupt_run, run_htn, start_htn, wait_until
 from htn.executor.config import load_retries
 from htn.executor.dispatcher import TaskDispatcher
 from htn.executor.log import EventLog
 from htn.jshop import Planner, load_domain, load_problem
 from htn.robot.pybullet_sim import Faults, PyBulletRobot
 from htn.robot.world import world_from_state
+
+from conftest import ROOT, interrupt_run, run_htn, start_htn, wait_until
 
 pytestmark = pytest.mark.sim
 

@@ -11,7 +11,6 @@ import json
 import math
 
 import pytest
-from conftest import ROOT, run_htn
 
 from htn.executor.config import load_retries
 from htn.executor.dispatcher import TaskDispatcher
@@ -29,6 +28,8 @@ from htn.robot.pybullet_sim import Faults
 from htn.robot.world import ROBOT_HALF_WIDTH, _rect_seg_dist, _table_rect, kitchen_world_from_state
 from htn.transform import rules
 from htn.transform.framework import Framework, Workspace
+
+from conftest import ROOT, run_htn
 
 pytestmark = pytest.mark.sim
 

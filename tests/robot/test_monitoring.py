@@ -8,6 +8,7 @@ import json
 import multiprocessing
 
 import pytest
+
 from conftest import ROOT, run_htn
 from monitoring_oracle import Oracle, run_checked
 

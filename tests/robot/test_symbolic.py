@@ -9,8 +9,7 @@ import subprocess
 
 import pytest
 
-from conftest import (CORPUS, FUNCTIONS, ROOT, corpus_available, htn_command, needs_corpus,
-                      run_htn)
+from conftest import CORPUS, FUNCTIONS, ROOT, corpus_available, htn_command, needs_corpus, run_htn
 
 FUNCTION_FILES = {"freecell": FUNCTIONS / "freecell.py", "test": FUNCTIONS / "test.py"}
 DOMESTIC = ROOT / "domains" / "domestic.jshop"

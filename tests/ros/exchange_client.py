@@ -9,8 +9,9 @@ import sys
 import time
 
 import rclpy
-from htn.ros.interfaces import import_interfaces
 from rclpy.action import ActionClient
+
+from htn.ros.interfaces import import_interfaces
 
 t = import_interfaces()
 

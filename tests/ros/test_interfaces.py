@@ -20,9 +20,11 @@ from importlib.util import find_spec
 from pathlib import Path
 
 import pytest
-from conftest import ROOT
+
 from htn.ros import cmake, interfaces
 from htn.ros.interfaces import InterfaceBuildError
+
+from conftest import ROOT
 
 # the tests that need ROS carry the "ros" marker once pyproject registers it
 # (--strict-markers makes an unregistered one a collection error for the whole run)

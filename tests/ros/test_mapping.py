@@ -7,10 +7,11 @@ import math
 from types import SimpleNamespace as NS
 
 import pytest
-from conftest import ROOT
 
 from htn.jshop.language.errors import HtnError
 from htn.ros import mapping
+
+from conftest import ROOT
 
 FACTS = [("location", ("counter_front", 2.2, 1.5, 0.0)), ("location", ("sofa_front", -2.0, 1.5, 90.0))]
 

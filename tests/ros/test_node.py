@@ -10,6 +10,7 @@ import sys
 import textwrap
 
 import pytest
+
 import rosenv
 from conftest import ROOT
 

@@ -17,10 +17,11 @@ from importlib.util import find_spec
 
 import pytest
 
-import rosenv
-from conftest import ROOT, run_htn, start_htn, wait_until
 from htn import missing_modules
 from htn.jshop.language.errors import HtnError
+
+import rosenv
+from conftest import ROOT, run_htn, start_htn, wait_until
 
 DOMAIN, PROBLEM = ROOT / "domains" / "domestic.jshop", ROOT / "problems" / "bring_object.jshop"
 GOAL = "((bring_object jenny pringles guest))"

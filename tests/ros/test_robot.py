@@ -15,6 +15,7 @@ import textwrap
 import time
 
 import pytest
+
 import rosenv
 from conftest import ROOT, htn_command, wait_until
 
@@ -148,7 +149,7 @@ POSES = textwrap.dedent('''
 
 def test_a_cancel_ends_preempted_the_robot_holds_and_the_same_goal_goes_on_from_there(
         ros, sim, procs, tmp_path):
-    from test_node import CLIENT, GOAL     # a plain rclpy client: cancels once step 2 runs
+    from test_node import CLIENT, GOAL  # a plain rclpy client: cancels once step 2 runs
     robot(procs, "--speed", "4")
     node(procs, "--log-dir", tmp_path)
     client = subprocess.run([sys.executable, "-c", CLIENT], input=f"cancel {GOAL}\n", env=ros,

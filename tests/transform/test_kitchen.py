@@ -3,8 +3,9 @@ from __future__ import annotations
 
 import pytest
 
-from conftest import ROOT
 from htn.jshop import Planner, load_domain, load_problem
+
+from conftest import ROOT
 
 DOMAIN = str(ROOT / "domains" / "kitchen.jshop")
 

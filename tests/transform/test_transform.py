@@ -5,13 +5,14 @@ from __future__ import annotations
 import json
 
 import pytest
-from conftest import ROOT, run_htn
 
 from htn.jshop import Planner, load_domain, load_problem
 from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import HtnError
 from htn.transform import rules
 from htn.transform.framework import Framework, Unit, Workspace, navigation_distance
+
+from conftest import ROOT, run_htn
 
 DOMAIN = str(ROOT / "domains" / "kitchen.jshop")
 PROBLEMS = ROOT / "problems"

@@ -11,18 +11,26 @@ import pytest
 
 pytest.importorskip("unified_planning")
 
-import htn.up  # noqa: E402,F401  (registers the engine)
+from test_up_cases import REFUSED, SUPPORTED, cases  # noqa: E402
 from unified_planning.engines import PlanGenerationResultStatus as Status  # noqa: E402
 from unified_planning.engines.plan_validator import SequentialPlanValidator  # noqa: E402
 from unified_planning.exceptions import UPUsageError  # noqa: E402
 from unified_planning.model.htn import HierarchicalProblem, Method  # noqa: E402
 from unified_planning.plans import HierarchicalPlan, PlanKind, SequentialPlan  # noqa: E402
-from unified_planning.shortcuts import (BoolType, Fluent, InstantaneousAction, Not,  # noqa: E402
-                                        OneshotPlanner, PlanValidator,
-                                        get_all_applicable_engines, get_environment)
+from unified_planning.shortcuts import (  # noqa: E402
+    BoolType,
+    Fluent,
+    InstantaneousAction,
+    Not,
+    OneshotPlanner,
+    PlanValidator,
+    get_all_applicable_engines,
+    get_environment,
+)
+
+import htn.up  # noqa: E402,F401  (registers the engine)
 
 from conftest import ROOT  # noqa: E402
-from test_up_cases import REFUSED, SUPPORTED, cases  # noqa: E402
 
 get_environment().credits_stream = None
 

@@ -22,8 +22,8 @@ REFUSED = ["test:htn-go-temporal"]
 @lru_cache(maxsize=1)
 def cases() -> dict:
     """Name -> UP ``TestCase``: ``builtin.hierarchical`` and UP's examples."""
-    import up_test_cases
     import unified_planning.test as up_test
+    import up_test_cases
     folder = os.path.dirname(up_test_cases.__file__)
     if folder not in sys.path:
         sys.path.append(folder)
@@ -42,9 +42,10 @@ def report_script() -> str:
 
 
 def test_the_lists_name_every_hierarchical_case_and_agree_with_the_kind():
-    import htn.up  # noqa: F401
     from unified_planning.model.htn import HierarchicalProblem
     from unified_planning.shortcuts import OneshotPlanner
+
+    import htn.up  # noqa: F401
     hierarchical = {name for name, tc in cases().items()
                     if isinstance(tc.problem, HierarchicalProblem)}
     assert hierarchical == set(SUPPORTED) | set(REFUSED)

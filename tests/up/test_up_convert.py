@@ -5,20 +5,32 @@ import pytest
 
 pytest.importorskip("unified_planning")
 
-import htn.up  # noqa: E402,F401
+from test_up_cases import cases  # noqa: E402
 from unified_planning.engines import PlanGenerationResultStatus as Status  # noqa: E402
 from unified_planning.engines.plan_validator import SequentialPlanValidator  # noqa: E402
 from unified_planning.engines.results import FailedValidationReason  # noqa: E402
 from unified_planning.model.htn import HierarchicalProblem, Method  # noqa: E402
 from unified_planning.plans import ActionInstance, SequentialPlan  # noqa: E402
-from unified_planning.plans.hierarchical_plan import (Decomposition, HierarchicalPlan,  # noqa: E402
-                                                      MethodInstance)
-from unified_planning.shortcuts import (And, BoolType, Equals, Exists, Forall,  # noqa: E402
-                                        Implies, InstantaneousAction, Not, OneshotPlanner,
-                                        PlanValidator, UserType, Variable, get_environment)
+from unified_planning.plans.hierarchical_plan import Decomposition, HierarchicalPlan, MethodInstance  # noqa: E402
+from unified_planning.shortcuts import (  # noqa: E402
+    And,
+    BoolType,
+    Equals,
+    Exists,
+    Forall,
+    Implies,
+    InstantaneousAction,
+    Not,
+    OneshotPlanner,
+    PlanValidator,
+    UserType,
+    Variable,
+    get_environment,
+)
+
+import htn.up  # noqa: E402,F401
 
 from conftest import SHARED  # noqa: E402
-from test_up_cases import cases  # noqa: E402
 
 get_environment().credits_stream = None
 IPC = SHARED / "corpus" / "ipc2020-to"

@@ -6,12 +6,13 @@ import re
 
 import pytest
 
-from conftest import ROOT
 from htn.cli.tree_view import behaviour_rows, fit, render_rows
 from htn.executor.dispatcher import TaskDispatcher
 from htn.executor.log import EventLog
 from htn.jshop import Planner, load_domain, load_problem
 from htn.robot.backends import RobotRequest, make_robot
+
+from conftest import ROOT
 
 
 @pytest.mark.parametrize("height", [40, 12, 5])
@@ -55,10 +56,11 @@ def test_the_terminal_view_keeps_a_log_above_the_tree_and_counts_follow_repairs(
 
     from rich.console import Console
 
-    from coffee import COFFEE, MORNING
     from htn.cli.tree_view import LiveTreeView
     from htn.executor.config import load_retries
     from htn.executor.dispatcher import actions
+
+    from coffee import COFFEE, MORNING
 
     (tmp_path / "coffee.jshop").write_text(COFFEE)
     (tmp_path / "morning.jshop").write_text(MORNING)

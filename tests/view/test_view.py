@@ -14,7 +14,6 @@ import urllib.request
 
 import pytest
 
-from conftest import ROOT, run_htn, start_htn, wait_until
 from htn import missing_modules
 from htn.executor.dispatcher import TaskDispatcher
 from htn.executor.log import EventLog
@@ -22,6 +21,8 @@ from htn.jshop import Planner, load_domain, load_problem
 from htn.jshop.language.errors import HtnError
 from htn.robot.backends import RobotRequest, make_robot
 from htn.view.model import page_records, read_log
+
+from conftest import ROOT, run_htn, start_htn, wait_until
 
 needs_view = pytest.mark.skipif(bool(missing_modules("view")),
                                 reason="needs the view extra: pip install 'htn[view]'")

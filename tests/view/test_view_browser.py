@@ -26,8 +26,9 @@ import time
 
 import pytest
 
-from conftest import CORPUS, ROOT, needs_corpus, run_htn, start_htn
 from htn import missing_modules
+
+from conftest import CORPUS, ROOT, needs_corpus, run_htn, start_htn
 
 CHROMIUM, DRIVER = shutil.which("chromium"), shutil.which("chromedriver")
 SELENIUM = importlib.util.find_spec("selenium") is not None
