@@ -28,19 +28,35 @@ framework (``htn.transform.framework``).
 The bundled example domains and problems are in :data:`EXAMPLES`; the
 install extras and the modules each brings are in :data:`EXTRAS`.
 """
+
 from .installation import EXAMPLES, EXTRAS, missing_modules
 
-__all__ = ["EXAMPLES", "EXTRAS", "missing_modules", "plan", "run", "validate", "transform_plan",
-           "evaluate", "stats"]
+__all__ = [
+    "EXAMPLES",
+    "EXTRAS",
+    "missing_modules",
+    "plan",
+    "run",
+    "validate",
+    "transform_plan",
+    "evaluate",
+    "stats",
+]
 
 # the use cases by name: the module of htn.api that holds each (imported on first use)
-USE_CASES = {"plan": "htn.api.plan", "run": "htn.api.run", "validate": "htn.api.validate",
-             "transform_plan": "htn.api.transform", "evaluate": "htn.api.evaluate",
-             "stats": "htn.api.stats"}
+USE_CASES = {
+    "plan": "htn.api.plan",
+    "run": "htn.api.run",
+    "validate": "htn.api.validate",
+    "transform_plan": "htn.api.transform",
+    "evaluate": "htn.api.evaluate",
+    "stats": "htn.api.stats",
+}
 
 
 def _use_case(name: str):
     from importlib import import_module
+
     return getattr(import_module(USE_CASES[name]), name)
 
 
@@ -52,6 +68,7 @@ def __getattr__(name):
     # the version is read from the installed metadata only when asked for
     if name == "__version__":
         from .installation import version
+
         return version()
     raise AttributeError(f"module 'htn' has no attribute {name!r}")
 

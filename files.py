@@ -13,6 +13,7 @@ replaced, the link kept. An I/O error while writing (a full disk, a failing
 device, a read-only file system) is a :class:`WriteError` naming the path;
 the earlier file stays as it was and no temporary is left.
 """
+
 from __future__ import annotations
 
 import atexit
@@ -27,13 +28,14 @@ from typing import Iterable, Optional
 from htn.jshop.language.errors import HtnError, WriteError
 
 TEMP_PREFIX = ".htn-"
-_pending: set = set()       # temporary files of this process not yet committed
+_pending: set = set()  # temporary files of this process not yet committed
 
 
 # ---------------------------------------------------------------- output paths
 # Every output a command writes is checked before any work starts, with one
 # message style: "PATH: OPTION: what is wrong" (OPTION left out where the
 # caller does not name it).
+
 
 def _refused(path: str, option: Optional[str], message: str):
     return HtnError(f"{option}: {message}" if option else message, path)
@@ -55,24 +57,30 @@ def _stream_identities() -> dict:
             st = os.fstat(fd)
         except OSError:
             continue
-        if stat.S_ISREG(st.st_mode):        # a terminal or a pipe is no file to clash with
+        if stat.S_ISREG(st.st_mode):  # a terminal or a pipe is no file to clash with
             out[(st.st_dev, st.st_ino)] = name
     return out
 
 
-KINDS = ((stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
-         (stat.S_ISFIFO, "a FIFO"), (stat.S_ISSOCK, "a socket"))
+KINDS = (
+    (stat.S_ISCHR, "a character device"),
+    (stat.S_ISBLK, "a block device"),
+    (stat.S_ISFIFO, "a FIFO"),
+    (stat.S_ISSOCK, "a socket"),
+)
 
 
-def check_target(path: str, option: Optional[str], inputs: Iterable = (),
-                 others: Iterable = ()) -> str:
+def check_target(
+    path: str, option: Optional[str], inputs: Iterable = (), others: Iterable = ()
+) -> str:
     """The file ``path`` stands for (a symbolic link's target), refused if it
     is ``-``, not a regular file, one of ``inputs`` (paths), one of
     ``others`` (``(path, option)`` of the command's other outputs) or the
     command's standard output or error."""
     if path == "-":
-        raise _refused(path, option, "'-' is not standard output here: name a file "
-                                     "(./- for one called '-')")
+        raise _refused(
+            path, option, "'-' is not standard output here: name a file (./- for one called '-')"
+        )
     try:
         target = os.path.realpath(path)
         st = os.stat(target) if os.path.lexists(target) else None
@@ -81,28 +89,34 @@ def check_target(path: str, option: Optional[str], inputs: Iterable = (),
     if st is not None:
         for test, kind in KINDS:
             if test(st.st_mode):
-                raise _refused(path, option, f"is {kind}, not a file: htn writes only "
-                                             "regular files")
+                raise _refused(
+                    path, option, f"is {kind}, not a file: htn writes only regular files"
+                )
     me = (st.st_dev, st.st_ino) if st is not None else None
     for other, other_option in others:
         if os.path.realpath(other) == target or (me and _identity(other) == me):
-            raise _refused(path, option, f"is also where {other_option} writes: give "
-                                         "each output its own file")
+            raise _refused(
+                path, option, f"is also where {other_option} writes: give each output its own file"
+            )
     if me is None:
         return target
     for given in inputs:
         if given is not None and _identity(given) == me:
             same = "" if os.path.realpath(given) == target else f" ({given})"
-            raise _refused(path, option, f"is an input of this command{same}: htn does "
-                                         "not write over its inputs")
+            raise _refused(
+                path,
+                option,
+                f"is an input of this command{same}: htn does not write over its inputs",
+            )
     stream = _stream_identities().get(me)
     if stream:
         raise _refused(path, option, f"is this command's {stream}")
     return target
 
 
-def check_output_file(path: str, option: Optional[str] = None, inputs: Iterable = (),
-                      others: Iterable = ()) -> str:
+def check_output_file(
+    path: str, option: Optional[str] = None, inputs: Iterable = (), others: Iterable = ()
+) -> str:
     """Can ``path`` be written as a new file? It is not a folder, its folder
     exists and takes new files, a file already there may be replaced, and it
     is no input nor other output (:func:`check_target`). Returns the folder
@@ -119,8 +133,9 @@ def check_output_file(path: str, option: Optional[str] = None, inputs: Iterable 
     return folder
 
 
-def check_output_folder(path: str, option: str, inputs: Iterable = (),
-                        others: Iterable = ()) -> None:
+def check_output_folder(
+    path: str, option: str, inputs: Iterable = (), others: Iterable = ()
+) -> None:
     """Can ``path`` be a folder to write files in? It is one, or it can be
     made under the nearest folder that exists. Nothing is made here (see
     :func:`make_output_folder`), so a later check that fails leaves no trace."""
@@ -173,8 +188,14 @@ class AtomicFile:
     as it was; the file is then failed (:attr:`failed`) and commits nothing.
     """
 
-    def __init__(self, path: str, option: Optional[str] = None, inputs: Iterable = (),
-                 others: Iterable = (), binary: bool = False):
+    def __init__(
+        self,
+        path: str,
+        option: Optional[str] = None,
+        inputs: Iterable = (),
+        others: Iterable = (),
+        binary: bool = False,
+    ):
         self.path, self.option = path, option
         directory = check_output_file(path, option, inputs, others)
         self.target = os.path.realpath(path)
@@ -182,16 +203,17 @@ class AtomicFile:
         try:
             fd, self.tmp = tempfile.mkstemp(prefix=f"{TEMP_PREFIX}{os.getpid()}-", dir=directory)
         except OSError as exc:
-            raise _refused(path, option, f"cannot write in {directory}: "
-                                         f"{exc.strerror or exc}") from None
+            raise _refused(
+                path, option, f"cannot write in {directory}: {exc.strerror or exc}"
+            ) from None
         _pending.add(self.tmp)
         umask = os.umask(0)
         os.umask(umask)
-        os.chmod(self.tmp, 0o666 & ~umask)      # mkstemp makes 0600; a plan file is ordinary
+        os.chmod(self.tmp, 0o666 & ~umask)  # mkstemp makes 0600; a plan file is ordinary
         self.fh = os.fdopen(fd, "wb") if binary else os.fdopen(fd, "w", encoding="utf-8")
         self.failed: Optional[WriteError] = None
         self.done = False
-        self.lock = threading.Lock()        # the watchdog may commit from its thread
+        self.lock = threading.Lock()  # the watchdog may commit from its thread
 
     def _failing(self, exc: OSError) -> WriteError:
         self.discard()
@@ -237,7 +259,7 @@ class AtomicFile:
         self.done = True
         try:
             self.fh.close()
-        except OSError:         # what was buffered cannot be written either: it is dropped
+        except OSError:  # what was buffered cannot be written either: it is dropped
             pass
         _remove(self.tmp)
 
@@ -282,14 +304,19 @@ def _alive(pid: int) -> bool:
         os.kill(pid, 0)
     except ProcessLookupError:
         return False
-    except OSError:             # someone else's process
+    except OSError:  # someone else's process
         return True
     return True
 
 
 @contextmanager
-def atomic_write(path: str, option: Optional[str] = None, inputs: Iterable = (),
-                 others: Iterable = (), binary: bool = False):
+def atomic_write(
+    path: str,
+    option: Optional[str] = None,
+    inputs: Iterable = (),
+    others: Iterable = (),
+    binary: bool = False,
+):
     """An :class:`AtomicFile` that replaces ``path`` when the block ends
     normally; an exception or an interrupt leaves any earlier file untouched."""
     out = AtomicFile(path, option, inputs, others, binary)

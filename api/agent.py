@@ -32,6 +32,7 @@ its steps verified before stay done.
 One goal runs at a time; :meth:`execute` and :meth:`resume` are meant to be
 called from one thread, :meth:`preempt` and :meth:`plan` from any.
 """
+
 from __future__ import annotations
 
 import json
@@ -49,19 +50,20 @@ PREEMPTED = "preempted by a newer goal or a cancel"
 @dataclass
 class GoalResult:
     """How a goal ended (the fields of ``ExecuteTasks``' result)."""
-    outcome: str                 # verified | failed | aborted | preempted | refused
-    summary: str = ""            # the line htn run prints
-    error: str = ""              # the located error, when refused
-    plan: list = field(default_factory=list)     # the steps, as executed
-    tree: str = ""               # the plan's task tree, JSON
+
+    outcome: str  # verified | failed | aborted | preempted | refused
+    summary: str = ""  # the line htn run prints
+    error: str = ""  # the located error, when refused
+    plan: list = field(default_factory=list)  # the steps, as executed
+    tree: str = ""  # the plan's task tree, JSON
     steps: int = 0
     verified: int = 0
-    log: list = field(default_factory=list)      # every event, as logged
-    remaining: str = ""          # preempted: the top-level tasks not completed, a task list
-    tasks: str = ""              # the goal's task list, as given
+    log: list = field(default_factory=list)  # every event, as logged
+    remaining: str = ""  # preempted: the top-level tasks not completed, a task list
+    tasks: str = ""  # the goal's task list, as given
     retries: int = 0
     replans: int = 0
-    resumed: int = 0             # how often it was resumed after a preemption
+    resumed: int = 0  # how often it was resumed after a preemption
 
     @property
     def ok(self) -> bool:
@@ -70,18 +72,19 @@ class GoalResult:
     @property
     def done(self) -> list:
         """The steps verified (the first ``verified`` of ``plan``)."""
-        return self.plan[:self.verified]
+        return self.plan[: self.verified]
 
 
 @dataclass
 class _Handover:
     """A newer goal whose plan starts with the action running now: that
     action goes on, and the goal's run takes it as verified."""
+
     tasks: str
     plan: object
     problem: object
-    execution: object            # the run it goes on from
-    ctx: object                  # the action that goes on
+    execution: object  # the run it goes on from
+    ctx: object  # the action that goes on
 
     def went_on(self) -> bool:
         """Was that action the last one its run verified?"""
@@ -97,15 +100,25 @@ class Agent:
     ``faults``, ``seed``, ``retries``, ``replan``: as :func:`htn.api.run.run`,
     for every goal. ``stops``: the process's :class:`htn.process.Stops`."""
 
-    def __init__(self, domain, problem=None, *, robot="symbolic", functions=None,
-                 faults: str = "", seed: int = 0, retries=None, replan: bool = False,
-                 stops=None):
+    def __init__(
+        self,
+        domain,
+        problem=None,
+        *,
+        robot="symbolic",
+        functions=None,
+        faults: str = "",
+        seed: int = 0,
+        retries=None,
+        replan: bool = False,
+        stops=None,
+    ):
         self.world = WorldModel(domain, problem, functions, stops)
         self.retries, self.replan, self.stops = retries, replan, stops
         self.robot_name = robot if isinstance(robot, str) else type(robot).__name__
         self.robot = self._robot(robot, faults, seed) if isinstance(robot, str) else robot
-        self._busy = False               # a goal is being planned or run
-        self._running = None             # the Execution of the goal being run
+        self._busy = False  # a goal is being planned or run
+        self._running = None  # the Execution of the goal being run
         self._preempted: Optional[str] = None
         self._handover: Optional[_Handover] = None
         self._lock = threading.Lock()
@@ -115,10 +128,15 @@ class Agent:
         from htn.robot.backends import RobotRequest, make_robot
 
         from .extras import require_robot_extra
+
         require_robot_extra(name, f"the {name} robot")
-        problem = self.world.problem("()", "world")      # the world as believed, no tasks
-        return make_robot(name, RobotRequest(self.world.domain, problem.instances[0], faults,
-                                             seed, False, self.world.functions))
+        problem = self.world.problem("()", "world")  # the world as believed, no tasks
+        return make_robot(
+            name,
+            RobotRequest(
+                self.world.domain, problem.instances[0], faults, seed, False, self.world.functions
+            ),
+        )
 
     # ------------------------------------------------------------ goals
     def plan(self, tasks: str, source: str = "goal"):
@@ -137,17 +155,25 @@ class Agent:
             from htn.jshop.language import syntax as S
 
             from .plan import plan
+
             problem = self.world.problem(tasks, source)
             problem.instances[0].state = [S.Atom(p, tuple(args)) for p, args in facts]
-            stream = plan(self.world.domain, problem, functions=self.world.functions,
-                          stops=self.stops)
+            stream = plan(
+                self.world.domain, problem, functions=self.world.functions, stops=self.stops
+            )
         try:
             return next(iter(stream), None), stream.problem
         finally:
             stream.close()
 
-    def execute(self, tasks: str, *, source: str = "goal", log=None,
-                on_event: Optional[Callable[[dict], None]] = None) -> GoalResult:
+    def execute(
+        self,
+        tasks: str,
+        *,
+        source: str = "goal",
+        log=None,
+        on_event: Optional[Callable[[dict], None]] = None,
+    ) -> GoalResult:
         """Plan ``tasks`` from the world model and run the plan on the robot;
         ``on_event`` gets every event as it is logged (and ``log``, a path,
         the JSON Lines log of ``htn run``). Where the goal preempted the one
@@ -156,8 +182,9 @@ class Agent:
         step, verified (the log says ``adopted``)."""
         return self._run(tasks, source, log, on_event)
 
-    def resume(self, result: GoalResult, *, log=None,
-               on_event: Optional[Callable[[dict], None]] = None) -> GoalResult:
+    def resume(
+        self, result: GoalResult, *, log=None, on_event: Optional[Callable[[dict], None]] = None
+    ) -> GoalResult:
         """Go on with the preempted goal ``result``: plan its remaining
         tasks (:attr:`GoalResult.remaining`) from the world model and run
         them. The result is the whole goal's: its plan is the steps verified
@@ -170,46 +197,69 @@ class Agent:
             raise ValueError(f"a {result.outcome} goal with no tasks left has nothing to resume")
         return self._run(result.remaining, "goal", log, on_event, result)
 
-    def _run(self, tasks: str, source: str, log, on_event, before: Optional[GoalResult] = None
-             ) -> GoalResult:
+    def _run(
+        self, tasks: str, source: str, log, on_event, before: Optional[GoalResult] = None
+    ) -> GoalResult:
         from .run import prepare
+
         with self._lock:
             self._busy, self._preempted = True, None
             handover, self._handover = self._handover, None
         try:
-            adopted, since = None, self.world.mark()   # facts reported from now on outlive the run
+            adopted, since = None, self.world.mark()  # facts reported from now on outlive the run
             try:
-                if before is None and handover is not None and handover.tasks == tasks \
-                        and handover.went_on():
+                if (
+                    before is None
+                    and handover is not None
+                    and handover.tasks == tasks
+                    and handover.went_on()
+                ):
                     plan, problem, adopted = handover.plan, handover.problem, handover.ctx.text
                 else:
                     self._observe()
                     plan, problem = self._first_plan(tasks, source)
                 if plan is None:
-                    raise HtnError("no plan reaches the goal from the current state" if before
-                                   is None else f"resuming {tasks}: no plan reaches these tasks "
-                                   "from the current state", source)
+                    raise HtnError(
+                        "no plan reaches the goal from the current state"
+                        if before is None
+                        else f"resuming {tasks}: no plan reaches these tasks "
+                        "from the current state",
+                        source,
+                    )
                 # a log that cannot be written (a folder gone) refuses the goal too
-                execution = prepare(plan, robot=self.robot, domain=self.world.domain,
-                                    problem=problem, retries=self.retries, replan=self.replan,
-                                    log=log, on_event=on_event, stops=self.stops)
+                execution = prepare(
+                    plan,
+                    robot=self.robot,
+                    domain=self.world.domain,
+                    problem=problem,
+                    retries=self.retries,
+                    replan=self.replan,
+                    log=log,
+                    on_event=on_event,
+                    stops=self.stops,
+                )
             except HtnError as exc:
                 return self._refused(exc, tasks, before)
             if adopted:
                 execution.adopt(1, "went on from the goal it preempted, and was verified there")
             if before is not None:
-                execution.annotate(resumed={"tasks": tasks, "times": before.resumed + 1,
-                                            "verified_before": before.verified,
-                                            "goal": before.tasks or tasks})
+                execution.annotate(
+                    resumed={
+                        "tasks": tasks,
+                        "times": before.resumed + 1,
+                        "verified_before": before.verified,
+                        "goal": before.tasks or tasks,
+                    }
+                )
             with self._lock:
                 self._running = execution
-                if self._preempted is not None:     # while it was being planned
+                if self._preempted is not None:  # while it was being planned
                     execution.halt(self._preempted, "preempted")
             with execution:
                 execution.begin()
                 try:
                     result = execution.execute()
-                except KeyboardInterrupt as exc:    # outside the ticks: the log ends in order
+                except KeyboardInterrupt as exc:  # outside the ticks: the log ends in order
                     result = execution.interrupted(str(exc))
                 self.world.believe(execution.believed(), since)
             remaining = ""
@@ -277,32 +327,66 @@ class Agent:
     def _refused(self, exc: HtnError, tasks: str, before: Optional[GoalResult]) -> GoalResult:
         if before is None:
             return GoalResult("refused", f"refused: {exc.message}", error=str(exc), tasks=tasks)
-        return replace(before, outcome="refused", summary=f"refused: {exc.message}",
-                       error=str(exc), plan=before.done, steps=before.verified, log=[],
-                       remaining="")
+        return replace(
+            before,
+            outcome="refused",
+            summary=f"refused: {exc.message}",
+            error=str(exc),
+            plan=before.done,
+            steps=before.verified,
+            log=[],
+            remaining="",
+        )
 
-    def _result(self, plan, result, tasks: str, remaining: str,
-                before: Optional[GoalResult]) -> GoalResult:
+    def _result(
+        self, plan, result, tasks: str, remaining: str, before: Optional[GoalResult]
+    ) -> GoalResult:
         s = result.summary
         tree = json.dumps(plan.tree.to_dict()) if plan.tree is not None else ""
         if before is None:
-            return GoalResult(s.result, s.line(), plan=list(result.plan), tree=tree,
-                              steps=s.steps, verified=s.verified, log=list(result.events),
-                              remaining=remaining, tasks=tasks, retries=s.retries,
-                              replans=s.replans)
+            return GoalResult(
+                s.result,
+                s.line(),
+                plan=list(result.plan),
+                tree=tree,
+                steps=s.steps,
+                verified=s.verified,
+                log=list(result.events),
+                remaining=remaining,
+                tasks=tasks,
+                retries=s.retries,
+                replans=s.replans,
+            )
         # resumed: the goal's counts, the steps verified before it included
         k = before.verified
-        whole = replace(s, steps=s.steps + k, verified=s.verified + k,
-                        retries=s.retries + before.retries, replans=s.replans + before.replans,
-                        executed=s.executed + k,
-                        failed_at=None if s.failed_at is None else s.failed_at + k)
+        whole = replace(
+            s,
+            steps=s.steps + k,
+            verified=s.verified + k,
+            retries=s.retries + before.retries,
+            replans=s.replans + before.replans,
+            executed=s.executed + k,
+            failed_at=None if s.failed_at is None else s.failed_at + k,
+        )
         times = before.resumed + 1
-        line = (f"{whole.line()}; resumed{'' if times == 1 else f' {times} times'} after a "
-                f"preemption, {k} step{'' if k == 1 else 's'} verified before")
-        return GoalResult(s.result, line, plan=before.done + list(result.plan), tree=tree,
-                          steps=whole.steps, verified=whole.verified, log=list(result.events),
-                          remaining=remaining, tasks=before.tasks, retries=whole.retries,
-                          replans=whole.replans, resumed=times)
+        line = (
+            f"{whole.line()}; resumed{'' if times == 1 else f' {times} times'} after a "
+            f"preemption, {k} step{'' if k == 1 else 's'} verified before"
+        )
+        return GoalResult(
+            s.result,
+            line,
+            plan=before.done + list(result.plan),
+            tree=tree,
+            steps=whole.steps,
+            verified=whole.verified,
+            log=list(result.events),
+            remaining=remaining,
+            tasks=before.tasks,
+            retries=whole.retries,
+            replans=whole.replans,
+            resumed=times,
+        )
 
 
 def _warm_up() -> None:
@@ -312,4 +396,5 @@ def _warm_up() -> None:
     from htn.executor.machines.base import load_plugins
 
     from . import run  # noqa: F401  (the executor and py_trees)
+
     load_plugins()

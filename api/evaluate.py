@@ -13,6 +13,7 @@ One entry, :func:`evaluate`: its settings are an :class:`EvaluateOptions`
 are here too (:data:`METRIC_NAMES`, :func:`format_change`, :func:`format_p`,
 :class:`ClusterError`).
 """
+
 from __future__ import annotations
 
 import os
@@ -29,8 +30,16 @@ from htn.jshop.readers.load import load_problem
 from .extras import require_extra, require_robot_extra
 from .inputs import domain_for, read_inputs
 
-__all__ = ["evaluate", "EvaluateOptions", "Progress", "Evaluation", "ClusterError",
-           "METRIC_NAMES", "format_change", "format_p"]
+__all__ = [
+    "evaluate",
+    "EvaluateOptions",
+    "Progress",
+    "Evaluation",
+    "ClusterError",
+    "METRIC_NAMES",
+    "format_change",
+    "format_p",
+]
 
 
 class Progress:
@@ -67,6 +76,7 @@ class EvaluateOptions:
     process); ``scheduler``: the address of an existing cluster;
     ``records``: a file for one JSON line per run of each plan (streamed,
     then put in run order); ``plot``: a folder for the figures."""
+
     runs: int = 200
     seed: int = 0
     robot: str = "projection"
@@ -77,7 +87,7 @@ class EvaluateOptions:
     plot: Optional[str] = None
 
     def __post_init__(self):
-        for name in ("records", "plot"):        # paths as str (a Path is welcome)
+        for name in ("records", "plot"):  # paths as str (a Path is welcome)
             value = getattr(self, name)
             if value is not None:
                 object.__setattr__(self, name, os.fspath(value))
@@ -89,6 +99,7 @@ class Evaluation:
     (``comparison``: a :class:`htn.evaluation.statistics.Comparison`), its
     ``metrics``, the figures written (``plots``), and the cluster's one-line
     ``notes``."""
+
     problem: str
     comparison: object
     metrics: dict
@@ -98,17 +109,27 @@ class Evaluation:
     def document(self) -> dict:
         """The ``htn evaluate --json`` object."""
         c = self.comparison
-        return {"problem": self.problem, "runs": c.runs, "applied": c.applied,
-                "metrics": self.metrics, "plots": self.plots, "robot": c.robot,
-                "results": c.results(), "workers": c.workers,
-                "runs_per_s": round(c.runs_per_s, 3)}
+        return {
+            "problem": self.problem,
+            "runs": c.runs,
+            "applied": c.applied,
+            "metrics": self.metrics,
+            "plots": self.plots,
+            "robot": c.robot,
+            "results": c.results(),
+            "workers": c.workers,
+            "runs_per_s": round(c.runs_per_s, 3),
+        }
 
     def heading(self) -> str:
         """What was run: "20 projected runs of each plan; applied: tray"."""
         from htn.evaluation.runs import MEASURES
+
         c = self.comparison
-        return (f"{c.runs} {MEASURES[c.robot].description} run{'s' if c.runs > 1 else ''} "
-                f"of each plan; applied: {applied_rules(c.applied)}")
+        return (
+            f"{c.runs} {MEASURES[c.robot].description} run{'s' if c.runs > 1 else ''} "
+            f"of each plan; applied: {applied_rules(c.applied)}"
+        )
 
 
 def check_evaluation(problem: str, domain: Optional[str], options: EvaluateOptions) -> None:
@@ -121,23 +142,28 @@ def check_evaluation(problem: str, domain: Optional[str], options: EvaluateOptio
     if domain is not None and not os.path.isfile(domain):
         raise HtnError("no such file", domain)
     from htn.evaluation.runs import MEASURES
+
     o = options
     if o.robot not in MEASURES:
-        raise HtnError(f"--robot {o.robot}: this robot cannot be evaluated (choose from "
-                       f"{', '.join(MEASURES)})")
+        raise HtnError(
+            f"--robot {o.robot}: this robot cannot be evaluated (choose from {', '.join(MEASURES)})"
+        )
     require_robot_extra(o.robot, f"htn evaluate --robot {o.robot}")
     if o.scheduler is not None and o.workers is not None:
-        raise HtnError("--workers starts a local cluster, --scheduler uses an existing "
-                       "one and its workers: give one of them")
+        raise HtnError(
+            "--workers starts a local cluster, --scheduler uses an existing "
+            "one and its workers: give one of them"
+        )
     from htn.robot.faults import parse_faults
+
     parse_faults(o.faults, MEASURES[o.robot].fault_kinds)
     inputs = (problem, domain)
     if o.plot is not None:
-        check_output_folder(o.plot, "--plot", inputs,
-                            [(o.records, "--records")] if o.records else ())
+        check_output_folder(
+            o.plot, "--plot", inputs, [(o.records, "--records")] if o.records else ()
+        )
     if o.records is not None:
-        check_output_file(o.records, "--records", inputs,
-                          [(o.plot, "--plot")] if o.plot else ())
+        check_output_file(o.records, "--records", inputs, [(o.plot, "--plot")] if o.plot else ())
 
 
 def check_study(study, log: list, problem: str) -> None:
@@ -148,31 +174,44 @@ def check_study(study, log: list, problem: str) -> None:
     the problem that says why, and what an evaluation needs."""
     from htn.executor.machines.base import machine_for
     from htn.transform.registered import default_framework
+
     why = []
     if not log:
         rules = ", ".join(t.name for t in default_framework().transformations if t.enabled)
-        why.append(f"no registered transformation ({rules}) applies to its plan (the built-in "
-                   "ones rewrite top-level (transporting ...) tasks, as in the kitchen domain; "
-                   "add rules for another domain: entry points 'htn.transformations')")
+        why.append(
+            f"no registered transformation ({rules}) applies to its plan (the built-in "
+            "ones rewrite top-level (transporting ...) tasks, as in the kitchen domain; "
+            "add rules for another domain: entry points 'htn.transformations')"
+        )
     missing: dict = {}
     for steps in study.plans.values():
         for s in steps:
             if not s.internal and machine_for(s.name, study.domain.name) is None:
                 missing.setdefault(s.name)
     if missing:
-        why.append(f"the {study.robot} robot has no action for {', '.join(missing)} (it runs "
-                   "the bundled domestic and kitchen domains' actions and those of plugins: "
-                   "entry points 'htn.actions'), so its runs would measure nothing")
+        why.append(
+            f"the {study.robot} robot has no action for {', '.join(missing)} (it runs "
+            "the bundled domestic and kitchen domains' actions and those of plugins: "
+            "entry points 'htn.actions'), so its runs would measure nothing"
+        )
     if why:
-        raise HtnError("htn evaluate compares a plan with its transformed plan, but "
-                       + "; and ".join(why), problem)
+        raise HtnError(
+            "htn evaluate compares a plan with its transformed plan, but " + "; and ".join(why),
+            problem,
+        )
 
 
 _OPTIONS = tuple(f.name for f in fields(EvaluateOptions))
 
 
-def evaluate(problem, options: Optional[EvaluateOptions] = None, *, domain=None,
-             progress: Optional[Progress] = None, **settings) -> Evaluation:
+def evaluate(
+    problem,
+    options: Optional[EvaluateOptions] = None,
+    *,
+    domain=None,
+    progress: Optional[Progress] = None,
+    **settings,
+) -> Evaluation:
     """Plan ``problem`` (a path), transform the plan with every registered
     rule, execute both ``runs`` times and compare navigation, manipulation,
     actions and failures (Welch's t-test; pooled failure proportions with a
@@ -193,8 +232,10 @@ def evaluate(problem, options: Optional[EvaluateOptions] = None, *, domain=None,
     """
     unknown = [name for name in settings if name not in _OPTIONS]
     if unknown:
-        raise TypeError(f"evaluate() got unexpected keyword argument(s) {', '.join(unknown)} "
-                        f"(its options: {', '.join(_OPTIONS)}; progress: one Progress object)")
+        raise TypeError(
+            f"evaluate() got unexpected keyword argument(s) {', '.join(unknown)} "
+            f"(its options: {', '.join(_OPTIONS)}; progress: one Progress object)"
+        )
     options = replace(options or EvaluateOptions(), **settings)
     progress = progress or Progress()
     problem = os.fspath(problem)
@@ -208,6 +249,7 @@ def evaluate(problem, options: Optional[EvaluateOptions] = None, *, domain=None,
         progress.warning(w)
     comp, notes = _study(problem, inputs.domain, prob, options, progress)
     from htn.evaluation.figures import plot as figures
+
     plots = figures(comp, options.plot) if options.plot else []
     return Evaluation(problem, comp, comp.metrics(), plots, notes)
 
@@ -218,23 +260,27 @@ def _study(problem: str, domain, prob, options: EvaluateOptions, progress: Progr
     and is put in run order once all are in."""
     from htn.evaluation.cluster import open_runner
     from htn.evaluation.study import RecordsFile, prepare_study, run_study, start_workers_early
+
     o = options
     stream = None
     try:
         with open_runner(o.workers or 1, o.scheduler) as runner:
-            if o.plot is not None:      # all options are checked now (the scheduler last)
+            if o.plot is not None:  # all options are checked now (the scheduler last)
                 make_output_folder(o.plot, "--plot")
             notes = list(runner.notes)
             progress.started(runner.workers, notes)
             log: list = []
             start_workers_early(runner, o.robot, o.runs)
-            study, applied = prepare_study(domain, prob, o.robot, o.faults, log=log,
-                                           on_phase=progress.phase)
+            study, applied = prepare_study(
+                domain, prob, o.robot, o.faults, log=log, on_phase=progress.phase
+            )
             check_study(study, log, problem)
             if log and not applied:
-                progress.warning(f"{problem}: warning: every rewrite was rolled back ("
-                                 + "; ".join(f"{rule}: {detail}" for rule, _, detail in log)
-                                 + "): both plans are the same")
+                progress.warning(
+                    f"{problem}: warning: every rewrite was rolled back ("
+                    + "; ".join(f"{rule}: {detail}" for rule, _, detail in log)
+                    + "): both plans are the same"
+                )
             stream = RecordsFile(o.records) if o.records else None
             progress.phase(f"{o.runs} runs of each plan on the {o.robot} robot")
 
@@ -243,8 +289,7 @@ def _study(problem: str, domain, prob, options: EvaluateOptions, progress: Progr
                     stream.write(new)
                 progress.batch(new, len(new) / len(study.plans))
 
-            comp = run_study(study, problem, applied, o.runs, o.seed, runner, batch,
-                             progress.note)
+            comp = run_study(study, problem, applied, o.runs, o.seed, runner, batch, progress.note)
     finally:
         if stream:
             stream.close()

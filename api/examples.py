@@ -10,6 +10,7 @@ They are found in :data:`EXAMPLES` (:data:`htn.installation.EXAMPLES`); an
 installation without them is an :class:`~htn.jshop.language.errors.HtnError`
 at that folder.
 """
+
 from __future__ import annotations
 
 import re
@@ -46,8 +47,8 @@ def summary(path: Path) -> str:
             break
         words.append(text.lstrip(";# ").strip())
     text = " ".join(w for w in words if w)
-    end = re.search(r"\.\s+(?=[A-Z\"(])", text)    # not "Fig. 7"
-    return text[:end.start() + 1] if end else text
+    end = re.search(r"\.\s+(?=[A-Z\"(])", text)  # not "Fig. 7"
+    return text[: end.start() + 1] if end else text
 
 
 def list_examples() -> list[tuple[str, str, str]]:
@@ -68,10 +69,13 @@ def copy_examples(dest, force: bool = False) -> list[Path]:
     pairs = [(f, target / f.parent.name / f.name) for f in bundled()]
     clash = [str(t) for _, t in pairs if t.exists()]
     if clash and not force:
-        raise HtnError(f"{len(clash)} file(s) exist already, e.g. {clash[0]} "
-                       "(use --force to overwrite)", str(dest))
+        raise HtnError(
+            f"{len(clash)} file(s) exist already, e.g. {clash[0]} (use --force to overwrite)",
+            str(dest),
+        )
     from htn.files import check_target
-    for src, dst in pairs:     # no device, FIFO or bundled file itself is written over
+
+    for src, dst in pairs:  # no device, FIFO or bundled file itself is written over
         if dst.exists() or dst.is_symlink():
             check_target(str(dst), None, [src])
     for src, dst in pairs:

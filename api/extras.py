@@ -1,5 +1,6 @@
 """What the machine must have for a use case: an optional part of the
 install, a display (``gui``). One that is missing is said in one line."""
+
 from __future__ import annotations
 
 import os
@@ -19,6 +20,7 @@ def require_robot_extra(robot: str, what: str) -> None:
     """The same for the extra the robot back end ``robot`` needs, as its
     :class:`~htn.robot.backends.Backend` records it (``pybullet``: sim)."""
     from htn.robot.backends import backends
+
     backend = backends().get(robot)
     if backend is not None and backend.extra:
         require_extra(backend.extra, what)
@@ -28,6 +30,7 @@ def check_display() -> None:
     """A PyBullet window (``gui``) needs an X server that answers: check it
     (PyBullet itself exits without a word when it cannot open one)."""
     import socket  # only for a window: not at start-up
+
     disp = os.environ.get("DISPLAY")
     if not disp:
         raise HtnError("--gui needs a display (DISPLAY is not set); run headless without it")
@@ -43,5 +46,6 @@ def check_display() -> None:
         else:
             socket.create_connection((host, 6000 + int(number)), timeout=2.0).close()
     except OSError:
-        raise HtnError(f"--gui: no X server answers on DISPLAY={disp}; run headless "
-                       "without --gui") from None
+        raise HtnError(
+            f"--gui: no X server answers on DISPLAY={disp}; run headless without --gui"
+        ) from None

@@ -12,6 +12,7 @@ and a problem gets the one static check
 (:func:`htn.jshop.readers.checks.check_inputs`), so each use case accepts or
 refuses the same input the same way, with the same located message.
 """
+
 from __future__ import annotations
 
 import os
@@ -59,6 +60,7 @@ def function_table(functions, stops=None) -> FunctionTable:
 class Inputs:
     """A domain and a problem for it, read and checked; ``warnings`` are the
     check's located warnings (``file:line:col: warning: ...``)."""
+
     domain: S.Domain
     problem: S.Problem
     warnings: list = field(default_factory=list)
@@ -120,20 +122,25 @@ def domain_for(problem) -> str:
         if path is not None:
             return path
     shown = [os.path.join(p, "") for p in looked]
-    raise HtnError(f"cannot find the domain file {' or '.join(files)}: looked in "
-                   f"{', '.join(shown[:-1])} and {shown[-1]}; give it with --domain",
-                   problem.file)
+    raise HtnError(
+        f"cannot find the domain file {' or '.join(files)}: looked in "
+        f"{', '.join(shown[:-1])} and {shown[-1]}; give it with --domain",
+        problem.file,
+    )
 
 
-HEAD = 65536        # bytes of a file read to see which domain it defines
+HEAD = 65536  # bytes of a file read to see which domain it defines
 
 
 def _defining(folder: str, name: str, language: str):
     """The first file (by name) in ``folder`` with the language's extension
     whose text defines the domain ``name``, or None."""
     ext = ".hddl" if language == "hddl" else ".jshop"
-    pattern = (rf"\(\s*define\s*\(\s*domain\s+{re.escape(name)}\s*\)" if language == "hddl"
-               else rf"\(\s*defdomain\s+{re.escape(name)}[\s(]")
+    pattern = (
+        rf"\(\s*define\s*\(\s*domain\s+{re.escape(name)}\s*\)"
+        if language == "hddl"
+        else rf"\(\s*defdomain\s+{re.escape(name)}[\s(]"
+    )
     try:
         entries = sorted(os.listdir(folder))
     except OSError:
@@ -147,7 +154,7 @@ def _defining(folder: str, name: str, language: str):
                 head = fh.read(HEAD).decode("utf-8", "replace")
         except OSError:
             continue
-        head = re.sub(r";[^\n]*", "", head)        # comments
+        head = re.sub(r";[^\n]*", "", head)  # comments
         if re.search(pattern, head, re.IGNORECASE if language == "hddl" else 0):
             return path
     return None

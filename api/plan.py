@@ -7,6 +7,7 @@ search runs as the stream is iterated, one plan at a time, so a program (or
 ``htn plan --all``) holds one plan at a time however many there are. The
 planner follows the JSHOP2 manual, sections 4 and 5 (:mod:`htn.jshop.search.planner`).
 """
+
 from __future__ import annotations
 
 import time
@@ -23,15 +24,34 @@ from htn.jshop.search.stream import SearchStream
 from .inputs import function_table, path_of, read_inputs
 
 # what the command line shows of plans and searches (it imports only htn.api)
-__all__ = ["plan", "PlanStream", "UnsupportedSearch", "ipc_text", "java_double", "SEARCHES",
-           "DEFAULT_MAX_DEPTH"]
+__all__ = [
+    "plan",
+    "PlanStream",
+    "UnsupportedSearch",
+    "ipc_text",
+    "java_double",
+    "SEARCHES",
+    "DEFAULT_MAX_DEPTH",
+]
 
 
-def plan(domain, problem, *, plans: Optional[int] = 1, timeout: Optional[float] = None,
-         functions=None, jshop2_compat: bool = False, max_depth: int = DEFAULT_MAX_DEPTH,
-         max_memory: Optional[int] = None, explain: bool = False, explain_all: bool = False,
-         trees: bool = True, tree_paths: bool = True, search: str = "dfs",
-         stops=None) -> "PlanStream":
+def plan(
+    domain,
+    problem,
+    *,
+    plans: Optional[int] = 1,
+    timeout: Optional[float] = None,
+    functions=None,
+    jshop2_compat: bool = False,
+    max_depth: int = DEFAULT_MAX_DEPTH,
+    max_memory: Optional[int] = None,
+    explain: bool = False,
+    explain_all: bool = False,
+    trees: bool = True,
+    tree_paths: bool = True,
+    search: str = "dfs",
+    stops=None,
+) -> "PlanStream":
     """The plans of ``problem`` in ``domain`` (paths or loaded objects, see
     :mod:`htn.api.inputs`), as a stream in JSHOP2's order.
 
@@ -62,16 +82,33 @@ def plan(domain, problem, *, plans: Optional[int] = 1, timeout: Optional[float] 
         raise UnsupportedSearch(why)
     if jshop2_compat:
         warnings += [str(w) for w in filter(None, [compat_warning(dom)])]
-    options = dict(jshop2_compat=jshop2_compat, max_depth=max_depth,
-                   max_memory=max_memory << 20 if max_memory else None)
-    return PlanStream(dom, prob, table, warnings, options, started, timeout, plans,
-                      explain or explain_all, explain_all, trees, tree_paths, search)
+    options = dict(
+        jshop2_compat=jshop2_compat,
+        max_depth=max_depth,
+        max_memory=max_memory << 20 if max_memory else None,
+    )
+    return PlanStream(
+        dom,
+        prob,
+        table,
+        warnings,
+        options,
+        started,
+        timeout,
+        plans,
+        explain or explain_all,
+        explain_all,
+        trees,
+        tree_paths,
+        search,
+    )
 
 
 def ipc_text(plan: Plan, spelling: Optional[dict] = None) -> str:
     """``plan`` in the IPC 2020 HTN plan format (actions and decompositions);
     ``spelling``: names as the input wrote them."""
     from htn.jshop.plans.ipc import ipc_text as text
+
     return text(plan, spelling or {})
 
 
@@ -94,8 +131,22 @@ class PlanStream:
     ``max_memory``) that stopped the search, if one did.
     """
 
-    def __init__(self, domain, problem, functions, warnings, options, started, timeout,
-                 limit, explain, explain_all, trees, tree_paths, search="dfs"):
+    def __init__(
+        self,
+        domain,
+        problem,
+        functions,
+        warnings,
+        options,
+        started,
+        timeout,
+        limit,
+        explain,
+        explain_all,
+        trees,
+        tree_paths,
+        search="dfs",
+    ):
         self.domain, self.problem, self.functions = domain, problem, functions
         self.warnings: list[str] = warnings
         self.options = options
@@ -103,10 +154,11 @@ class PlanStream:
         self.explain_all = explain_all
         self.record = explain
         self.trees, self.tree_paths = trees, tree_paths
-        self.explanations: list = []     # one Explainer per instance searched (explain=True)
-        self.search = search              # its name (see plan())
-        self._plans = SearchStream(problem.instances, self._make, started=started,
-                                   timeout=timeout, limit=limit)
+        self.explanations: list = []  # one Explainer per instance searched (explain=True)
+        self.search = search  # its name (see plan())
+        self._plans = SearchStream(
+            problem.instances, self._make, started=started, timeout=timeout, limit=limit
+        )
         self.stats = self._plans.stats
 
     @property
@@ -142,11 +194,19 @@ class PlanStream:
         explainer = None
         if self.record:
             from htn.jshop.checks.explain import Explainer
+
             explainer = Explainer(keep_all=self.explain_all)
             self.explanations.append(explainer)
-        return make_search(self.search, self.domain, instance, self.functions,
-                           record_trees=self.trees, tree_paths=self.tree_paths,
-                           explain=explainer, **self.options)
+        return make_search(
+            self.search,
+            self.domain,
+            instance,
+            self.functions,
+            record_trees=self.trees,
+            tree_paths=self.tree_paths,
+            explain=explainer,
+            **self.options,
+        )
 
     def explain(self) -> list:
         """Why the search found what it found: one
@@ -156,8 +216,11 @@ class PlanStream:
         recording them this time (planning without it pays nothing for them)."""
         if not self.explanations:
             from htn.jshop.checks.explain import explain_search
-            self.explanations = [explain_search(self.domain, inst, self.functions,
-                                                keep_all=self.explain_all, **self.options)
-                                 for inst in self.problem.instances]
-        return self.explanations
 
+            self.explanations = [
+                explain_search(
+                    self.domain, inst, self.functions, keep_all=self.explain_all, **self.options
+                )
+                for inst in self.problem.instances
+            ]
+        return self.explanations

@@ -8,6 +8,7 @@ otherwise an earlier file stays. A plan counts once it is wholly written:
 the figures a command reports (:meth:`PlanFiles.totals`) are those of what
 its files and streams hold.
 """
+
 from __future__ import annotations
 
 from typing import Optional
@@ -30,8 +31,9 @@ class PlanFiles:
             if output:
                 self.out = AtomicFile(output, "-o", inputs, [(dot, "--dot")] if dot else ())
             if dot:
-                self.dot = _DotFile(AtomicFile(dot, "--dot", inputs,
-                                               [(output, "-o")] if output else ()))
+                self.dot = _DotFile(
+                    AtomicFile(dot, "--dot", inputs, [(output, "-o")] if output else ())
+                )
         except BaseException:
             self.close()
             raise
@@ -46,8 +48,15 @@ class PlanFiles:
         """The plan file's header: the files the plans of ``stream`` (a
         :class:`htn.api.plan.PlanStream`) are made from."""
         if self.out:
-            self.out.write(header(self.output_path, stream.domain_file, stream.problem_file,
-                                  stream.functions.source, stream.functions.sha256))
+            self.out.write(
+                header(
+                    self.output_path,
+                    stream.domain_file,
+                    stream.problem_file,
+                    stream.functions.source,
+                    stream.functions.sha256,
+                )
+            )
 
     def add(self, plan) -> None:
         """Write ``plan`` to the files (flushed: it outlives the process)."""

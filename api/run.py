@@ -16,6 +16,7 @@ says ``interrupted``; a program that halts it for another goal
 (:meth:`Execution.halt` with ``outcome="preempted"``, as
 :class:`htn.api.agent.Agent` does) makes it say ``preempted``.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -43,6 +44,7 @@ class RunResult:
     """How a run ended: ``summary`` (result, steps verified, retries, replans,
     simulated time, the step that ended it), every event as logged, the plan
     as executed (repairs included), and the notes of :attr:`Execution.notes`."""
+
     summary: RunSummary
     events: list = field(default_factory=list)
     plan: list = field(default_factory=list)
@@ -58,10 +60,24 @@ class RunResult:
         return self.summary.result == "verified"
 
 
-def run(plan, *, robot, domain=None, problem=None, functions=None, plan_index: int = 1,
-        faults: str = "", seed: int = 0, retries=None, replan: bool = False,
-        log=None, on_event: Optional[Listener] = None, gui: bool = False,
-        argv: Optional[list] = None, stops=None) -> RunResult:
+def run(
+    plan,
+    *,
+    robot,
+    domain=None,
+    problem=None,
+    functions=None,
+    plan_index: int = 1,
+    faults: str = "",
+    seed: int = 0,
+    retries=None,
+    replan: bool = False,
+    log=None,
+    on_event: Optional[Listener] = None,
+    gui: bool = False,
+    argv: Optional[list] = None,
+    stops=None,
+) -> RunResult:
     """Execute ``plan`` on ``robot`` and return how it ended.
 
     ``plan``: a plan file's path (as ``htn plan -o`` writes it), a
@@ -87,28 +103,57 @@ def run(plan, *, robot, domain=None, problem=None, functions=None, plan_index: i
     ``stops``: the command's :class:`htn.process.Stops` (the user functions
     run under them).
     """
-    execution = prepare(plan, robot=robot, domain=domain, problem=problem,
-                        functions=functions, plan_index=plan_index, faults=faults, seed=seed,
-                        retries=retries, replan=replan, log=log, on_event=on_event, gui=gui,
-                        stops=stops)
+    execution = prepare(
+        plan,
+        robot=robot,
+        domain=domain,
+        problem=problem,
+        functions=functions,
+        plan_index=plan_index,
+        faults=faults,
+        seed=seed,
+        retries=retries,
+        replan=replan,
+        log=log,
+        on_event=on_event,
+        gui=gui,
+        stops=stops,
+    )
     with execution:
         execution.begin(argv)
         try:
             return execution.execute()
-        except KeyboardInterrupt as exc:    # outside the ticks: end the log in order
+        except KeyboardInterrupt as exc:  # outside the ticks: end the log in order
             return execution.interrupted(str(exc))
 
 
 def robots() -> list[str]:
     """The names of the robot back ends (``htn run --robot NAME``), plugins' too."""
     from htn.robot.backends import backends
+
     return sorted(backends())
 
 
-def prepare(plan, *, robot, domain=None, problem=None, functions=None, plan_index: int = 1,
-            faults: str = "", seed: int = 0, retries=None, replan: bool = False, log=None,
-            on_event: Optional[Listener] = None, gui: bool = False,
-            stops=None, bt_dot=None, snapshots=None, read=()) -> "Execution":
+def prepare(
+    plan,
+    *,
+    robot,
+    domain=None,
+    problem=None,
+    functions=None,
+    plan_index: int = 1,
+    faults: str = "",
+    seed: int = 0,
+    retries=None,
+    replan: bool = False,
+    log=None,
+    on_event: Optional[Listener] = None,
+    gui: bool = False,
+    stops=None,
+    bt_dot=None,
+    snapshots=None,
+    read=(),
+) -> "Execution":
     """Everything :func:`run` does before the log begins: read and check the
     inputs (every step ground and applicable in turn, the retry limits, the
     task tree, the outputs' paths), build the robot and check that every step
@@ -121,32 +166,42 @@ def prepare(plan, *, robot, domain=None, problem=None, functions=None, plan_inde
     for a labelled camera image per action attempt (a robot with a camera);
     ``read``: other files the caller read for this run (a log it repeats),
     which no output may overwrite."""
-    outputs = RunOutputs(None if log is None else str(log), bt_dot and str(bt_dot),
-                         snapshots and str(snapshots))
+    outputs = RunOutputs(
+        None if log is None else str(log), bt_dot and str(bt_dot), snapshots and str(snapshots)
+    )
     log = outputs.log
-    outputs.check([path_of(plan) or getattr(plan, "path", None), path_of(domain),
-                   path_of(problem), path_of(functions), *read])
+    outputs.check(
+        [
+            path_of(plan) or getattr(plan, "path", None),
+            path_of(domain),
+            path_of(problem),
+            path_of(functions),
+            *read,
+        ]
+    )
     if isinstance(robot, str):
         require_robot_extra(robot, f"the {robot} robot")
         if gui:
             check_display()
     elif isinstance(robot, Robot):
         if faults or gui:
-            raise HtnError("faults and gui are for a robot built by name; a robot object "
-                           "injects its own faults")
+            raise HtnError(
+                "faults and gui are for a robot built by name; a robot object "
+                "injects its own faults"
+            )
     else:
-        raise HtnError(f"robot: give a robot's name or a Robot object, not "
-                       f"{type(robot).__name__}")
+        raise HtnError(f"robot: give a robot's name or a Robot object, not {type(robot).__name__}")
     inputs = run_inputs(plan, domain, problem, functions, plan_index, retries, stops)
     if isinstance(robot, str):
         name = robot
-        robot = make_robot(name, RobotRequest(inputs.domain, inputs.instance, faults or "",
-                                              seed, gui, inputs.functions))
+        robot = make_robot(
+            name,
+            RobotRequest(inputs.domain, inputs.instance, faults or "", seed, gui, inputs.functions),
+        )
         owned = True
     else:
         name, owned = type(robot).__name__, False
-    execution = Execution(inputs, robot, name, owned, faults or "", seed, replan, outputs,
-                          on_event)
+    execution = Execution(inputs, robot, name, owned, faults or "", seed, replan, outputs, on_event)
     try:
         execution.check_machines()
         outputs.prepare_snapshots(robot, name)
@@ -161,22 +216,31 @@ class Execution:
     (or use it as a context manager, which closes it and logs an error that
     ended it). :meth:`halt` stops it between two ticks, from anywhere."""
 
-    def __init__(self, inputs: RunInputs, robot, robot_name: str, owned: bool, faults: str,
-                 seed: int, replan: bool, outputs: RunOutputs,
-                 on_event: Optional[Listener]):
+    def __init__(
+        self,
+        inputs: RunInputs,
+        robot,
+        robot_name: str,
+        owned: bool,
+        faults: str,
+        seed: int,
+        replan: bool,
+        outputs: RunOutputs,
+        on_event: Optional[Listener],
+    ):
         self.inputs = inputs
         self.robot = robot
         self.robot_name = robot_name
-        self.owned = owned              # built here, so closed here
+        self.owned = owned  # built here, so closed here
         self.faults, self.seed, self.replan = faults, seed, replan
         self.outputs = outputs
         self.log_path = outputs.log
         self.listeners: list = [on_event] if on_event else []
         self.log: Optional[EventLog] = None
         self.dispatcher: Optional[TaskDispatcher] = None
-        self._halt: Optional[tuple] = None         # (why, outcome), before it begins
-        self._adopted: Optional[tuple] = None      # (count, detail), see adopt()
-        self._extra: dict = {}                     # see annotate()
+        self._halt: Optional[tuple] = None  # (why, outcome), before it begins
+        self._adopted: Optional[tuple] = None  # (count, detail), see adopt()
+        self._extra: dict = {}  # see annotate()
         self._closed = False
 
     @property
@@ -194,11 +258,15 @@ class Execution:
         this robot (or the robot runs the operator model)."""
         where = self.inputs.plan_file
         for s in self.steps:
-            if not s.internal and machine_for(s.name, self.inputs.domain.name,
-                                              self.robot) is None:
-                raise HtnError(f"no action state machine is registered for {s.name} "
-                               f"(try --robot symbolic, or add one: entry points "
-                               f"'htn.actions')", where, s.line or None, 1 if s.line else None)
+            if not s.internal and machine_for(s.name, self.inputs.domain.name, self.robot) is None:
+                raise HtnError(
+                    f"no action state machine is registered for {s.name} "
+                    f"(try --robot symbolic, or add one: entry points "
+                    f"'htn.actions')",
+                    where,
+                    s.line or None,
+                    1 if s.line else None,
+                )
 
     def listen(self, listener: Listener) -> None:
         """Call ``listener`` with every event from now on."""
@@ -214,15 +282,43 @@ class Execution:
         robot = self.robot
         self.log = EventLog(self.log_path, clock=lambda: robot.sim_time)
         self.log.listeners.extend(self.listeners)
-        self.log.emit(None, None, "header", None, "", **run_header(
-            i.plan_file, i.plan_sha256, i.plan_index, i.files["domain"], i.files["problem"],
-            i.files["functions"], self.robot_name, self.seed, self.faults, i.limits,
-            self.replan, argv=argv, digests={"domain": i.domain.sha256 or None,
-                                             "problem": i.problem.sha256 or None,
-                                             "functions": i.functions.sha256}))
-        self.dispatcher = TaskDispatcher(robot, i.domain, i.instance, i.plan.steps, i.limits,
-                                         self.log, replan=self.replan, functions=i.functions,
-                                         tree=i.tree)
+        self.log.emit(
+            None,
+            None,
+            "header",
+            None,
+            "",
+            **run_header(
+                i.plan_file,
+                i.plan_sha256,
+                i.plan_index,
+                i.files["domain"],
+                i.files["problem"],
+                i.files["functions"],
+                self.robot_name,
+                self.seed,
+                self.faults,
+                i.limits,
+                self.replan,
+                argv=argv,
+                digests={
+                    "domain": i.domain.sha256 or None,
+                    "problem": i.problem.sha256 or None,
+                    "functions": i.functions.sha256,
+                },
+            ),
+        )
+        self.dispatcher = TaskDispatcher(
+            robot,
+            i.domain,
+            i.instance,
+            i.plan.steps,
+            i.limits,
+            self.log,
+            replan=self.replan,
+            functions=i.functions,
+            tree=i.tree,
+        )
         self.dispatcher.summary_extra.update(self._extra)
         if self._adopted:
             self.dispatcher.adopt(*self._adopted)
@@ -240,7 +336,7 @@ class Execution:
         if self.dispatcher is None:
             self.begin()
         summary = self.dispatcher.run()
-        if summary.replans:     # the tree was repaired: its DOT again
+        if summary.replans:  # the tree was repaired: its DOT again
             self.outputs.write_dot(self.dispatcher.root)
         return self._result(summary)
 
@@ -289,6 +385,7 @@ class Execution:
         from htn.executor.repair import pending_tasks
         from htn.jshop.language import syntax as S
         from htn.jshop.language.terms import source_atom
+
         if self.dispatcher is None:
             tasks = S.task_atoms(self.inputs.instance.tasks)
         else:
@@ -321,7 +418,7 @@ class Execution:
             return
         try:
             self.interrupted(why)
-        except BaseException:       # noqa: BLE001 - the dispatcher is mid-tick: end the log itself
+        except BaseException:  # noqa: BLE001 - the dispatcher is mid-tick: end the log itself
             log.emit(None, None, "interrupted", None, "ended by the watchdog")
             log.emit(None, None, "summary", None, "interrupted", result="interrupted")
         log.close()
@@ -329,8 +426,9 @@ class Execution:
     def fail(self, exc: BaseException) -> None:
         """End the log with an ``error`` summary: ``exc`` stopped the run."""
         if self.log is not None and not self._closed:
-            self.log.emit(None, None, "summary", None, f"error: {type(exc).__name__}: {exc}",
-                          result="error")
+            self.log.emit(
+                None, None, "summary", None, f"error: {type(exc).__name__}: {exc}", result="error"
+            )
 
     def close(self) -> None:
         """Close the log and (if it was built here) the robot."""

@@ -7,6 +7,7 @@ The plan file is opened once: its text gives the steps, the task trees
 the SHA-256 the log's header records. ``htn run --from-log`` reads the log's
 header and the plan file it names (:func:`read_run_log`), once each.
 """
+
 from __future__ import annotations
 
 import os
@@ -34,18 +35,19 @@ from .inputs import domain_and_problem, function_table, is_path, path_of
 @dataclass
 class RunInputs:
     """A plan ready to run: everything read and checked."""
-    domain: object               # S.Domain
-    problem: object              # S.Problem
-    instance: object             # the S.ProblemInstance whose state is the world
+
+    domain: object  # S.Domain
+    problem: object  # S.Problem
+    instance: object  # the S.ProblemInstance whose state is the world
     plan: Plan
-    functions: object            # FunctionTable
-    limits: dict                 # retry limits by operator ('!grasp': 2)
-    tree: object                 # the TaskTree to execute, or None (one sequence)
-    plan_file: Optional[str]     # where the plan was read from (None: a plan object)
+    functions: object  # FunctionTable
+    limits: dict  # retry limits by operator ('!grasp': 2)
+    tree: object  # the TaskTree to execute, or None (one sequence)
+    plan_file: Optional[str]  # where the plan was read from (None: a plan object)
     plan_sha256: Optional[str]
     plan_index: int
-    files: dict                  # "domain", "problem", "functions" -> path or None
-    notes: list                  # one line each, e.g. how the tree was found
+    files: dict  # "domain", "problem", "functions" -> path or None
+    notes: list  # one line each, e.g. how the tree was found
 
 
 def load_plan(plan) -> tuple[Optional[PlanFile], Optional[Plan]]:
@@ -56,12 +58,14 @@ def load_plan(plan) -> tuple[Optional[PlanFile], Optional[Plan]]:
         return plan, None
     if isinstance(plan, Plan):
         return None, plan
-    raise HtnError(f"expected a plan (a plan file's path, a PlanFile or a Plan), got "
-                   f"{type(plan).__name__}")
+    raise HtnError(
+        f"expected a plan (a plan file's path, a PlanFile or a Plan), got {type(plan).__name__}"
+    )
 
 
-def run_inputs(plan, domain=None, problem=None, functions=None, plan_index: int = 1,
-               retries=None, stops=None) -> RunInputs:
+def run_inputs(
+    plan, domain=None, problem=None, functions=None, plan_index: int = 1, retries=None, stops=None
+) -> RunInputs:
     """Read and check everything a run of ``plan`` needs (see :func:`htn.api.run.run`)."""
     pf, given = load_plan(plan)
     where = pf.path if pf else None
@@ -70,11 +74,15 @@ def run_inputs(plan, domain=None, problem=None, functions=None, plan_index: int 
         problem = problem or pf.problem
         functions = checked_functions(pf.named_functions(), functions, where, stops=stops)
         if not domain or not problem:
-            raise HtnError("the plan file names no domain or problem (write it with 'htn plan "
-                           "-o', or give --domain and --problem)", where)
+            raise HtnError(
+                "the plan file names no domain or problem (write it with 'htn plan "
+                "-o', or give --domain and --problem)",
+                where,
+            )
         if plan_index > len(pf.plans):
-            raise HtnError(f"--plan-index {plan_index}: the file holds {len(pf.plans)} "
-                           "plan(s)", where)
+            raise HtnError(
+                f"--plan-index {plan_index}: the file holds {len(pf.plans)} plan(s)", where
+            )
         chosen = pf.plans[plan_index - 1]
     else:
         if domain is None or problem is None:
@@ -90,8 +98,7 @@ def run_inputs(plan, domain=None, problem=None, functions=None, plan_index: int 
     overrides = _overrides(retries)
     unknown = sorted(op for op in overrides if op not in dom.operators)
     if unknown:
-        raise HtnError(f"--retries: the domain {dom.name} has no operator "
-                       f"{', '.join(unknown)}")
+        raise HtnError(f"--retries: the domain {dom.name} has no operator {', '.join(unknown)}")
     limits.update(overrides)
     check_runnable(dom, instance, chosen, where, table, pf.lines if pf else ())
     notes: list = []
@@ -104,14 +111,34 @@ def run_inputs(plan, domain=None, problem=None, functions=None, plan_index: int 
     if tree is None:
         tasks = pf.notes.get("tasks", (None,))[0] if pf else None
         tree = recover_tree(dom, instance, chosen.steps, table, tasks=tasks)
-        notes.append(f"{source} has no task tree: "
-                     + ("recovered one by planning again" if tree is not None else
-                        f"planning again found none ({RECOVER_PLANS} plans, "
-                        f"{RECOVER_TIMEOUT:g} s), so it runs as one sequence of actions"))
-    files = {"domain": path_of(domain) or path_of(dom), "problem": path_of(problem) or
-             path_of(prob), "functions": table.source}
-    return RunInputs(dom, prob, instance, chosen, table, limits, tree, where,
-                     pf.sha256 if pf else None, plan_index, files, notes)
+        notes.append(
+            f"{source} has no task tree: "
+            + (
+                "recovered one by planning again"
+                if tree is not None
+                else f"planning again found none ({RECOVER_PLANS} plans, "
+                f"{RECOVER_TIMEOUT:g} s), so it runs as one sequence of actions"
+            )
+        )
+    files = {
+        "domain": path_of(domain) or path_of(dom),
+        "problem": path_of(problem) or path_of(prob),
+        "functions": table.source,
+    }
+    return RunInputs(
+        dom,
+        prob,
+        instance,
+        chosen,
+        table,
+        limits,
+        tree,
+        where,
+        pf.sha256 if pf else None,
+        plan_index,
+        files,
+        notes,
+    )
 
 
 def _overrides(retries) -> dict:
@@ -135,8 +162,9 @@ def methods_of(domain, instance) -> dict:
     return {**domain.methods, top.name: [top]}
 
 
-def checked_functions(named, given, where: str, line: Optional[int] = None,
-                      option: str = "--functions", stops=None):
+def checked_functions(
+    named, given, where: str, line: Optional[int] = None, option: str = "--functions", stops=None
+):
     """The functions to run with: ``given`` (a path or a loaded table, from
     the user), checked against ``named`` ((path, line, SHA-256 or None): the
     file a plan file or a log says its plans were made with). A data file
@@ -147,16 +175,24 @@ def checked_functions(named, given, where: str, line: Optional[int] = None,
     path, at, digest = named
     at = line or at
     if given is None:
-        raise HtnError(f"these plans were made with the functions file {path}; htn imports "
-                       f"no Python a data file names: give {option} {path} to run it",
-                       where, at)
+        raise HtnError(
+            f"these plans were made with the functions file {path}; htn imports "
+            f"no Python a data file names: give {option} {path} to run it",
+            where,
+            at,
+        )
     if digest and is_path(given):
         # read once: the bytes checked are the bytes that run
         def check(actual: str) -> None:
             if actual != digest:
-                raise HtnError(f"{option} {os.fspath(given)} is not the functions file these "
-                               f"plans were made with ({path}): its SHA-256 is "
-                               f"{actual[:12]}..., recorded {digest[:12]}...", where, at)
+                raise HtnError(
+                    f"{option} {os.fspath(given)} is not the functions file these "
+                    f"plans were made with ({path}): its SHA-256 is "
+                    f"{actual[:12]}..., recorded {digest[:12]}...",
+                    where,
+                    at,
+                )
+
         table = FunctionTable(stops) if stops is not None else FunctionTable()
         table.load_file(os.fspath(given), check)
         return table
@@ -167,6 +203,7 @@ def checked_functions(named, given, where: str, line: Optional[int] = None,
 class LoggedRun:
     """What a log's header records of its run (``htn run --log``), with the
     plan file it names, read and checked to be unchanged."""
+
     log: str
     plan: PlanFile
     plan_index: int
@@ -181,10 +218,18 @@ class LoggedRun:
 
     def options(self) -> dict:
         """The keyword arguments of :func:`htn.api.run.run` for the same run."""
-        return dict(plan=self.plan, plan_index=self.plan_index, domain=self.domain,
-                    problem=self.problem, functions=self.functions, robot=self.robot,
-                    seed=self.seed, faults=self.faults, retries=self.retries,
-                    replan=self.replan)
+        return dict(
+            plan=self.plan,
+            plan_index=self.plan_index,
+            domain=self.domain,
+            problem=self.problem,
+            functions=self.functions,
+            robot=self.robot,
+            seed=self.seed,
+            faults=self.faults,
+            retries=self.retries,
+            replan=self.replan,
+        )
 
 
 def read_run_log(path, functions=None, stops=None) -> LoggedRun:
@@ -202,6 +247,16 @@ def read_run_log(path, functions=None, stops=None) -> LoggedRun:
         check_unchanged(rec, kind, path)
     named = (rec["functions"], 1, rec.get("functions_sha256")) if rec.get("functions") else None
     functions = checked_functions(named, functions, path, 1, stops=stops)
-    return LoggedRun(path, pf, rec["plan_index"], rec["domain"], rec["problem"],
-                     functions, rec["robot"], rec["seed"], rec["faults"],
-                     dict(rec["retries"] or {}), rec["replan"])
+    return LoggedRun(
+        path,
+        pf,
+        rec["plan_index"],
+        rec["domain"],
+        rec["problem"],
+        functions,
+        rec["robot"],
+        rec["seed"],
+        rec["faults"],
+        dict(rec["retries"] or {}),
+        rec["replan"],
+    )

@@ -7,6 +7,7 @@ can be made, a file that can be written, none an input of the run nor
 another of its outputs); the snapshot folder is made only once the robot
 is built and has a camera, so a run refused earlier leaves no trace.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -20,6 +21,7 @@ from htn.robot.interface import Robot
 @dataclass
 class RunOutputs:
     """The paths a run writes (None: not written)."""
+
     log: Optional[str] = None
     bt_dot: Optional[str] = None
     snapshots: Optional[str] = None
@@ -27,8 +29,15 @@ class RunOutputs:
     def check(self, inputs) -> None:
         """Each can be written and none is an input (``inputs``: paths or
         None) or another output."""
-        given = [(p, o) for p, o in ((self.log, "--log"), (self.bt_dot, "--bt-dot"),
-                                     (self.snapshots, "--snapshots")) if p]
+        given = [
+            (p, o)
+            for p, o in (
+                (self.log, "--log"),
+                (self.bt_dot, "--bt-dot"),
+                (self.snapshots, "--snapshots"),
+            )
+            if p
+        ]
         inputs = [i for i in inputs if isinstance(i, str)]
         for path, option in given:
             others = [x for x in given if x[1] != option]
@@ -50,6 +59,7 @@ class RunOutputs:
         if not self.snapshots:
             return None
         from htn.executor.snapshots import snapshot_listener
+
         return snapshot_listener(robot, self.snapshots)
 
     def write_dot(self, root) -> None:
@@ -57,5 +67,6 @@ class RunOutputs:
         if not self.bt_dot:
             return
         from htn.executor.bt_dot import behaviour_tree_dot
+
         with atomic_write(self.bt_dot, "--bt-dot") as fh:
             fh.write(behaviour_tree_dot(root))

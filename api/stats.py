@@ -5,6 +5,7 @@ For one domain and problem: how many plans the planner returns (and how many
 distinct action sequences), how long finding all of them takes, the shortest
 plan's length, and the size of the domain (methods and operators).
 """
+
 from __future__ import annotations
 
 import os
@@ -21,15 +22,29 @@ from htn.jshop.search.planner import Planner
 from .inputs import function_table, read_inputs
 
 # the paper's two scenarios, as bundled examples
-SCENARIOS = [("domains/domestic.jshop", "problems/bring_object.jshop"),
-             ("domains/domestic.jshop", "problems/guide_robot.jshop")]
+SCENARIOS = [
+    ("domains/domestic.jshop", "problems/bring_object.jshop"),
+    ("domains/domestic.jshop", "problems/guide_robot.jshop"),
+]
 
 # Table 1 of Shpieva & Awaad: the paper's own figures for its two scenarios.
 PAPER = {
-    "bring_object": {"plans": 3, "distinct_plans": 1, "plan_s": 3.0, "min_length": 8,
-                     "methods": 13, "operators": 7},
-    "guide_robot": {"plans": 1, "distinct_plans": 1, "plan_s": 1.5, "min_length": 5,
-                    "methods": 13, "operators": 7},
+    "bring_object": {
+        "plans": 3,
+        "distinct_plans": 1,
+        "plan_s": 3.0,
+        "min_length": 8,
+        "methods": 13,
+        "operators": 7,
+    },
+    "guide_robot": {
+        "plans": 1,
+        "distinct_plans": 1,
+        "plan_s": 1.5,
+        "min_length": 5,
+        "methods": 13,
+        "operators": 7,
+    },
 }
 
 
@@ -44,7 +59,7 @@ class ScenarioStats:
     methods: int
     operators: int
     timed_out: bool = False
-    repeats: int = 1            # enumerations timed (fewer than asked when time ran out)
+    repeats: int = 1  # enumerations timed (fewer than asked when time ran out)
     # the located warnings of the inputs' check (as htn.plan has them)
     warnings: list = field(default_factory=list)
 
@@ -79,8 +94,9 @@ def scenarios(files=()) -> list[tuple[str, str]]:
     return [(files[0], p) for p in files[1:]]
 
 
-def stats(files=(), *, repeat: int = 1, functions=None,
-          timeout: Optional[float] = None, stops=None) -> list[ScenarioStats]:
+def stats(
+    files=(), *, repeat: int = 1, functions=None, timeout: Optional[float] = None, stops=None
+) -> list[ScenarioStats]:
     """The statistics of each scenario of ``files`` (see :func:`scenarios`):
     every plan enumerated ``repeat`` times, the median time reported.
     ``timeout`` bounds the whole call (checked between expansions): an
@@ -91,8 +107,14 @@ def stats(files=(), *, repeat: int = 1, functions=None,
     return [scenario_stats(d, p, table, repeat, until=until) for d, p in scenarios(files)]
 
 
-def scenario_stats(domain_path: str, problem_path: str, functions=None, repeat: int = 1, *,
-                   until: Optional[float] = None) -> ScenarioStats:
+def scenario_stats(
+    domain_path: str,
+    problem_path: str,
+    functions=None,
+    repeat: int = 1,
+    *,
+    until: Optional[float] = None,
+) -> ScenarioStats:
     """Enumerate every plan ``repeat`` times; report the median wall time.
     ``until`` (a ``time.perf_counter()`` value) bounds all of them: an
     enumeration cut short is the last."""
@@ -113,11 +135,17 @@ def scenario_stats(domain_path: str, problem_path: str, functions=None, repeat: 
             timed_out = timed_out or planner.stats.timed_out
         times.append(time.perf_counter() - t0)
         if timed_out or until is not None and time.perf_counter() >= until:
-            break           # a partial enumeration says nothing more if repeated
+            break  # a partial enumeration says nothing more if repeated
     return ScenarioStats(
-        domain=domain_path, problem=problem_path, plans=len(plans),
-        distinct_plans=len(set(plans)), plan_ms=round(statistics.median(times) * 1000, 3),
+        domain=domain_path,
+        problem=problem_path,
+        plans=len(plans),
+        distinct_plans=len(set(plans)),
+        plan_ms=round(statistics.median(times) * 1000, 3),
         min_length=min((len(p) for p in plans), default=None),
-        methods=domain.n_methods, operators=domain.n_operators, timed_out=timed_out,
+        methods=domain.n_methods,
+        operators=domain.n_operators,
+        timed_out=timed_out,
         repeats=len(times),
-        warnings=inputs.warnings)
+        warnings=inputs.warnings,
+    )

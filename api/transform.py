@@ -6,6 +6,7 @@ Every transformed plan is planned again from the rewritten task list, so each
 step's precondition holds in sequence from the initial state; a rewrite that
 breaks the plan, or costs more on the chosen metric, is rolled back.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -35,13 +36,15 @@ class TransformResult:
     original's and the transformed plan's length and cost on the metric, the
     annotated tree), the transformed ``plan`` (with its task ``tree``) and
     the rewritten top-level ``tasks``."""
+
     document: dict
     plan: object
     tasks: list
     workspace: object
 
-    def plan_file_text(self, out_path: str, domain: Optional[str] = None,
-                       problem: Optional[str] = None) -> str:
+    def plan_file_text(
+        self, out_path: str, domain: Optional[str] = None, problem: Optional[str] = None
+    ) -> str:
         """The transformed plan as a plan file at ``out_path`` (for
         :func:`htn.run` and ``htn run``): the header naming ``domain`` and
         ``problem``, the rewritten task list (``; tasks:``), the plan's task
@@ -49,14 +52,25 @@ class TransformResult:
         ws = self.workspace
         domain = domain or path_of(ws.domain)
         problem = problem or self.document["problem"]
-        return (header(out_path, domain, problem)
-                + f"; tasks: {' '.join(self.tasks)}\n" + plan_text(self.plan))
+        return (
+            header(out_path, domain, problem)
+            + f"; tasks: {' '.join(self.tasks)}\n"
+            + plan_text(self.plan)
+        )
 
 
-def transform_plan(domain, problem, *, rules=None, metric: str = "navigation", functions=None,
-              on_warning: Optional[Callable[[str], None]] = None,
-              on_phase: Optional[Callable[[str], None]] = None,
-              stops=None, output=None) -> TransformResult:
+def transform_plan(
+    domain,
+    problem,
+    *,
+    rules=None,
+    metric: str = "navigation",
+    functions=None,
+    on_warning: Optional[Callable[[str], None]] = None,
+    on_phase: Optional[Callable[[str], None]] = None,
+    stops=None,
+    output=None,
+) -> TransformResult:
     """Plan ``problem`` (its first instance), apply the registered
     transformations in priority order (tray > container > both-hands, and any
     plugins'), or only ``rules`` (names, or one comma-separated text), and
@@ -72,18 +86,17 @@ def transform_plan(domain, problem, *, rules=None, metric: str = "navigation", f
     rewritten task list, its tree: ``htn run`` executes it), checked before
     any work and replaced only once all is done."""
     if output is None:
-        return _transform(domain, problem, rules, metric, functions, on_warning, on_phase,
-                          stops)
+        return _transform(domain, problem, rules, metric, functions, on_warning, on_phase, stops)
     output = str(output)
     with atomic_write(output, "-o", (path_of(domain), path_of(problem))) as out:
-        done = _transform(domain, problem, rules, metric, functions, on_warning, on_phase,
-                          stops)
+        done = _transform(domain, problem, rules, metric, functions, on_warning, on_phase, stops)
         out.write(done.plan_file_text(output, path_of(domain), path_of(problem)))
     return done
 
 
-def _transform(domain, problem, rules, metric, functions, on_warning, on_phase,
-               stops) -> TransformResult:
+def _transform(
+    domain, problem, rules, metric, functions, on_warning, on_phase, stops
+) -> TransformResult:
     from htn.transform.framework import METRICS, Workspace
     from htn.transform.registered import default_framework
 
@@ -111,21 +124,31 @@ def _transform(domain, problem, rules, metric, functions, on_warning, on_phase,
             for t in fw.transformations:
                 t.enabled = t.name in rules
         fw.apply_all_transformations(ws, metric, on_phase=say)
-    finally:          # the registered framework is shared: leave it as it was
+    finally:  # the registered framework is shared: leave it as it was
         for t in fw.transformations:
             t.enabled = enabled[t.name]
     cost = METRICS[metric]
-    changes = [{"rule": u.transformed_by, "paths": u.paths,
-                "tasks": [source_atom(t.name, t.args) for t in u.tasks]}
-               for u in ws.units if u.transformed_by]
+    changes = [
+        {
+            "rule": u.transformed_by,
+            "paths": u.paths,
+            "tasks": [source_atom(t.name, t.args) for t in u.tasks],
+        }
+        for u in ws.units
+        if u.transformed_by
+    ]
     document = {
-        "problem": path_of(problem) or path_of(prob), "metric": metric,
+        "problem": path_of(problem) or path_of(prob),
+        "metric": metric,
         "applied": [r for r, status, _ in ws.log if status == "applied"],
         "log": [{"rule": r, "status": s, "detail": d} for r, s, d in ws.log],
         "changes": changes,
         "original": {"steps": len(original.steps), metric: cost(ws, original)},
-        "transformed": {"steps": len(ws.plan.steps), metric: cost(ws, ws.plan),
-                        "plan": ws.plan.lines()},
+        "transformed": {
+            "steps": len(ws.plan.steps),
+            metric: cost(ws, ws.plan),
+            "plan": ws.plan.lines(),
+        },
         "tree": ws.annotated_tree().to_dict(),
     }
     tasks = [source_atom(t.name, t.args) for t in S.task_atoms(ws.task_list())]

@@ -13,6 +13,7 @@ A plan file in the IPC 2020 format (``htn plan -f ipc``) is checked as the
 competition's verifier does, decompositions included
 (:func:`validate_ipc`, :mod:`htn.jshop.checks.ipc_verify`).
 """
+
 from __future__ import annotations
 
 import os
@@ -30,6 +31,7 @@ from .inputs import domain_and_problem, function_table, is_path
 @dataclass
 class PlanVerdict:
     """One plan and its verdict; ``file`` is the plan file it was read from."""
+
     plan: Plan
     verdict: Verdict
     file: Optional[str] = None
@@ -54,8 +56,9 @@ class PlanVerdict:
         return None
 
 
-def validate(domain, problem, plan, *, plan_index: Optional[int] = None,
-             functions=None, stops=None) -> list[PlanVerdict]:
+def validate(
+    domain, problem, plan, *, plan_index: Optional[int] = None, functions=None, stops=None
+) -> list[PlanVerdict]:
     """The verdict on each plan of ``plan`` (a plan file's path, a
     :class:`~htn.jshop.plans.planfile.PlanFile`, a
     :class:`~htn.jshop.plans.plan.Plan` or a list of them), in order;
@@ -74,8 +77,7 @@ def validate(domain, problem, plan, *, plan_index: Optional[int] = None,
         plans = list(plan)
     if plan_index is not None:
         if plan_index > len(plans):
-            raise HtnError(f"--plan-index {plan_index}: the file holds {len(plans)} plan(s)",
-                           file)
+            raise HtnError(f"--plan-index {plan_index}: the file holds {len(plans)} plan(s)", file)
         plans = [plans[plan_index - 1]]
     instance = prob.instances[0]
     for p in plans:
@@ -88,14 +90,23 @@ def ipc_text(path) -> Optional[str]:
     (``==>`` ... ``<==``), else None."""
     from htn.jshop.plans.ipc import is_ipc_text
     from htn.jshop.readers.source import read_source
+
     if not is_path(path) or not os.path.isfile(path):
         return None
     text = read_source(os.fspath(path))
     return text if is_ipc_text(text) else None
 
 
-def validate_ipc(domain, problem, plan, *, plan_index: Optional[int] = None,
-                 functions=None, text: Optional[str] = None, stops=None) -> list:
+def validate_ipc(
+    domain,
+    problem,
+    plan,
+    *,
+    plan_index: Optional[int] = None,
+    functions=None,
+    text: Optional[str] = None,
+    stops=None,
+) -> list:
     """``[(IpcPlan, IpcVerdict)]`` for each IPC plan of the file ``plan``
     (``text``: its text, if read already): the actions replayed, every
     decomposition line checked against the domain's methods, every action
@@ -103,6 +114,7 @@ def validate_ipc(domain, problem, plan, *, plan_index: Optional[int] = None,
     ``--verify`` checks them (:func:`~htn.jshop.checks.ipc_verify.verify_ipc_plan`)."""
     from htn.jshop.checks.ipc_verify import verify_ipc_text
     from htn.jshop.readers.source import read_source
+
     table = function_table(functions, stops)
     dom, prob = domain_and_problem(domain, problem, table)
     file = os.fspath(plan)

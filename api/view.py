@@ -21,6 +21,7 @@ functions only, and without the extra they raise an
 read, a bad address or a port in use are ``HtnError`` s too. Nothing here
 prints or waits for Ctrl-C: the caller keeps the page up as long as it likes.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -36,10 +37,11 @@ DEFAULT_HOST = "127.0.0.1"
 @dataclass
 class ViewLog:
     """A log of ``htn run --log``, read and checked for the page."""
+
     path: str
     records: list = field(repr=False)
-    warning: Optional[str] = None       # a last line cut short, left out
-    note: Optional[str] = None          # a bag's: which of its goals this is
+    warning: Optional[str] = None  # a last line cut short, left out
+    note: Optional[str] = None  # a bag's: which of its goals this is
 
     @property
     def events(self) -> int:
@@ -57,13 +59,17 @@ def read_view_log(log_file: str, what: str = "htn view", goal: Optional[int] = N
     view extra in the error without it."""
     require_extra("view", what)
     from htn.view.bag import is_bag, read_bag
+
     if is_bag(log_file):
         bag = read_bag(log_file, goal)
         return ViewLog(str(log_file), bag.records, bag.warning, bag.note)
     if goal is not None:
-        raise HtnError("--goal chooses a goal of a rosbag2 bag (htn ros record); a log holds "
-                       "one run", str(log_file))
+        raise HtnError(
+            "--goal chooses a goal of a rosbag2 bag (htn ros record); a log holds one run",
+            str(log_file),
+        )
     from htn.view.model import read_log
+
     records, warning = read_log(str(log_file))
     return ViewLog(str(log_file), records, warning)
 
@@ -95,8 +101,9 @@ class LogPage:
         self.close()
 
 
-def serve_log(log: Union[ViewLog, str], host: str = DEFAULT_HOST, port: int = 0,
-              what: str = "htn view") -> LogPage:
+def serve_log(
+    log: Union[ViewLog, str], host: str = DEFAULT_HOST, port: int = 0, what: str = "htn view"
+) -> LogPage:
     """Serve the page of ``log`` (a :class:`ViewLog`, or the path of a log,
     read by :func:`read_view_log`) on ``host``:``port`` (0: a free port)."""
     if not isinstance(log, ViewLog):
@@ -105,6 +112,7 @@ def serve_log(log: Union[ViewLog, str], host: str = DEFAULT_HOST, port: int = 0,
     from htn.view.hub import Hub
     from htn.view.model import page_records, title_of
     from htn.view.server import ViewServer
+
     hub = Hub("log", page_records(log.records), title=title_of(log.records[0]))
     return LogPage(log, ViewServer(hub, host, port).start())
 
@@ -115,6 +123,7 @@ def start_live_view(host: str = DEFAULT_HOST, port: int = 0, what: str = "htn ru
     ``wait_for_page``, ``close``)."""
     require_extra("view", what)
     from htn.view.live import RunView
+
     return RunView(host, port).start()
 
 
@@ -124,6 +133,7 @@ def start_goals_view(host: str = DEFAULT_HOST, port: int = 0, what: str = "htn r
     of the goal being run, ``close``)."""
     require_extra("view", what)
     from htn.view.live import GoalsView
+
     return GoalsView(host, port).start()
 
 
@@ -131,7 +141,10 @@ def exposure_warning(host: str) -> Optional[str]:
     """What to warn of when serving on ``host``: None for an address only
     this machine reaches (loopback), else that anyone with the URL can watch."""
     from htn.view.server import is_loopback
+
     if is_loopback(host):
         return None
-    return (f"the view is served on {host}, reachable from other machines: "
-            f"anyone with its URL (the token) can watch")
+    return (
+        f"the view is served on {host}, reachable from other machines: "
+        f"anyone with its URL (the token) can watch"
+    )

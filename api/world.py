@@ -13,6 +13,7 @@ errors located in the goal's text (``goal:1:3: unknown task ...``).
 JSHOP2 domains only, for now: an HDDL goal needs the objects' types, which
 an HDDL problem declares and a bare task list does not.
 """
+
 from __future__ import annotations
 
 import os
@@ -37,21 +38,24 @@ class WorldModel:
 
     def __init__(self, domain, problem=None, functions=None, stops=None):
         self.functions = function_table(functions, stops)
-        self.domain: S.Domain = load_domain(os.fspath(domain), self.functions) \
-            if is_path(domain) else domain
+        self.domain: S.Domain = (
+            load_domain(os.fspath(domain), self.functions) if is_path(domain) else domain
+        )
         if self.domain.language != "jshop2":
-            raise HtnError("a world model plans goals for JSHOP2 domains only (an HDDL goal "
-                           "needs its objects' types)", self.domain.file or None)
+            raise HtnError(
+                "a world model plans goals for JSHOP2 domains only (an HDDL goal "
+                "needs its objects' types)",
+                self.domain.file or None,
+            )
         prob = None
         if problem is not None:
-            prob = load_problem(os.fspath(problem), self.functions) if is_path(problem) \
-                else problem
+            prob = load_problem(os.fspath(problem), self.functions) if is_path(problem) else problem
             check_problem(self.domain, prob)
         self.arities = predicate_arities(self.domain, prob)
         self._lock = threading.Lock()
         self._facts: dict[tuple, S.Atom] = {}
-        self._updates: list[tuple] = []        # (deleted, added) atoms of each update()
-        self._forgotten = 0                     # updates dropped from the list, settled
+        self._updates: list[tuple] = []  # (deleted, added) atoms of each update()
+        self._forgotten = 0  # updates dropped from the list, settled
         for atom in prob.instances[0].state if prob is not None else ():
             self._facts[(atom.pred, atom.args)] = atom
 
@@ -71,12 +75,16 @@ class WorldModel:
         if not pattern.strip():
             return self.facts()
         pred, args = _pattern(pattern)
-        return [source_atom(a.pred, a.args) for a in self.atoms()
-                if a.pred == pred and _matches(args, a.args)]
+        return [
+            source_atom(a.pred, a.args)
+            for a in self.atoms()
+            if a.pred == pred and _matches(args, a.args)
+        ]
 
     # ------------------------------------------------------------ changing
-    def update(self, add: Iterable[str] = (), delete: Iterable[str] = (),
-               source: str = "facts") -> int:
+    def update(
+        self, add: Iterable[str] = (), delete: Iterable[str] = (), source: str = "facts"
+    ) -> int:
         """Delete, then add, the facts given as source text (``(at robby
         kitchen)``); every one is checked first (syntax, ground, a predicate
         the domain speaks of, with the number of arguments it has there), so
@@ -109,7 +117,7 @@ class WorldModel:
         with self._lock:
             self._facts = atoms
             if since is not None:
-                for gone, new in self._updates[max(0, since - self._forgotten):]:
+                for gone, new in self._updates[max(0, since - self._forgotten) :]:
                     self._apply(gone, new)
             # one run at a time: the updates before now are in the facts for good
             self._forgotten += len(self._updates)
@@ -137,11 +145,11 @@ class WorldModel:
         _balanced(tasks, source)
         # the task list on line 2 of a problem text: its errors say line 2
         text = f"(defproblem {source} {self.domain.name} ()\n{tasks}\n)"
-        prob = _on_first_line(lambda: parse_text(text, source, self.functions, "problem"),
-                              source)
+        prob = _on_first_line(lambda: parse_text(text, source, self.functions, "problem"), source)
         if not isinstance(prob, S.Problem) or len(prob.instances) != 1:
-            raise HtnError("a goal is one task list, e.g. ((bring_object jenny pringles guest))",
-                           source, 1, 1)
+            raise HtnError(
+                "a goal is one task list, e.g. ((bring_object jenny pringles guest))", source, 1, 1
+            )
         prob.instances[0].state = self.atoms()
         _on_first_line(lambda: check_problem(self.domain, prob), source)
         return prob
@@ -150,8 +158,14 @@ class WorldModel:
         """The atoms of ``text`` (one or more), checked against the domain."""
         _balanced(text, source)
         prob = _on_first_line(
-            lambda: parse_text(f"(defproblem {source} {self.domain.name} (\n{text}\n) ())",
-                               source, self.functions, "problem"), source)
+            lambda: parse_text(
+                f"(defproblem {source} {self.domain.name} (\n{text}\n) ())",
+                source,
+                self.functions,
+                "problem",
+            ),
+            source,
+        )
         atoms = prob.instances[0].state if isinstance(prob, S.Problem) else []
         if not atoms:
             raise HtnError(f"no fact in {text!r}", source, 1, 1)
@@ -159,11 +173,17 @@ class WorldModel:
             where = (source, a.pos.line - 1, a.pos.col) if a.pos else (source,)
             known = self.arities.get(a.pred)
             if known is None:
-                raise HtnError(f"unknown predicate '{a.pred}': the domain "
-                               f"'{self.domain.name}' never speaks of it", *where)
+                raise HtnError(
+                    f"unknown predicate '{a.pred}': the domain "
+                    f"'{self.domain.name}' never speaks of it",
+                    *where,
+                )
             if len(a.args) not in known:
-                raise HtnError(f"'{a.pred}' has {' or '.join(map(str, sorted(known)))} "
-                               f"argument(s) in the domain, given {len(a.args)}", *where)
+                raise HtnError(
+                    f"'{a.pred}' has {' or '.join(map(str, sorted(known)))} "
+                    f"argument(s) in the domain, given {len(a.args)}",
+                    *where,
+                )
         return atoms
 
 
@@ -199,10 +219,18 @@ def _pattern(text: str) -> tuple[str, tuple]:
     """``(at ?who kitchen)`` -> ``("at", (_Var("?who"), "kitchen"))``: one
     flat atom of symbols, numbers and variables (what a query asks)."""
     inner = text.strip()
-    if not (inner.startswith("(") and inner.endswith(")")) or "(" in inner[1:-1] \
-            or ")" in inner[1:-1] or not inner[1:-1].split():
-        raise HtnError("a pattern is one atom of symbols, numbers and ?variables, e.g. "
-                       "(robot_at ?who ?where)", "pattern", 1, 1)
+    if (
+        not (inner.startswith("(") and inner.endswith(")"))
+        or "(" in inner[1:-1]
+        or ")" in inner[1:-1]
+        or not inner[1:-1].split()
+    ):
+        raise HtnError(
+            "a pattern is one atom of symbols, numbers and ?variables, e.g. (robot_at ?who ?where)",
+            "pattern",
+            1,
+            1,
+        )
     pred, *words = inner[1:-1].lower().split()
     args = []
     for w in words:
@@ -229,10 +257,24 @@ def _matches(pattern: tuple, args: tuple) -> bool:
     return True
 
 
-def plan_goal(world: WorldModel, tasks: str, *, source: str = "goal",
-              timeout: Optional[float] = None, stops=None, **options):
+def plan_goal(
+    world: WorldModel,
+    tasks: str,
+    *,
+    source: str = "goal",
+    timeout: Optional[float] = None,
+    stops=None,
+    **options,
+):
     """The plans of the goal ``tasks`` from the facts believed now (a
     :class:`htn.api.plan.PlanStream`; ``options`` as :func:`htn.api.plan.plan`)."""
     from .plan import plan
-    return plan(world.domain, world.problem(tasks, source), timeout=timeout,
-                functions=world.functions, stops=stops, **options)
+
+    return plan(
+        world.domain,
+        world.problem(tasks, source),
+        timeout=timeout,
+        functions=world.functions,
+        stops=stops,
+        **options,
+    )

@@ -24,6 +24,7 @@ CPU time (of the solved instances), and for ``ipc2020-to`` the ratios::
     python benchmarks/bench_ipc.py --sample ipc2020-to --runs 3
     python benchmarks/bench_ipc.py --search gbfs --json
 """
+
 from __future__ import annotations
 
 import json
@@ -102,13 +103,13 @@ def run_limited(argv: list, limit: float, pin=None) -> dict:
         resource.setrlimit(resource.RLIMIT_CPU, (soft, soft + 1))
 
     with tempfile.TemporaryFile("w+") as out, tempfile.TemporaryFile("w+") as err:
-        proc = subprocess.Popen(argv, stdout=out, stderr=err, cwd=ROOT, preexec_fn=cap,
-                                text=True)
+        proc = subprocess.Popen(argv, stdout=out, stderr=err, cwd=ROOT, preexec_fn=cap, text=True)
         fired: list = []
 
         def kill():
             fired.append(True)
             proc.kill()
+
         guard = threading.Timer(WALL_GUARD * limit, kill)
         guard.start()
         try:
@@ -118,8 +119,13 @@ def run_limited(argv: list, limit: float, pin=None) -> dict:
         proc.returncode = os.waitstatus_to_exitcode(status)
         out.seek(0)
         err.seek(0)
-        return {"cpu_s": usage.ru_utime + usage.ru_stime, "rc": proc.returncode,
-                "stdout": out.read(), "stderr": err.read(), "guard": bool(fired)}
+        return {
+            "cpu_s": usage.ru_utime + usage.ru_stime,
+            "rc": proc.returncode,
+            "stdout": out.read(),
+            "stderr": err.read(),
+            "guard": bool(fired),
+        }
 
 
 def htn(*args) -> list:
@@ -132,8 +138,7 @@ def has_search_option() -> bool:
 
 
 def pandapi() -> Path | None:
-    path = Path(os.environ.get("HTN_PANDAPI",
-                               SHARED / "tools" / "pandaPIparser" / "pandaPIparser"))
+    path = Path(os.environ.get("HTN_PANDAPI", SHARED / "tools" / "pandaPIparser" / "pandaPIparser"))
     return path if path.is_file() else None
 
 
@@ -142,15 +147,23 @@ def verify(domain: Path, problem: Path, text: str, verifier) -> dict:
     with tempfile.NamedTemporaryFile("w", suffix=".plan", delete=False) as fh:
         fh.write(text)
     try:
-        ours = subprocess.run(htn("validate", domain, problem, fh.name), capture_output=True,
-                              text=True, cwd=ROOT)
-        out = {"htn_validate": ours.returncode == 0,
-               "htn_validate_message": (ours.stderr.splitlines() or [""])[0]}
+        ours = subprocess.run(
+            htn("validate", domain, problem, fh.name), capture_output=True, text=True, cwd=ROOT
+        )
+        out = {
+            "htn_validate": ours.returncode == 0,
+            "htn_validate_message": (ours.stderr.splitlines() or [""])[0],
+        }
         if verifier is not None:
-            theirs = subprocess.run([str(verifier), "-C", "--verify", str(domain), str(problem),
-                                     fh.name], capture_output=True, text=True, timeout=600)
-            out["pandapi"] = (theirs.returncode == 0
-                              and "Plan verification result: true" in theirs.stdout)
+            theirs = subprocess.run(
+                [str(verifier), "-C", "--verify", str(domain), str(problem), fh.name],
+                capture_output=True,
+                text=True,
+                timeout=600,
+            )
+            out["pandapi"] = (
+                theirs.returncode == 0 and "Plan verification result: true" in theirs.stdout
+            )
         return out
     finally:
         os.unlink(fh.name)
@@ -170,16 +183,25 @@ def outcome(run: dict, limit: float) -> str:
 
 
 def measure(dname, domain, problem, search, flag, limit, runs, verifier, pin, ref) -> dict:
-    argv = htn("plan", domain, problem, "-f", "ipc", "--quiet",
-               *(["--search", search] if flag else []))
+    argv = htn(
+        "plan", domain, problem, "-f", "ipc", "--quiet", *(["--search", search] if flag else [])
+    )
     done = [run_limited(argv, limit, pin) for _ in range(runs)]
     first = done[0]
     cpus = [r["cpu_s"] for r in done]
-    row = {"domain": dname, "instance": problem.name, "result": outcome(first, limit),
-           "cpu_median_s": round(statistics.median(cpus), 3), "cpu_max_s": round(max(cpus), 3)}
+    row = {
+        "domain": dname,
+        "instance": problem.name,
+        "result": outcome(first, limit),
+        "cpu_median_s": round(statistics.median(cpus), 3),
+        "cpu_max_s": round(max(cpus), 3),
+    }
     if row["result"] == "plan":
-        row["actions"] = sum(1 for line in first["stdout"].splitlines()[1:]
-                             if line[:1].isdigit() and " -> " not in line)
+        row["actions"] = sum(
+            1
+            for line in first["stdout"].splitlines()[1:]
+            if line[:1].isdigit() and " -> " not in line
+        )
         row.update(verify(domain, problem, first["stdout"], verifier))
     row["solved"] = row["result"] == "plan" and row["htn_validate"] and row.get("pandapi", True)
     if ref is not None and row["solved"]:
@@ -194,12 +216,24 @@ def search_time(domain, problem, search, flag, limit, runs, pin) -> float:
     times = []
     for _ in range(runs):
         if search == "dfs":
-            r = run_limited([sys.executable, "-c", SEARCH_CPU, str(domain), str(problem)],
-                            limit, pin)
+            r = run_limited(
+                [sys.executable, "-c", SEARCH_CPU, str(domain), str(problem)], limit, pin
+            )
             times.append(json.loads(r["stdout"])["search_ms"])
         else:
-            r = run_limited(htn("plan", domain, problem, "-f", "json", "--quiet",
-                                *(["--search", search] if flag else [])), limit, pin)
+            r = run_limited(
+                htn(
+                    "plan",
+                    domain,
+                    problem,
+                    "-f",
+                    "json",
+                    "--quiet",
+                    *(["--search", search] if flag else []),
+                ),
+                limit,
+                pin,
+            )
             times.append(json.loads(r["stdout"].splitlines()[-1])["search_ms"])
     return round(statistics.median(times), 2)
 
@@ -207,10 +241,14 @@ def search_time(domain, problem, search, flag, limit, runs, pin) -> float:
 def summary(rows: list, sample: str) -> dict:
     solved = [r for r in rows if r["solved"]]
     cpus = [r["cpu_median_s"] for r in solved]
-    out = {"sample": sample, "instances": len(rows), "solved": len(solved),
-           "plan_rejected": sum(r["result"] == "plan" and not r["solved"] for r in rows),
-           "cpu_median_s": round(statistics.median(cpus), 3) if cpus else None,
-           "cpu_max_s": round(max(cpus), 3) if cpus else None}
+    out = {
+        "sample": sample,
+        "instances": len(rows),
+        "solved": len(solved),
+        "plan_rejected": sum(r["result"] == "plan" and not r["solved"] for r in rows),
+        "cpu_median_s": round(statistics.median(cpus), 3) if cpus else None,
+        "cpu_max_s": round(max(cpus), 3) if cpus else None,
+    }
     ratios = [r["search_ratio"] for r in rows if "search_ratio" in r]
     if ratios:
         slow = [r["search_ratio"] for r in rows if "search_ratio" in r and r["ht_plan_ms"] > 10]
@@ -223,28 +261,53 @@ def summary(rows: list, sample: str) -> dict:
 
 
 @click.command()
-@click.option("--sample", "samples", multiple=True, type=click.Choice(SAMPLES),
-              help="Run only these samples (repeatable) [default: all four].")
-@click.option("--search", type=click.Choice(SEARCHES), default="dfs", show_default=True,
-              help="Passed to 'htn plan --search'.")
+@click.option(
+    "--sample",
+    "samples",
+    multiple=True,
+    type=click.Choice(SAMPLES),
+    help="Run only these samples (repeatable) [default: all four].",
+)
+@click.option(
+    "--search",
+    type=click.Choice(SEARCHES),
+    default="dfs",
+    show_default=True,
+    help="Passed to 'htn plan --search'.",
+)
 @click.option("--only", multiple=True, metavar="DOMAIN", help="Only these domain folders.")
 @click.option("--limit", default=30.0, show_default=True, help="CPU seconds per run.")
-@click.option("--runs", default=1, show_default=True, type=click.IntRange(min=1),
-              help="Runs per instance (median and max CPU time).")
+@click.option(
+    "--runs",
+    default=1,
+    show_default=True,
+    type=click.IntRange(min=1),
+    help="Runs per instance (median and max CPU time).",
+)
 @click.option("--pin", type=int, metavar="CPU", help="Pin every run to this core (taskset).")
 @click.option("--json", "as_json", is_flag=True, help="Print JSON instead of tables.")
 def main(samples, search, only, limit, runs, pin, as_json):
     """Solve the IPC samples under a CPU limit; every plan verified twice."""
     flag = has_search_option()
     if not flag and search != "dfs":
-        message = (f"--search {search}: not available (this htn plan has no --search option; "
-                   "its only search is dfs)")
-        click.echo(json.dumps({"search": search, "available": False, "message": message})
-                   if as_json else message)
+        message = (
+            f"--search {search}: not available (this htn plan has no --search option; "
+            "its only search is dfs)"
+        )
+        click.echo(
+            json.dumps({"search": search, "available": False, "message": message})
+            if as_json
+            else message
+        )
         return
     verifier = pandapi()
-    report = {"search": search, "limit_s": limit, "runs": runs,
-              "pandapiparser": str(verifier) if verifier else None, "samples": []}
+    report = {
+        "search": search,
+        "limit_s": limit,
+        "runs": runs,
+        "pandapiparser": str(verifier) if verifier else None,
+        "samples": [],
+    }
     for name in samples or SAMPLES:
         folder = SHARED / "corpus" / name
         if not folder.is_dir():
@@ -254,9 +317,12 @@ def main(samples, search, only, limit, runs, pin, as_json):
         for dname, domain, problem in instances(folder, only):
             row = measure(dname, domain, problem, search, flag, limit, runs, verifier, pin, ref)
             rows.append(row)
-            click.echo(f"{name} {dname} {problem.name}: "                  # progress
-                       f"{'solved' if row['solved'] else row['result']} "
-                       f"{row['cpu_median_s']:.2f} s CPU", err=True)
+            click.echo(
+                f"{name} {dname} {problem.name}: "  # progress
+                f"{'solved' if row['solved'] else row['result']} "
+                f"{row['cpu_median_s']:.2f} s CPU",
+                err=True,
+            )
         report["samples"].append({"summary": summary(rows, name), "instances": rows})
     if as_json:
         click.echo(json.dumps(report, indent=1))
@@ -267,32 +333,63 @@ def main(samples, search, only, limit, runs, pin, as_json):
 def _print(report: dict) -> None:
     from rich.console import Console
     from rich.table import Table
+
     console = Console(width=None if sys.stdout.isatty() else 120)
     checks = "htn validate" + (" + pandaPIparser" if report["pandapiparser"] else "")
-    t = Table(title=f"IPC samples, --search {report['search']}, {report['limit_s']:g} s CPU "
-                    f"per run; plans checked by {checks}")
-    for col in ("sample", "instances", "solved", "plan rejected", "CPU s median",
-                "CPU s max", "search/HT geo. mean, max", "HT > 10 ms: ratio <= 1"):
+    t = Table(
+        title=f"IPC samples, --search {report['search']}, {report['limit_s']:g} s CPU "
+        f"per run; plans checked by {checks}"
+    )
+    for col in (
+        "sample",
+        "instances",
+        "solved",
+        "plan rejected",
+        "CPU s median",
+        "CPU s max",
+        "search/HT geo. mean, max",
+        "HT > 10 ms: ratio <= 1",
+    ):
         t.add_column(col, justify="left" if col == "sample" else "right")
     for s in report["samples"]:
         m = s["summary"]
-        ratio = (f"{m['search_ratio_geomean']}, {m['search_ratio_max']}"
-                 if "search_ratio_geomean" in m else "-")
-        t.add_row(m["sample"], str(m["instances"]), str(m["solved"]), str(m["plan_rejected"]),
-                  _fmt(m["cpu_median_s"]), _fmt(m["cpu_max_s"]), ratio,
-                  m.get("over_10ms_at_most_1", "-"))
+        ratio = (
+            f"{m['search_ratio_geomean']}, {m['search_ratio_max']}"
+            if "search_ratio_geomean" in m
+            else "-"
+        )
+        t.add_row(
+            m["sample"],
+            str(m["instances"]),
+            str(m["solved"]),
+            str(m["plan_rejected"]),
+            _fmt(m["cpu_median_s"]),
+            _fmt(m["cpu_max_s"]),
+            ratio,
+            m.get("over_10ms_at_most_1", "-"),
+        )
     console.print(t)
     for s in report["samples"]:
         d = Table(title=s["summary"]["sample"])
         for col in ("domain", "instance", "result", "CPU s", "search ms", "HT plan ms", "ratio"):
-            d.add_column(col, justify="left" if col in ("domain", "instance", "result")
-                         else "right")
+            d.add_column(
+                col, justify="left" if col in ("domain", "instance", "result") else "right"
+            )
         for r in s["instances"]:
-            result = "solved" if r["solved"] else (
-                "[red]plan rejected[/red]" if r["result"] == "plan" else r["result"])
-            d.add_row(r["domain"], r["instance"], result, f"{r['cpu_median_s']:.2f}",
-                      _fmt(r.get("search_ms")), _fmt(r.get("ht_plan_ms")),
-                      _fmt(r.get("search_ratio")))
+            result = (
+                "solved"
+                if r["solved"]
+                else ("[red]plan rejected[/red]" if r["result"] == "plan" else r["result"])
+            )
+            d.add_row(
+                r["domain"],
+                r["instance"],
+                result,
+                f"{r['cpu_median_s']:.2f}",
+                _fmt(r.get("search_ms")),
+                _fmt(r.get("ht_plan_ms")),
+                _fmt(r.get("search_ratio")),
+            )
         console.print(d)
 
 

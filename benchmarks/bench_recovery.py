@@ -9,6 +9,7 @@ event although the step's effect and the hold-monitor's condition hold)::
     python benchmarks/bench_recovery.py                       # the issue's figures
     python benchmarks/bench_recovery.py --problem bring_object --faults moved=1 --runs 20 --replan
 """
+
 from __future__ import annotations
 
 import multiprocessing
@@ -22,7 +23,7 @@ import click
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "tests"))
 
-DEFAULT = [   # (problem, faults, runs, replan)
+DEFAULT = [  # (problem, faults, runs, replan)
     ("bring_object", "moved=1", 20, True),
     ("transport_four", "moved=1", 10, True),
     ("bring_object", "slip=0.3,nav=0.3,detect=0.3,moved=0.3", 50, False),
@@ -32,6 +33,7 @@ DEFAULT = [   # (problem, faults, runs, replan)
 
 def one(job):
     from monitoring_oracle import run_checked
+
     problem, faults, seed, replan = job
     return run_checked(problem, faults, seed, replan)
 
@@ -53,12 +55,16 @@ def main(problem, faults, runs, replan, workers):
             ok = sum(r["result"] == "verified" for r in results)
             paths = Counter(p for r in results for p in r["repaired"])
             unexplained = [a for r in results for a in r["false_alarms"]]
-            click.echo(f"{prob} --faults {flt} {'--replan' if rep else '(no replan)'}: "
-                       f"{ok}/{n} verified; {sum(r['aborts'] for r in results)} aborted events, "
-                       f"{len(unexplained)} unexplained; {sum(r['faults'] for r in results)} "
-                       f"faults; {time.perf_counter() - t0:.1f} s")
+            click.echo(
+                f"{prob} --faults {flt} {'--replan' if rep else '(no replan)'}: "
+                f"{ok}/{n} verified; {sum(r['aborts'] for r in results)} aborted events, "
+                f"{len(unexplained)} unexplained; {sum(r['faults'] for r in results)} "
+                f"faults; {time.perf_counter() - t0:.1f} s"
+            )
             if paths:
-                click.echo("    repaired: " + ", ".join(f"{p} x{c}" for p, c in paths.most_common()))
+                click.echo(
+                    "    repaired: " + ", ".join(f"{p} x{c}" for p, c in paths.most_common())
+                )
             for a in unexplained[:5]:
                 click.echo(f"    FALSE ALARM: {a}")
 

@@ -103,6 +103,7 @@ Run: ``python benchmarks/bench_ros.py [--runs 20] [--robot ros] [--cancel-speed 
 [--json PATH]``
 (the ros and sim extras).
 """
+
 from __future__ import annotations
 
 import argparse
@@ -118,16 +119,18 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 DOMAIN, PROBLEM = ROOT / "domains" / "domestic.jshop", ROOT / "problems" / "bring_object.jshop"
 GOAL = "((bring_object jenny pringles guest))"
-WARM_UP = "((inform jenny ready))"      # one say: the world stays as it is
-FIRST_SKILL = "/robot/skill/say"        # the goal's first action on the ros robot
-SETTLE = 2.0                            # s after a robot node is up: see the docstring
-RESULT_LIMIT = 30.0                     # s a measured goal may take (else it hung)
-PLANNING_CALLS = 5                      # the plan service's round trip: their median
-EXECUTING = 2                           # action_msgs/msg/GoalStatus STATUS_EXECUTING
-DRIVEN_TO = (2.2, 1.5)                  # the second action drives to counter_front
-AFTER_RESULT = 0.3                      # s the poses are watched after a cancelled goal
-TARGETS = {"goal accepted -> first action, beyond planning (ms)": 50.0,
-           "cancel sent -> robot holding (ms)": 100.0}
+WARM_UP = "((inform jenny ready))"  # one say: the world stays as it is
+FIRST_SKILL = "/robot/skill/say"  # the goal's first action on the ros robot
+SETTLE = 2.0  # s after a robot node is up: see the docstring
+RESULT_LIMIT = 30.0  # s a measured goal may take (else it hung)
+PLANNING_CALLS = 5  # the plan service's round trip: their median
+EXECUTING = 2  # action_msgs/msg/GoalStatus STATUS_EXECUTING
+DRIVEN_TO = (2.2, 1.5)  # the second action drives to counter_front
+AFTER_RESULT = 0.3  # s the poses are watched after a cancelled goal
+TARGETS = {
+    "goal accepted -> first action, beyond planning (ms)": 50.0,
+    "cancel sent -> robot holding (ms)": 100.0,
+}
 
 
 class Hung(Exception):
@@ -141,18 +144,23 @@ class Client:
     def __init__(self, T, ros_robot: bool):
         import rclpy
         from rclpy.action import ActionClient
+
         self.rclpy, self.T, self.ros_robot = rclpy, T, ros_robot
         self.node = node = rclpy.create_node("bench_ros")
-        self.events: list = []      # (perf_counter, event, t)
-        self.sent: list = []        # (topic, wall time received, source stamp s, t, record)
-        self.poses: list = []       # (perf_counter, (x, y, z, w))
-        self.status: list = []      # (perf_counter, {goal id: status}) of the first skill
+        self.events: list = []  # (perf_counter, event, t)
+        self.sent: list = []  # (topic, wall time received, source stamp s, t, record)
+        self.poses: list = []  # (perf_counter, (x, y, z, w))
+        self.status: list = []  # (perf_counter, {goal id: status}) of the first skill
         self.recording = False
-        self.failures: list = []    # what failed, from the events
+        self.failures: list = []  # what failed, from the events
         node.create_subscription(T.Event, "/htn/events", self._event, 1000)
-        node.create_subscription(T.ExecuteTasks.Impl.FeedbackMessage,
-                                 "/htn/execute/_action/feedback", self._feedback, 1000)
-        self.feedback_stamps: dict = {}     # record -> source stamp, of the feedback topic
+        node.create_subscription(
+            T.ExecuteTasks.Impl.FeedbackMessage,
+            "/htn/execute/_action/feedback",
+            self._feedback,
+            1000,
+        )
+        self.feedback_stamps: dict = {}  # record -> source stamp, of the feedback topic
         self.action = ActionClient(node, T.ExecuteTasks, "/htn/execute")
         self.plan = node.create_client(T.PlanTasks, "/htn/plan")
         self.topics = ["/htn/events", "/htn/execute/_action/feedback"]
@@ -160,12 +168,14 @@ class Client:
             from action_msgs.msg import GoalStatusArray
             from geometry_msgs.msg import PoseStamped
             from rclpy.qos import DurabilityPolicy, QoSProfile
+
             node.create_subscription(PoseStamped, "/robot/pose", self._pose, 1000)
             # transient local, as the action server publishes it: once matched,
             # the last status comes, which says the subscription is matched
             latched = QoSProfile(depth=10, durability=DurabilityPolicy.TRANSIENT_LOCAL)
-            node.create_subscription(GoalStatusArray, f"{FIRST_SKILL}/_action/status",
-                                     self._status, latched)
+            node.create_subscription(
+                GoalStatusArray, f"{FIRST_SKILL}/_action/status", self._status, latched
+            )
             self.topics += ["/robot/pose", f"{FIRST_SKILL}/_action/status"]
 
     def _event(self, msg, info) -> None:
@@ -179,7 +189,7 @@ class Client:
     def _feedback(self, msg, info) -> None:
         self.feedback_stamps[msg.feedback.event.record] = info["source_timestamp"] * 1e-9
 
-    def _action_feedback(self, msg) -> None:       # the action client's callback
+    def _action_feedback(self, msg) -> None:  # the action client's callback
         if self.recording:
             e = msg.feedback.event
             self.sent.append(("feedback", time.time(), None, e.t, e.record))
@@ -189,8 +199,12 @@ class Client:
         self.poses.append((time.perf_counter(), (p.x, p.y, q.z, q.w)))
 
     def _status(self, msg) -> None:
-        self.status.append((time.perf_counter(),
-                            {bytes(s.goal_info.goal_id.uuid): s.status for s in msg.status_list}))
+        self.status.append(
+            (
+                time.perf_counter(),
+                {bytes(s.goal_info.goal_id.uuid): s.status for s in msg.status_list},
+            )
+        )
 
     def spin(self, seconds: float) -> None:
         end = time.perf_counter() + seconds
@@ -216,9 +230,11 @@ class Client:
 
     def event(self, kind: str, since: int, nth: int = 1) -> float:
         """The arrival time of the ``nth`` event ``kind`` from ``since`` on."""
+
         def seen():
             at = [a for a, e, _ in self.events[since:] if e == kind]
             return at[nth - 1] if len(at) >= nth else None
+
         return self.until(seen, what=f"{kind} event")
 
     def ready(self) -> None:
@@ -239,8 +255,11 @@ class Client:
     def send(self, tasks: str):
         """Send ``tasks``; (the goal's handle, time sent, time accepted)."""
         t0 = time.perf_counter()
-        handle = self.future(self.action.send_goal_async(
-            self.T.ExecuteTasks.Goal(tasks=tasks), feedback_callback=self._action_feedback))
+        handle = self.future(
+            self.action.send_goal_async(
+                self.T.ExecuteTasks.Goal(tasks=tasks), feedback_callback=self._action_feedback
+            )
+        )
         assert handle.accepted, "the node rejected the goal"
         return handle, t0, time.perf_counter()
 
@@ -254,18 +273,23 @@ class Client:
             self.spin(1.0)
             raise Hung(f"{tasks}: no result within {RESULT_LIMIT:g} s") from None
         self.spin(0.05)
-        return "" if result.outcome == "verified" else (
-            f"{tasks}: {result.summary} ({'; '.join(self.failures[-3:])})")
+        return (
+            ""
+            if result.outcome == "verified"
+            else (f"{tasks}: {result.summary} ({'; '.join(self.failures[-3:])})")
+        )
 
 
 def start(cmd: list, err: Path) -> subprocess.Popen:
-    return subprocess.Popen([sys.executable, "-m", "htn", "ros", *cmd],
-                            stdout=subprocess.DEVNULL, stderr=open(err, "w"))
+    return subprocess.Popen(
+        [sys.executable, "-m", "htn", "ros", *cmd], stdout=subprocess.DEVNULL, stderr=open(err, "w")
+    )
 
 
 def htn_node(robot: str, logs: Path) -> subprocess.Popen:
-    return start(["node", str(DOMAIN), "--problem", str(PROBLEM), "--robot", robot],
-                 logs / "node.err")
+    return start(
+        ["node", str(DOMAIN), "--problem", str(PROBLEM), "--robot", robot], logs / "node.err"
+    )
 
 
 def robot_node(logs: Path, speed: float) -> subprocess.Popen:
@@ -306,7 +330,8 @@ def event_delays(c: Client, figures: dict) -> None:
     if least:
         low = min(least.values())
         figures["event logged -> published, beyond the goal's quickest (ms)"].extend(
-            (v - low) * 1e3 for v in least.values())
+            (v - low) * 1e3 for v in least.values()
+        )
     c.sent.clear()
 
 
@@ -326,7 +351,7 @@ def measured_goal(c: Client, figures: dict, cancel: bool, misses: list, steps: d
     """One goal on a fresh robot; its outcome. ``steps``: each step's time
     from its start to its verification on the node's log clock, appended."""
     request = c.T.PlanTasks.Request(tasks=GOAL)
-    planned = c.future(c.plan.call_async(request))      # the first warms the node's parser
+    planned = c.future(c.plan.call_async(request))  # the first warms the node's parser
     times = []
     for _ in range(PLANNING_CALLS):
         t0 = time.perf_counter()
@@ -342,24 +367,36 @@ def measured_goal(c: Client, figures: dict, cancel: bool, misses: list, steps: d
     started = c.event("start", since)
     figures["plan service round trip (ms)"].append(planning * 1e3)
     figures["goal accepted -> header event received (ms)"].append(
-        (c.event("header", since) - accepted) * 1e3)
+        (c.event("header", since) - accepted) * 1e3
+    )
     figures["header -> first action started, on the node's log clock (ms)"].append(
-        (c.log_clock("start", since) - c.log_clock("header", since)) * 1e3)
+        (c.log_clock("start", since) - c.log_clock("header", since)) * 1e3
+    )
     figures["goal sent -> accepted (ms)"].append((accepted - sent) * 1e3)
     figures["goal sent -> first action started (ms)"].append((started - sent) * 1e3)
     figures["goal accepted -> first action started (ms)"].append((started - accepted) * 1e3)
     figures["goal accepted -> first action, beyond planning (ms)"].append(
-        (started - accepted - planning) * 1e3)
+        (started - accepted - planning) * 1e3
+    )
     if c.ros_robot:
+
         def executing():
-            return next((t for t, goals in c.status[stati:]
-                         if any(s >= EXECUTING for g, s in goals.items() if g not in known)), None)
+            return next(
+                (
+                    t
+                    for t, goals in c.status[stati:]
+                    if any(s >= EXECUTING for g, s in goals.items() if g not in known)
+                ),
+                None,
+            )
+
         figures["goal accepted -> robot executing the first skill (ms)"].append(
-            (c.until(executing, what="first skill executing") - accepted) * 1e3)
+            (c.until(executing, what="first skill executing") - accepted) * 1e3
+        )
     cancelled = None
     if cancel:
-        c.event("start", since, nth=2)                    # the drive has started
-        if c.ros_robot:                                   # ... and the robot moves
+        c.event("start", since, nth=2)  # the drive has started
+        if c.ros_robot:  # ... and the robot moves
             stood = c.poses[-1][1]
             c.until(lambda: c.poses[-1][1] != stood or None, 10, "moving pose")
         cancelled = time.perf_counter()
@@ -372,17 +409,23 @@ def measured_goal(c: Client, figures: dict, cancel: bool, misses: list, steps: d
         c.sent.clear()
         handle.cancel_goal_async()
         c.spin(1.0)
-        raise Hung(f"no result within {RESULT_LIMIT:g} s; its last events: " + "; ".join(
-            f"{e['event']} {e['step'] or ''} {e['action'] or ''} {e['detail'] or ''}".strip()
-            for e in seen)) from None
+        raise Hung(
+            f"no result within {RESULT_LIMIT:g} s; its last events: "
+            + "; ".join(
+                f"{e['event']} {e['step'] or ''} {e['action'] or ''} {e['detail'] or ''}".strip()
+                for e in seen
+            )
+        ) from None
     done = time.perf_counter()
     if cancel:
         c.spin(AFTER_RESULT)
         logged = [json.loads(r) for topic, _, _, _, r in c.sent if topic == "events"]
         drive_verified = any(e["event"] == "verified" and e["step"] == 2 for e in logged)
         if drive_verified or result.outcome != "preempted":
-            misses.append(result.outcome + (": the drive was verified before the cancel"
-                                            if drive_verified else ""))
+            misses.append(
+                result.outcome
+                + (": the drive was verified before the cancel" if drive_verified else "")
+            )
         elif c.ros_robot:
             held, pose = held_at(c, cancelled)
             if abs(pose[0] - DRIVEN_TO[0]) + abs(pose[1] - DRIVEN_TO[1]) < 0.05:
@@ -390,12 +433,14 @@ def measured_goal(c: Client, figures: dict, cancel: bool, misses: list, steps: d
             else:
                 figures["cancel sent -> robot holding (ms)"].append((held - cancelled) * 1e3)
                 figures["cancel sent -> interrupted event (ms)"].append(
-                    (c.event("interrupted", since) - cancelled) * 1e3)
+                    (c.event("interrupted", since) - cancelled) * 1e3
+                )
         else:
             figures["cancel sent -> robot holding (ms)"].append(
-                (c.event("interrupted", since) - cancelled) * 1e3)
+                (c.event("interrupted", since) - cancelled) * 1e3
+            )
     else:
-        c.spin(0.05)        # the last events, for their delays
+        c.spin(0.05)  # the last events, for their delays
         figures["goal via ROS (s)"].append(done - sent)
         step_times([json.loads(r) for topic, _, _, _, r in c.sent if topic == "events"], steps)
     c.recording = False
@@ -444,8 +489,7 @@ def step_times(events: list, steps: dict) -> None:
         if e["event"] == "start":
             began[e["step"]] = e["t"]
         elif e["event"] == "verified" and e["step"] in began:
-            steps.setdefault((e["step"], e["action"]), []).append(
-                (e["t"] - began[e["step"]]) * 1e3)
+            steps.setdefault((e["step"], e["action"]), []).append((e["t"] - began[e["step"]]) * 1e3)
 
 
 def in_process(robot: str, steps: dict) -> float:
@@ -453,6 +497,7 @@ def in_process(robot: str, steps: dict) -> float:
     robot built beforehand; seconds. ``steps``: as :func:`step_times`."""
     import htn
     from htn.api.run import prepare
+
     plan = next(iter(htn.plan(DOMAIN, PROBLEM)))
     with prepare(plan, robot=robot, domain=DOMAIN, problem=PROBLEM) as execution:
         t0 = time.perf_counter()
@@ -468,9 +513,12 @@ def table(figures: dict, extra: dict) -> dict:
     out = {}
     for name, values in figures.items():
         if values:
-            out[name] = {"median": round(statistics.median(values), 3),
-                         "max": round(max(values), 3), "n": len(values),
-                         "values": [round(v, 3) for v in values]}
+            out[name] = {
+                "median": round(statistics.median(values), 3),
+                "max": round(max(values), 3),
+                "n": len(values),
+                "values": [round(v, 3) for v in values],
+            }
             if name in TARGETS:
                 out[name]["target"] = TARGETS[name]
     width = max(map(len, out)) + 2
@@ -486,11 +534,18 @@ def table(figures: dict, extra: dict) -> dict:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--runs", type=int, default=20)
-    ap.add_argument("--robot", default="pybullet",
-                    help="the node's robot: pybullet (in the node), ros (the robot node), ...")
-    ap.add_argument("--cancel-speed", type=float, default=1.0,
-                    help="--robot ros: the robot node's --speed for the cancelled goals "
-                         "(default 1: real time; at 0 a drive may end before the cancel)")
+    ap.add_argument(
+        "--robot",
+        default="pybullet",
+        help="the node's robot: pybullet (in the node), ros (the robot node), ...",
+    )
+    ap.add_argument(
+        "--cancel-speed",
+        type=float,
+        default=1.0,
+        help="--robot ros: the robot node's --speed for the cancelled goals "
+        "(default 1: real time; at 0 a drive may end before the cancel)",
+    )
     ap.add_argument("--domain-id", type=int, help="ROS_DOMAIN_ID (default 93; --robot ros: 94)")
     ap.add_argument("--json", type=Path, metavar="PATH", help="also write the figures here")
     args = ap.parse_args()
@@ -500,23 +555,28 @@ def main() -> None:
     import rclpy
 
     from htn.ros.interfaces import import_interfaces
+
     T = import_interfaces()
-    names = ["plan service round trip (ms)", "goal sent -> accepted (ms)",
-             "goal sent -> first action started (ms)",
-             "goal accepted -> first action started (ms)",
-             "goal accepted -> first action, beyond planning (ms)",
-             "goal accepted -> header event received (ms)",
-             "header -> first action started, on the node's log clock (ms)"]
+    names = [
+        "plan service round trip (ms)",
+        "goal sent -> accepted (ms)",
+        "goal sent -> first action started (ms)",
+        "goal accepted -> first action started (ms)",
+        "goal accepted -> first action, beyond planning (ms)",
+        "goal accepted -> header event received (ms)",
+        "header -> first action started, on the node's log clock (ms)",
+    ]
     if ros_robot:
         names.append("goal accepted -> robot executing the first skill (ms)")
-    names += ["event -> received on the action's feedback (ms)",
-              "event -> received on ~/events (ms)",
-              "event logged -> published, beyond the goal's quickest (ms)",
-              "cancel sent -> robot holding (ms)"]
+    names += [
+        "event -> received on the action's feedback (ms)",
+        "event -> received on ~/events (ms)",
+        "event logged -> published, beyond the goal's quickest (ms)",
+        "cancel sent -> robot holding (ms)",
+    ]
     if ros_robot:
         names.append("cancel sent -> interrupted event (ms)")
-    names += ["goal via ROS (s)", "htn run --sim in one process (s)",
-              "ROS overhead per goal (s)"]
+    names += ["goal via ROS (s)", "htn run --sim in one process (s)", "ROS overhead per goal (s)"]
     figures: dict = {name: [] for name in names}
     misses: list = []
     outcomes: list = []
@@ -535,14 +595,17 @@ def main() -> None:
             for i in range(args.runs):
                 for cancel in (False, True):
                     c.fresh_robot()
-                    procs = [robot_node(logs, args.cancel_speed if cancel else 0) if ros_robot
-                             else htn_node(args.robot, logs)]
+                    procs = [
+                        robot_node(logs, args.cancel_speed if cancel else 0)
+                        if ros_robot
+                        else htn_node(args.robot, logs)
+                    ]
                     try:
                         c.ready()
                         if ros_robot:
                             warm_up(c, warm_ups_failed)
                         outcomes.append(measured_goal(c, figures, cancel, misses, steps_ros))
-                    except Hung as exc:     # noted; the nodes started again
+                    except Hung as exc:  # noted; the nodes started again
                         outcomes.append(f"{'cancelled goal' if cancel else 'goal'}: {exc}")
                         if ros_robot:
                             stop([node])
@@ -552,11 +615,12 @@ def main() -> None:
                         continue
                     finally:
                         stop(procs)
-                    if not cancel:      # right after it, as the machine is now
+                    if not cancel:  # right after it, as the machine is now
                         alone = in_process("pybullet", steps_alone)
                         figures["htn run --sim in one process (s)"].append(alone)
                         figures["ROS overhead per goal (s)"].append(
-                            figures["goal via ROS (s)"][-1] - alone)
+                            figures["goal via ROS (s)"][-1] - alone
+                        )
                 print(f"run {i + 1}/{args.runs}", file=sys.stderr, flush=True)
         except Exception:
             for err in sorted(logs.glob("*.err")):
@@ -565,17 +629,21 @@ def main() -> None:
         finally:
             if node is not None:
                 stop([node])
-    extra = {"robot": args.robot, "runs": args.runs,
-             "outcomes of the goals": {o: outcomes.count(o) for o in sorted(set(outcomes))},
-             "cancels not counted (the drive had ended)": misses,
-             "benchmark wall time (s)": round(time.perf_counter() - began, 1),
-             "load average (1 min) at start, end": [load, round(os.getloadavg()[0], 2)]}
+    extra = {
+        "robot": args.robot,
+        "runs": args.runs,
+        "outcomes of the goals": {o: outcomes.count(o) for o in sorted(set(outcomes))},
+        "cancels not counted (the drive had ended)": misses,
+        "benchmark wall time (s)": round(time.perf_counter() - began, 1),
+        "load average (1 min) at start, end": [load, round(os.getloadavg()[0], 2)],
+    }
     if ros_robot:
         extra["warm-up goals that failed (tried again)"] = warm_ups_failed
         extra["robot node's --speed: measured goals, cancelled goals"] = [0, args.cancel_speed]
     out = table(figures, extra)
     out["per step, start -> verified on the log's clock (ms, medians)"] = per_step(
-        steps_ros, steps_alone)
+        steps_ros, steps_alone
+    )
     if args.json:
         args.json.write_text(json.dumps(out, indent=1) + "\n")
     c.node.destroy_node()
@@ -585,12 +653,20 @@ def main() -> None:
 def per_step(ros: dict, alone: dict) -> list:
     """Each step's time via ROS and in one process, printed and returned."""
     rows = []
-    print(f"\n{'step, start -> verified (ms, medians)':<52}{'via ROS':>10}{'alone':>10}"
-          f"{'more':>10}")
+    print(
+        f"\n{'step, start -> verified (ms, medians)':<52}{'via ROS':>10}{'alone':>10}{'more':>10}"
+    )
     for key in sorted(ros):
         r, a = statistics.median(ros[key]), statistics.median(alone.get(key, [float("nan")]))
-        rows.append({"step": key[0], "action": key[1], "via ROS": round(r, 1),
-                     "in one process": round(a, 1), "more": round(r - a, 1)})
+        rows.append(
+            {
+                "step": key[0],
+                "action": key[1],
+                "via ROS": round(r, 1),
+                "in one process": round(a, 1),
+                "more": round(r - a, 1),
+            }
+        )
         print(f"{key[0]:>2} {key[1]:<49}{r:>10.1f}{a:>10.1f}{r - a:>10.1f}")
     return rows
 

@@ -10,6 +10,7 @@ process's peak memory. Target: at least 20x faster than real time. Run::
 
 Kitchen problems (``(area ...)`` facts) run on the two-armed kitchen robot.
 """
+
 from __future__ import annotations
 
 import resource
@@ -26,8 +27,11 @@ ROOT = Path(__file__).resolve().parent.parent
 @click.option("--problem", default="bring_object", show_default=True)
 @click.option("--runs", default=5, show_default=True)
 @click.option("--faults", default="", help="e.g. slip=0.3,nav=0.3")
-@click.option("--transformed", is_flag=True,
-              help="Kitchen problems: run the plan after the plan transformations.")
+@click.option(
+    "--transformed",
+    is_flag=True,
+    help="Kitchen problems: run the plan after the plan transformations.",
+)
 def main(problem, runs, faults, transformed):
     """Time plan execution in the simulation; print the real-time factor."""
     from htn.executor.config import load_retries
@@ -45,6 +49,7 @@ def main(problem, runs, faults, transformed):
     if transformed:
         from htn.transform.framework import Workspace
         from htn.transform.registered import default_framework
+
         plan = default_framework().apply_all_transformations(Workspace.from_problem(dom, inst)).plan
     else:
         plan = next(Planner(dom, inst, record_trees=True).plans())
@@ -55,21 +60,26 @@ def main(problem, runs, faults, transformed):
         built = time.perf_counter()
         start_sim = robot.sim_time
         log = EventLog(None, clock=lambda: robot.sim_time)
-        summary = TaskDispatcher(robot, dom, inst, plan.steps, load_retries(domain), log,
-                                 tree=plan.tree).run()   # the behaviour tree htn run ticks
+        summary = TaskDispatcher(
+            robot, dom, inst, plan.steps, load_retries(domain), log, tree=plan.tree
+        ).run()  # the behaviour tree htn run ticks
         done = time.perf_counter()
         sim = robot.sim_time - start_sim
         robot.close()
         exec_factor.append(sim / (done - built))
         total_factor.append(robot.sim_time / (done - t0))
         sims.append(sim)
-        click.echo(f"run {seed}: {summary.result}, {sim:.1f} s simulated in {done - built:.3f} s "
-                   f"(+{built - t0:.3f} s to build the world): {exec_factor[-1]:.1f}x real time")
+        click.echo(
+            f"run {seed}: {summary.result}, {sim:.1f} s simulated in {done - built:.3f} s "
+            f"(+{built - t0:.3f} s to build the world): {exec_factor[-1]:.1f}x real time"
+        )
     peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-    click.echo(f"\n{problem}: median {statistics.median(exec_factor):.1f} sim-s per wall-s during "
-               f"execution (min {min(exec_factor):.1f}), {statistics.median(total_factor):.1f} "
-               f"including world building; {statistics.median(sims):.1f} s simulated per run; "
-               f"peak memory {peak_mb:.0f} MB")
+    click.echo(
+        f"\n{problem}: median {statistics.median(exec_factor):.1f} sim-s per wall-s during "
+        f"execution (min {min(exec_factor):.1f}), {statistics.median(total_factor):.1f} "
+        f"including world building; {statistics.median(sims):.1f} s simulated per run; "
+        f"peak memory {peak_mb:.0f} MB"
+    )
     ok = min(exec_factor) >= 20
     click.echo(f"at least 20x real time on every run: {ok}")
 

@@ -36,6 +36,7 @@ Run (pinned to one core, as the README of the corpus measures)::
     python benchmarks/bench_up.py --timeout 10 --repeat 3 --json up.json
     python benchmarks/bench_up.py --htn-search gbfs        # htn's heuristic search
 """
+
 from __future__ import annotations
 
 import gc
@@ -61,17 +62,23 @@ def up_test_cases() -> list:
     import unified_planning.test as up_test
     import up_test_cases
     from unified_planning.model.htn import HierarchicalProblem
-    sys.path.insert(0, os.path.dirname(up_test_cases.__file__))   # as report.py runs
+
+    sys.path.insert(0, os.path.dirname(up_test_cases.__file__))  # as report.py runs
     import builtin.hierarchical as hierarchical
+
     cases = {f"up:{k}": v for k, v in hierarchical.get_test_cases().items()}
     cases.update({f"up:{k}": v for k, v in up_test.get_test_cases().items()})
-    return [(name, tc.problem, None) for name, tc in cases.items()
-            if isinstance(tc.problem, HierarchicalProblem)]
+    return [
+        (name, tc.problem, None)
+        for name, tc in cases.items()
+        if isinstance(tc.problem, HierarchicalProblem)
+    ]
 
 
 def ipc_problems() -> list:
     """(name, problem, (domain file, problem file)) for the IPC 2020 sample."""
     from unified_planning.io import PDDLReader
+
     out = []
     for domain in sorted(IPC.glob("*/domain.hddl")):
         for pf in sorted(domain.parent.glob("*.hddl")):
@@ -99,11 +106,12 @@ def _reap(patience: float = 5.0) -> None:
             time.sleep(0.005)
 
 
-HTN_PARAMS: dict = {}      # the htn engine's params (--htn-search)
+HTN_PARAMS: dict = {}  # the htn engine's params (--htn-search)
 
 
 def solve(engine: str, problem, timeout: float, repeat: int) -> dict:
     from unified_planning.shortcuts import OneshotPlanner
+
     times, cpus, internal, result = [], [], [], None
     params = HTN_PARAMS if engine == "htn" else {}
     for _ in range(repeat):
@@ -113,22 +121,27 @@ def solve(engine: str, problem, timeout: float, repeat: int) -> dict:
             result = planner.solve(problem, timeout=timeout)
             times.append(time.perf_counter() - t0)
         own = time.process_time() - cpu0
-        gc.collect()         # ends Aries' server (outside the measured CPU time)
+        gc.collect()  # ends Aries' server (outside the measured CPU time)
         _reap()
         cpus.append(own + _children_cpu() - children0)
         internal.append(float((result.metrics or {}).get("engine_internal_time", "nan")))
         if result.status.name == "TIMEOUT":
-            break           # a repeat would only wait as long again
+            break  # a repeat would only wait as long again
     plan = result.plan
-    return {"status": result.status.name, "time": statistics.median(times),
-            "cpu": statistics.median(cpus),
-            "internal": statistics.median(internal), "plan": plan,
-            "length": len(plan.action_plan.actions) if plan is not None else None,
-            "log": [str(m) for m in (result.log_messages or []) if m.message][:3]}
+    return {
+        "status": result.status.name,
+        "time": statistics.median(times),
+        "cpu": statistics.median(cpus),
+        "internal": statistics.median(internal),
+        "plan": plan,
+        "length": len(plan.action_plan.actions) if plan is not None else None,
+        "log": [str(m) for m in (result.log_messages or []) if m.message][:3],
+    }
 
 
 def _validate(name: str, problem, plan) -> tuple[str, str]:
     from unified_planning.shortcuts import PlanValidator
+
     with PlanValidator(name=name) as v:
         res = v.validate(problem, plan)
     return res.status.name, _why(res)
@@ -140,14 +153,15 @@ def _aries_val(problem, plan, timeout: float) -> tuple:
     in a thread, and its server (a child process of this one) is killed then."""
     import signal
     import threading
+
     box: dict = {}
 
     def run():
         try:
             box["answer"] = _validate("aries-val", problem, plan)
-        except Exception as e:        # e.g. a plan over gRPC's 4 MB message limit
-            box["answer"] = (None, f"failed: {type(e).__name__}: "
-                                   f"{str(e).splitlines()[0][:200]}")
+        except Exception as e:  # e.g. a plan over gRPC's 4 MB message limit
+            box["answer"] = (None, f"failed: {type(e).__name__}: {str(e).splitlines()[0][:200]}")
+
     before = _aries_servers()
     worker = threading.Thread(target=run, daemon=True)
     worker.start()
@@ -168,7 +182,7 @@ def _aries_servers() -> set:
             text = stat.read_text()
         except OSError:
             continue
-        name, rest = text[text.index("(") + 1:text.rindex(")")], text[text.rindex(")") + 2:]
+        name, rest = text[text.index("(") + 1 : text.rindex(")")], text[text.rindex(")") + 2 :]
         if name.startswith("up-aries") and int(rest.split()[1]) == os.getpid():
             out.add(int(stat.parent.name))
     return out
@@ -178,9 +192,10 @@ def checks(problem, plan, files, validate_timeout: float = 30.0) -> tuple[str, l
     """The check letters of a plan (see the module docstring), and why any said invalid."""
     from unified_planning.engines.plan_validator import SequentialPlanValidator
     from unified_planning.shortcuts import PlanValidator
+
     notes: list = []
     seq = SequentialPlanValidator()
-    seq.skip_checks = True          # it refuses hierarchical kinds; the actions are flat
+    seq.skip_checks = True  # it refuses hierarchical kinds; the actions are flat
     res = seq.validate(problem, plan.action_plan)
     letters = "U" + ("V" if res.status.name == "VALID" else "I")
     if letters[-1] == "I":
@@ -189,9 +204,12 @@ def checks(problem, plan, files, validate_timeout: float = 30.0) -> tuple[str, l
     with PlanValidator(name="aries-val") as v:
         if not (v.supports(problem.kind) and v.supports_plan(plan.kind)):
             name = "htn"
-    status, why = (_aries_val(problem, plan, validate_timeout) if name == "aries-val"
-                   else _validate("htn", problem, plan))
-    if status is None:              # aries-val gave no answer in time: htn's validator
+    status, why = (
+        _aries_val(problem, plan, validate_timeout)
+        if name == "aries-val"
+        else _validate("htn", problem, plan)
+    )
+    if status is None:  # aries-val gave no answer in time: htn's validator
         notes.append(f"aries-val: {why}")
         name = "htn"
         status, why = _validate("htn", problem, plan)
@@ -214,10 +232,14 @@ def _htn_validate(plan, files) -> tuple[bool, str]:
     from htn.jshop.checks.validate import validate_plan
     from htn.jshop.plans.plan import Plan, Step
     from htn.jshop.readers.load import load_inputs
+
     domain, problem = load_inputs(str(files[0]), str(files[1]))
-    steps = [Step("!" + a.action.name.lower(),
-                  tuple(x.object().name.lower() for x in a.actual_parameters))
-             for a in plan.action_plan.actions]
+    steps = [
+        Step(
+            "!" + a.action.name.lower(), tuple(x.object().name.lower() for x in a.actual_parameters)
+        )
+        for a in plan.action_plan.actions
+    ]
     verdict = validate_plan(domain, problem.instances[0], Plan(steps, None))
     return verdict.valid, verdict.reason
 
@@ -227,9 +249,11 @@ def engines() -> tuple[list, list]:
     from unified_planning.shortcuts import get_environment
 
     import htn.up  # noqa: F401  (registers htn)
+
     names, notes = ["htn"], []
     try:
         import up_aries  # noqa: F401
+
         if "aries" in get_environment().factory.engines:
             names.append("aries")
         else:
@@ -240,22 +264,40 @@ def engines() -> tuple[list, list]:
 
 
 @click.command()
-@click.option("--timeout", type=float, default=30.0, show_default=True,
-              help="Seconds per engine and problem.")
-@click.option("--repeat", type=click.IntRange(min=1), default=1, show_default=True,
-              help="Solve each problem this many times; the median time is shown.")
-@click.option("--validate-timeout", type=float, default=20.0, show_default=True,
-              help="Seconds aries-val may take on one plan (it has no limit of its own); "
-                   "without its answer the plan's decomposition is checked by htn's validator.")
+@click.option(
+    "--timeout", type=float, default=30.0, show_default=True, help="Seconds per engine and problem."
+)
+@click.option(
+    "--repeat",
+    type=click.IntRange(min=1),
+    default=1,
+    show_default=True,
+    help="Solve each problem this many times; the median time is shown.",
+)
+@click.option(
+    "--validate-timeout",
+    type=float,
+    default=20.0,
+    show_default=True,
+    help="Seconds aries-val may take on one plan (it has no limit of its own); "
+    "without its answer the plan's decomposition is checked by htn's validator.",
+)
 @click.option("--only", default="", help="Problems whose name contains this text.")
-@click.option("--json", "json_path", type=click.Path(dir_okay=False),
-              help="Also write the records as JSON.")
-@click.option("--htn-search", type=click.Choice(["dfs", "gbfs", "wastar", "auto"]),
-              default="dfs", show_default=True, help="The htn engine's search option.")
+@click.option(
+    "--json", "json_path", type=click.Path(dir_okay=False), help="Also write the records as JSON."
+)
+@click.option(
+    "--htn-search",
+    type=click.Choice(["dfs", "gbfs", "wastar", "auto"]),
+    default="dfs",
+    show_default=True,
+    help="The htn engine's search option.",
+)
 def main(timeout, repeat, validate_timeout, only, json_path, htn_search):
     """htn and Aries through unified-planning on UP's hierarchical test cases and the IPC sample."""
     HTN_PARAMS["search"] = htn_search
     from unified_planning.shortcuts import get_environment
+
     get_environment().credits_stream = None
     warnings.simplefilter("ignore")
     names, notes = engines()
@@ -265,8 +307,10 @@ def main(timeout, repeat, validate_timeout, only, json_path, htn_search):
     if not IPC.is_dir():
         print(f"IPC sample not found at {IPC} (set HTN_SHARED): UP's test cases only")
     records = []
-    print(f"| problem | {' | '.join(f'{n} status | {n} s (internal) | {n} cpu s | {n} len | {n} checks' for n in names)}"
-          f" | htn/aries s | htn/aries cpu |")
+    print(
+        f"| problem | {' | '.join(f'{n} status | {n} s (internal) | {n} cpu s | {n} len | {n} checks' for n in names)}"
+        f" | htn/aries s | htn/aries cpu |"
+    )
     print("|---" * (3 + 5 * len(names)) + "|")
     for name, problem, files in problems:
         if only and only not in name:
@@ -288,21 +332,25 @@ def main(timeout, repeat, validate_timeout, only, json_path, htn_search):
 
 def _run(engine, problem, files, timeout, repeat, validate_timeout) -> dict:
     from unified_planning.shortcuts import OneshotPlanner
+
     with OneshotPlanner(name=engine) as planner:
         if not planner.supports(problem.kind):
             return {"status": "unsupported kind"}
     r = solve(engine, problem, timeout, repeat)
     plan = r.pop("plan")
-    r["checks"], r["notes"] = (checks(problem, plan, files, validate_timeout)
-                               if plan is not None else ("", []))
+    r["checks"], r["notes"] = (
+        checks(problem, plan, files, validate_timeout) if plan is not None else ("", [])
+    )
     return r
 
 
 def _cells(r: dict) -> str:
     if r["status"] == "unsupported kind":
         return "refused (kind) | - | - | - | -"
-    return (f"{r['status']} | {r['time']:.3f} ({r['internal']:.3f}) | {r['cpu']:.3f} | "
-            f"{r['length'] or '-'} | {r['checks'] or '-'}")
+    return (
+        f"{r['status']} | {r['time']:.3f} ({r['internal']:.3f}) | {r['cpu']:.3f} | "
+        f"{r['length'] or '-'} | {r['checks'] or '-'}"
+    )
 
 
 def _verdicts(r: dict) -> dict:
@@ -312,8 +360,9 @@ def _verdicts(r: dict) -> dict:
 
 def _solved(r: dict) -> bool:
     """A plan came back and UP's own validator accepts its actions."""
-    return r.get("status") in ("SOLVED_SATISFICING", "SOLVED_OPTIMALLY") and \
-        _verdicts(r).get("U", False)
+    return r.get("status") in ("SOLVED_SATISFICING", "SOLVED_OPTIMALLY") and _verdicts(r).get(
+        "U", False
+    )
 
 
 def _ratio(row, what: str):
@@ -328,15 +377,19 @@ def _summary(records, names, timeout) -> None:
         tried = [r for r in records if r[n]["status"] != "unsupported kind"]
         solved = [r for r in tried if _solved(r[n])]
         valid = [r for r in solved if all(_verdicts(r[n]).values())]
-        print(f"{n}: solved {len(solved)} of the {len(tried)} problems it supports "
-              f"({len(records)} problems, {timeout:g} s each); every check valid on "
-              f"{len(valid)}")
+        print(
+            f"{n}: solved {len(solved)} of the {len(tried)} problems it supports "
+            f"({len(records)} problems, {timeout:g} s each); every check valid on "
+            f"{len(valid)}"
+        )
     for key, what in (("ratio", "wall-clock time"), ("cpu_ratio", "CPU time")):
         ratios = [r[key] for r in records if r.get(key)]
         if ratios:
             gm = math.exp(sum(math.log(x) for x in ratios) / len(ratios))
-            print(f"htn/aries {what} on the {len(ratios)} problems both solved: geometric "
-                  f"mean {gm:.3f}, median {statistics.median(ratios):.3f}")
+            print(
+                f"htn/aries {what} on the {len(ratios)} problems both solved: geometric "
+                f"mean {gm:.3f}, median {statistics.median(ratios):.3f}"
+            )
     for r in records:
         for n in names:
             for note in r[n].get("notes", []):

@@ -11,6 +11,7 @@ is appended to ``OUT/tally.jsonl``, its whole output kept in
 kind and per exit code, failed chunks (each one's first failing input), and
 the time taken. Exit code 1 when any chunk failed.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -49,13 +50,32 @@ def main() -> int:
                 if not todo:
                     return
                 index, size = todo.pop(0)
-            env = {**os.environ, "HTN_FUZZ_INPUTS": str(size), "HTN_FUZZ_RANDOM": "1",
-                   "HTN_FUZZ_TALLY": str(tally.resolve()),
-                   "HTN_FUZZ_PLANS": str((args.out / "plans").resolve())}
-            r = subprocess.run(["nice", "-n", str(args.nice), sys.executable, "-m", "pytest",
-                                "-q", "-s", "-p", "no:cacheprovider",
-                                "tests/e2e/test_fuzz_inputs.py"],
-                               cwd=ROOT, env=env, capture_output=True, text=True)
+            env = {
+                **os.environ,
+                "HTN_FUZZ_INPUTS": str(size),
+                "HTN_FUZZ_RANDOM": "1",
+                "HTN_FUZZ_TALLY": str(tally.resolve()),
+                "HTN_FUZZ_PLANS": str((args.out / "plans").resolve()),
+            }
+            r = subprocess.run(
+                [
+                    "nice",
+                    "-n",
+                    str(args.nice),
+                    sys.executable,
+                    "-m",
+                    "pytest",
+                    "-q",
+                    "-s",
+                    "-p",
+                    "no:cacheprovider",
+                    "tests/e2e/test_fuzz_inputs.py",
+                ],
+                cwd=ROOT,
+                env=env,
+                capture_output=True,
+                text=True,
+            )
             with lock:
                 done["chunks"] += 1
                 done["inputs"] += size
@@ -65,9 +85,12 @@ def main() -> int:
                     failed.append(path)
                 took = time.monotonic() - began
                 rate = done["inputs"] / took
-                print(f"{done['chunks']}/{len(chunks)} chunks, {done['inputs']} inputs, "
-                      f"{took / 60:.1f} min, {rate:.1f} inputs/s, "
-                      f"{'FAILED ' + str(path) if r.returncode else 'ok'}", flush=True)
+                print(
+                    f"{done['chunks']}/{len(chunks)} chunks, {done['inputs']} inputs, "
+                    f"{took / 60:.1f} min, {rate:.1f} inputs/s, "
+                    f"{'FAILED ' + str(path) if r.returncode else 'ok'}",
+                    flush=True,
+                )
 
     threads = [threading.Thread(target=lane, args=(n,)) for n in range(args.lanes)]
     for t in threads:
@@ -85,21 +108,28 @@ def summary(tally: Path, failed: list, seconds: float) -> None:
             total.update(json.loads(line))
     inputs = sum(v for k, v in total.items() if k.startswith("exit "))
     print(f"\n{inputs} inputs in {seconds / 60:.1f} min")
-    print("per exit code: " + ", ".join(f"{k[5:]}: {v}" for k, v in sorted(total.items())
-                                        if k.startswith("exit ")))
+    print(
+        "per exit code: "
+        + ", ".join(f"{k[5:]}: {v}" for k, v in sorted(total.items()) if k.startswith("exit "))
+    )
     kinds = sorted({k.split(" exit ")[0][5:] for k in total if k.startswith("kind ")})
     print("per kind:")
     for kind in kinds:
-        codes = ", ".join(f"exit {k.rsplit(' ', 1)[1]}: {v}" for k, v in sorted(total.items())
-                          if k.startswith(f"kind {kind} exit "))
+        codes = ", ".join(
+            f"exit {k.rsplit(' ', 1)[1]}: {v}"
+            for k, v in sorted(total.items())
+            if k.startswith(f"kind {kind} exit ")
+        )
         print(f"  {kind}: {total['kind ' + kind]} ({codes})")
-    print("per command: " + ", ".join(f"{k[8:]}: {v}" for k, v in sorted(total.items())
-                                      if k.startswith("command ")))
+    print(
+        "per command: "
+        + ", ".join(f"{k[8:]}: {v}" for k, v in sorted(total.items()) if k.startswith("command "))
+    )
     print(f"failed chunks: {len(failed)}")
     for path in failed:
         text = path.read_text()
         at = text.find("AssertionError")
-        print(f"  {path}: {text[at:at + 400] if at >= 0 else text[-400:]}")
+        print(f"  {path}: {text[at : at + 400] if at >= 0 else text[-400:]}")
 
 
 if __name__ == "__main__":

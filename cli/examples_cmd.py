@@ -1,4 +1,5 @@
 """``htn examples [DIR]``: the bundled domains and problems; copy them to start from."""
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -29,9 +30,12 @@ def examples(dest, force):
     target = Path(dest)
     copied = copy_examples(dest, force=force)
     click.echo(f"copied {len(copied)} files to {target}/domains and {target}/problems")
-    click.echo("next:\n  cd " + click.format_filename(str(target))
-               + "\n  htn plan domains/domestic.jshop problems/bring_object.jshop -o plan.txt"
-               "\n  htn run plan.txt --robot symbolic")
+    click.echo(
+        "next:\n  cd "
+        + click.format_filename(str(target))
+        + "\n  htn plan domains/domestic.jshop problems/bring_object.jshop -o plan.txt"
+        "\n  htn run plan.txt --robot symbolic"
+    )
 
 
 def _list(rows: list[tuple[str, str, str]], root: Path) -> None:
@@ -42,6 +46,7 @@ def _list(rows: list[tuple[str, str, str]], root: Path) -> None:
     from rich.console import Console
     from rich.markup import escape
     from rich.table import Table
+
     t = Table(title=f"bundled examples ({root})", title_justify="left")
     t.add_column("file", style="bold", no_wrap=True)
     t.add_column("what it is")

@@ -7,6 +7,7 @@ Ctrl-C exits with 130, SIGTERM with 143 (both after the command's own clean-up,
 see :mod:`htn.process`), and a reader that closes the pipe early (``htn
 plan ... | head -1``) ends the command quietly with 0.
 """
+
 from __future__ import annotations
 
 import errno
@@ -78,9 +79,16 @@ def cli():
 
 
 # command name -> its module in htn.cli (the command is the module's attribute of that name)
-_COMMANDS = {"plan": "plan_cmd", "run": "run_cmd", "validate": "validate_cmd",
-             "stats": "stats_cmd", "transform": "transform_cmd", "evaluate": "evaluate_cmd",
-             "examples": "examples_cmd", "view": "view_cmd"}
+_COMMANDS = {
+    "plan": "plan_cmd",
+    "run": "run_cmd",
+    "validate": "validate_cmd",
+    "stats": "stats_cmd",
+    "transform": "transform_cmd",
+    "evaluate": "evaluate_cmd",
+    "examples": "examples_cmd",
+    "view": "view_cmd",
+}
 
 
 def _plugins() -> dict:
@@ -88,6 +96,7 @@ def _plugins() -> dict:
     packages add through the entry-point group ``htn.commands``: the command
     line imports none of them until it is asked for one."""
     from importlib.metadata import entry_points
+
     return {ep.name: ep for ep in entry_points(group="htn.commands")}
 
 
@@ -104,7 +113,7 @@ def main(argv=None, stops: Stops | None = None) -> None:
         except HtnError as exc:
             fail(exc)
             code = 2
-        except click.exceptions.Abort as exc:    # click's form of an interrupt outside a command
+        except click.exceptions.Abort as exc:  # click's form of an interrupt outside a command
             interrupt_exit(exc.__context__)
         except click.ClickException as exc:
             exc.show()
@@ -128,7 +137,7 @@ def main(argv=None, stops: Stops | None = None) -> None:
             fail(HtnError(f"cannot write: {exc.strerror or exc}", "standard output"))
             code = 2
         if stops.received is not None and not stops.reported:
-            interrupt_exit(stops.received)   # a signal the command did not report
+            interrupt_exit(stops.received)  # a signal the command did not report
     sys.exit(code or 0)
 
 

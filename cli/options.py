@@ -8,6 +8,7 @@ negatives, zero where it means nothing, fractions and values past what the
 clock or the machine can hold are usage errors (exit 2), never a traceback
 deep in the command.
 """
+
 from __future__ import annotations
 
 import math
@@ -17,9 +18,10 @@ import click
 
 from htn.process import Stops
 
-TIMEOUT_HELP = ("Wall-clock limit of the whole command in seconds, loading included "
-                "(user functions too); 'inf' for none.")
-
+TIMEOUT_HELP = (
+    "Wall-clock limit of the whole command in seconds, loading included "
+    "(user functions too); 'inf' for none."
+)
 
 
 def current_stops() -> Stops:
@@ -29,9 +31,9 @@ def current_stops() -> Stops:
     return click.get_current_context().ensure_object(Stops)
 
 
-MAX_COUNT = 2 ** 63 - 1     # what a machine word holds: C code (PyBullet, numpy) takes no more
-MAX_RUNS = 10 ** 6          # --repeat, --runs: a million runs is days of work already
-MAX_WORKERS = 256           # processes on one machine
+MAX_COUNT = 2**63 - 1  # what a machine word holds: C code (PyBullet, numpy) takes no more
+MAX_RUNS = 10**6  # --repeat, --runs: a million runs is days of work already
+MAX_WORKERS = 256  # processes on one machine
 
 
 class Timeout(click.ParamType):
@@ -49,11 +51,13 @@ class Timeout(click.ParamType):
         try:
             seconds = float(text)
         except ValueError:
-            self.fail(f"{text[:40]!r} is not a number of seconds (e.g. 10, 0.5 or inf)",
-                      param, ctx)
+            self.fail(f"{text[:40]!r} is not a number of seconds (e.g. 10, 0.5 or inf)", param, ctx)
         if math.isnan(seconds) or seconds <= 0:
-            self.fail(f"{text[:40]!r}: give a positive number of seconds (or inf for no "
-                      "limit)", param, ctx)
+            self.fail(
+                f"{text[:40]!r}: give a positive number of seconds (or inf for no limit)",
+                param,
+                ctx,
+            )
         return None if math.isinf(seconds) else seconds
 
 
@@ -67,18 +71,25 @@ class Count(click.ParamType):
         self.low, self.high = low, high
 
     def convert(self, value, param, ctx):
-        if isinstance(value, int) and not isinstance(value, bool) \
-                and self.low <= value <= self.high:
+        if (
+            isinstance(value, int)
+            and not isinstance(value, bool)
+            and self.low <= value <= self.high
+        ):
             return value
         text = str(value).strip()
         try:
-            n = int(text.replace("_", "x"), 10)     # int() takes 1_000; a user means no such thing
+            n = int(text.replace("_", "x"), 10)  # int() takes 1_000; a user means no such thing
         except ValueError:
-            self.fail(f"{text[:40]!r} is not a whole number; give one from {self.low} to "
-                      f"{self.high}", param, ctx)
+            self.fail(
+                f"{text[:40]!r} is not a whole number; give one from {self.low} to {self.high}",
+                param,
+                ctx,
+            )
         if not self.low <= n <= self.high:
-            self.fail(f"{text[:40]!r}: give a whole number from {self.low} to {self.high}",
-                      param, ctx)
+            self.fail(
+                f"{text[:40]!r}: give a whole number from {self.low} to {self.high}", param, ctx
+            )
         return n
 
     def __repr__(self) -> str:
@@ -88,9 +99,9 @@ class Count(click.ParamType):
 def memory_mb() -> int:
     """This machine's memory in MB (the most ``--max-memory`` can mean)."""
     try:
-        return max(1, os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") // 2 ** 20)
+        return max(1, os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") // 2**20)
     except (ValueError, OSError, AttributeError):
-        return MAX_COUNT // 2 ** 20
+        return MAX_COUNT // 2**20
 
 
 SEED = Count(-MAX_COUNT - 1, MAX_COUNT)

@@ -1,13 +1,14 @@
 """Shared output helpers for the command line: messages on stderr, rich
 consoles that treat a closed pipe like any other write. (Output paths and
 files replaced only whole are :mod:`htn.files`, which the use cases share.)"""
+
 from __future__ import annotations
 
 import sys
 
 import click
 
-MESSAGE_LIMIT = 1000    # characters: each quoted term is cut to 200 already
+MESSAGE_LIMIT = 1000  # characters: each quoted term is cut to 200 already
 
 
 def fail(exc) -> None:

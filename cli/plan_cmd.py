@@ -5,6 +5,7 @@ the planner finds it and then forgotten, so ``--all`` runs in flat memory
 until it ends, times out or is interrupted. ``-f json`` is JSON Lines: one
 object per plan, then one with the statistics (see the README).
 """
+
 from __future__ import annotations
 
 import json
@@ -27,53 +28,113 @@ FORMATS = ["text", "jshop", "json", "ipc"]
 @click.command("plan")
 @click.argument("domain", type=click.Path(dir_okay=False))
 @click.argument("problem", type=click.Path(dir_okay=False))
-@click.option("-n", "--plans", "n_plans", type=Count(), default=1, show_default=True,
-              help="Stop after the first N plans (per problem in the file).")
-@click.option("-a", "--all", "all_plans", is_flag=True,
-              help="Enumerate every plan (JSHOP2's -ra); stream them as they are found.")
-@click.option("-f", "--format", "fmt", type=click.Choice(FORMATS),
-              help="Output format [default: text on a terminal, else jshop]. 'jshop' prints "
-                   "exactly what JSHOP2 prints; 'json' is JSON Lines: one object per plan "
-                   "(steps, cost, task tree), then one with the statistics; 'ipc' the IPC "
-                   "2020 HTN plan format (actions and decompositions), which the "
-                   "competition's verifier reads.")
-@click.option("-o", "--output", type=click.Path(dir_okay=False),
-              help="Also write the plans (jshop format, with a header naming the domain and "
-                   "problem files, and each plan's task tree as comment lines) to this file, "
-                   "for 'htn run'.")
-@click.option("--timeout", type=Timeout(), metavar="SECONDS",
-              help=TIMEOUT_HELP + " The search stops then and keeps what was found.")
-@click.option("--functions", type=click.Path(dir_okay=False), metavar="FILE.py",
-              help="Python file whose public functions can be called with (call name ...) "
-                   "and used as :sort-by comparators.")
-@click.option("--tree", "show_tree", is_flag=True,
-              help="Show each plan's task tree (decompositions, branches, paths).")
-@click.option("--dot", type=click.Path(dir_okay=False), metavar="FILE",
-              help="Write the task tree(s) as Graphviz DOT.")
-@click.option("-q", "--quiet", is_flag=True,
-              help="Do not print domain warnings, nor why there is no plan (unless --explain).")
-@click.option("--jshop2-compat", is_flag=True,
-              help="Reproduce JSHOP2 1.0.3 exactly: a method body written (:unordered ...) "
-                   "runs in order [default: unordered, as the JSHOP2 manual says].")
-@click.option("--max-depth", type=Count(), default=DEFAULT_MAX_DEPTH,
-              show_default=True, metavar="N",
-              help="Stop a search that nests more than N method reductions without an "
-                   "operator in between (a method that decomposes into itself without end).")
-@click.option("--max-memory", type=Count(1, memory_mb()), metavar="MB",
-              help="Stop a search whose process reaches this much resident memory "
-                   "[default: 80% of the memory available, and of ulimit -v if set].")
-@click.option("--explain", is_flag=True,
-              help="Say why there is no plan (also printed when there is none): the deepest "
-                   "dead end of the search, each operator or method tried and the precondition "
-                   "literal that failed, with file:line:col.")
+@click.option(
+    "-n",
+    "--plans",
+    "n_plans",
+    type=Count(),
+    default=1,
+    show_default=True,
+    help="Stop after the first N plans (per problem in the file).",
+)
+@click.option(
+    "-a",
+    "--all",
+    "all_plans",
+    is_flag=True,
+    help="Enumerate every plan (JSHOP2's -ra); stream them as they are found.",
+)
+@click.option(
+    "-f",
+    "--format",
+    "fmt",
+    type=click.Choice(FORMATS),
+    help="Output format [default: text on a terminal, else jshop]. 'jshop' prints "
+    "exactly what JSHOP2 prints; 'json' is JSON Lines: one object per plan "
+    "(steps, cost, task tree), then one with the statistics; 'ipc' the IPC "
+    "2020 HTN plan format (actions and decompositions), which the "
+    "competition's verifier reads.",
+)
+@click.option(
+    "-o",
+    "--output",
+    type=click.Path(dir_okay=False),
+    help="Also write the plans (jshop format, with a header naming the domain and "
+    "problem files, and each plan's task tree as comment lines) to this file, "
+    "for 'htn run'.",
+)
+@click.option(
+    "--timeout",
+    type=Timeout(),
+    metavar="SECONDS",
+    help=TIMEOUT_HELP + " The search stops then and keeps what was found.",
+)
+@click.option(
+    "--functions",
+    type=click.Path(dir_okay=False),
+    metavar="FILE.py",
+    help="Python file whose public functions can be called with (call name ...) "
+    "and used as :sort-by comparators.",
+)
+@click.option(
+    "--tree",
+    "show_tree",
+    is_flag=True,
+    help="Show each plan's task tree (decompositions, branches, paths).",
+)
+@click.option(
+    "--dot",
+    type=click.Path(dir_okay=False),
+    metavar="FILE",
+    help="Write the task tree(s) as Graphviz DOT.",
+)
+@click.option(
+    "-q",
+    "--quiet",
+    is_flag=True,
+    help="Do not print domain warnings, nor why there is no plan (unless --explain).",
+)
+@click.option(
+    "--jshop2-compat",
+    is_flag=True,
+    help="Reproduce JSHOP2 1.0.3 exactly: a method body written (:unordered ...) "
+    "runs in order [default: unordered, as the JSHOP2 manual says].",
+)
+@click.option(
+    "--max-depth",
+    type=Count(),
+    default=DEFAULT_MAX_DEPTH,
+    show_default=True,
+    metavar="N",
+    help="Stop a search that nests more than N method reductions without an "
+    "operator in between (a method that decomposes into itself without end).",
+)
+@click.option(
+    "--max-memory",
+    type=Count(1, memory_mb()),
+    metavar="MB",
+    help="Stop a search whose process reaches this much resident memory "
+    "[default: 80% of the memory available, and of ulimit -v if set].",
+)
+@click.option(
+    "--explain",
+    is_flag=True,
+    help="Say why there is no plan (also printed when there is none): the deepest "
+    "dead end of the search, each operator or method tried and the precondition "
+    "literal that failed, with file:line:col.",
+)
 @click.option("--explain-all", is_flag=True, help="Like --explain, listing every dead end.")
-@click.option("--search", "search_name", type=click.Choice(list(SEARCHES)), default="dfs",
-              show_default=True,
-              help="How to search: " + "; ".join(f"{k}: {v}" for k, v in SEARCHES.items())
-                   + ". See the README (HDDL).")
-def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
-         show_tree, dot, quiet, jshop2_compat, max_depth, max_memory, explain, explain_all,
-         search_name):
+@click.option(
+    "--search",
+    "search_name",
+    type=click.Choice(list(SEARCHES)),
+    default="dfs",
+    show_default=True,
+    help="How to search: "
+    + "; ".join(f"{k}: {v}" for k, v in SEARCHES.items())
+    + ". See the README (HDDL).",
+)
+def plan(domain, problem, fmt, output, timeout, functions, show_tree, dot, quiet, **flags):
     """Find plans for PROBLEM in DOMAIN (JSHOP2 files).
 
     \b
@@ -85,10 +146,21 @@ def plan(domain, problem, n_plans, all_plans, fmt, output, timeout, functions,
     stops = current_stops()
     fmt = fmt or ("text" if stdout_is_terminal() else "jshop")
     trees = show_tree or bool(dot) or bool(output) or fmt in ("json", "ipc")
-    options = dict(plans=None if all_plans else n_plans, timeout=timeout, functions=functions,
-                   jshop2_compat=jshop2_compat, max_depth=max_depth, max_memory=max_memory,
-                   explain=explain or explain_all, explain_all=explain_all, search=search_name,
-                   trees=trees, tree_paths=show_tree or bool(dot) or fmt == "json", stops=stops)
+    explain_all = flags["explain_all"]
+    options = dict(
+        plans=None if flags["all_plans"] else flags["n_plans"],
+        timeout=timeout,
+        functions=functions,
+        jshop2_compat=flags["jshop2_compat"],
+        max_depth=flags["max_depth"],
+        max_memory=flags["max_memory"],
+        explain=flags["explain"] or explain_all,
+        explain_all=explain_all,
+        search=flags["search_name"],
+        trees=trees,
+        tree_paths=show_tree or bool(dot) or fmt == "json",
+        stops=stops,
+    )
     # -o and --dot are checked before any work, and replaced only by a
     # complete new result (htn.api.plan_files)
     with PlanFiles(output, dot, (domain, problem, functions)) as files:
@@ -109,8 +181,10 @@ def _open(domain, problem, options: dict, stops):
     a spinner says so, on a terminal, after a second; it counts toward
     --timeout too)."""
     try:
-        with deadline(stops, options["timeout"], stops.started), \
-                Phase("reading the domain and the problem"):
+        with (
+            deadline(stops, options["timeout"], stops.started),
+            Phase("reading the domain and the problem"),
+        ):
             return find_plans(domain, problem, **options)
     except UnsupportedSearch as exc:
         raise click.UsageError(exc.message) from None
@@ -123,11 +197,11 @@ def _stream(plans, files, render, stops, timeout):
         with deadline(stops, timeout, stops.started), plans, Phase("planning") as phase:
             for p in plans:
                 phase.end()
-                with stops.held():      # the files first: they outlive a closed stdout
+                with stops.held():  # the files first: they outlive a closed stdout
                     files.add(p)
                     files.count(p)
                     render.plan(p)
-                stops.raise_again()     # a Ctrl-C a finalizer swallowed
+                stops.raise_again()  # a Ctrl-C a finalizer swallowed
     except DeadlineExceeded:
         plans.stats["timed_out"] = True
     except (KeyboardInterrupt, BrokenPipeError) as exc:
@@ -138,14 +212,20 @@ def _stream(plans, files, render, stops, timeout):
 
 def _finish(plans, files, render, stop, stops, quiet, explain_all, timeout) -> None:
     """The statistics, the explanations, the warnings and the exit code."""
-    totals = files.totals(plans.stats)      # what the streams and files hold
+    totals = files.totals(plans.stats)  # what the streams and files hold
     found = files.plans
     if plans.bound is not None:
         warn(plans.bound)
     if isinstance(stop, BrokenPipeError):
-        raise stop          # the reader went away: main() exits quietly
-    if not found and not quiet and stop is None and not totals["timed_out"] \
-            and not totals["depth_limit_reached"] and not totals["memory_limit_reached"]:
+        raise stop  # the reader went away: main() exits quietly
+    if (
+        not found
+        and not quiet
+        and stop is None
+        and not totals["timed_out"]
+        and not totals["depth_limit_reached"]
+        and not totals["memory_limit_reached"]
+    ):
         plans.explain()
     if plans.explanations:
         totals["explain"] = [e.to_dict(full=explain_all) for e in plans.explanations]
@@ -166,8 +246,10 @@ def _nothing_found(fmt, totals, quiet, stop, paths) -> None:
     if fmt == "text":
         warn("no plan found")
     if totals.get("loop_cuts") and not quiet and not totals["timed_out"] and stop is None:
-        warn(f"the loop check cut {totals['loop_cuts']} reduction(s) that revisit a state: "
-             "a plan that needs them may exist (--search auto searches without it)")
+        warn(
+            f"the loop check cut {totals['loop_cuts']} reduction(s) that revisit a state: "
+            "a plan that needs them may exist (--search auto searches without it)"
+        )
     for path in paths:
         warn(f"{path}: not written (no plan)")
     sys.exit(1)
@@ -183,7 +265,7 @@ class _Renderer:
         self.problem = problem
         self.count = 0
         self._console = None
-        self.spelling: dict = {}    # lower-case name -> as the input wrote it (HDDL)
+        self.spelling: dict = {}  # lower-case name -> as the input wrote it (HDDL)
 
     @property
     def console(self):
@@ -199,18 +281,27 @@ class _Renderer:
             if self.show_tree and p.tree is not None:
                 # asked for, so on stdout (piped too), after the plan it explains
                 from .tree_view import rich_tree
+
                 self.console.print(rich_tree(p.tree))
         elif self.fmt == "text":
             self._text_plan(p)
         elif self.fmt == "ipc":
             from htn.api.plan import ipc_text
+
             sys.stdout.write(ipc_text(p, self.spelling))
             sys.stdout.flush()
         else:
-            self._json_line({"type": "plan", "instance": getattr(p, "instance", 0),
-                             "index": p.index, "cost": p.cost, "length": len(p.steps),
-                             "steps": p.lines(),
-                             "tree": p.tree.to_dict() if p.tree is not None else None})
+            self._json_line(
+                {
+                    "type": "plan",
+                    "instance": getattr(p, "instance", 0),
+                    "index": p.index,
+                    "cost": p.cost,
+                    "length": len(p.steps),
+                    "steps": p.lines(),
+                    "tree": p.tree.to_dict() if p.tree is not None else None,
+                }
+            )
 
     def _json_line(self, record: dict) -> None:
         sys.stdout.write(json.dumps(record, separators=(",", ":")) + "\n")
@@ -221,9 +312,12 @@ class _Renderer:
         from rich.table import Table
 
         from htn.api.plan import java_double
+
         c = self.console
-        c.print(f"[bold]Plan {self.count}[/bold]  cost {java_double(p.cost)}  "
-                f"{len(p.steps)} step{'s' if len(p.steps) != 1 else ''}")
+        c.print(
+            f"[bold]Plan {self.count}[/bold]  cost {java_double(p.cost)}  "
+            f"{len(p.steps)} step{'s' if len(p.steps) != 1 else ''}"
+        )
         t = Table(box=box.SIMPLE, show_header=False, padding=(0, 1))
         t.add_column(justify="right", style="dim")
         t.add_column()
@@ -232,12 +326,14 @@ class _Renderer:
         c.print(t)
         if self.show_tree and p.tree is not None:
             from .tree_view import rich_tree
+
             c.print(rich_tree(p.tree))
 
     def finish(self, totals: dict) -> None:
         if self.fmt == "json":
-            self._json_line({"type": "stats", "domain": self.domain, "problem": self.problem,
-                             **totals})
+            self._json_line(
+                {"type": "stats", "domain": self.domain, "problem": self.problem, **totals}
+            )
         elif self.fmt == "text":
             shortest = totals["shortest_plan"]
             extra = f", shortest plan {shortest} steps" if shortest is not None else ""
@@ -246,4 +342,6 @@ class _Renderer:
             self.console.print(
                 f"[bold]{totals['plans_found']}[/bold] plan(s) found; search "
                 f"{totals['search_ms']:.1f} ms{extra}; {totals['expansions']} expansions, "
-                f"{totals['backtracks']} backtracks", style="green" if self.count else "red")
+                f"{totals['backtracks']} backtracks",
+                style="green" if self.count else "red",
+            )

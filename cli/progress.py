@@ -9,13 +9,14 @@ thread); it is started from a timer thread and always stopped (and the timer
 joined) when the phase ends, also by an exception or Ctrl-C, before anything
 else is printed.
 """
+
 from __future__ import annotations
 
 import sys
 import threading
 from typing import Optional
 
-DELAY = 1.0          # seconds a phase runs before its spinner shows
+DELAY = 1.0  # seconds a phase runs before its spinner shows
 
 
 def stderr_is_terminal() -> bool:
@@ -50,6 +51,7 @@ class Phase:
             if self._ended:
                 return
             from rich.console import Console
+
             self._status = Console(stderr=True).status(self.text, spinner="dots")
             self._status.start()
 

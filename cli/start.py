@@ -12,6 +12,7 @@ What comes before this module's first line (the interpreter's own start-up,
 a few milliseconds unloaded) is outside any Python program's reach: a signal
 then ends the process as the signal's default does.
 """
+
 import os
 import signal
 
@@ -31,12 +32,21 @@ def _whole_writes() -> None:
     # sys.__stdout__ and sys.__stderr__, so the file descriptors stay open.)
     import io
     import sys
+
     for name in ("stdout", "stderr"):
         stream = getattr(sys, name)
         raw = getattr(stream, "buffer", None)
         if isinstance(raw, io.RawIOBase):
-            setattr(sys, name, io.TextIOWrapper(io.BufferedWriter(raw), encoding=stream.encoding,
-                                                errors=stream.errors, line_buffering=True))
+            setattr(
+                sys,
+                name,
+                io.TextIOWrapper(
+                    io.BufferedWriter(raw),
+                    encoding=stream.encoding,
+                    errors=stream.errors,
+                    line_buffering=True,
+                ),
+            )
 
 
 def main(argv=None):
@@ -44,14 +54,16 @@ def main(argv=None):
         signal.signal(sig, _early)
     _whole_writes()
     from htn.process import Stops, begin_process, end_process
-    stops = Stops(owned=True)       # the process is htn's: a stop may end it
+
+    stops = Stops(owned=True)  # the process is htn's: a stop may end it
     begin_process(stops)
     code = 0
     try:
         from .main import main as cli_main
+
         cli_main(argv, stops)
     except SystemExit as exc:
         code = exc.code
-    except KeyboardInterrupt as exc:    # between the command's end and its exit phase
+    except KeyboardInterrupt as exc:  # between the command's end and its exit phase
         stops.interrupt_exit(exc, now=True)
     end_process(stops, code)

@@ -1,4 +1,5 @@
 """``htn stats``: the planning paper's Table 1, for its scenarios or any problem."""
+
 from __future__ import annotations
 
 import json
@@ -11,19 +12,31 @@ from htn.process import DeadlineExceeded, deadline
 from .options import MAX_RUNS, TIMEOUT_HELP, Count, Timeout, current_stops
 from .output import console
 
-GRACE = 0.5     # seconds past --timeout before a user function is interrupted
+GRACE = 0.5  # seconds past --timeout before a user function is interrupted
 
 
 @click.command("stats")
 @click.argument("files", nargs=-1, type=click.Path(dir_okay=False))
-@click.option("--repeat", type=Count(1, MAX_RUNS), default=5, show_default=True,
-              help="Plan N times and report the median time.")
+@click.option(
+    "--repeat",
+    type=Count(1, MAX_RUNS),
+    default=5,
+    show_default=True,
+    help="Plan N times and report the median time.",
+)
 @click.option("--json", "as_json", is_flag=True, help="Print JSON instead of a table.")
-@click.option("--functions", type=click.Path(dir_okay=False), metavar="FILE.py",
-              help="Python file with user functions for (call ...).")
-@click.option("--timeout", type=Timeout(), metavar="SECONDS",
-              help=TIMEOUT_HELP + " An enumeration cut short is reported as partial; the "
-                   "repeats stop then.")
+@click.option(
+    "--functions",
+    type=click.Path(dir_okay=False),
+    metavar="FILE.py",
+    help="Python file with user functions for (call ...).",
+)
+@click.option(
+    "--timeout",
+    type=Timeout(),
+    metavar="SECONDS",
+    help=TIMEOUT_HELP + " An enumeration cut short is reported as partial; the repeats stop then.",
+)
 def stats(files, repeat, as_json, functions, timeout):
     """Plan counts, planning time, shortest plan and domain size (Table 1).
 
@@ -44,9 +57,11 @@ def stats(files, repeat, as_json, functions, timeout):
     out = console()
     out.print(_table(rows, show_paper=not files))
     done = min(r.repeats for r in rows)
-    out.print(f"[dim]time: median of {done} run(s)"
-              + (f" (of {repeat} asked: --timeout ran out)" if done < repeat else "")
-              + f"; parsing excluded; domain {rows[0].domain}[/dim]")
+    out.print(
+        f"[dim]time: median of {done} run(s)"
+        + (f" (of {repeat} asked: --timeout ran out)" if done < repeat else "")
+        + f"; parsing excluded; domain {rows[0].domain}[/dim]"
+    )
     if any(r.timed_out for r in rows):
         out.print("[yellow]some problems timed out; their counts are partial[/yellow]")
 
@@ -72,8 +87,11 @@ def _figures(files, repeat: int, functions, timeout) -> list:
             try:
                 rows.append(scenario_stats(d, p, table, repeat, until=until))
             except DeadlineExceeded:
-                click.echo(f"{p}: --timeout {timeout:g} s ran out inside a user function "
-                           "or comparator; no figures", err=True)
+                click.echo(
+                    f"{p}: --timeout {timeout:g} s ran out inside a user function "
+                    "or comparator; no figures",
+                    err=True,
+                )
                 raise SystemExit(1) from None
             for w in rows[-1].warnings:
                 if w not in shown:
@@ -103,12 +121,20 @@ def _table(rows: list, show_paper: bool):
         return f"  [dim](paper {ref['methods']} / {ref['operators']})[/dim]" if ref else ""
 
     t.add_row("solution plans", *[f"{r.plans}{paper(r, 'plans')}" for r in rows])
-    t.add_row("distinct action sequences",
-              *[f"{r.distinct_plans}{paper(r, 'distinct_plans')}" for r in rows])
-    t.add_row("time to plan (all plans)",
-              *[f"{r.plan_ms:.2f} ms{paper(r, 'plan_s', '{:g} s')}" for r in rows])
-    t.add_row("minimum plan length",
-              *[f"{r.min_length if r.min_length is not None else '-'}{paper(r, 'min_length')}"
-                for r in rows])
+    t.add_row(
+        "distinct action sequences",
+        *[f"{r.distinct_plans}{paper(r, 'distinct_plans')}" for r in rows],
+    )
+    t.add_row(
+        "time to plan (all plans)",
+        *[f"{r.plan_ms:.2f} ms{paper(r, 'plan_s', '{:g} s')}" for r in rows],
+    )
+    t.add_row(
+        "minimum plan length",
+        *[
+            f"{r.min_length if r.min_length is not None else '-'}{paper(r, 'min_length')}"
+            for r in rows
+        ],
+    )
     t.add_row("methods / operators", *[f"{r.methods} / {r.operators}{sizes(r)}" for r in rows])
     return t

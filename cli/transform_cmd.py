@@ -1,4 +1,5 @@
 """``htn transform DOMAIN PROBLEM``: apply plan transformations to a plan's task tree."""
+
 from __future__ import annotations
 
 import json
@@ -16,20 +17,33 @@ from .progress import Phase
 @click.command("transform")
 @click.argument("domain", type=click.Path(dir_okay=False))
 @click.argument("problem", type=click.Path(dir_okay=False))
-@click.option("--rules", metavar="NAME,...",
-              help="Only these transformations (default: all registered: tray, container, "
-                   "both-hands).")
-@click.option("--metric", type=click.Choice(["navigation", "manipulation", "actions",
-                                              "navigation-static"]),
-              default="navigation", show_default=True,
-              help="A transformation that makes this worse (mean over 64 projected runs; "
-                   "navigation-static: distance between area centres) is rolled back.")
-@click.option("-o", "--output", type=click.Path(dir_okay=False),
-              help="Write the transformed plan (jshop format with header, rewritten task list and "
-                   "task tree) for 'htn run'.")
+@click.option(
+    "--rules",
+    metavar="NAME,...",
+    help="Only these transformations (default: all registered: tray, container, both-hands).",
+)
+@click.option(
+    "--metric",
+    type=click.Choice(["navigation", "manipulation", "actions", "navigation-static"]),
+    default="navigation",
+    show_default=True,
+    help="A transformation that makes this worse (mean over 64 projected runs; "
+    "navigation-static: distance between area centres) is rolled back.",
+)
+@click.option(
+    "-o",
+    "--output",
+    type=click.Path(dir_okay=False),
+    help="Write the transformed plan (jshop format with header, rewritten task list and "
+    "task tree) for 'htn run'.",
+)
 @click.option("--json", "as_json", is_flag=True, help="Print JSON instead of text.")
-@click.option("--timeout", type=Timeout(), metavar="SECONDS",
-              help=TIMEOUT_HELP + " -o is written only if all is done in time.")
+@click.option(
+    "--timeout",
+    type=Timeout(),
+    metavar="SECONDS",
+    help=TIMEOUT_HELP + " -o is written only if all is done in time.",
+)
 def transform(domain, problem, rules, metric, output, as_json, timeout):
     """Plan PROBLEM, transform its task tree with the registered rules
     (tray > container > both-hands), check and print what changed.
@@ -46,10 +60,20 @@ def transform(domain, problem, rules, metric, output, as_json, timeout):
         # planning and each rule's projected runs take seconds: a spinner
         # says which (on a terminal, after a second)
         stops = current_stops()
-        with deadline(stops, timeout, stops.started), \
-                Phase("reading the domain and the problem") as phase:
-            done = transform_plan(domain, problem, rules=rules, metric=metric, on_warning=warn,
-                                  on_phase=phase.update, stops=stops, output=output)
+        with (
+            deadline(stops, timeout, stops.started),
+            Phase("reading the domain and the problem") as phase,
+        ):
+            done = transform_plan(
+                domain,
+                problem,
+                rules=rules,
+                metric=metric,
+                on_warning=warn,
+                on_phase=phase.update,
+                stops=stops,
+                output=output,
+            )
     except UnknownRules as exc:
         raise click.BadParameter(exc.message, param_hint="--rules") from None
     result = done.document
@@ -66,6 +90,7 @@ def transform(domain, problem, rules, metric, output, as_json, timeout):
         for t in ch["tasks"]:
             click.echo(f"    {t}")
     o, t = result["original"], result["transformed"]
-    click.echo(f"\nplan: {o['steps']} -> {t['steps']} steps; {metric}: "
-               f"{o[metric]:.2f} -> {t[metric]:.2f}")
+    click.echo(
+        f"\nplan: {o['steps']} -> {t['steps']} steps; {metric}: {o[metric]:.2f} -> {t[metric]:.2f}"
+    )
     sys.stdout.flush()

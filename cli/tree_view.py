@@ -2,6 +2,7 @@
 behaviour tree being executed (live, on a terminal) and the one line per
 event a pipe gets (display only; the trees live in ``htn.jshop.plans`` and
 ``htn.executor``)."""
+
 from __future__ import annotations
 
 from collections import deque
@@ -16,9 +17,16 @@ from rich.tree import Tree
 from htn.process import silence_stdout
 
 STATUS_STYLE = {"✓": "green", "✕": "bold red", "*": "yellow", "-": "dim"}
-LINE_STYLE = {"verified": "green", "failed": "red", "aborted": "bold red", "fault": "yellow",
-              "retrying": "yellow", "replanned": "cyan", "replan_failed": "bold red",
-              "interrupted": "bold red"}
+LINE_STYLE = {
+    "verified": "green",
+    "failed": "red",
+    "aborted": "bold red",
+    "fault": "yellow",
+    "retrying": "yellow",
+    "replanned": "cyan",
+    "replan_failed": "bold red",
+    "interrupted": "bold red",
+}
 
 
 def rich_tree(tree):
@@ -37,12 +45,15 @@ def _label(node) -> str:
     if node.step is not None:
         return f"[cyan]{text}[/cyan] [dim]step {node.step + 1}[/dim]"
     if node.method:
-        return (f"[bold]{text}[/bold] [dim]method #{node.method_index + 1}, branch "
-                f"{escape(node.branch)} · {escape(node.path)}[/dim]")
+        return (
+            f"[bold]{text}[/bold] [dim]method #{node.method_index + 1}, branch "
+            f"{escape(node.branch)} · {escape(node.path)}[/dim]"
+        )
     return f"{text} [red](not decomposed)[/red]"
 
 
 # ---------------------------------------------------------------- the behaviour tree, live
+
 
 class Row:
     __slots__ = ("depth", "mark", "text", "note", "must")
@@ -74,7 +85,7 @@ class GraftedSteps:
     rebases it on the old one's), the root by the empty path."""
 
     def __init__(self):
-        self.above: dict = {}         # id(action context) -> (context, the paths above it)
+        self.above: dict = {}  # id(action context) -> (context, the paths above it)
 
     def counts(self, root, done) -> dict:
         """``task path -> verified steps below it that are gone`` (``done``:
@@ -130,8 +141,9 @@ def behaviour_rows(root, running, failed, events: dict, gone: dict | None = None
                 note = f"try {ctx.attempt} · {events.get(id(ctx), '')}"
             rows.append(Row(depth, mark, ctx.text, note, on_path))
             if on_path and ctx.holds and running is ctx and failed is not ctx:
-                rows.append(Row(depth + 1, "*", "execute | hold: " + ", ".join(ctx.holds),
-                                must=True))
+                rows.append(
+                    Row(depth + 1, "*", "execute | hold: " + ", ".join(ctx.holds), must=True)
+                )
             continue
         ctxs = _actions(b)
         mark = _mark(ctxs, focus if focus is running else None, failed)
@@ -187,13 +199,14 @@ class LiveTreeView:
     in the terminal after the run."""
 
     def __init__(self, dispatcher_ref, console=None):
-        self.dispatcher = dispatcher_ref      # a callable returning the dispatcher
+        self.dispatcher = dispatcher_ref  # a callable returning the dispatcher
         self.console = console or Console()
-        self.last: dict = {}                  # id(action context) -> last event text
+        self.last: dict = {}  # id(action context) -> last event text
         self.header = ""
         self.grafted = GraftedSteps()
-        self.live = Live(console=self.console, auto_refresh=False, transient=False,
-                         vertical_overflow="crop")
+        self.live = Live(
+            console=self.console, auto_refresh=False, transient=False, vertical_overflow="crop"
+        )
 
     def __enter__(self):
         self.live.__enter__()
@@ -208,14 +221,16 @@ class LiveTreeView:
         if d is None or rec["event"] in ("header", "summary", "tree"):
             return
         from htn.api.run import event_line
+
         line = event_line(rec)
-        if line is not None:        # printed above the live part, which is redrawn below
+        if line is not None:  # printed above the live part, which is redrawn below
             self.console.print(Text(line, style=LINE_STYLE.get(rec["event"], "")))
         ctx = d.running
         if ctx is not None and rec["event"] not in ("feedback",):
             self.last[id(ctx)] = f"{rec['event']} {rec['detail']}"[:60]
-        self.header = (f"sim {rec['sim_t']:.1f} s · {rec['event']}"
-                       + (f" · step {rec['step']}" if rec["step"] else ""))
+        self.header = f"sim {rec['sim_t']:.1f} s · {rec['event']}" + (
+            f" · step {rec['step']}" if rec["step"] else ""
+        )
         self._draw()
 
     def _draw(self) -> None:
@@ -223,12 +238,14 @@ class LiveTreeView:
         if d is None:
             return
         height = max(3, self.console.size.height - 3)
-        rows = behaviour_rows(d.root, d.running, d.failed, self.last,
-                              self.grafted.counts(d.root, d.done))
+        rows = behaviour_rows(
+            d.root, d.running, d.failed, self.last, self.grafted.counts(d.root, d.done)
+        )
         shown = fit(rows, height)
         below = bool(shown) and shown[-1][0] is not rows[-1]
-        self.live.update(Group(Text(self.header, style="bold"), render_rows(shown, below)),
-                         refresh=True)
+        self.live.update(
+            Group(Text(self.header, style="bold"), render_rows(shown, below)), refresh=True
+        )
 
 
 class PlainView:
@@ -246,6 +263,7 @@ class PlainView:
 
     def event(self, rec) -> None:
         from htn.api.run import event_line
+
         line = event_line(rec)
         if line is None:
             return

@@ -1,4 +1,5 @@
 """``htn validate DOMAIN PROBLEM PLAN``: replay plans from the initial state."""
+
 from __future__ import annotations
 
 import sys
@@ -12,10 +13,18 @@ from .options import TIMEOUT_HELP, Count, Timeout, current_stops
 @click.argument("domain", type=click.Path(dir_okay=False))
 @click.argument("problem", type=click.Path(dir_okay=False))
 @click.argument("plan_file", metavar="PLAN", type=click.Path(dir_okay=False))
-@click.option("--plan-index", type=Count(), metavar="N",
-              help="Validate only the N-th plan of the file [default: every plan].")
-@click.option("--functions", type=click.Path(dir_okay=False), metavar="FILE.py",
-              help="Python file with user functions for (call ...).")
+@click.option(
+    "--plan-index",
+    type=Count(),
+    metavar="N",
+    help="Validate only the N-th plan of the file [default: every plan].",
+)
+@click.option(
+    "--functions",
+    type=click.Path(dir_okay=False),
+    metavar="FILE.py",
+    help="Python file with user functions for (call ...).",
+)
 @click.option("--timeout", type=Timeout(), metavar="SECONDS", help=TIMEOUT_HELP)
 @click.option("-q", "--quiet", is_flag=True, help="Print only failures.")
 def validate(domain, problem, plan_file, plan_index, functions, timeout, quiet):
@@ -42,14 +51,17 @@ def validate(domain, problem, plan_file, plan_index, functions, timeout, quiet):
     from htn.api.validate import ipc_text
     from htn.api.validate import validate as validate_plans
     from htn.process import deadline
+
     stops = current_stops()
     with deadline(stops, timeout, stops.started):
         text = ipc_text(plan_file)
         if text is not None:
-            sys.exit(_validate_ipc(domain, problem, plan_file, text, plan_index, functions,
-                                   quiet, stops))
-        checked = validate_plans(domain, problem, plan_file, plan_index=plan_index,
-                                 functions=functions, stops=stops)
+            sys.exit(
+                _validate_ipc(domain, problem, plan_file, text, plan_index, functions, quiet, stops)
+            )
+        checked = validate_plans(
+            domain, problem, plan_file, plan_index=plan_index, functions=functions, stops=stops
+        )
     bad = 0
     for c in checked:
         label = f"plan {c.plan.index + 1}"
@@ -67,22 +79,31 @@ def validate(domain, problem, plan_file, plan_index, functions, timeout, quiet):
 
 def _validate_ipc(domain, problem, plan_file, text, plan_index, functions, quiet, stops) -> int:
     from htn.api.validate import validate_ipc
-    results = validate_ipc(domain, problem, plan_file, plan_index=plan_index,
-                           functions=functions, text=text, stops=stops)
+
+    results = validate_ipc(
+        domain,
+        problem,
+        plan_file,
+        plan_index=plan_index,
+        functions=functions,
+        text=text,
+        stops=stops,
+    )
     bad = 0
     for p, verdict in results:
         label = f"plan {p.index + 1}"
         if verdict.valid:
             if not quiet:
-                click.echo(f"{label}: valid, {verdict.actions} actions, "
-                           f"{verdict.decompositions} decompositions")
+                click.echo(
+                    f"{label}: valid, {verdict.actions} actions, "
+                    f"{verdict.decompositions} decompositions"
+                )
             continue
         bad += 1
         for f in verdict.findings[:10]:
             click.echo(f"{plan_file}:{f.line}:{f.col}: {label}: {f.message}", err=True)
         if len(verdict.findings) > 10:
-            click.echo(f"{plan_file}: {label}: ... and {len(verdict.findings) - 10} more",
-                       err=True)
+            click.echo(f"{plan_file}: {label}: ... and {len(verdict.findings) - 10} more", err=True)
     if len(results) > 1 and not quiet:
         click.echo(f"{len(results) - bad} of {len(results)} plans valid")
     return 1 if bad else 0

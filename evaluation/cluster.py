@@ -9,6 +9,7 @@ it finishes, in whatever order. Dask gives the batches of a lost worker to
 the others; the caller keys results by run number, so nothing is counted
 twice.
 """
+
 from __future__ import annotations
 
 import logging
@@ -26,6 +27,7 @@ class ClusterError(RuntimeError):
 
 class InProcess:
     """Runs the batches one after another in this process."""
+
     workers = 1
     deferred = False
     notes: list = []
@@ -42,7 +44,7 @@ class DaskRunner:
 
     def __init__(self, client):
         self.client = client
-        self.notes: list[str] = []      # one-line warnings about the cluster
+        self.notes: list[str] = []  # one-line warnings about the cluster
 
     @property
     def workers(self) -> int:
@@ -62,12 +64,14 @@ class DaskRunner:
     def _collect(self, futures: list) -> Iterator:
         from distributed import as_completed
         from distributed.scheduler import KilledWorker
+
         try:
             for _, result in as_completed(futures, loop=self.client.loop, with_results=True):
                 yield result
         except KilledWorker as exc:
-            raise ClusterError(f"a batch of runs was lost with every worker that took it "
-                               f"({exc}); giving up") from None
+            raise ClusterError(
+                f"a batch of runs was lost with every worker that took it ({exc}); giving up"
+            ) from None
         except (ImportError, RuntimeError) as exc:
             # e.g. a worker without pybullet, or Dask's "Error during
             # deserialization of the task graph" caused by one
@@ -99,7 +103,7 @@ def _lacking_htn(client) -> list[str]:
     try:
         if not client.run_on_scheduler(probe):
             lacking.insert(0, "the scheduler")
-    except Exception:   # a scheduler may refuse to run code; its error comes later then
+    except Exception:  # a scheduler may refuse to run code; its error comes later then
         pass
     return lacking
 
@@ -108,13 +112,20 @@ def _version_notes(caught) -> list[str]:
     """Dask's version-mismatch warnings as one line each."""
     notes = []
     for w in caught:
-        rows = [[c.strip() for c in line.strip("|").split("|")]
-                for line in str(w.message).splitlines() if line.startswith("|")]
+        rows = [
+            [c.strip() for c in line.strip("|").split("|")]
+            for line in str(w.message).splitlines()
+            if line.startswith("|")
+        ]
         if len(rows) > 1:
             header = rows[0][1:]
-            notes.append("package versions differ on the Dask cluster: " + "; ".join(
-                f"{row[0]} " + ", ".join(f"{h.lower()} {v}" for h, v in zip(header, row[1:]))
-                for row in rows[1:]))
+            notes.append(
+                "package versions differ on the Dask cluster: "
+                + "; ".join(
+                    f"{row[0]} " + ", ".join(f"{h.lower()} {v}" for h, v in zip(header, row[1:]))
+                    for row in rows[1:]
+                )
+            )
         else:
             notes.append(" ".join(str(w.message).split()))
     return notes
@@ -125,6 +136,7 @@ def check_scheduler_address(address: str) -> None:
     from distributed.comm import parse_address
     from distributed.comm.addressing import parse_host_port
     from distributed.comm.registry import backends
+
     try:
         scheme, location = parse_address(address, strict=True)
         if scheme not in backends:
@@ -134,15 +146,22 @@ def check_scheduler_address(address: str) -> None:
             if not host or not 0 < port < 65536:
                 raise ValueError("expected HOST:PORT")
     except ValueError as exc:
-        raise HtnError(f"--scheduler {address}: not a Dask scheduler address "
-                       f"like tcp://HOST:PORT ({exc})") from None
+        raise HtnError(
+            f"--scheduler {address}: not a Dask scheduler address like tcp://HOST:PORT ({exc})"
+        ) from None
 
 
 def _quiet_dask() -> None:
     # Dask logs worker losses and restarts at WARNING; the evaluation
     # survives them, so the user needs only errors
-    for name in ("distributed", "distributed.client", "distributed.scheduler",
-                 "distributed.nanny", "distributed.worker", "distributed.core"):
+    for name in (
+        "distributed",
+        "distributed.client",
+        "distributed.scheduler",
+        "distributed.nanny",
+        "distributed.worker",
+        "distributed.core",
+    ):
         logging.getLogger(name).setLevel(logging.ERROR)
 
 
@@ -159,7 +178,7 @@ class LocalWorkers:
         self.requested = workers
         self.preload = preload
         self.notes: list[str] = []
-        self.started_in: Optional[float] = None     # seconds the start took
+        self.started_in: Optional[float] = None  # seconds the start took
         self._cluster = self._client = self._runner = None
         self._lock = threading.Lock()
         self._early: Optional[threading.Thread] = None
@@ -173,15 +192,16 @@ class LocalWorkers:
     def start_soon(self, around=nullcontext) -> None:
         """Begin the start in a thread (inside the context ``around()``);
         :meth:`start` waits for it and raises what it raised."""
+
         def start() -> None:
             try:
                 with around():
                     self.start()
-            except BaseException as exc:        # re-raised by start()
+            except BaseException as exc:  # re-raised by start()
                 self._early_error = exc
+
         if self._early is None:
-            self._early = threading.Thread(target=start, name="htn: starting workers",
-                                           daemon=True)
+            self._early = threading.Thread(target=start, name="htn: starting workers", daemon=True)
             self._early.start()
 
     @property
@@ -201,6 +221,7 @@ class LocalWorkers:
     def _start(self) -> "DaskRunner":
         if self._runner is None:
             import time
+
             t0 = time.perf_counter()
             self._cluster, self._client = start_local_cluster(self.requested, self.preload)
             # up means registered with the scheduler and running
@@ -208,8 +229,9 @@ class LocalWorkers:
                 self._client.wait_for_workers(self.requested, timeout=START_TIMEOUT)
             except TimeoutError:
                 self.close()
-                raise ClusterError(f"{self.requested} local workers were not up after "
-                                   f"{START_TIMEOUT} s") from None
+                raise ClusterError(
+                    f"{self.requested} local workers were not up after {START_TIMEOUT} s"
+                ) from None
             self._runner = DaskRunner(self._client)
             self.started_in = time.perf_counter() - t0
         return self._runner
@@ -219,14 +241,18 @@ class LocalWorkers:
 
     def close(self) -> None:
         if self._early is not None:
-            self._early.join()      # a cluster still starting is closed once up
+            self._early.join()  # a cluster still starting is closed once up
         if self._client is not None:
             # a study stopped midway (Ctrl-C, --timeout) cancels the work the
             # scheduler is taking in, which it logs as an error as its loop
             # ends, after close() has returned: no error of the user's. The
             # next cluster's start sets the level back (_quiet_dask)
-            for name in ("distributed", "distributed.scheduler", "distributed.client",
-                         "distributed.core"):
+            for name in (
+                "distributed",
+                "distributed.scheduler",
+                "distributed.client",
+                "distributed.core",
+            ):
                 logging.getLogger(name).setLevel(logging.CRITICAL)
             self._client.close()
             self._cluster.close()
@@ -242,7 +268,7 @@ class LocalWorkers:
 # takes 0.1-0.4 s. On a busy machine all of it takes longer, as the runs do.
 START_BASE = 2.0
 START_PER_WORKER = 0.25
-START_TIMEOUT = 120     # seconds the workers may take to be up, on a machine ever so busy
+START_TIMEOUT = 120  # seconds the workers may take to be up, on a machine ever so busy
 
 
 def start_seconds(workers: int) -> float:
@@ -262,21 +288,28 @@ def start_local_cluster(workers: int, preload: tuple = ("htn.evaluation.runs",))
     import dask
     from distributed import Client
     from distributed import LocalCluster as DaskLocalCluster
+
     settings = {
         # the workers' statistical profiler feeds the dashboard, which is not
         # started; sampling the runs' Python stacks every 10 ms slows them
-        "distributed.worker.profile.enabled": False}
+        "distributed.worker.profile.enabled": False
+    }
     if "forkserver" in multiprocessing.get_all_start_methods():
         settings["distributed.worker.multiprocessing-method"] = "forkserver"
     with dask.config.set(settings):
         if "distributed.worker.multiprocessing-method" in settings:
             _preload_forkserver(preload)
         cluster = DaskLocalCluster(
-            n_workers=workers, threads_per_worker=1, processes=True,
-            dashboard_address=None, silence_logs=logging.ERROR, preload=list(preload),
+            n_workers=workers,
+            threads_per_worker=1,
+            processes=True,
+            dashboard_address=None,
+            silence_logs=logging.ERROR,
+            preload=list(preload),
             # no dashboard; its HTTP server on any free port, not on 8787, so that
             # two evaluations at once do not warn about the port
-            scheduler_kwargs={"dashboard": False, "dashboard_address": ":0"})
+            scheduler_kwargs={"dashboard": False, "dashboard_address": ":0"},
+        )
     return cluster, Client(cluster, set_as_default=False)
 
 
@@ -287,15 +320,24 @@ def _preload_forkserver(preload: tuple) -> None:
 
     from distributed.utils import get_mp_context
     from distributed.versions import optional_packages, required_packages
+
     context = get_mp_context()
-    modules = ["distributed", *(p for p in (*required_packages, *optional_packages)
-                                if importlib.util.find_spec(p) is not None), *preload]
+    modules = [
+        "distributed",
+        *(
+            p
+            for p in (*required_packages, *optional_packages)
+            if importlib.util.find_spec(p) is not None
+        ),
+        *preload,
+    ]
     context.set_forkserver_preload(list(dict.fromkeys(modules)))
 
 
 @contextmanager
-def open_runner(workers: int = 1, scheduler: Optional[str] = None,
-                preload: tuple = ("htn.evaluation.runs",)):
+def open_runner(
+    workers: int = 1, scheduler: Optional[str] = None, preload: tuple = ("htn.evaluation.runs",)
+):
     """A runner for ``workers`` processes (1: this process; more: a local
     Dask cluster, started when a study is worth it, see :class:`LocalWorkers`),
     or for the Dask cluster whose scheduler is at ``scheduler``. The
@@ -314,27 +356,32 @@ def open_runner(workers: int = 1, scheduler: Optional[str] = None,
     _quiet_dask()
     import dask
     from distributed import Client
+
     check_scheduler_address(scheduler)
     timeout = dask.config.get("distributed.comm.timeouts.connect")
     from distributed.versions import VersionMismatchWarning
+
     try:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", VersionMismatchWarning)
             client = Client(scheduler, timeout=timeout, set_as_default=False)
     except OSError as exc:
-        raise HtnError(f"--scheduler {scheduler}: cannot reach the Dask scheduler "
-                       f"({exc})") from None
+        raise HtnError(
+            f"--scheduler {scheduler}: cannot reach the Dask scheduler ({exc})"
+        ) from None
     try:
         client.wait_for_workers(1, timeout=timeout)
         lacking = _lacking_htn(client)
     except TimeoutError:
         client.close()
-        raise HtnError(f"--scheduler {scheduler}: the scheduler has no workers "
-                       f"(waited {timeout})") from None
+        raise HtnError(
+            f"--scheduler {scheduler}: the scheduler has no workers (waited {timeout})"
+        ) from None
     if lacking:
         client.close()
-        raise HtnError(f"--scheduler {scheduler}: htn is not installed on "
-                       f"{', '.join(lacking)}; {NEEDS}")
+        raise HtnError(
+            f"--scheduler {scheduler}: htn is not installed on {', '.join(lacking)}; {NEEDS}"
+        )
     try:
         runner = DaskRunner(client)
         runner.notes = _version_notes(caught)

@@ -24,6 +24,7 @@ A study whose runs are known to be long (PyBullet's: a run takes half a
 second at the least) and many enough starts them even before, beside its
 planning (:func:`start_early`).
 """
+
 from __future__ import annotations
 
 import os
@@ -34,19 +35,20 @@ from contextlib import contextmanager
 from dataclasses import dataclass, field
 from typing import Callable, Optional
 
-EFFICIENCY = 0.9        # of each worker, against this process (sending tasks, results)
-MARGIN = 1.15           # the workers must be this much faster to be started
-SWITCH_INTERVAL = 0.0002    # seconds between GIL hand-overs while the workers start
+EFFICIENCY = 0.9  # of each worker, against this process (sending tasks, results)
+MARGIN = 1.15  # the workers must be this much faster to be started
+SWITCH_INTERVAL = 0.0002  # seconds between GIL hand-overs while the workers start
 
 
 @dataclass
 class Projection:
     """The rest of a study, projected from the batches run so far."""
-    runs: int                   # runs of the study
-    left: int                   # runs not yet done
-    per_run: float              # seconds per run (every plan once), measured here
+
+    runs: int  # runs of the study
+    left: int  # runs not yet done
+    per_run: float  # seconds per run (every plan once), measured here
     workers: int
-    start: float                # seconds to start the workers
+    start: float  # seconds to start the workers
     cores: int = field(default_factory=lambda: os.cpu_count() or 1)
 
     @property
@@ -72,20 +74,30 @@ class Projection:
         if self.parallel == 1:
             return f"{head}, and this machine has one core: running in this process"
         if total <= self.start:
-            return (f"{head}, less than starting {self.workers} workers (about "
-                    f"{_seconds(self.start)}): running in this process")
+            return (
+                f"{head}, less than starting {self.workers} workers (about "
+                f"{_seconds(self.start)}): running in this process"
+            )
         with_workers = self.per_run * (self.runs - self.left) + self.on_workers
-        return (f"{head}; about {_seconds(with_workers)} with {self.workers} workers, "
-                f"{_seconds(self.start)} of it to start them: running in this process")
+        return (
+            f"{head}; about {_seconds(with_workers)} with {self.workers} workers, "
+            f"{_seconds(self.start)} of it to start them: running in this process"
+        )
 
 
 def _seconds(s: float) -> str:
     return f"{s:.1f} s" if s < 10 else f"{s:.0f} s"
 
 
-def place(runner, tasks: list, runs_in: Callable[[tuple], float], function: Callable,
-          take: Callable[[list], None], description: str,
-          say: Optional[Callable[[str], None]] = None):
+def place(
+    runner,
+    tasks: list,
+    runs_in: Callable[[tuple], float],
+    function: Callable,
+    take: Callable[[list], None],
+    description: str,
+    say: Optional[Callable[[str], None]] = None,
+):
     """Run ``tasks`` (batches) in this process until it is clear where the
     rest should go; return the runner for the rest and an iterator over the
     results of the tasks left. ``runner`` is a not yet started
@@ -95,17 +107,23 @@ def place(runner, tasks: list, runs_in: Callable[[tuple], float], function: Call
     says why the runs stay here, if they do. Workers that
     :func:`start_early` began to start get the tasks once up, unmeasured."""
     from .cluster import InProcess, start_seconds
+
     if not tasks:
         return InProcess(), iter(())
-    if getattr(runner, "starting", False):     # started early: no need to measure
+    if getattr(runner, "starting", False):  # started early: no need to measure
         starter = _Starter(runner, tasks, function, begun=0)
         starter.run_here(take)
         return starter.result()
     runs, first = sum(runs_in(t) for t in tasks), runs_in(tasks[0])
 
     def projection(seconds: float) -> Projection:
-        return Projection(round(runs), runs - first, seconds / first, runner.requested,
-                          start_seconds(runner.requested))
+        return Projection(
+            round(runs),
+            runs - first,
+            seconds / first,
+            runner.requested,
+            start_seconds(runner.requested),
+        )
 
     # CPU time of this thread: on a machine others share, waiting for a core
     # is not the study's cost (the workers would wait as long), the start-up
@@ -115,9 +133,14 @@ def place(runner, tasks: list, runs_in: Callable[[tuple], float], function: Call
     now = time.thread_time if clock is None else lambda: time.clock_gettime(clock)
     t0 = now()
     starter = None
-    if clock is not None:           # another thread can read this one's clock
-        starter = _Starter(runner, tasks, function, begun=1,
-                           when=lambda: projection(now() - t0).worth_the_workers())
+    if clock is not None:  # another thread can read this one's clock
+        starter = _Starter(
+            runner,
+            tasks,
+            function,
+            begun=1,
+            when=lambda: projection(now() - t0).worth_the_workers(),
+        )
     try:
         take(function(*tasks[0]))
     except BaseException:
@@ -126,7 +149,7 @@ def place(runner, tasks: list, runs_in: Callable[[tuple], float], function: Call
         raise
     seconds = now() - t0
     if starter is not None and not starter.stop():
-        starter = None                  # the first batch was too short to start them
+        starter = None  # the first batch was too short to start them
     if starter is None and projection(seconds).worth_the_workers():
         starter = _Starter(runner, tasks, function, begun=1)
     if starter is not None:
@@ -144,16 +167,18 @@ def start_early(runner, runs: int, plans: int, least: float) -> None:
     start then hides behind the planning too. Otherwise :func:`place`
     measures first."""
     from .cluster import start_seconds
+
     if not getattr(runner, "deferred", False) or least <= 0 or runs <= 0:
         return
-    projection = Projection(runs, runs, least * plans, runner.requested,
-                            start_seconds(runner.requested))
+    projection = Projection(
+        runs, runs, least * plans, runner.requested, start_seconds(runner.requested)
+    )
     if projection.worth_the_workers():
         runner.start_soon(fast_switching)
 
 
 _switching = threading.Lock()
-_switchers = [0, None]          # threads starting workers; the interval before them
+_switchers = [0, None]  # threads starting workers; the interval before them
 
 
 def _switch_fast() -> None:
@@ -191,7 +216,7 @@ def _thread_clock() -> Optional[int]:
     """The CPU-time clock of the calling thread, which another thread can read."""
     try:
         return time.pthread_getcpuclockid(threading.get_ident())
-    except (AttributeError, OSError):   # not on this platform
+    except (AttributeError, OSError):  # not on this platform
         return None
 
 
@@ -200,19 +225,26 @@ class _Starter:
     given) while this process runs the tasks; once they are up, the thread
     hands them every task not yet begun here."""
 
-    POLL = 0.02                         # seconds between looks at ``when()``
+    POLL = 0.02  # seconds between looks at ``when()``
 
-    def __init__(self, runner, tasks: list, function: Callable, begun: int,
-                 when: Optional[Callable[[], bool]] = None):
+    def __init__(
+        self,
+        runner,
+        tasks: list,
+        function: Callable,
+        begun: int,
+        when: Optional[Callable[[], bool]] = None,
+    ):
         self.runner, self.tasks, self.function = runner, tasks, function
-        self.begun = begun                  # tasks[:begun] are (being) run here
+        self.begun = begun  # tasks[:begun] are (being) run here
         self.when = when
         self.lock = threading.Lock()
         self.stopped = threading.Event()
         self.starting = self.switched = False
         self.workers = self.results = self.error = None
-        self.thread = threading.Thread(target=self._start, name="htn: starting workers",
-                                       daemon=True)
+        self.thread = threading.Thread(
+            target=self._start, name="htn: starting workers", daemon=True
+        )
         self.thread.start()
 
     def _start(self) -> None:
@@ -224,13 +256,13 @@ class _Starter:
                 if self.stopped.is_set():
                     return
                 self.starting = True
-            _switch_fast()                  # until the caller has joined this thread
+            _switch_fast()  # until the caller has joined this thread
             self.switched = True
             workers = self.runner.start()
             with self.lock:
                 self.workers = workers
-                self.results = workers.submit(self.function, self.tasks[self.begun:])
-        except BaseException as exc:    # re-raised in the calling thread
+                self.results = workers.submit(self.function, self.tasks[self.begun :])
+        except BaseException as exc:  # re-raised in the calling thread
             self.error = exc
 
     def stop(self) -> bool:
@@ -248,8 +280,11 @@ class _Starter:
         try:
             while True:
                 with self.lock:
-                    if (self.workers is not None or self.begun == len(self.tasks)
-                            or not self.thread.is_alive()):
+                    if (
+                        self.workers is not None
+                        or self.begun == len(self.tasks)
+                        or not self.thread.is_alive()
+                    ):
                         return
                     task = self.tasks[self.begun]
                     self.begun += 1

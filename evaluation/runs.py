@@ -11,6 +11,7 @@ is the same wherever and in whatever order it executes.
 The robots that can be evaluated are in :data:`MEASURES`, each with how its
 robot is built for a run and how its metrics are read.
 """
+
 from __future__ import annotations
 
 import hashlib
@@ -30,6 +31,7 @@ from htn.transform.projection import measured_run, projection_metrics
 class Study:
     """A plan comparison as a worker receives it; ``plans`` maps a name
     ("original", "transformed") to its steps."""
+
     domain: S.Domain
     instance: S.ProblemInstance
     plans: dict
@@ -45,6 +47,7 @@ class Study:
 
 # ------------------------------------------------------------------ robots
 
+
 @dataclass
 class Measure:
     """How one robot back end is evaluated: the fault kinds it injects, how
@@ -52,10 +55,11 @@ class Measure:
     run, how it reads the run's distances and failed attempts, and how many
     runs make a batch (about 40 ms of projection, one physics run: enough
     to outweigh sending a task, few enough to balance the workers)."""
+
     fault_kinds: tuple
-    prepare: Callable            # Study -> what robot() needs, built once per process
-    robot: Callable              # (prepared, seed) -> robot
-    read: Callable               # (robot, RunSummary) -> {navigation, manipulation, actions, failed}
+    prepare: Callable  # Study -> what robot() needs, built once per process
+    robot: Callable  # (prepared, seed) -> robot
+    read: Callable  # (robot, RunSummary) -> {navigation, manipulation, actions, failed}
     description: str
     batch: int
     # each plan's run a task of its own: a physics run takes seconds, and at
@@ -76,25 +80,41 @@ def _projection_prepare(study: Study):
 def _pybullet_robot(study: Study, seed: int):
     # a fresh physics world per run: a run is then a function of its seed alone
     from htn.robot.backends import RobotRequest, make_robot
+
     return make_robot("pybullet", RobotRequest(study.domain, study.instance, study.faults, seed))
 
 
 def _pybullet_read(robot, summary: RunSummary) -> dict:
     # the physics robot has no failure draws: a failed attempt is one its
     # monitor did not verify (aborted or failed)
-    attempts = summary.executed + summary.retries     # steps started, then their retries
-    return {"navigation": robot.odometry.base, "manipulation": robot.odometry.grippers,
-            "actions": attempts, "failed": attempts - summary.verified}
+    attempts = summary.executed + summary.retries  # steps started, then their retries
+    return {
+        "navigation": robot.odometry.base,
+        "manipulation": robot.odometry.grippers,
+        "actions": attempts,
+        "failed": attempts - summary.verified,
+    }
 
 
 MEASURES: dict[str, Measure] = {
     "projection": Measure(
-        FailureRates.kinds(), _projection_prepare,
+        FailureRates.kinds(),
+        _projection_prepare,
         lambda prepared, seed: ProjectionRobot(prepared[0], seed=seed, failures=prepared[1]),
-        projection_metrics, "projected", batch=25),
+        projection_metrics,
+        "projected",
+        batch=25,
+    ),
     "pybullet": Measure(
-        Faults.kinds(), lambda study: study, _pybullet_robot, _pybullet_read, "PyBullet",
-        batch=1, per_plan=True, least=0.5),     # 2.1-2.4 s on this 2-core machine
+        Faults.kinds(),
+        lambda study: study,
+        _pybullet_robot,
+        _pybullet_read,
+        "PyBullet",
+        batch=1,
+        per_plan=True,
+        least=0.5,
+    ),  # 2.1-2.4 s on this 2-core machine
 }
 
 
@@ -103,11 +123,18 @@ def execute(study: Study, prepared, name: str, seed: int, outcomes: bool = False
     ``outcomes``, also each step's final outcome (0-based step -> event)."""
     measure = MEASURES[study.robot]
     robot = measure.robot(prepared, seed)
-    return measured_run(robot, measure.read, study.domain, study.instance, study.plans[name],
-                        study.retries, outcomes)
+    return measured_run(
+        robot,
+        measure.read,
+        study.domain,
+        study.instance,
+        study.plans[name],
+        study.retries,
+        outcomes,
+    )
 
 
-_PREPARED: OrderedDict = OrderedDict()     # study key -> (study, prepared), this process's
+_PREPARED: OrderedDict = OrderedDict()  # study key -> (study, prepared), this process's
 _KEEP = 4
 
 
@@ -123,5 +150,8 @@ def run_batch(key: str, blob: bytes, runs: list, plans: Optional[tuple] = None) 
             _PREPARED.popitem(last=False)
     study, prepared = _PREPARED[key]
     _PREPARED.move_to_end(key)
-    return [{"run": number, "seed": seed, "plan": name, **execute(study, prepared, name, seed)}
-            for number, seed in runs for name in (plans or study.plans)]
+    return [
+        {"run": number, "seed": seed, "plan": name, **execute(study, prepared, name, seed)}
+        for number, seed in runs
+        for name in (plans or study.plans)
+    ]

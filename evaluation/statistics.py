@@ -9,6 +9,7 @@ never NaN: a standard deviation of fewer than two runs, a p-value with fewer
 than two runs on a side or no variance on either (none, or so little that
 scipy reports precision loss), a change from a mean of 0.
 """
+
 from __future__ import annotations
 
 import math
@@ -19,20 +20,21 @@ from dataclasses import dataclass, field
 from typing import Optional
 
 METRIC_NAMES = ("navigation", "manipulation", "actions", "failures")
-UNDERFLOW = 1e-300          # p-values below this are shown as "< 1e-300"
+UNDERFLOW = 1e-300  # p-values below this are shown as "< 1e-300"
 
 
 @dataclass
 class Comparison:
     """The records of an evaluation's runs, one list per plan in run order."""
+
     problem: str
     runs: int
     applied: list
-    original: list = field(default_factory=list)      # per-run records (dicts)
+    original: list = field(default_factory=list)  # per-run records (dicts)
     transformed: list = field(default_factory=list)
     robot: str = "projection"
     workers: int = 1
-    seconds: float = 0.0                               # wall time of the runs
+    seconds: float = 0.0  # wall time of the runs
 
     @property
     def runs_per_s(self) -> float:
@@ -44,8 +46,10 @@ class Comparison:
         """How the runs of each plan ended (verified, aborted, failed, ...).
         Every run counts in the metrics, a stopped one with what it did
         until it stopped."""
-        return {side: dict(Counter(r["result"] for r in getattr(self, side)))
-                for side in ("original", "transformed")}
+        return {
+            side: dict(Counter(r["result"] for r in getattr(self, side)))
+            for side in ("original", "transformed")
+        }
 
     def metrics(self) -> dict:
         out = {}
@@ -77,6 +81,7 @@ def welch_p(a, b) -> Optional[float]:
     if len(a) < 2 or len(b) < 2 or (statistics.pvariance(a) == 0 == statistics.pvariance(b)):
         return None
     from scipy import stats
+
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         p = float(stats.ttest_ind(a, b, equal_var=False).pvalue)
@@ -96,12 +101,18 @@ def pooled_failures(records) -> dict:
     if not attempts:
         return {"failed": failed, "attempts": attempts, "rate": None, "wilson95": None}
     from scipy import stats
+
     ci = stats.binomtest(failed, attempts).proportion_ci(0.95, method="wilson")
-    return {"failed": failed, "attempts": attempts, "rate": failed / attempts,
-            "wilson95": [float(ci.low), float(ci.high)]}
+    return {
+        "failed": failed,
+        "attempts": attempts,
+        "rate": failed / attempts,
+        "wilson95": [float(ci.low), float(ci.high)],
+    }
 
 
 # ------------------------------------------------------------------ display
+
 
 def format_p(p: Optional[float]) -> str:
     if p is None:
@@ -116,5 +127,4 @@ def format_change(pct: Optional[float]) -> str:
 def applied_rules(applied: list) -> str:
     """Each applied rule once, with its count: "both-hands \u00d72", "tray, container"."""
     counts = Counter(applied)
-    return ", ".join(f"{rule} \u00d7{n}" if n > 1 else rule for rule, n in counts.items()) \
-        or "none"
+    return ", ".join(f"{rule} \u00d7{n}" if n > 1 else rule for rule, n in counts.items()) or "none"

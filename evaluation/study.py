@@ -12,6 +12,7 @@ metrics for a given seed are the same on any number of workers.
 The one entry that opens a runner and runs a study is the evaluate use case
 (:func:`htn.api.evaluate.evaluate`); these are its steps.
 """
+
 from __future__ import annotations
 
 import json
@@ -25,12 +26,17 @@ from .placement import place, start_early
 from .runs import MEASURES, Study, run_batch
 from .statistics import Comparison
 
-BATCHES_PER_WORKER = 4          # at least, to even out batches of uneven length
+BATCHES_PER_WORKER = 4  # at least, to even out batches of uneven length
 
 
-def prepare_study(domain_path, problem_path, robot: str = "projection", faults: str = "",
-                  log: Optional[list] = None,
-                  on_phase: Optional[Callable[[str], None]] = None) -> tuple[Study, list]:
+def prepare_study(
+    domain_path,
+    problem_path,
+    robot: str = "projection",
+    faults: str = "",
+    log: Optional[list] = None,
+    on_phase: Optional[Callable[[str], None]] = None,
+) -> tuple[Study, list]:
     """Plan the problem, transform the plan with every registered rule, and
     return the study of both plans with the names of the rules applied. The
     domain and problem are paths, or a Domain and a Problem already read.
@@ -40,6 +46,7 @@ def prepare_study(domain_path, problem_path, robot: str = "projection", faults: 
     from htn.jshop.readers.load import load_inputs
     from htn.transform.framework import Workspace
     from htn.transform.registered import default_framework
+
     if isinstance(domain_path, S.Domain):
         domain, problem = domain_path, problem_path
         domain_path = domain.file
@@ -55,19 +62,27 @@ def prepare_study(domain_path, problem_path, robot: str = "projection", faults: 
         log.extend(ws.log)
     applied = [rule for rule, status, _ in ws.log if status == "applied"]
     plans = {"original": original.steps, "transformed": ws.plan.steps}
-    return Study(domain, instance, plans, load_retries(domain_path, domain.operators), robot,
-                 faults), applied
+    return Study(
+        domain, instance, plans, load_retries(domain_path, domain.operators), robot, faults
+    ), applied
 
 
 def batches(runs: int, seed: int, size: int) -> list[list[tuple[int, int]]]:
     """Runs ``0..runs-1`` as ``(number, seed + number)``, in batches of ``size``."""
     numbered = [(i, seed + i) for i in range(runs)]
-    return [numbered[i:i + size] for i in range(0, runs, size)]
+    return [numbered[i : i + size] for i in range(0, runs, size)]
 
 
-def run_study(study: Study, problem: str, applied: list, runs: int, seed: int, runner,
-              on_batch: Optional[Callable[[list], None]] = None,
-              say: Optional[Callable[[str], None]] = None) -> Comparison:
+def run_study(
+    study: Study,
+    problem: str,
+    applied: list,
+    runs: int,
+    seed: int,
+    runner,
+    on_batch: Optional[Callable[[list], None]] = None,
+    say: Optional[Callable[[str], None]] = None,
+) -> Comparison:
     """Execute ``runs`` runs of every plan of ``study`` on ``runner``;
     ``on_batch`` gets each batch's new records as they arrive. On local
     workers not yet started, batches run here and the rest goes to the
@@ -75,18 +90,21 @@ def run_study(study: Study, problem: str, applied: list, runs: int, seed: int, r
     (:func:`.placement.place`; ``say`` gets the line that says it is not)."""
     measure = MEASURES[study.robot]
     planned = runner.requested if runner.deferred else runner.workers
-    size = max(1, min(measure.batch,
-                      math.ceil(runs / (planned * BATCHES_PER_WORKER))))
+    size = max(1, min(measure.batch, math.ceil(runs / (planned * BATCHES_PER_WORKER))))
     key, blob = study.pack()
     if measure.per_plan:
-        tasks = [(key, blob, batch, (name,)) for batch in batches(runs, seed, size)
-                 for name in study.plans]
+        tasks = [
+            (key, blob, batch, (name,))
+            for batch in batches(runs, seed, size)
+            for name in study.plans
+        ]
     else:
         tasks = [(key, blob, batch) for batch in batches(runs, seed, size)]
-    share = 1 / len(study.plans) if measure.per_plan else 1     # of a run, a task's plans
+    share = 1 / len(study.plans) if measure.per_plan else 1  # of a run, a task's plans
 
     def runs_in(task: tuple) -> float:
         return len(task[2]) * share
+
     done: dict = {}
 
     def take(records: list) -> None:
@@ -97,16 +115,14 @@ def run_study(study: Study, problem: str, applied: list, runs: int, seed: int, r
 
     start = time.perf_counter()
     if runner.deferred:
-        runner, results = place(runner, tasks, runs_in, run_batch, take,
-                                measure.description, say)
+        runner, results = place(runner, tasks, runs_in, run_batch, take, measure.description, say)
     else:
         results = runner.results(run_batch, tasks)
     workers = runner.workers
     for records in results:
         take(records)
     seconds = time.perf_counter() - start
-    comp = Comparison(problem, runs, applied, robot=study.robot, workers=workers,
-                      seconds=seconds)
+    comp = Comparison(problem, runs, applied, robot=study.robot, workers=workers, seconds=seconds)
     comp.original = [done[(i, "original")] for i in range(runs)]
     comp.transformed = [done[(i, "transformed")] for i in range(runs)]
     return comp
@@ -136,6 +152,7 @@ class RecordsFile:
 
     def finish(self, comp: Comparison) -> None:
         from htn.files import atomic_write
+
         self.fh.close()
         ordered = [r for pair in zip(comp.original, comp.transformed) for r in pair]
         with atomic_write(self.path, "--records") as out:

@@ -23,6 +23,7 @@ retried. What the behaviours of one action share (step, machine, attempt,
 outcome) is an :class:`ActionContext`, as SMACH states share userdata.
 Display lives elsewhere (``htn.cli.tree_view``).
 """
+
 from __future__ import annotations
 
 import inspect
@@ -61,18 +62,19 @@ class Executor(Protocol):
 @dataclass
 class ActionContext:
     """One plan step being executed: what its behaviours share."""
-    step: Any                       # the plan Step
-    machine: Any                    # its ActionMachine (None for internal steps)
-    limit: int                      # retries allowed after an aborted attempt
-    node: Any = None                # its task-tree node (path), if known
+
+    step: Any  # the plan Step
+    machine: Any  # its ActionMachine (None for internal steps)
+    limit: int  # retries allowed after an aborted attempt
+    node: Any = None  # its task-tree node (path), if known
     attempt: int = 0
     outcome: Optional[Outcome] = None
     preempted: bool = False
-    done: bool = False              # verified: never run again
-    number: Optional[int] = None    # its 1-based step, once verified
+    done: bool = False  # verified: never run again
+    number: Optional[int] = None  # its 1-based step, once verified
     detail: str = ""
     holds: list = field(default_factory=list)
-    text: str = ""                  # the step as the plan shows it
+    text: str = ""  # the step as the plan shows it
 
     def __post_init__(self):
         self.text = str(self.step)
@@ -101,7 +103,7 @@ class Execute(ActionBehaviour):
         self.ticking, self.result = None, None
         try:
             started = ctx.machine.execute(self.executor.robot, *ctx.step.args)
-        except TypeError as exc:      # wrong number of parameters in the plan step
+        except TypeError as exc:  # wrong number of parameters in the plan step
             started = SkillResult(False, f"bad parameters: {exc}")
         except HtnError as exc:
             started = SkillResult(False, exc.message)
@@ -130,7 +132,7 @@ class Execute(ActionBehaviour):
         return Status.FAILURE
 
     def terminate(self, new_status: Status) -> None:
-        if self.ticking is not None:      # preempted (a hold-monitor, or a halt)
+        if self.ticking is not None:  # preempted (a hold-monitor, or a halt)
             self.ticking.close()
             self.ticking = None
             self.executor.robot.hold()
@@ -149,8 +151,9 @@ class Hold(ActionBehaviour):
         if seen.ok:
             return Status.RUNNING
         self.ctx.outcome, self.ctx.preempted = Outcome.ABORTED, True
-        self.emit(Outcome.ABORTED.value, f"{self.name} no longer holds: {seen.detail}",
-                  hold=self.name)
+        self.emit(
+            Outcome.ABORTED.value, f"{self.name} no longer holds: {seen.detail}", hold=self.name
+        )
         return Status.FAILURE
 
 
@@ -161,8 +164,9 @@ class Monitor(ActionBehaviour):
         ctx = self.ctx
         seen = ctx.machine.monitor(self.executor.robot, *ctx.step.args)
         ctx.outcome = Outcome.VERIFIED if seen.ok else Outcome.ABORTED
-        detail = seen.detail if seen.ok or retries_left(ctx) else \
-            f"{seen.detail}; {out_of_retries(ctx)}"
+        detail = (
+            seen.detail if seen.ok or retries_left(ctx) else f"{seen.detail}; {out_of_retries(ctx)}"
+        )
         self.emit(ctx.outcome.value, detail)
         return Status.SUCCESS if seen.ok else Status.FAILURE
 
@@ -233,8 +237,12 @@ class ApplyInternal(ActionBehaviour):
         self.executor.begun(ctx, True)
         ok = self.executor.apply_internal(ctx.step)
         ctx.attempt, ctx.outcome = 1, Outcome.VERIFIED if ok else Outcome.FAILED
-        self.emit(ctx.outcome.value, "internal operator applied to the belief state"
-                  if ok else "internal operator not applicable")
+        self.emit(
+            ctx.outcome.value,
+            "internal operator applied to the belief state"
+            if ok
+            else "internal operator not applicable",
+        )
         self.executor.report(ctx, ok)
         return Status.SUCCESS if ok else Status.FAILURE
 
@@ -245,8 +253,9 @@ class Unavailable(ActionBehaviour):
     def update(self) -> Status:
         self.executor.begun(self.ctx, True)
         self.ctx.attempt, self.ctx.outcome = 1, Outcome.FAILED
-        self.emit(Outcome.FAILED.value, f"no action state machine is registered for "
-                                        f"{self.ctx.step.name}")
+        self.emit(
+            Outcome.FAILED.value, f"no action state machine is registered for {self.ctx.step.name}"
+        )
         self.executor.report(self.ctx, False)
         return Status.FAILURE
 
@@ -264,10 +273,13 @@ def action_subtree(ctx: ActionContext, executor, holds: list) -> py_trees.behavi
         if holds:
             ctx.holds = [label for label, _ in holds]
             execute = py_trees.composites.Parallel(
-                "execute | hold", ParallelPolicy.SuccessOnSelected([execute]),
-                children=[execute, *(Hold(label, ctx, executor, fn) for label, fn in holds)])
-        attempt = py_trees.composites.Sequence("attempt", memory=True,
-                                               children=[execute, Monitor("monitor", ctx, executor)])
+                "execute | hold",
+                ParallelPolicy.SuccessOnSelected([execute]),
+                children=[execute, *(Hold(label, ctx, executor, fn) for label, fn in holds)],
+            )
+        attempt = py_trees.composites.Sequence(
+            "attempt", memory=True, children=[execute, Monitor("monitor", ctx, executor)]
+        )
         top = Report(RetryAborted(attempt, ctx, executor), ctx, executor)
     top.htn_action = ctx
     return top

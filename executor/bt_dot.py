@@ -15,11 +15,12 @@ glyphs as words (``with memory``, ``synchronised``). A ``:`` in a node path
 (``:call 2``) would be read by pydot as a port: node names carry U+2236 (it
 looks alike), labels the ``:`` itself.
 """
+
 from __future__ import annotations
 
 from typing import Optional
 
-GLYPHS = {"Ⓜ": "with memory", "⚡": "synchronised"}     # py_trees' unicode prefixes
+GLYPHS = {"Ⓜ": "with memory", "⚡": "synchronised"}  # py_trees' unicode prefixes
 
 
 def behaviour_tree_dot(root) -> str:
@@ -33,7 +34,7 @@ def behaviour_tree_dot(root) -> str:
         label = _label(b)
         name = label.replace("\n", " ").replace(":", "\u2236")
         taken[name] = taken.get(name, 0) + 1
-        if taken[name] > 1:                 # the same step twice in the plan
+        if taken[name] > 1:  # the same step twice in the plan
             name = f"{name} [{taken[name]}]"
         labels[name] = label
         b.name = name
@@ -53,7 +54,7 @@ def _label(b) -> str:
     """What a behaviour is: its role and step, or its task's node path."""
     ctx = _action_of(b)
     if ctx is None or getattr(b, "htn_action", None) is ctx:
-        return b.name                        # a task's sequence, or the step itself
+        return b.name  # a task's sequence, or the step itself
     return f"{b.name}\n{ctx.text}"
 
 
@@ -78,6 +79,6 @@ def _with_words(shown: str, name: str, label: str) -> str:
             words.append(word)
         shown = shown.replace(glyph, "")
     shown = shown.strip().replace(name, label, 1)
-    policy = shown[len(label):].strip() if shown.startswith(label) else ""
+    policy = shown[len(label) :].strip() if shown.startswith(label) else ""
     extra = ", ".join(x for x in (policy, *words) if x)
     return f"{label}\n{extra}" if extra else label

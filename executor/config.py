@@ -7,6 +7,7 @@ an action whose monitor did not verify it is tried once more before the run
 (or ``--replan``) gives up on it, as a robot operator would. A file states
 its limits itself: an operator it does not name gets no retry.
 """
+
 from __future__ import annotations
 
 import os
@@ -20,7 +21,7 @@ def config_path(domain_path: str) -> str:
     return os.path.splitext(domain_path)[0] + ".toml"
 
 
-DEFAULT_RETRIES = 1      # per operator, for a domain without a .toml
+DEFAULT_RETRIES = 1  # per operator, for a domain without a .toml
 
 
 def load_retries(domain_path: Optional[str], operators=()) -> dict[str, int]:

@@ -24,6 +24,7 @@ Events go to an :class:`~htn.executor.log.EventLog`; ``step`` is the action's
 1-based position in the plan as executed (steps verified before it, plus
 one). Each fault the robot injects becomes a ``fault`` event as it happens.
 """
+
 from __future__ import annotations
 
 import threading
@@ -45,8 +46,8 @@ from .repair import find_repair, graft, observed_instance, retry_applies
 from .task_bt import actions, build, flat_tree
 from .tree_events import NodeNumbers, tree_detail, tree_nodes
 
-STOPPED_BY_USER = "stopped by the user"     # why a run halted, unless told otherwise
-INTERRUPTED, PREEMPTED = "interrupted", "preempted"     # what a halted run's summary says
+STOPPED_BY_USER = "stopped by the user"  # why a run halted, unless told otherwise
+INTERRUPTED, PREEMPTED = "interrupted", "preempted"  # what a halted run's summary says
 
 
 class Halted(KeyboardInterrupt):
@@ -56,30 +57,32 @@ class Halted(KeyboardInterrupt):
 
 @dataclass
 class RunSummary:
-    result: str              # verified | failed | aborted | interrupted | preempted
-    steps: int               # steps of the plan (as repaired), executed or not
+    result: str  # verified | failed | aborted | interrupted | preempted
+    steps: int  # steps of the plan (as repaired), executed or not
     verified: int
     retries: int
     replans: int
     sim_time: float
-    failed_step: Optional[str] = None    # the action that ended the run
-    failed_at: Optional[int] = None      # its 1-based step
-    executed: int = 0                    # steps started (each once, however many attempts)
-    advice: Optional[str] = None         # what might have saved it (retries used up)
-    reason: Optional[str] = None         # why it was halted (interrupted, preempted)
+    failed_step: Optional[str] = None  # the action that ended the run
+    failed_at: Optional[int] = None  # its 1-based step
+    executed: int = 0  # steps started (each once, however many attempts)
+    advice: Optional[str] = None  # what might have saved it (retries used up)
+    reason: Optional[str] = None  # why it was halted (interrupted, preempted)
 
     def as_dict(self) -> dict:
         d = dict(self.__dict__)
-        if d["reason"] is None:         # only a halted run's summary says why
+        if d["reason"] is None:  # only a halted run's summary says why
             del d["reason"]
         return d
 
     def line(self) -> str:
         """``aborted: 3 of 8 steps verified, ...; aborted at step 4: (!grasp ...)``,
         and the advice, if any."""
-        line = (f"{self.result}: {self.verified} of {self.steps} steps verified, "
-                f"{self.retries} retries, {self.replans} replans, "
-                f"{self.sim_time:.1f} s simulated")
+        line = (
+            f"{self.result}: {self.verified} of {self.steps} steps verified, "
+            f"{self.retries} retries, {self.replans} replans, "
+            f"{self.sim_time:.1f} s simulated"
+        )
         if self.failed_step:
             line += f"; {self.result} at step {self.failed_at}: {self.failed_step}"
         if self.advice:
@@ -94,9 +97,19 @@ class TaskDispatcher:
     ``steps``); without it the plan runs as one sequence of actions.
     """
 
-    def __init__(self, robot, domain: S.Domain, instance: S.ProblemInstance, steps: list,
-                 retries: dict[str, int], log: EventLog, replan: bool = False,
-                 functions=None, max_replans: int = 10, tree=None):
+    def __init__(
+        self,
+        robot,
+        domain: S.Domain,
+        instance: S.ProblemInstance,
+        steps: list,
+        retries: dict[str, int],
+        log: EventLog,
+        replan: bool = False,
+        functions=None,
+        max_replans: int = 10,
+        tree=None,
+    ):
         self.robot = robot
         self.domain = domain
         self.instance = instance
@@ -107,25 +120,25 @@ class TaskDispatcher:
         self.max_replans = max_replans
         self.tree_known = tree is not None
         self.belief = Planner.for_state(domain, instance.state, functions)
-        self.done: list[ActionContext] = []       # verified steps, in order
+        self.done: list[ActionContext] = []  # verified steps, in order
         self.failed: Optional[ActionContext] = None
         self.running: Optional[ActionContext] = None
         self.retries = self.replans = self.started = 0
         self._faults_seen = 0
         self._halt: Optional[str] = None
-        self._halt_as = INTERRUPTED         # what the summary of a halted run says
-        self._halt_later: Optional[tuple] = None   # (why, as): halt when the next action begins
-        self._lock = threading.Lock()       # running and the belief, as another thread sees them
+        self._halt_as = INTERRUPTED  # what the summary of a halted run says
+        self._halt_later: Optional[tuple] = None  # (why, as): halt when the next action begins
+        self._lock = threading.Lock()  # running and the belief, as another thread sees them
         self._in_tick = False
-        self.summary_extra: dict = {}       # more fields for the summary event
-        self._carrying: tuple = (None, [])        # (action, attempt) -> what it carries
-        self.carry = carry_predicate(domain.name)    # the domain's word for carrying
+        self.summary_extra: dict = {}  # more fields for the summary event
+        self._carrying: tuple = (None, [])  # (action, attempt) -> what it carries
+        self.carry = carry_predicate(domain.name)  # the domain's word for carrying
         self.carry_checks = self.carry is not None and "still_held" in robot.check_names()
         steps = list(steps)
         tree = tree if tree is not None else flat_tree(steps)
         self.root = build(tree, steps, self._action)
-        self.nodes = NodeNumbers()          # the task-tree nodes as the log numbers them
-        self.tick_listeners: list = []      # called between two ticks (e.g. a camera view)
+        self.nodes = NodeNumbers()  # the task-tree nodes as the log numbers them
+        self.tick_listeners: list = []  # called between two ticks (e.g. a camera view)
         self._log_tree([tree], None, lambda n: n.step + 1)
 
     # ------------------------------------------------------------ building
@@ -136,8 +149,10 @@ class TaskDispatcher:
         if machine is not None and not self.robot.instantaneous:
             holds = machine.holds(self.robot, *step.args)
             if self.carry_checks:
-                holds = [*holds, ("what it carries stays in the gripper",
-                                  lambda: self._carried_in_gripper(ctx))]
+                holds = [
+                    *holds,
+                    ("what it carries stays in the gripper", lambda: self._carried_in_gripper(ctx)),
+                ]
         return action_subtree(ctx, self, holds)
 
     # ------------------------------------------------------------ what the behaviours call
@@ -148,17 +163,34 @@ class TaskDispatcher:
         self._flush_faults()
         if ctx is not None:
             extra = {"node": self.nodes.of(ctx.node), **extra}
-        self.log.emit(self.number(ctx) if ctx else None, ctx.text if ctx else None, event,
-                      ctx.attempt if ctx else None, detail, **extra)
+        self.log.emit(
+            self.number(ctx) if ctx else None,
+            ctx.text if ctx else None,
+            event,
+            ctx.attempt if ctx else None,
+            detail,
+            **extra,
+        )
 
     def _log_tree(self, tops, parent, step_of, replaces=()) -> None:
         """A ``tree`` event with the nodes of the subtrees ``tops``, each
         under ``parent`` (see :mod:`htn.executor.tree_events`)."""
         ctxs = {id(a.node): a for a in actions(self.root)}
-        nodes = [n for top in tops for n in
-                 tree_nodes(top, self.nodes, parent, step_of, lambda n: ctxs.get(id(n)))]
-        self.log.emit(None, None, "tree", None, tree_detail(nodes, len(replaces)),
-                      nodes=nodes, parent=parent, replaces=list(replaces))
+        nodes = [
+            n
+            for top in tops
+            for n in tree_nodes(top, self.nodes, parent, step_of, lambda n: ctxs.get(id(n)))
+        ]
+        self.log.emit(
+            None,
+            None,
+            "tree",
+            None,
+            tree_detail(nodes, len(replaces)),
+            nodes=nodes,
+            parent=parent,
+            replaces=list(replaces),
+        )
 
     def begun(self, ctx: ActionContext, first: bool) -> None:
         """An action's behaviours say it runs now (``first``: its first
@@ -202,7 +234,7 @@ class TaskDispatcher:
             self.started += 1
             self.report(ctx, True)
             if isinstance(top, py_trees.decorators.OneShot):
-                top.final_status = Status.SUCCESS       # it bounces: success, not run
+                top.final_status = Status.SUCCESS  # it bounces: success, not run
             self.emit(ctx, Outcome.VERIFIED.value, detail, adopted=True)
 
     def running_action(self) -> Optional[tuple]:
@@ -212,8 +244,14 @@ class TaskDispatcher:
         decide whether a new plan may go on from it (safe from any thread)."""
         with self._lock:
             ctx = self.running
-            if ctx is None or ctx.done or ctx.outcome is not None or ctx.step.internal \
-                    or self._halt or self._halt_later:
+            if (
+                ctx is None
+                or ctx.done
+                or ctx.outcome is not None
+                or ctx.step.internal
+                or self._halt
+                or self._halt_later
+            ):
                 return None
             return ctx, list(self.belief.state.facts())
 
@@ -239,7 +277,8 @@ class TaskDispatcher:
 
     def _carried_in_gripper(self, ctx: ActionContext):
         from htn.robot.interface import Check
-        if self._carrying[0] != (id(ctx), ctx.attempt):   # the belief is fixed while it runs
+
+        if self._carrying[0] != (id(ctx), ctx.attempt):  # the belief is fixed while it runs
             self._carrying = ((id(ctx), ctx.attempt), self.carried(ctx))
         objs = self._carrying[1]
         if not objs:
@@ -248,12 +287,20 @@ class TaskDispatcher:
 
     def _flush_faults(self) -> None:
         """A ``fault`` event for each fault the robot injected since the last call."""
-        for f in self.robot.injected_faults()[self._faults_seen:]:
+        for f in self.robot.injected_faults()[self._faults_seen :]:
             self._faults_seen += 1
             ctx = self.running
             where = {"node": self.nodes.of(ctx.node)} if ctx else {}
-            self.log.emit(self.number(ctx) if ctx else None, ctx.text if ctx else None, "fault",
-                          None, f["detail"], kind=f["kind"], sim_t=f["sim_t"], **where)
+            self.log.emit(
+                self.number(ctx) if ctx else None,
+                ctx.text if ctx else None,
+                "fault",
+                None,
+                f["detail"],
+                kind=f["kind"],
+                sim_t=f["sim_t"],
+                **where,
+            )
 
     # ------------------------------------------------------------ the tick loop
     def halt(self, why: str = "", outcome: str = INTERRUPTED, after=None) -> bool:
@@ -270,8 +317,13 @@ class TaskDispatcher:
         ends the same way (between two ticks, e.g. while repair plans)."""
         why = why or STOPPED_BY_USER
         with self._lock:
-            if after is not None and not self._halt and self.running is after \
-                    and not after.done and after.outcome is None:
+            if (
+                after is not None
+                and not self._halt
+                and self.running is after
+                and not after.done
+                and after.outcome is None
+            ):
                 self._halt_later = (why, outcome)
             else:
                 self._halt, self._halt_as = why, outcome
@@ -300,10 +352,13 @@ class TaskDispatcher:
                     if self.replan and self.replans < self.max_replans and self._repair(ctx):
                         continue
                     self.robot.hold()
-                    advice = None if ctx.outcome is not Outcome.ABORTED or ctx.preempted \
-                        or retries_left(ctx) else out_of_retries(ctx)
+                    advice = (
+                        None
+                        if ctx.outcome is not Outcome.ABORTED or ctx.preempted or retries_left(ctx)
+                        else out_of_retries(ctx)
+                    )
                     return self._summary(ctx.outcome.value, ctx, advice)
-        except Halted:          # the next action would have begun after a halt
+        except Halted:  # the next action would have begun after a halt
             return self.interrupted()
         except KeyboardInterrupt as exc:
             # an interrupt between two ticks (e.g. while repair plans) halts
@@ -323,25 +378,43 @@ class TaskDispatcher:
         self.root.stop(Status.INVALID)
         self.robot.hold()
         ctx = self.running if self.running is not None and not self.running.done else None
-        self.failed = ctx              # the action the run ended in
+        self.failed = ctx  # the action the run ended in
         why = self._halt or STOPPED_BY_USER
-        self.emit(ctx, "interrupted", f"{why}; the robot holds its pose" if self.started
-                  else f"{why} before the first step")
+        self.emit(
+            ctx,
+            "interrupted",
+            f"{why}; the robot holds its pose" if self.started else f"{why} before the first step",
+        )
         return self._summary(self._halt_as, ctx, reason=why)
 
     def plan_lines(self) -> list[str]:
         """The plan as executed and repaired: verified steps, then the pending ones."""
         return [c.text for c in self.done] + [a.text for a in actions(self.root) if not a.done]
 
-    def _summary(self, result: str, ctx: Optional[ActionContext] = None,
-                 advice: Optional[str] = None, reason: Optional[str] = None) -> RunSummary:
+    def _summary(
+        self,
+        result: str,
+        ctx: Optional[ActionContext] = None,
+        advice: Optional[str] = None,
+        reason: Optional[str] = None,
+    ) -> RunSummary:
         pending = sum(1 for a in actions(self.root) if not a.done)
-        summary = RunSummary(result, len(self.done) + pending, len(self.done), self.retries,
-                             self.replans, round(self.robot.sim_time, 3),
-                             ctx.text if ctx else None, self.number(ctx) if ctx else None,
-                             self.started, advice, reason)
-        self.log.emit(None, None, "summary", None, result, **summary.as_dict(),
-                      **self.summary_extra)
+        summary = RunSummary(
+            result,
+            len(self.done) + pending,
+            len(self.done),
+            self.retries,
+            self.replans,
+            round(self.robot.sim_time, 3),
+            ctx.text if ctx else None,
+            self.number(ctx) if ctx else None,
+            self.started,
+            advice,
+            reason,
+        )
+        self.log.emit(
+            None, None, "summary", None, result, **summary.as_dict(), **self.summary_extra
+        )
         return summary
 
     # ------------------------------------------------------------ repair
@@ -350,20 +423,38 @@ class TaskDispatcher:
         its retry limit allows and it still applies in the observed state
         (with the rest of the plan after it), else re-plan its enclosing tasks."""
         observed = observed_instance(self.domain, self.instance, self.robot)
-        if retries_left(ctx) and ctx.machine is not None and retry_applies(
-                ctx, self.root, self.domain, observed, self.functions):
+        if (
+            retries_left(ctx)
+            and ctx.machine is not None
+            and retry_applies(ctx, self.root, self.domain, observed, self.functions)
+        ):
             self.retries += 1
             self.belief = Planner.for_state(self.domain, observed.state, self.functions)
             self.failed = None
-            self.emit(ctx, "retrying", f"retry {ctx.attempt} of {ctx.limit}, by repair: the "
-                      "step still applies in the observed state")
+            self.emit(
+                ctx,
+                "retrying",
+                f"retry {ctx.attempt} of {ctx.limit}, by repair: the "
+                "step still applies in the observed state",
+            )
             return True
         shot = next(b for b in self.root.iterate() if getattr(b, "htn_action", None) is ctx)
-        repair, tried = find_repair(shot, self.root, self.tree_known, self.domain, observed,
-                                    self.instance.tasks, self.functions)
+        repair, tried = find_repair(
+            shot,
+            self.root,
+            self.tree_known,
+            self.domain,
+            observed,
+            self.instance.tasks,
+            self.functions,
+        )
         if repair is None:
-            self.emit(ctx, "replan_failed", "no enclosing task has a plan from the observed "
-                      f"state (tried {', '.join(tried)})", tried=tried)
+            self.emit(
+                ctx,
+                "replan_failed",
+                f"no enclosing task has a plan from the observed state (tried {', '.join(tried)})",
+                tried=tried,
+            )
             return False
         self.replans += 1
         self.tree_known = True
@@ -373,14 +464,25 @@ class TaskDispatcher:
         added = graft(repair, self.root, self._action)
         self.belief = Planner.for_state(self.domain, observed.state, self.functions)
         self.failed = None
-        self.emit(ctx, "replanned", f"re-planned {tried[-1]} from the observed state: "
-                  f"{len(repair.plan.steps)} new steps", path=repair.path, paths=paths,
-                  tasks=repair.tasks, steps=repair.plan.lines(), tried=tried,
-                  plan=self.plan_lines())
+        self.emit(
+            ctx,
+            "replanned",
+            f"re-planned {tried[-1]} from the observed state: {len(repair.plan.steps)} new steps",
+            path=repair.path,
+            paths=paths,
+            tasks=repair.tasks,
+            steps=repair.plan.lines(),
+            tried=tried,
+            plan=self.plan_lines(),
+        )
         pending = [a for a in actions(self.root) if not a.done]
         number = {id(a.node): len(self.done) + 1 + k for k, a in enumerate(pending)}
-        self._log_tree([_task_node(b) for b in added], self.nodes.of(holder.htn_task),
-                       lambda n: number.get(id(n)), replaced)
+        self._log_tree(
+            [_task_node(b) for b in added],
+            self.nodes.of(holder.htn_task),
+            lambda n: number.get(id(n)),
+            replaced,
+        )
         return True
 
 

@@ -8,6 +8,7 @@ the file only ever holds whole lines: a full disk (or a failing device) cuts
 it back to its last whole line, and the summary is still written when the
 disk allows.
 """
+
 from __future__ import annotations
 
 import json
@@ -32,8 +33,8 @@ class LineFile:
     def __init__(self, path: str, option: Optional[str] = None):
         self.path, self.option = path, option
         self.failed: Optional[WriteError] = None
-        self.size = 0                   # bytes of whole lines written
-        self.lock = threading.Lock()    # the watchdog may end the file from its thread
+        self.size = 0  # bytes of whole lines written
+        self.lock = threading.Lock()  # the watchdog may end the file from its thread
         try:
             self.fd: Optional[int] = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o666)
         except OSError as exc:
@@ -53,7 +54,7 @@ class LineFile:
             try:
                 view = memoryview(data)
                 while view:
-                    view = view[os.write(self.fd, view):]
+                    view = view[os.write(self.fd, view) :]
             except OSError as exc:
                 self._cut()
                 if self.failed is None:
@@ -105,16 +106,29 @@ class EventLog:
     def failed(self) -> Optional[WriteError]:
         return self._file.failed if self._file is not None else None
 
-    def emit(self, step: Optional[int], action: Optional[str], event: str,
-             attempt: Optional[int] = None, detail: str = "", sim_t: Optional[float] = None,
-             **extra) -> dict:
-        record = {"t": round(time.perf_counter() - self.start, 4),
-                  "sim_t": round(self.clock() if sim_t is None else sim_t, 4),
-                  "step": step, "action": action, "event": event, "attempt": attempt,
-                  "detail": detail, **extra}
+    def emit(
+        self,
+        step: Optional[int],
+        action: Optional[str],
+        event: str,
+        attempt: Optional[int] = None,
+        detail: str = "",
+        sim_t: Optional[float] = None,
+        **extra,
+    ) -> dict:
+        record = {
+            "t": round(time.perf_counter() - self.start, 4),
+            "sim_t": round(self.clock() if sim_t is None else sim_t, 4),
+            "step": step,
+            "action": action,
+            "event": event,
+            "attempt": attempt,
+            "detail": detail,
+            **extra,
+        }
         last = event == "summary"
         if self.ended:
-            return record       # a run ends once (the watchdog may have ended it)
+            return record  # a run ends once (the watchdog may have ended it)
         self.ended = last
         self.events.append(record)
         if self._file is not None:
@@ -130,8 +144,16 @@ class EventLog:
 
 
 # the one line htn run prints (and htn ros send) for each thing that happened
-SHOWN = ("verified", "failed", "aborted", "retrying", "replanned", "replan_failed",
-         "interrupted", "fault")
+SHOWN = (
+    "verified",
+    "failed",
+    "aborted",
+    "retrying",
+    "replanned",
+    "replan_failed",
+    "interrupted",
+    "fault",
+)
 
 
 def event_line(rec: dict) -> Optional[str]:
@@ -146,5 +168,7 @@ def event_line(rec: dict) -> Optional[str]:
         return f"{step}{'fault':<11} {rec['kind']}: {rec['detail']}  [t={rec['sim_t']:.2f}s]"
     if rec["event"] == "replanned":
         what = rec["path"]
-    return (f"{step}{rec['event']:<11} {what}  "
-            f"[try {rec['attempt'] or '-'}, t={rec['sim_t']:.1f}s] {rec['detail']}")
+    return (
+        f"{step}{rec['event']:<11} {what}  "
+        f"[try {rec['attempt'] or '-'}, t={rec['sim_t']:.1f}s] {rec['detail']}"
+    )

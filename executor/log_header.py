@@ -9,6 +9,7 @@ its SHA-256, :mod:`htn.api.run_inputs`). Every field is checked when the
 header is read back, with errors that name the log's first line and the
 field (``run.jsonl:1: header field "seed": ...``).
 """
+
 from __future__ import annotations
 
 import hashlib
@@ -32,8 +33,21 @@ def file_sha256(path: Optional[str]) -> Optional[str]:
         return None
 
 
-def run_header(plan_file, plan_sha256, plan_index, domain, problem, functions, robot, seed,
-               faults, retries, replan, argv, digests: dict) -> dict:
+def run_header(
+    plan_file,
+    plan_sha256,
+    plan_index,
+    domain,
+    problem,
+    functions,
+    robot,
+    seed,
+    faults,
+    retries,
+    replan,
+    argv,
+    digests: dict,
+) -> dict:
     """What a log's header records: enough to run the same thing again
     (``argv``: the command line as given, None for a program's call), with
     the SHA-256 of the plan file, domain, problem and functions file: of the
@@ -49,24 +63,43 @@ def run_header(plan_file, plan_sha256, plan_index, domain, problem, functions, r
             return version(name)
         except PackageNotFoundError:
             return None
+
     absolute = lambda p: os.path.abspath(p) if p else None  # noqa: E731
-    return {"htn": htn_version(), "argv": None if argv is None else list(argv),
-            "plan": absolute(plan_file), "plan_sha256": plan_sha256,
-            "plan_index": plan_index, "domain": absolute(domain),
-            "domain_sha256": digests.get("domain") if domain else None,
-            "problem": absolute(problem),
-            "problem_sha256": digests.get("problem") if problem else None,
-            "functions": absolute(functions),
-            "functions_sha256": digests.get("functions") if functions else None,
-            "robot": robot, "seed": seed,
-            "faults": faults, "retries": dict(sorted(retries.items())), "replan": replan,
-            "python": platform.python_version(), "pybullet": installed("pybullet")}
+    return {
+        "htn": htn_version(),
+        "argv": None if argv is None else list(argv),
+        "plan": absolute(plan_file),
+        "plan_sha256": plan_sha256,
+        "plan_index": plan_index,
+        "domain": absolute(domain),
+        "domain_sha256": digests.get("domain") if domain else None,
+        "problem": absolute(problem),
+        "problem_sha256": digests.get("problem") if problem else None,
+        "functions": absolute(functions),
+        "functions_sha256": digests.get("functions") if functions else None,
+        "robot": robot,
+        "seed": seed,
+        "faults": faults,
+        "retries": dict(sorted(retries.items())),
+        "replan": replan,
+        "python": platform.python_version(),
+        "pybullet": installed("pybullet"),
+    }
 
 
-HEADER_KEYS = ("plan", "plan_index", "domain", "problem", "robot", "seed", "faults",
-               "retries", "replan")
-MAX_SEED = 2 ** 63
-MAX_TEXT = 100_000       # characters of a path or a faults text
+HEADER_KEYS = (
+    "plan",
+    "plan_index",
+    "domain",
+    "problem",
+    "robot",
+    "seed",
+    "faults",
+    "retries",
+    "replan",
+)
+MAX_SEED = 2**63
+MAX_TEXT = 100_000  # characters of a path or a faults text
 
 
 def _shown(value) -> str:
@@ -86,8 +119,7 @@ def read_header(path: str) -> dict:
     except (OSError, UnicodeDecodeError, ValueError, RecursionError) as exc:
         raise HtnError(f"not a log of htn run --log: {str(exc)[:200]}", path, 1, 1)
     if not isinstance(rec, dict) or rec.get("event") != "header":
-        raise HtnError("not a log of htn run --log: its first line is no header event",
-                       path, 1, 1)
+        raise HtnError("not a log of htn run --log: its first line is no header event", path, 1, 1)
     missing = [k for k in HEADER_KEYS if k not in rec]
     if missing:
         raise HtnError(f"the header lacks {', '.join(missing)}", path, 1, 1)
@@ -106,6 +138,7 @@ def _text(optional: bool):
         if not isinstance(v, str) or not v or len(v) > MAX_TEXT or "\0" in v:
             return "expected a path" + (" or null" if optional else "")
         return None
+
     return check
 
 
@@ -118,7 +151,7 @@ def _digest(v):
 
 
 def _plan_index(v):
-    if type(v) is not int or not 1 <= v <= 10 ** 9:
+    if type(v) is not int or not 1 <= v <= 10**9:
         return "expected a plan number, 1 or more (the first plan is 1)"
     return None
 
@@ -146,8 +179,9 @@ def _faults(v):
 def _retries(v):
     if v is None:
         return None
-    if not isinstance(v, dict) or not all(isinstance(k, str) and k and type(n) is int
-                                          and 0 <= n <= 10 ** 6 for k, n in v.items()):
+    if not isinstance(v, dict) or not all(
+        isinstance(k, str) and k and type(n) is int and 0 <= n <= 10**6 for k, n in v.items()
+    ):
         return "expected an object of operator names to retry limits (integers, 0 or more)"
     return None
 
@@ -156,30 +190,49 @@ def _replan(v):
     return None if type(v) is bool else "expected true or false"
 
 
-CHECKS = {"plan": _text(True), "plan_sha256": _digest, "plan_index": _plan_index,
-          "domain": _text(True), "domain_sha256": _digest, "problem": _text(True),
-          "problem_sha256": _digest, "functions": _text(True), "functions_sha256": _digest,
-          "robot": _robot, "seed": _seed, "faults": _faults, "retries": _retries,
-          "replan": _replan}
+CHECKS = {
+    "plan": _text(True),
+    "plan_sha256": _digest,
+    "plan_index": _plan_index,
+    "domain": _text(True),
+    "domain_sha256": _digest,
+    "problem": _text(True),
+    "problem_sha256": _digest,
+    "functions": _text(True),
+    "functions_sha256": _digest,
+    "robot": _robot,
+    "seed": _seed,
+    "faults": _faults,
+    "retries": _retries,
+    "replan": _replan,
+}
 
 
 def check_plan_present(plan_file: Optional[str], log_path: str) -> None:
     """The plan file a header names is there; otherwise an input error at the
     log's first line."""
     if not plan_file:
-        raise HtnError("the log records no plan file (its run was of a plan a program "
-                       "passed in)", log_path, 1, 1)
+        raise HtnError(
+            "the log records no plan file (its run was of a plan a program passed in)",
+            log_path,
+            1,
+            1,
+        )
     if not os.path.isfile(plan_file):
         raise HtnError(f"the plan file of this run is missing: {plan_file}", log_path, 1, 1)
 
 
-def check_plan_digest(plan_file: str, recorded: Optional[str], actual: str,
-                      log_path: str) -> None:
+def check_plan_digest(plan_file: str, recorded: Optional[str], actual: str, log_path: str) -> None:
     """The plan file is unchanged since the logged run (when the header has
     its SHA-256): ``actual`` is the digest of the bytes read now."""
     if recorded and actual != recorded:
-        raise HtnError(f"the plan file {plan_file} has changed since this run (SHA-256 "
-                       f"{actual[:12]}..., the log says {recorded[:12]}...)", log_path, 1, 1)
+        raise HtnError(
+            f"the plan file {plan_file} has changed since this run (SHA-256 "
+            f"{actual[:12]}..., the log says {recorded[:12]}...)",
+            log_path,
+            1,
+            1,
+        )
 
 
 def check_unchanged(rec: dict, kind: str, log_path: str) -> None:
@@ -192,5 +245,9 @@ def check_unchanged(rec: dict, kind: str, log_path: str) -> None:
     if actual is None:
         raise HtnError(f"the {kind} file of this run is missing: {path}", log_path, 1)
     if actual != recorded:
-        raise HtnError(f"the {kind} file {path} has changed since this run (SHA-256 "
-                       f"{actual[:12]}..., the log says {recorded[:12]}...)", log_path, 1)
+        raise HtnError(
+            f"the {kind} file {path} has changed since this run (SHA-256 "
+            f"{actual[:12]}..., the log says {recorded[:12]}...)",
+            log_path,
+            1,
+        )

@@ -8,6 +8,7 @@
   a hold-monitor saw a condition break while it ran (it is then preempted);
 * ``retrying``  - it will be tried again (up to the operator's retry limit).
 """
+
 from __future__ import annotations
 
 from enum import Enum

@@ -16,6 +16,7 @@ it is. At the root, the pending top-level tasks are planned together (or,
 when the plan's task tree is unknown, the problem's tasks). If no enclosing
 task has a plan, there is no repair and the robot holds its pose.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -26,28 +27,32 @@ from htn.jshop.search.planner import Planner
 
 from .task_bt import ROOT_NAME, actions, build, enclosing_tasks, label_among, rebase, task_atom
 
-PLAN_TIMEOUT = 10.0       # seconds of search per candidate task
+PLAN_TIMEOUT = 10.0  # seconds of search per candidate task
 
 
 @dataclass
 class Repair:
     """A repair found: the task replaced (node path), its new plan, and the
     behaviours it replaces."""
-    path: str                        # the node path of the (first) task re-planned
+
+    path: str  # the node path of the (first) task re-planned
     tasks: list
     plan: object
-    target: object                   # the sequence repaired (the root for the root)
+    target: object  # the sequence repaired (the root for the root)
     replaced: list = field(default_factory=list)
 
     @property
     def paths(self) -> list[str]:
         """Node paths of every task replaced."""
-        return [getattr(b, "htn_task", None).path if hasattr(b, "htn_task")
-                else b.htn_action.node.path for b in self.replaced]
+        return [
+            getattr(b, "htn_task", None).path if hasattr(b, "htn_task") else b.htn_action.node.path
+            for b in self.replaced
+        ]
 
 
-def observed_instance(domain: S.Domain, instance: S.ProblemInstance, robot,
-                      tasks=None) -> S.ProblemInstance:
+def observed_instance(
+    domain: S.Domain, instance: S.ProblemInstance, robot, tasks=None
+) -> S.ProblemInstance:
     """The current state as the robot observes it: static facts of the
     problem plus the observed facts of the domain's dynamic predicates."""
     dynamic = domain.dynamic_predicates()
@@ -76,7 +81,7 @@ def candidates(shot, root, tree_known: bool, problem_tasks: S.TaskList):
         if seq is not root:
             yield seq, [seq], S.TaskList([task_atom(seq.htn_task)])
             siblings = seq.parent.children
-            later = siblings[siblings.index(seq):]
+            later = siblings[siblings.index(seq) :]
             if len(later) > 1:
                 yield seq, later, S.TaskList([_task_of(b) for b in later])
             continue
@@ -93,19 +98,24 @@ def pending_tasks(root, tree_known: bool, problem_tasks: S.TaskList) -> S.TaskLi
     return S.TaskList([_task_of(c) for c in root.children if not _done(c)])
 
 
-def find_repair(shot, root, tree_known: bool, domain, observed: S.ProblemInstance,
-                problem_tasks, functions=None) -> tuple[Optional[Repair], list[str]]:
+def find_repair(
+    shot, root, tree_known: bool, domain, observed: S.ProblemInstance, problem_tasks, functions=None
+) -> tuple[Optional[Repair], list[str]]:
     """The repair for the failed action subtree ``shot``, and the node paths tried."""
     tried = []
     for seq, replaced, tasks in candidates(shot, root, tree_known, problem_tasks):
         path = seq.name if seq is not root else ROOT_NAME
-        tried.append(path if seq is root or len(replaced) == 1 else
-                     f"{path} and the {len(replaced) - 1} task(s) after it")
+        tried.append(
+            path
+            if seq is root or len(replaced) == 1
+            else f"{path} and the {len(replaced) - 1} task(s) after it"
+        )
         if not tasks.items:
             continue
         inst = S.ProblemInstance(observed.state, tasks, observed.pos)
-        plan = next(Planner(domain, inst, functions, record_trees=True).plans(
-            timeout=PLAN_TIMEOUT), None)
+        plan = next(
+            Planner(domain, inst, functions, record_trees=True).plans(timeout=PLAN_TIMEOUT), None
+        )
         if plan is None:
             continue
         gone = {id(a) for b in replaced for a in actions(b)}
@@ -125,6 +135,7 @@ def retry_applies(ctx, root, domain, observed: S.ProblemInstance, functions=None
 
 def _atoms(tasks: S.TaskList) -> list:
     from htn.jshop.language.terms import atom_str
+
     return [atom_str(t.name, t.args) for t in S.task_atoms(tasks)]
 
 
@@ -142,8 +153,9 @@ def graft(repair: Repair, root, make_action) -> list:
         at = parent.children.index(repair.replaced[0])
         added = []
         for old, node in zip(repair.replaced, plan.tree.children):
-            rebase(node, old.htn_task.path if hasattr(old, "htn_task")
-                   else old.htn_action.node.path)
+            rebase(
+                node, old.htn_task.path if hasattr(old, "htn_task") else old.htn_action.node.path
+            )
             parent.remove_child(old)
             added.append(build(node, plan.steps, make_action))
         for k, new in enumerate(added):

@@ -7,6 +7,7 @@ robot's camera saves ``step04_try2_aborted.png`` with a caption
 (:class:`~htn.robot.interface.Caption`: step, action, attempt, outcome,
 simulated time, the monitor's detail).
 """
+
 from __future__ import annotations
 
 import os
@@ -19,11 +20,21 @@ OUTCOMES = ("verified", "failed", "aborted")
 
 def snapshot_listener(robot, folder: str) -> Callable[[dict], None]:
     """An event-log listener that saves a labelled snapshot per attempt outcome."""
+
     def on_event(rec: dict) -> None:
         if rec["event"] in OUTCOMES and rec["step"] is not None:
             attempt = rec["attempt"] or 1
             name = f"step{rec['step']:02d}_try{attempt}_{rec['event']}.png"
-            robot.snapshot(os.path.join(folder, name), label=Caption(
-                rec["step"], rec["action"] or "", attempt, rec["event"],
-                rec.get("sim_t") or robot.sim_time, rec.get("detail") or ""))
+            robot.snapshot(
+                os.path.join(folder, name),
+                label=Caption(
+                    rec["step"],
+                    rec["action"] or "",
+                    attempt,
+                    rec["event"],
+                    rec.get("sim_t") or robot.sim_time,
+                    rec.get("detail") or "",
+                ),
+            )
+
     return on_event

@@ -14,6 +14,7 @@ the plan is one sequence of actions. Task trees deeper than ``MAX_DEPTH``
 leaves below become children of the sequence at that depth, so ticking
 stays shallow.
 """
+
 from __future__ import annotations
 
 from typing import Callable, Optional
@@ -30,8 +31,10 @@ ROOT_NAME = "plan"
 def flat_tree(steps) -> TaskTree:
     """A task tree that knows only the plan's steps."""
     root = TaskTree(name="", path="")
-    root.children = [TaskTree(name=s.name, args=tuple(s.args), path=f"step {i + 1}", step=i)
-                     for i, s in enumerate(steps)]
+    root.children = [
+        TaskTree(name=s.name, args=tuple(s.args), path=f"step {i + 1}", step=i)
+        for i, s in enumerate(steps)
+    ]
     return root
 
 
@@ -45,7 +48,7 @@ def build(node: TaskTree, steps, make_action: Callable, depth: int = 0):
         return make_action(steps[node.step], node)
     top = _sequence(node)
     work = [(node, top, depth)]
-    while work:           # iterative: task trees can be deep
+    while work:  # iterative: task trees can be deep
         task, seq, d = work.pop()
         children = task.children if d < MAX_DEPTH else task.leaves()
         for child in children:
@@ -85,7 +88,7 @@ def rebase(tree: TaskTree, new_root_path: Optional[str]) -> None:
     they replace: its top node gets ``new_root_path``, the rest follow."""
     old = tree.path
     for n in tree.walk():
-        n.path = new_root_path + n.path[len(old):]
+        n.path = new_root_path + n.path[len(old) :]
 
 
 def label_among(name: str, taken: set, count: int) -> str:

@@ -22,6 +22,7 @@ depth first in order, so a node's children are the later nodes naming it as
 ``parent``, in list order. Paths are not logged whole: a path spells all its
 ancestors, which would make a deep tree's event quadratic in its depth.
 """
+
 from __future__ import annotations
 
 from typing import Callable, Optional
@@ -46,8 +47,9 @@ class NodeNumbers:
         return number
 
 
-def tree_nodes(top, numbers: NodeNumbers, parent: Optional[int],
-               step_of: Callable, action_of: Callable) -> list[dict]:
+def tree_nodes(
+    top, numbers: NodeNumbers, parent: Optional[int], step_of: Callable, action_of: Callable
+) -> list[dict]:
     """The nodes of the task tree ``top`` (depth first), numbered from
     ``len(numbers)`` on; ``top``'s parent is the node numbered ``parent``.
     ``step_of(node)`` is an operator node's 1-based step (or None),
@@ -60,8 +62,12 @@ def tree_nodes(top, numbers: NodeNumbers, parent: Optional[int],
     while stack:
         node, up = stack.pop()
         number = numbers.add(node)
-        d: dict = {"id": number, "parent": up, "task": node.task,
-                   "label": node.path.rsplit("/", 1)[-1]}
+        d: dict = {
+            "id": number,
+            "parent": up,
+            "task": node.task,
+            "label": node.path.rsplit("/", 1)[-1],
+        }
         if node.method is not None:
             d["method"] = node.method
             d["branch"] = node.branch
@@ -80,4 +86,8 @@ def tree_nodes(top, numbers: NodeNumbers, parent: Optional[int],
 def tree_detail(nodes: list[dict], replaced: int = 0) -> str:
     actions = sum(1 for n in nodes if "step" in n)
     what = f"{len(nodes)} nodes, {actions} actions"
-    return f"grafted {what} in place of {replaced} subtree(s)" if replaced else f"the task tree: {what}"
+    return (
+        f"grafted {what} in place of {replaced} subtree(s)"
+        if replaced
+        else f"the task tree: {what}"
+    )

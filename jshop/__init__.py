@@ -15,14 +15,20 @@ plan files, validation, ``--explain``). The names below are imported on first
 use, so that importing ``htn.jshop.language.errors`` (as the command line
 does for ``htn --help``) does not load the parser.
 """
+
 from importlib import import_module
 
 _EXPORTS = {
-    "HtnError": "language.errors", "PlanningError": "language.errors",
+    "HtnError": "language.errors",
+    "PlanningError": "language.errors",
     "FunctionTable": "language.functions",
-    "load_domain": "readers.load", "load_problem": "readers.load", "load_inputs": "readers.load",
+    "load_domain": "readers.load",
+    "load_problem": "readers.load",
+    "load_inputs": "readers.load",
     "parse_text": "readers.load",
-    "Plan": "plans.plan", "Step": "plans.plan", "TaskTree": "plans.tree",
+    "Plan": "plans.plan",
+    "Step": "plans.plan",
+    "TaskTree": "plans.tree",
     "Planner": "search.planner",
 }
 

@@ -15,18 +15,30 @@ that embeds :mod:`htn.api` calls none of them unless it wants to.
 
 This room imports only the standard library and htn's error type.
 """
+
 from .handlers import begin_process, command, deadline, end_process
 from .stops import (
-                    INTERRUPT_EXIT,
-                    SIGTERM_EXIT,
-                    TIMEOUT_EXIT,
-                    DeadlineExceeded,
-                    Stops,
-                    Terminated,
-                    TimedOut,
-                    silence_stdout,
+    INTERRUPT_EXIT,
+    SIGTERM_EXIT,
+    TIMEOUT_EXIT,
+    DeadlineExceeded,
+    Stops,
+    Terminated,
+    TimedOut,
+    silence_stdout,
 )
 
-__all__ = ["Stops", "Terminated", "DeadlineExceeded", "TimedOut", "command", "deadline",
-           "begin_process", "end_process", "silence_stdout", "INTERRUPT_EXIT",
-           "SIGTERM_EXIT", "TIMEOUT_EXIT"]
+__all__ = [
+    "Stops",
+    "Terminated",
+    "DeadlineExceeded",
+    "TimedOut",
+    "command",
+    "deadline",
+    "begin_process",
+    "end_process",
+    "silence_stdout",
+    "INTERRUPT_EXIT",
+    "SIGTERM_EXIT",
+    "TIMEOUT_EXIT",
+]

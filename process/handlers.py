@@ -16,6 +16,7 @@ A library that embeds :mod:`htn.api` installs none of these unless it calls
 them: the use cases stop by their own ``timeout`` and the ``stops`` they are
 given.
 """
+
 from __future__ import annotations
 
 import signal
@@ -39,8 +40,8 @@ from .stops import (
 )
 from .watchdog import GRACE, backstop_after, cancel_backstop, exit_code, leave_last
 
-MAX_TIMER = 1e8          # seconds (three years): a longer --timeout is no limit
-AGAIN = 0.5              # seconds: the deadline is raised again until the command stops
+MAX_TIMER = 1e8  # seconds (three years): a longer --timeout is no limit
+AGAIN = 0.5  # seconds: the deadline is raised again until the command stops
 
 
 def _on_signal(stops: Stops):
@@ -51,6 +52,7 @@ def _on_signal(stops: Stops):
         if stops.phase != COMMAND:
             stops.interrupt_exit(stops.received, now=True)
         stops.deliver(exc)
+
     return handler
 
 
@@ -71,11 +73,11 @@ def command(stops: Optional[Stops] = None):
     stops = stops if stops is not None else Stops()
     stops.reset()
     stops.phase = COMMAND
-    mask = signal.pthread_sigmask(signal.SIG_BLOCK, ())    # put back after (user code)
+    mask = signal.pthread_sigmask(signal.SIG_BLOCK, ())  # put back after (user code)
     handler = _on_signal(stops)
     try:
         old = {sig: signal.signal(sig, handler) for sig in (signal.SIGINT, signal.SIGTERM)}
-    except ValueError:          # not the main thread: leave signals alone
+    except ValueError:  # not the main thread: leave signals alone
         old = {}
 
     def unraisable(args) -> None:
@@ -119,12 +121,16 @@ def _on_alarm(stops: Stops):
     def handler(signum, frame):
         # again until the deadline's block ends: Python drops an exception
         # raised in a finalizer, and even a library caller's command must stop
-        if stops.halting is None:       # a run ends by being halted, once
+        if stops.halting is None:  # a run ends by being halted, once
             signal.setitimer(signal.ITIMER_REAL, AGAIN)
             if isinstance(stops.raised, DeadlineExceeded) and not stops.swallowed:
-                stops.swallowed = True      # raised before and the command goes on: again
-        stops.deliver(TimedOut(timeout_reason(stops.timeout)) if stops.halting is not None
-                      else DeadlineExceeded())
+                stops.swallowed = True  # raised before and the command goes on: again
+        stops.deliver(
+            TimedOut(timeout_reason(stops.timeout))
+            if stops.halting is not None
+            else DeadlineExceeded()
+        )
+
     return handler
 
 
@@ -142,7 +148,7 @@ def deadline(stops: Stops, seconds: Optional[float], started: Optional[float] = 
     remaining = seconds - (time.perf_counter() - started if started is not None else 0.0)
     try:
         old = signal.signal(signal.SIGALRM, _on_alarm(stops))
-    except ValueError:          # not the main thread: the planner's own check must do
+    except ValueError:  # not the main thread: the planner's own check must do
         yield
         return
     outer, stops.timeout = stops.timeout, seconds
@@ -156,7 +162,7 @@ def deadline(stops: Stops, seconds: Optional[float], started: Optional[float] = 
             try:
                 signal.setitimer(signal.ITIMER_REAL, 0)
                 break
-            except DeadlineExceeded:    # raised again as it was being cancelled
+            except DeadlineExceeded:  # raised again as it was being cancelled
                 continue
         if backstop:
             cancel_backstop()

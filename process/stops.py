@@ -20,6 +20,7 @@ the whole story):
 * raised again if user code swallowed it (:meth:`dropped`, and the
   watchdog for a stop Python itself dropped).
 """
+
 from __future__ import annotations
 
 import os
@@ -80,23 +81,23 @@ class Stops:
 
     def __init__(self, owned: bool = False):
         self.owned = owned
-        self.phase = COMMAND        # START and EXIT only in an owned process
-        self.count = 0              # stops raised into the program so far
-        self.running: list[str] = []    # user code running now (innermost last)
+        self.phase = COMMAND  # START and EXIT only in an owned process
+        self.count = 0  # stops raised into the program so far
+        self.running: list[str] = []  # user code running now (innermost last)
         self.raised_last: Optional[BaseException] = None
-        self.exit_code: Optional[int] = None    # set when an owned process leaves
+        self.exit_code: Optional[int] = None  # set when an owned process leaves
         self.reset()
 
     def reset(self) -> None:
-        self.received: Optional[BaseException] = None   # the first SIGINT / SIGTERM
-        self.raised: Optional[BaseException] = None     # the stop raised into the program
-        self.swallowed = False      # ... and dropped where Python cannot let it out
-        self.quiet = False          # record signals only: the command ends in order
+        self.received: Optional[BaseException] = None  # the first SIGINT / SIGTERM
+        self.raised: Optional[BaseException] = None  # the stop raised into the program
+        self.swallowed = False  # ... and dropped where Python cannot let it out
+        self.quiet = False  # record signals only: the command ends in order
         self.holding = 0
-        self.pending: Optional[BaseException] = None    # came during a held() block
-        self.halting: Optional[Haltable] = None         # halted instead of raised into
-        self.timeout: Optional[float] = None            # the --timeout in force (seconds)
-        self.reported = False       # "interrupted" was printed
+        self.pending: Optional[BaseException] = None  # came during a held() block
+        self.halting: Optional[Haltable] = None  # halted instead of raised into
+        self.timeout: Optional[float] = None  # the --timeout in force (seconds)
+        self.reported = False  # "interrupted" was printed
         self.started = time.perf_counter()
         self.watchdog = None
         self.finalizers: list[Callable[[], Optional[str]]] = []
@@ -112,16 +113,17 @@ class Stops:
         """Raise ``exc`` into the program now, later (held, halted) or not at all."""
         if self.holding:
             if self.pending is None or isinstance(self.pending, DeadlineExceeded):
-                self.pending = exc          # an interrupt outranks the deadline
+                self.pending = exc  # an interrupt outranks the deadline
             return
         if self.quiet or (self.raised is not None and not self.swallowed):
-            return                          # the command is stopping already
+            return  # the command is stopping already
         self.swallowed = False
         self.raised = exc
         if self.watchdog is None and self.owned:
             # only in htn's own process: a library caller's (or a test's)
             # process is not ours to interrupt from another thread, nor to end
             from .watchdog import Watchdog
+
             self.watchdog = Watchdog(self).begin()
         if self.halting is not None and self.halting.halt(str(exc)):
             return
@@ -235,7 +237,7 @@ class Stops:
         Ctrl-C was seen (rarely) to end the process by SIGINT instead of
         the exit code. Only in an owned process: else ``SystemExit``."""
         if self.received is not None and isinstance(exc, (TimedOut, DeadlineExceeded)):
-            exc = self.received     # a signal came too: it decides
+            exc = self.received  # a signal came too: it decides
         self.reported = True
         code, word = self.exit_of(exc)
         flush_stdout()
@@ -251,23 +253,23 @@ class Stops:
     def emergency_exit(self, stuck: str) -> None:
         """The watchdog's end: keep what is whole (the finalizers), say why,
         leave with the stop's exit code."""
-        if not self.owned:          # a library caller's process is not ours to end
+        if not self.owned:  # a library caller's process is not ours to end
             return
         waited = time.monotonic()
-        while self.holding and time.monotonic() - waited < 1.0:    # a unit being written
+        while self.holding and time.monotonic() - waited < 1.0:  # a unit being written
             time.sleep(0.01)
         notes = [stuck]
         for finalizer in reversed(self.finalizers):
             try:
                 note = finalizer()
-            except BaseException:       # noqa: BLE001 - the process ends anyway
+            except BaseException:  # noqa: BLE001 - the process ends anyway
                 note = None
             if note:
                 notes.append(note)
         code, word = self.exit_of(self.cause)
         try:
             sys.stdout.flush()
-        except BaseException:           # noqa: BLE001
+        except BaseException:  # noqa: BLE001
             pass
         os.write(2, ("; ".join([word, *notes]) + "\n").encode("utf-8", "replace"))
         os._exit(code)
@@ -276,7 +278,7 @@ class Stops:
 def flush_stdout() -> None:
     try:
         sys.stdout.flush()
-    except (OSError, ValueError):       # the reader is gone, or the disk is full
+    except (OSError, ValueError):  # the reader is gone, or the disk is full
         silence_stdout()
 
 
@@ -286,10 +288,25 @@ def silence_stdout() -> None:
     try:
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())
-    except (OSError, ValueError):   # no real file descriptor (tests capture stdout)
+    except (OSError, ValueError):  # no real file descriptor (tests capture stdout)
         pass
 
 
-__all__ = ["Stops", "Terminated", "DeadlineExceeded", "TimedOut", "Haltable", "interrupt",
-           "timeout_reason", "is_stop", "flush_stdout", "silence_stdout", "INTERRUPT_EXIT",
-           "SIGTERM_EXIT", "TIMEOUT_EXIT", "START", "COMMAND", "EXIT"]
+__all__ = [
+    "Stops",
+    "Terminated",
+    "DeadlineExceeded",
+    "TimedOut",
+    "Haltable",
+    "interrupt",
+    "timeout_reason",
+    "is_stop",
+    "flush_stdout",
+    "silence_stdout",
+    "INTERRUPT_EXIT",
+    "SIGTERM_EXIT",
+    "TIMEOUT_EXIT",
+    "START",
+    "COMMAND",
+    "EXIT",
+]

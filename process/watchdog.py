@@ -19,6 +19,7 @@ command ends it
 
 This module imports only the standard library.
 """
+
 from __future__ import annotations
 
 import _thread
@@ -28,8 +29,8 @@ import sys
 import threading
 import time
 
-GRACE = 3.0      # seconds user code gets to stop after a stop
-HARD = 30.0      # seconds anything gets
+GRACE = 3.0  # seconds user code gets to stop after a stop
+HARD = 30.0  # seconds anything gets
 EVERY = 0.2
 
 
@@ -74,6 +75,7 @@ def backstop_after(after: float) -> bool:
     """End the process (exit 1, nothing printed) ``after`` seconds from now
     even if no Python code can run: faulthandler's timer is a C thread."""
     import faulthandler
+
     if not _DEVNULL:
         _DEVNULL.append(open(os.devnull, "w"))
     faulthandler.dump_traceback_later(after, exit=True, file=_DEVNULL[0])
@@ -82,6 +84,7 @@ def backstop_after(after: float) -> bool:
 
 def cancel_backstop() -> None:
     import faulthandler
+
     faulthandler.cancel_dump_traceback_later()
 
 
@@ -104,6 +107,7 @@ def leave_last(stops) -> None:
     kill the process (an interrupted htn plan under load, 1 in 8; a finished
     htn run --sim). Exit hooks run last registered first: registered at the
     process's start, this one runs after those of every library imported."""
+
     def leave() -> None:
         if stops.exit_code is None:
             return
@@ -113,4 +117,5 @@ def leave_last(stops) -> None:
             except (OSError, ValueError):
                 pass
         os._exit(stops.exit_code)
+
     atexit.register(leave)

@@ -1,6 +1,7 @@
 """The frame of each kitchen area (the kitchen robot): ``u`` forward from
 the area's base pose towards its table, ``v`` to the robot's left. The
 drawers, the trays and the spots on a table are placed in it."""
+
 from __future__ import annotations
 
 import math
@@ -20,8 +21,10 @@ class AreaFrames:
 
     def to_world(self, area: str, u: float, v: float) -> tuple[float, float]:
         x, y, yaw = self.frame(area)
-        return (x + u * math.cos(yaw) - v * math.sin(yaw),
-                y + u * math.sin(yaw) + v * math.cos(yaw))
+        return (
+            x + u * math.cos(yaw) - v * math.sin(yaw),
+            y + u * math.sin(yaw) + v * math.cos(yaw),
+        )
 
     def to_area(self, area: str, x: float, y: float) -> tuple[float, float]:
         ax, ay, yaw = self.frame(area)

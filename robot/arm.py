@@ -6,6 +6,7 @@ object with a fixed constraint, created only when both fingers really touch
 it (:meth:`Arm.close_on`); letting go removes the constraint. A robot with
 two arms holds two of them (:mod:`~htn.robot.two_arms`).
 """
+
 from __future__ import annotations
 
 import math
@@ -18,28 +19,38 @@ from .faults import FaultDraws
 from .interface import Check
 from .physics import DT, Physics, yaw_quat
 
-EE_LINK = 11              # panda_grasptarget_hand
+EE_LINK = 11  # panda_grasptarget_hand
 FINGERS = (9, 10)
 ARM_JOINTS = tuple(range(7))
-HAND_LINKS = (*FINGERS, 8, 7, 6)   # links that touch what the hand holds
+HAND_LINKS = (*FINGERS, 8, 7, 6)  # links that touch what the hand holds
 GRIP_FORCE = 200
-HOLD_SLACK = 0.15         # m: a carried object further from its gripper has slipped
+HOLD_SLACK = 0.15  # m: a carried object further from its gripper has slipped
 
 
 class Arm:
     """Reaching and gripping with one arm, mounted on ``base`` at ``offset``."""
 
-    def __init__(self, physics: Physics, base: MobileBase, draws: FaultDraws, offset: Offset,
-                 name: str = "arm"):
+    def __init__(
+        self,
+        physics: Physics,
+        base: MobileBase,
+        draws: FaultDraws,
+        offset: Offset,
+        name: str = "arm",
+    ):
         self.physics, self.base, self.draws = physics, base, draws
         self.name = name
         p = physics.p
-        self.body: int = p.loadURDF("franka_panda/panda.urdf", base.mount_pos(offset),
-                                    yaw_quat(p, base.pose[2]), useFixedBase=True,
-                                    physicsClientId=physics.cid)
+        self.body: int = p.loadURDF(
+            "franka_panda/panda.urdf",
+            base.mount_pos(offset),
+            yaw_quat(p, base.pose[2]),
+            useFixedBase=True,
+            physicsClientId=physics.cid,
+        )
         base.mount(self.body, offset)
-        self.held: Optional[str] = None          # what the gripper holds (a constraint)
-        self.grip: Optional[int] = None          # that constraint
+        self.held: Optional[str] = None  # what the gripper holds (a constraint)
+        self.grip: Optional[int] = None  # that constraint
 
     def ee(self) -> np.ndarray:
         p, c = self.physics.p, self.physics.cid
@@ -62,13 +73,23 @@ class Arm:
         level), or None if no solution comes within 2 cm."""
         p, c = self.physics.p, self.physics.cid
         yaw = self.base.pose[2] if yaw is None else yaw
-        orn = p.getQuaternionFromEuler((math.pi, 0.0, yaw)) if down else \
-            p.getQuaternionFromEuler((math.pi / 2, 0.0, yaw - math.pi / 2))
+        orn = (
+            p.getQuaternionFromEuler((math.pi, 0.0, yaw))
+            if down
+            else p.getQuaternionFromEuler((math.pi / 2, 0.0, yaw - math.pi / 2))
+        )
         saved = self.q()
         q = saved
         for _ in range(12):
-            q = p.calculateInverseKinematics(self.body, EE_LINK, pos, orn, maxNumIterations=200,
-                                             residualThreshold=1e-4, physicsClientId=c)[:7]
+            q = p.calculateInverseKinematics(
+                self.body,
+                EE_LINK,
+                pos,
+                orn,
+                maxNumIterations=200,
+                residualThreshold=1e-4,
+                physicsClientId=c,
+            )[:7]
             self.set_q(q)
         err = float(np.linalg.norm(self.ee() - np.array(pos)))
         self.set_q(saved)
@@ -103,8 +124,10 @@ class Arm:
 
     def fingers_touch(self, body: int) -> bool:
         p, c = self.physics.p, self.physics.cid
-        return all(p.getContactPoints(bodyA=self.body, bodyB=body, linkIndexA=f, physicsClientId=c)
-                   for f in FINGERS)
+        return all(
+            p.getContactPoints(bodyA=self.body, bodyB=body, linkIndexA=f, physicsClientId=c)
+            for f in FINGERS
+        )
 
     def close_on(self, obj: str) -> bool:
         """Hold ``obj`` if both fingers touch it."""
@@ -121,8 +144,18 @@ class Arm:
         b_pos, b_orn = p.getBasePositionAndOrientation(body, physicsClientId=c)
         inv_pos, inv_orn = p.invertTransform(ee_pos, ee_orn)
         rel_pos, rel_orn = p.multiplyTransforms(inv_pos, inv_orn, b_pos, b_orn)
-        self.grip = p.createConstraint(self.body, EE_LINK, body, -1, p.JOINT_FIXED,
-                                       [0, 0, 0], rel_pos, [0, 0, 0], rel_orn, physicsClientId=c)
+        self.grip = p.createConstraint(
+            self.body,
+            EE_LINK,
+            body,
+            -1,
+            p.JOINT_FIXED,
+            [0, 0, 0],
+            rel_pos,
+            [0, 0, 0],
+            rel_orn,
+            physicsClientId=c,
+        )
         p.changeConstraint(self.grip, maxForce=GRIP_FORCE, physicsClientId=c)
         for link in HAND_LINKS:
             p.setCollisionFilterPair(self.body, body, link, -1, 0, physicsClientId=c)
@@ -165,8 +198,9 @@ class Arm:
         d = float(np.linalg.norm(pos - self.ee()))
         lifted = pos[2] > max(self.physics.furniture_top.values(), default=0.0) + 0.1
         ok = d < tolerance and lifted and self.grip is not None
-        return Check(ok, f"{obj} is {d:.3f} m from {self.label}"
-                     + ("" if lifted else ", not lifted"))
+        return Check(
+            ok, f"{obj} is {d:.3f} m from {self.label}" + ("" if lifted else ", not lifted")
+        )
 
     def still_holds(self, obj: str) -> Check:
         """While the robot carries ``obj`` (held by this gripper): still attached

@@ -12,6 +12,7 @@ the robot's name, its object the factory::
 A factory checks its request (unknown fault kinds, a world it cannot build)
 by raising :class:`~htn.jshop.language.errors.HtnError`, before anything moves.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -28,6 +29,7 @@ class RobotRequest:
     """What a robot back end is asked to build: the planning domain, the
     problem instance whose initial state is the world, the ``--faults`` text,
     the seed of its random draws, a window or not, and the user functions."""
+
     domain: S.Domain
     instance: S.ProblemInstance
     faults: str = ""
@@ -42,19 +44,24 @@ class RobotRequest:
 
 def _pybullet(req: RobotRequest):
     from .faults import Faults
+
     faults = Faults(**req.fault_rates(Faults.kinds()))
     from . import simulated_robot
+
     return simulated_robot(req.instance.state, gui=req.gui, faults=faults, seed=req.seed)
 
 
 def _symbolic(req: RobotRequest):
     from .symbolic import SymbolicRobot
-    return SymbolicRobot(req.domain, req.instance, req.functions,
-                         req.fault_rates(SymbolicRobot.FAULTS), req.seed)
+
+    return SymbolicRobot(
+        req.domain, req.instance, req.functions, req.fault_rates(SymbolicRobot.FAULTS), req.seed
+    )
 
 
 def _projection(req: RobotRequest):
     from .projection import FailureRates, ProjectionRobot, world_from_atoms
+
     # like the other robots, nothing fails unless --faults says so
     rates = FailureRates.none().with_faults(req.faults)
     return ProjectionRobot(world_from_atoms(req.instance.state), seed=req.seed, failures=rates)
@@ -65,22 +72,35 @@ class Backend:
     name: str
     factory: Callable
     description: str
-    extra: Optional[str] = None      # the install extra it needs ('sim'), if any
+    extra: Optional[str] = None  # the install extra it needs ('sim'), if any
 
 
 BUILTIN = {
-    "pybullet": Backend("pybullet", _pybullet, "PyBullet physics: the domestic robot, or the "
-                        "two-armed kitchen robot for (area ...) problems", "sim"),
-    "symbolic": Backend("symbolic", _symbolic, "the domain's own operators on a symbolic "
-                        "world; any domain (faults: effect=P, fail=P)"),
-    "projection": Backend("projection", _projection, "the fast kinematic projection of the "
-                          "plan-transformations paper (kitchen and domestic problems)"),
+    "pybullet": Backend(
+        "pybullet",
+        _pybullet,
+        "PyBullet physics: the domestic robot, or the "
+        "two-armed kitchen robot for (area ...) problems",
+        "sim",
+    ),
+    "symbolic": Backend(
+        "symbolic",
+        _symbolic,
+        "the domain's own operators on a symbolic world; any domain (faults: effect=P, fail=P)",
+    ),
+    "projection": Backend(
+        "projection",
+        _projection,
+        "the fast kinematic projection of the "
+        "plan-transformations paper (kitchen and domestic problems)",
+    ),
 }
 
 
 def backends() -> dict[str, Backend]:
     """The built-in back ends and those registered by installed plugins."""
     from importlib.metadata import entry_points
+
     found = dict(BUILTIN)
     for ep in entry_points(group="htn.robots"):
         if ep.name not in found:
@@ -93,15 +113,19 @@ def _lazy(ep) -> Callable:
         try:
             make = ep.load()
         except ModuleNotFoundError as exc:
-            if ep.dist is not None and ep.dist.name == "htn":   # htn's own: its extra, same name
-                raise HtnError(f"--robot {ep.name} needs the {ep.name} extra: pip install "
-                               f"'htn[{ep.name}]'")
-            raise HtnError(f"robot plugin '{ep.name}' ({ep.value}) failed to load: "
-                           f"{type(exc).__name__}: {exc}")
-        except Exception as exc:   # a broken plugin: say which, no traceback
-            raise HtnError(f"robot plugin '{ep.name}' ({ep.value}) failed to load: "
-                           f"{type(exc).__name__}: {exc}")
+            if ep.dist is not None and ep.dist.name == "htn":  # htn's own: its extra, same name
+                raise HtnError(
+                    f"--robot {ep.name} needs the {ep.name} extra: pip install 'htn[{ep.name}]'"
+                )
+            raise HtnError(
+                f"robot plugin '{ep.name}' ({ep.value}) failed to load: {type(exc).__name__}: {exc}"
+            )
+        except Exception as exc:  # a broken plugin: say which, no traceback
+            raise HtnError(
+                f"robot plugin '{ep.name}' ({ep.value}) failed to load: {type(exc).__name__}: {exc}"
+            )
         return make(req)
+
     return factory
 
 

@@ -11,6 +11,7 @@ here: a navigation that stops short of its goal (``nav``) and an object that
 slips out of a gripper while the base drives with it (``slip``, see
 :meth:`MobileBase.carry_slip`).
 """
+
 from __future__ import annotations
 
 import math
@@ -22,16 +23,16 @@ from .interface import Check
 from .physics import DT, Physics, yaw_quat
 from .world import Place, World
 
-BASE_SPEED = 1.0          # m/s
-TURN_SPEED = 2.0          # rad/s
-BASE_ACCEL = 1.0          # m/s^2
-TURN_ACCEL = 4.0          # rad/s^2
-POSE_TOLERANCE = 0.05     # m
-YAW_TOLERANCE = 0.05      # rad
-BASE_Z = 0.14             # husky base height
+BASE_SPEED = 1.0  # m/s
+TURN_SPEED = 2.0  # rad/s
+BASE_ACCEL = 1.0  # m/s^2
+TURN_ACCEL = 4.0  # rad/s^2
+POSE_TOLERANCE = 0.05  # m
+YAW_TOLERANCE = 0.05  # rad
+BASE_Z = 0.14  # husky base height
 LIMITS = Limits(BASE_SPEED, TURN_SPEED, BASE_ACCEL, TURN_ACCEL)
 
-Offset = tuple[float, float, float]   # where a body is mounted, in the base's frame
+Offset = tuple[float, float, float]  # where a body is mounted, in the base's frame
 
 
 class MobileBase:
@@ -39,15 +40,25 @@ class MobileBase:
     ``limits`` says how fast it may move now (the kitchen robot's depend on
     whether it carries a tray)."""
 
-    def __init__(self, physics: Physics, world: World, draws: FaultDraws, start: Place,
-                 limits: Callable[[], Limits] = lambda: LIMITS):
+    def __init__(
+        self,
+        physics: Physics,
+        world: World,
+        draws: FaultDraws,
+        start: Place,
+        limits: Callable[[], Limits] = lambda: LIMITS,
+    ):
         self.physics, self.world, self.draws = physics, world, draws
         self.limits = limits
-        self.pose = [start.x, start.y, start.theta]     # x, y, yaw as commanded
+        self.pose = [start.x, start.y, start.theta]  # x, y, yaw as commanded
         p = physics.p
-        self.body: int = p.loadURDF("husky/husky.urdf", [start.x, start.y, BASE_Z],
-                                    yaw_quat(p, start.theta), useFixedBase=True,
-                                    physicsClientId=physics.cid)
+        self.body: int = p.loadURDF(
+            "husky/husky.urdf",
+            [start.x, start.y, BASE_Z],
+            yaw_quat(p, start.theta),
+            useFixedBase=True,
+            physicsClientId=physics.cid,
+        )
         self._mounts: list[tuple[int, Offset]] = []
 
     # ------------------------------------------------------------ what rides on it
@@ -55,8 +66,11 @@ class MobileBase:
         """Where a body mounted at ``offset`` is, the base at ``pose`` (default: now)."""
         x, y, yaw = pose or self.pose
         mu, mv, mz = offset
-        return [x + mu * math.cos(yaw) - mv * math.sin(yaw),
-                y + mu * math.sin(yaw) + mv * math.cos(yaw), mz]
+        return [
+            x + mu * math.cos(yaw) - mv * math.sin(yaw),
+            y + mu * math.sin(yaw) + mv * math.cos(yaw),
+            mz,
+        ]
 
     def mount(self, body: int, offset: Offset) -> None:
         """Carry ``body`` at ``offset``: it moves with the base from now on."""
@@ -82,8 +96,14 @@ class MobileBase:
             self.put(x, y, heading)
             yield from self.physics.step()
 
-    def drive(self, gx: float, gy: float, fraction: float = 1.0, slip: Optional[float] = None,
-              drop: Callable[[], None] = lambda: None):
+    def drive(
+        self,
+        gx: float,
+        gy: float,
+        fraction: float = 1.0,
+        slip: Optional[float] = None,
+        drop: Callable[[], None] = lambda: None,
+    ):
         """Drive straight to (gx, gy), forwards or backwards, or ``fraction``
         of the way; an object scheduled to slip (``slip``: fraction of the
         drive) falls there (``drop``)."""
@@ -134,8 +154,10 @@ class MobileBase:
         """The named place whose pose the base is at, if any."""
         x, y, yaw = self.pose
         for pl in self.world.places.values():
-            if math.hypot(pl.x - x, pl.y - y) <= POSE_TOLERANCE and \
-                    abs(angle_diff(pl.theta, yaw)) <= YAW_TOLERANCE:
+            if (
+                math.hypot(pl.x - x, pl.y - y) <= POSE_TOLERANCE
+                and abs(angle_diff(pl.theta, yaw)) <= YAW_TOLERANCE
+            ):
                 return pl.name
         return None
 
@@ -157,5 +179,8 @@ class MobileBase:
         err = math.hypot(goal.x - x, goal.y - y)
         yaw_err = abs(angle_diff(goal.theta, yaw))
         ok = err <= POSE_TOLERANCE and yaw_err <= YAW_TOLERANCE
-        return Check(ok, f"base measured {err:.4f} m, {yaw_err:.4f} rad from {place} "
-                         f"(tolerance {POSE_TOLERANCE} m, {YAW_TOLERANCE} rad)")
+        return Check(
+            ok,
+            f"base measured {err:.4f} m, {yaw_err:.4f} rad from {place} "
+            f"(tolerance {POSE_TOLERANCE} m, {YAW_TOLERANCE} rad)",
+        )

@@ -11,6 +11,7 @@ browser view of ``htn run --view``). Both render with PyBullet's CPU
 renderer (no display needed) in the thread that owns the simulation: call
 them between two ticks, never from another thread.
 """
+
 from __future__ import annotations
 
 import io
@@ -23,10 +24,14 @@ from .base import MobileBase
 from .interface import Caption
 from .physics import Physics
 
-SIZE = (800, 600)                 # width, height of a snapshot (pixels)
-BAND = (20, 24, 28, 200)          # the caption band's colour, a little transparent
-TONE = {"verified": (120, 220, 120), "finished": (230, 230, 230),
-        "aborted": (255, 110, 100), "failed": (255, 110, 100)}
+SIZE = (800, 600)  # width, height of a snapshot (pixels)
+BAND = (20, 24, 28, 200)  # the caption band's colour, a little transparent
+TONE = {
+    "verified": (120, 220, 120),
+    "finished": (230, 230, 230),
+    "aborted": (255, 110, 100),
+    "failed": (255, 110, 100),
+}
 TEXT = (240, 240, 240)
 FONT_SIZE = 17
 
@@ -41,16 +46,22 @@ class OverviewCamera:
         p, c = self.physics.p, self.physics.cid
         x, y, yaw = self.base.pose
         eye = [x - 2.2 * math.cos(yaw) + 0.8, y - 2.2 * math.sin(yaw) - 0.8, 2.6]
-        view = p.computeViewMatrix(eye, [x + 0.6 * math.cos(yaw), y + 0.6 * math.sin(yaw), 0.5],
-                                   [0, 0, 1], physicsClientId=c)
+        view = p.computeViewMatrix(
+            eye,
+            [x + 0.6 * math.cos(yaw), y + 0.6 * math.sin(yaw), 0.5],
+            [0, 0, 1],
+            physicsClientId=c,
+        )
         proj = p.computeProjectionMatrixFOV(60, width / height, 0.1, 20, physicsClientId=c)
-        w_, h_, rgb, _, _ = p.getCameraImage(width, height, view, proj,
-                                             renderer=p.ER_TINY_RENDERER, physicsClientId=c)
+        w_, h_, rgb, _, _ = p.getCameraImage(
+            width, height, view, proj, renderer=p.ER_TINY_RENDERER, physicsClientId=c
+        )
         return np.asarray(rgb, dtype=np.uint8).reshape(h_, w_, 4)[:, :, :3]
 
     def snapshot(self, path: str, label: Optional[Caption] = None) -> Optional[str]:
         """Save a PNG (:data:`SIZE`) from the overview camera, with ``label`` drawn on it."""
         from PIL import Image
+
         image = Image.fromarray(self._overview_rgb(*SIZE))
         if label is not None:
             image = _captioned(image, label)
@@ -60,6 +71,7 @@ class OverviewCamera:
     def camera_frame(self, width: int = 320, height: int = 240) -> Optional[bytes]:
         """The overview camera's image now, as JPEG bytes."""
         from PIL import Image
+
         out = io.BytesIO()
         Image.fromarray(self._overview_rgb(width, height)).save(out, "JPEG", quality=80)
         return out.getvalue()
@@ -67,15 +79,17 @@ class OverviewCamera:
 
 def _font(size: int):
     from PIL import ImageFont
+
     try:
-        return ImageFont.load_default(size=size)     # Pillow >= 10.1: scalable
-    except TypeError:                                 # older Pillow: its bitmap font
+        return ImageFont.load_default(size=size)  # Pillow >= 10.1: scalable
+    except TypeError:  # older Pillow: its bitmap font
         return ImageFont.load_default()
 
 
 def _captioned(image, label: Caption):
     """``image`` with the caption band drawn along its bottom."""
     from PIL import Image, ImageDraw
+
     font = _font(FONT_SIZE)
     lines = label.lines()
     width = image.width - 24

@@ -22,29 +22,31 @@ base's pose from PyBullet): a few millimetres and milliradians, different for
 each motion. The base itself is kinematic (placed at each step, as the arm
 is): collisions do not stop it, the ``no collision`` hold-monitor does.
 """
+
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
 
-XY_TOL = 0.01           # m: the drive stops commanding this close to its goal
-YAW_TOL = 0.01          # rad: a turn stops commanding this close to its heading
-MIN_SPEED = 0.04        # m/s: the slowest the wheels run smoothly
-MIN_TURN = 0.08         # rad/s
-HOLD_HEADING = 0.1      # m: no steering this close to the goal
-HEADING_GAIN = 2.0      # 1/s: steering rate per radian of bearing error
-BRAKING = 0.8           # profiles brake at this share of the acceleration limit
-REST = 1e-4             # m/s, rad/s: at rest
-MAX_SECONDS = 60.0      # a motion that has not ended by then is cut (never seen)
+XY_TOL = 0.01  # m: the drive stops commanding this close to its goal
+YAW_TOL = 0.01  # rad: a turn stops commanding this close to its heading
+MIN_SPEED = 0.04  # m/s: the slowest the wheels run smoothly
+MIN_TURN = 0.08  # rad/s
+HOLD_HEADING = 0.1  # m: no steering this close to the goal
+HEADING_GAIN = 2.0  # 1/s: steering rate per radian of bearing error
+BRAKING = 0.8  # profiles brake at this share of the acceleration limit
+REST = 1e-4  # m/s, rad/s: at rest
+MAX_SECONDS = 60.0  # a motion that has not ended by then is cut (never seen)
 
 
 @dataclass(frozen=True)
 class Limits:
     """The base's speed and acceleration limits."""
-    speed: float        # m/s
-    turn: float         # rad/s
-    accel: float        # m/s^2
-    turn_accel: float   # rad/s^2
+
+    speed: float  # m/s
+    turn: float  # rad/s
+    accel: float  # m/s^2
+    turn_accel: float  # rad/s^2
 
 
 def angle_diff(a: float, b: float) -> float:
@@ -69,8 +71,11 @@ def turn_steps(yaw: float, goal: float, lim: Limits, dt: float):
     for _ in range(int(MAX_SECONDS / dt)):
         err = angle_diff(goal, yaw)
         stopping = stopping or abs(err) < YAW_TOL
-        command = 0.0 if stopping else math.copysign(
-            profile(abs(err), lim.turn, MIN_TURN, lim.turn_accel), err)
+        command = (
+            0.0
+            if stopping
+            else math.copysign(profile(abs(err), lim.turn, MIN_TURN, lim.turn_accel), err)
+        )
         w = follow(w, command, lim.turn_accel, dt)
         if stopping and abs(w) < REST:
             return
@@ -91,15 +96,14 @@ def drive_steps(pose: tuple, goal: tuple, lim: Limits, dt: float):
         dx, dy = gx - x, gy - y
         rho = math.hypot(dx, dy)
         bearing = angle_diff(math.atan2(dy, dx), yaw)
-        along = rho * math.cos(bearing) * direction         # still to go, along the heading
+        along = rho * math.cos(bearing) * direction  # still to go, along the heading
         stopping = stopping or rho < XY_TOL or along <= 0.0
         if stopping:
             v_cmd = w_cmd = 0.0
         else:
             v_cmd = direction * profile(along, lim.speed, MIN_SPEED, lim.accel)
             off = bearing if direction > 0 else angle_diff(bearing, math.pi)
-            w_cmd = 0.0 if rho < HOLD_HEADING else \
-                max(-lim.turn, min(lim.turn, HEADING_GAIN * off))
+            w_cmd = 0.0 if rho < HOLD_HEADING else max(-lim.turn, min(lim.turn, HEADING_GAIN * off))
         v = follow(v, v_cmd, lim.accel, dt)
         w = follow(w, w_cmd, lim.turn_accel, dt)
         if stopping and abs(v) < REST and abs(w) < REST:

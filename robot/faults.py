@@ -1,5 +1,6 @@
 """Injected faults: ``--faults name=P,...`` parsed once, checked against the
 kinds a robot back end can inject (no simulator needed to check them)."""
+
 from __future__ import annotations
 
 import random
@@ -37,11 +38,12 @@ def parse_faults(text: Optional[str], known: Iterable[str]) -> dict[str, float]:
 @dataclass
 class Faults:
     """Probabilities of the PyBullet robots' injected faults (each in [0, 1])."""
-    slip: float = 0.0     # object slips out of the gripper: while a grasp lifts it, and
-                          # (drawn again for each drive) while the base drives with it
-    nav: float = 0.0      # navigation stops short of the goal
-    detect: float = 0.0   # object detection misses
-    moved: float = 0.0    # a person moves the object (once) just before the robot grasps it
+
+    slip: float = 0.0  # object slips out of the gripper: while a grasp lifts it, and
+    # (drawn again for each drive) while the base drives with it
+    nav: float = 0.0  # navigation stops short of the goal
+    detect: float = 0.0  # object detection misses
+    moved: float = 0.0  # a person moves the object (once) just before the robot grasps it
 
     @classmethod
     def kinds(cls) -> tuple[str, ...]:
@@ -61,9 +63,9 @@ class FaultDraws:
     def __init__(self, faults: Faults, seed: int, clock: Callable[[], float]):
         self.faults = faults
         self.rng = random.Random(seed)
-        self.injected: list[dict] = []     # kind, sim_t, detail: for the log and the tests
+        self.injected: list[dict] = []  # kind, sim_t, detail: for the log and the tests
         self._clock = clock
-        self._moved: set[str] = set()      # objects somebody already took away
+        self._moved: set[str] = set()  # objects somebody already took away
 
     def happens(self, kind: str) -> bool:
         """Does fault ``kind`` happen now? Draws only when its probability is not 0."""

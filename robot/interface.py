@@ -20,6 +20,7 @@ for an internal failure, e.g. an unreachable arm pose). Whether the effect
 really happened is for a monitor to decide with the checks, which look at the
 world itself.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -37,6 +38,7 @@ class SkillResult:
 class Caption:
     """What a snapshot shows happened: the step (1-based), its action, the
     attempt, the outcome and the simulated time, and the monitor's detail."""
+
     step: int
     action: str
     attempt: int
@@ -45,35 +47,42 @@ class Caption:
     detail: str = ""
 
     def lines(self) -> list[str]:
-        return [f"step {self.step}  {self.action}",
-                f"attempt {self.attempt}  {self.outcome}  t = {self.sim_time:.2f} s (simulated)",
-                *([self.detail] if self.detail else [])]
+        return [
+            f"step {self.step}  {self.action}",
+            f"attempt {self.attempt}  {self.outcome}  t = {self.sim_time:.2f} s (simulated)",
+            *([self.detail] if self.detail else []),
+        ]
 
 
 @dataclass
 class Check:
     """A monitor's observation: did the world show the expected effect?"""
+
     ok: bool
     detail: str = ""
 
 
-Ticking = Iterator[None]      # a skill in progress: one physics step per next()
-SkillRun = Union[SkillResult, Ticking]   # what act() returns: done at once, or ticking
+Ticking = Iterator[None]  # a skill in progress: one physics step per next()
+SkillRun = Union[SkillResult, Ticking]  # what act() returns: done at once, or ticking
 
 
 def skill(name: str) -> Callable:
     """Method decorator: register the method as the robot's skill ``name``."""
+
     def mark(fn):
         fn.htn_skills = (*getattr(fn, "htn_skills", ()), name)
         return fn
+
     return mark
 
 
 def check(name: str) -> Callable:
     """Method decorator: register the method as the robot's check ``name``."""
+
     def mark(fn):
         fn.htn_checks = (*getattr(fn, "htn_checks", ()), name)
         return fn
+
     return mark
 
 
@@ -102,9 +111,9 @@ class Robot:
     world: Any = None
     sim_time: float = 0.0
     executes_operator_model: bool = False
-    steps_per_tick: int = 1            # physics steps a skill advances per tick
-    instantaneous: bool = False        # every skill ends as it starts: nothing to hold-monitor
-    observes_world: bool = False       # a long-lived planner asks observe() before each goal
+    steps_per_tick: int = 1  # physics steps a skill advances per tick
+    instantaneous: bool = False  # every skill ends as it starts: nothing to hold-monitor
+    observes_world: bool = False  # a long-lived planner asks observe() before each goal
     _skills: dict = {}
     _checks: dict = {}
 
@@ -136,14 +145,19 @@ class Robot:
         decorator: the method ``check_NAME``)."""
         fn = getattr(self, self._checks.get(name, f"check_{name}"), None)
         if not callable(fn):
-            return Check(False, f"{name.replace('_', ' ')} is not observable on "
-                                f"{type(self).__name__}")
+            return Check(
+                False, f"{name.replace('_', ' ')} is not observable on {type(self).__name__}"
+            )
         return fn(*args)
 
     @classmethod
     def check_names(cls) -> list[str]:
-        return sorted({*cls._checks, *(a[6:] for a in dir(cls) if a.startswith("check_")
-                                       and a != "check_names")})
+        return sorted(
+            {
+                *cls._checks,
+                *(a[6:] for a in dir(cls) if a.startswith("check_") and a != "check_names"),
+            }
+        )
 
     # ---- control and state estimation
     def apply_internal(self, name: str, args: tuple) -> None:
@@ -160,7 +174,8 @@ class Robot:
     def inject(self, kind: str, detail: str) -> None:
         """Record a fault this robot injects now (see ``--faults``)."""
         self.__dict__.setdefault("injected", []).append(
-            {"kind": kind, "sim_t": round(self.sim_time, 4), "detail": detail})
+            {"kind": kind, "sim_t": round(self.sim_time, 4), "detail": detail}
+        )
 
     def injected_faults(self) -> list[dict]:
         """The faults injected so far (kind, sim_t, detail), oldest first."""

@@ -15,6 +15,7 @@ in the drawer and on the tray, and ride on the tray by friction while it is
 carried. Geometry is in each area's frame (:mod:`~htn.robot.areas`): ``u``
 forward from the base pose towards the table, ``v`` to the robot's left.
 """
+
 from __future__ import annotations
 
 import math
@@ -34,20 +35,20 @@ from .table_spots import TableSpots
 from .tray import Trays, make_tray
 from .two_arms import Hands, SideArm, TwoArms
 
-SHAPES = {   # kind -> (radius, height, colour)
+SHAPES = {  # kind -> (radius, height, colour)
     "bowl": (0.035, 0.06, (0.95, 0.95, 0.9, 1)),
     "cup": (0.03, 0.09, (0.2, 0.4, 0.9, 1)),
     "spoon": (0.02, 0.08, (0.6, 0.6, 0.65, 1)),
 }
 DEFAULT_SHAPE = (0.033, 0.12, (0.9, 0.2, 0.1, 1))
-TRAY_LIMITS = Limits(0.35, 0.6, 0.3, 0.6)   # m/s, rad/s, m/s^2, rad/s^2: with the tray
-DOCK = 0.35                         # backing away from a table before turning
+TRAY_LIMITS = Limits(0.35, 0.6, 0.3, 0.6)  # m/s, rad/s, m/s^2, rad/s^2: with the tray
+DOCK = 0.35  # backing away from a table before turning
 
 
 class KitchenRobot(SimulatedRobot):
     """The simulated two-armed kitchen robot; ``gui=True`` opens a window."""
 
-    GRIP_TOLERANCE = 0.06    # as tuned for the kitchen robot's grasps
+    GRIP_TOLERANCE = 0.06  # as tuned for the kitchen robot's grasps
 
     # ------------------------------------------------------------ building
     def _build(self) -> None:
@@ -60,12 +61,14 @@ class KitchenRobot(SimulatedRobot):
         self.frames = frames = AreaFrames(w)
         self.radius: dict[str, float] = {}
         self.height: dict[str, float] = {}
-        self.believed_in: dict[str, str] = {}   # object -> container it was seen to be in
+        self.believed_in: dict[str, str] = {}  # object -> container it was seen to be in
         hands: Hands = {a: None for a in TwoArms.NAMES}
         for f in w.furniture.values():
             ph.load_table(f.name, f.x, f.y, w.places[f.approach].theta + math.pi / 2)
-        drawers = {name: make_drawer(ph, frames, name, area, opened=name in w.opened)
-                   for name, area in w.containers.items()}
+        drawers = {
+            name: make_drawer(ph, frames, name, area, opened=name in w.opened)
+            for name, area in w.containers.items()
+        }
         trays = {name: make_tray(ph, frames, name, area) for name, area in w.trays.items()}
         self.spots = TableSpots(ph, frames, w, drawers, trays, self.radius, hands)
         for t in w.things.values():
@@ -146,8 +149,14 @@ class KitchenRobot(SimulatedRobot):
         fraction = base.nav_fault(place)
         slip = base.carry_slip(bool(self.arms.held_objects()))
         x, y, yaw = base.pose
-        here = next((a for a, pl in self.world.places.items()
-                     if math.hypot(pl.x - x, pl.y - y) <= POSE_TOLERANCE), None)
+        here = next(
+            (
+                a
+                for a, pl in self.world.places.items()
+                if math.hypot(pl.x - x, pl.y - y) <= POSE_TOLERANCE
+            ),
+            None,
+        )
         if math.hypot(goal.x - x, goal.y - y) > POSE_TOLERANCE:
             if here in tops:
                 yield from base.drive(x - DOCK * math.cos(yaw), y - DOCK * math.sin(yaw))
@@ -178,8 +187,12 @@ class KitchenRobot(SimulatedRobot):
         if pixels >= 5:
             return SkillResult(True, f"{obj} seen ({pixels} px)", {"pixels": pixels})
         for d in self.drawers.values():
-            if d.area == area and d.out < 0.02 and self.drawers.holds(obj, d) and \
-                    self.perception.visible_pixels(f"{d.name}-housing", target) >= 5:
+            if (
+                d.area == area
+                and d.out < 0.02
+                and self.drawers.holds(obj, d)
+                and self.perception.visible_pixels(f"{d.name}-housing", target) >= 5
+            ):
                 self.believed_in[obj] = d.name
                 return SkillResult(True, f"{obj} is in the closed {d.name}")
         return SkillResult(True, f"{obj} not seen")
@@ -206,8 +219,11 @@ class KitchenRobot(SimulatedRobot):
                 x, y, z = spot
                 self.draws.inject("moved", f"{obj} taken from {area} to {other}")
                 ph.p.resetBasePositionAndOrientation(
-                    ph.body_of[obj], [x, y, z + self.height[obj] / 2 + 0.002], [0, 0, 0, 1],
-                    physicsClientId=ph.cid)
+                    ph.body_of[obj],
+                    [x, y, z + self.height[obj] / 2 + 0.002],
+                    [0, 0, 0, 1],
+                    physicsClientId=ph.cid,
+                )
                 yield from ph.settle(0.2)
                 return
 
@@ -216,8 +232,9 @@ class KitchenRobot(SimulatedRobot):
         r = self.radius[obj]
         clear = gz + self.height[obj] / 2 + 0.12
         arm.set_fingers(0.04)
-        if not (yield from arm.reach([gx, gy, clear], 0.8)) or \
-                not (yield from arm.reach([gx, gy, gz + 0.01], 0.6)):
+        if not (yield from arm.reach([gx, gy, clear], 0.8)) or not (
+            yield from arm.reach([gx, gy, gz + 0.01], 0.6)
+        ):
             yield from arm.rest()
             return SkillResult(False, f"{obj} is out of the {arm.name} arm's reach")
         yield from arm.close_fingers(max(0.004, r - 0.005))
@@ -301,7 +318,9 @@ class KitchenRobot(SimulatedRobot):
         body = ph.body_of[obj]
         where_now = next((a for a in ph.furniture_top if ph.on_top(body, a)), None)
         ok = where_now == where and obj not in self.arms.hands.values()
-        return Check(ok, f"{obj} rests on {('the table of ' + where_now) if where_now else 'nothing'}")
+        return Check(
+            ok, f"{obj} rests on {('the table of ' + where_now) if where_now else 'nothing'}"
+        )
 
     @check("detection")
     def check_detection(self, obj: str) -> Check:
@@ -328,7 +347,7 @@ class KitchenRobot(SimulatedRobot):
         ph, hold = self.physics, self.trays.hold
         facts: list[tuple[str, tuple]] = []
         here = self.base.place_here()
-        if here is None:   # stopped on the way: a new area where the robot stands
+        if here is None:  # stopped on the way: a new area where the robot stands
             x, y, _ = self.base.pose
             facts += [("area", ("here", round(x, 3), round(y, 3))), ("robot-at", ("here",))]
         else:

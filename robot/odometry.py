@@ -7,6 +7,7 @@ between key points. The odometer samples after each step of the
 :class:`~htn.robot.physics.Physics` clock (its ``after_step`` hook), so every
 base and arm motion of both PyBullet robots is counted.
 """
+
 from __future__ import annotations
 
 import math
@@ -26,14 +27,14 @@ class Odometry:
         self._physics, self._base = physics, base
         self.base = 0.0
         self.grippers = 0.0
-        self._last: Optional[tuple] = None     # base (x, y), grippers in the base frame
+        self._last: Optional[tuple] = None  # base (x, y), grippers in the base frame
 
     def sample(self) -> None:
         p, c = self._physics.p, self._physics.cid
         x, y, yaw = self._base.pose
         cos, sin = math.cos(yaw), math.sin(yaw)
         grippers = []
-        for body, _ in self._base.mounted():       # the arms ride on the base
+        for body, _ in self._base.mounted():  # the arms ride on the base
             gx, gy, gz = p.getLinkState(body, EE_LINK, physicsClientId=c)[4]
             dx, dy = gx - x, gy - y
             grippers.append((cos * dx + sin * dy, cos * dy - sin * dx, gz))

@@ -5,6 +5,7 @@ the segmentation image of the head camera looking at a target; a detection
 records its position with a few millimetres of noise. The ``detect`` fault
 makes a look miss.
 """
+
 from __future__ import annotations
 
 import math
@@ -24,11 +25,12 @@ class Perception:
     """Looking with the head camera (``pixels``: width, height of its image),
     and the detections it leaves."""
 
-    def __init__(self, physics: Physics, base: MobileBase, draws: FaultDraws,
-                 pixels: tuple[int, int]):
+    def __init__(
+        self, physics: Physics, base: MobileBase, draws: FaultDraws, pixels: tuple[int, int]
+    ):
         self.physics, self.base, self.draws = physics, base, draws
         self.pixels = pixels
-        self.detections: dict[str, tuple] = {}     # object -> where it was seen
+        self.detections: dict[str, tuple] = {}  # object -> where it was seen
 
     def visible_pixels(self, name: str, target) -> int:
         """Pixels of ``name`` in the head camera's segmentation image, looking at ``target``."""
@@ -38,16 +40,16 @@ class Perception:
         eye = [x + 0.1 * math.cos(yaw), y + 0.1 * math.sin(yaw), CAMERA_HEIGHT]
         view = p.computeViewMatrix(eye, list(target), [0, 0, 1], physicsClientId=c)
         proj = p.computeProjectionMatrixFOV(70, 4 / 3, 0.1, 8.0, physicsClientId=c)
-        img = p.getCameraImage(w_, h_, view, proj, renderer=p.ER_TINY_RENDERER,
-                               physicsClientId=c)
+        img = p.getCameraImage(w_, h_, view, proj, renderer=p.ER_TINY_RENDERER, physicsClientId=c)
         seg = np.asarray(img[4]).reshape(h_, w_)
         return int(np.count_nonzero((seg & ((1 << 24) - 1)) == self.physics.body_of[name]))
 
     def noisy_pos(self, name: str) -> tuple:
         """Where perception puts a body: its position with a few millimetres of noise."""
         rng = self.draws.rng
-        return tuple(self.physics.body_pos(name) + np.array(
-            [rng.gauss(0, 0.003), rng.gauss(0, 0.003), 0]))
+        return tuple(
+            self.physics.body_pos(name) + np.array([rng.gauss(0, 0.003), rng.gauss(0, 0.003), 0])
+        )
 
     def look(self, obj: str, target) -> int:
         """Look at ``target`` for ``obj``; record a detection when it is seen.

@@ -10,6 +10,7 @@ which happens before anything is ticked, runs its steps to the end with
 kitchen's arms keep their joints, a carried tray follows the hand, the
 odometer samples) hooks into ``before_step`` and ``after_step``.
 """
+
 from __future__ import annotations
 
 import ctypes
@@ -22,8 +23,8 @@ import numpy as np
 
 from .interface import complete
 
-DT = 1.0 / 120.0        # physics step; motion is kinematic, so 120 Hz is stable
-STEPS_PER_TICK = 4      # a tick of the behaviour tree: 1/30 s of simulated time
+DT = 1.0 / 120.0  # physics step; motion is kinematic, so 120 Hz is stable
+STEPS_PER_TICK = 4  # a tick of the behaviour tree: 1/30 s of simulated time
 
 
 @contextmanager
@@ -54,7 +55,7 @@ class Physics:
     """A PyBullet client with a clock, and the named bodies of its world."""
 
     def __init__(self, gui: bool):
-        with quiet_fds():   # importing pybullet prints its build time on fd 1
+        with quiet_fds():  # importing pybullet prints its build time on fd 1
             import pybullet as p
             import pybullet_data
         self.p = p
@@ -63,12 +64,15 @@ class Physics:
             self.cid: int = p.connect(p.GUI if gui else p.DIRECT)
         if self.cid < 0:
             from htn.jshop.language.errors import HtnError
-            raise HtnError("--gui: PyBullet cannot open a window on display "
-                           f"{os.environ.get('DISPLAY', '(none)')!r}")
+
+            raise HtnError(
+                "--gui: PyBullet cannot open a window on display "
+                f"{os.environ.get('DISPLAY', '(none)')!r}"
+            )
         p.setAdditionalSearchPath(pybullet_data.getDataPath(), physicsClientId=self.cid)
         self.plane: Optional[int] = None
         self.body_of: dict[str, int] = {}
-        self.bodies_named: dict[int, str] = {}      # see name_bodies
+        self.bodies_named: dict[int, str] = {}  # see name_bodies
         self.furniture_top: dict[str, float] = {}
         self.before_step: list[Callable[[], None]] = []
         self.after_step: list[Callable[[], None]] = []
@@ -86,18 +90,21 @@ class Physics:
 
     def load_table(self, name: str, x: float, y: float, yaw: float = 0.0) -> int:
         p, c = self.p, self.cid
-        bid = p.loadURDF("table/table.urdf", [x, y, 0.0], yaw_quat(p, yaw),
-                         useFixedBase=True, physicsClientId=c)
+        bid = p.loadURDF(
+            "table/table.urdf", [x, y, 0.0], yaw_quat(p, yaw), useFixedBase=True, physicsClientId=c
+        )
         self.body_of[name] = bid
         self.furniture_top[name] = p.getAABB(bid, physicsClientId=c)[1][2]
         return bid
 
-    def make_cylinder(self, r: float, h: float, mass: float, rgba, x: float, y: float,
-                      z: float) -> int:
+    def make_cylinder(
+        self, r: float, h: float, mass: float, rgba, x: float, y: float, z: float
+    ) -> int:
         p, c = self.p, self.cid
         col = p.createCollisionShape(p.GEOM_CYLINDER, radius=r, height=h, physicsClientId=c)
-        vis = p.createVisualShape(p.GEOM_CYLINDER, radius=r, length=h, rgbaColor=rgba,
-                                  physicsClientId=c)
+        vis = p.createVisualShape(
+            p.GEOM_CYLINDER, radius=r, length=h, rgbaColor=rgba, physicsClientId=c
+        )
         bid = p.createMultiBody(mass, col, vis, [x, y, z], physicsClientId=c)
         p.changeDynamics(bid, -1, lateralFriction=1.0, physicsClientId=c)
         return bid
@@ -106,12 +113,19 @@ class Physics:
         """A rigid body made of boxes: parts are (half extents, offset) in the body frame."""
         p, c = self.p, self.cid
         n = len(parts)
-        col = p.createCollisionShapeArray([p.GEOM_BOX] * n, halfExtents=[h for h, _ in parts],
-                                          collisionFramePositions=[o for _, o in parts],
-                                          physicsClientId=c)
-        vis = p.createVisualShapeArray([p.GEOM_BOX] * n, halfExtents=[h for h, _ in parts],
-                                       visualFramePositions=[o for _, o in parts],
-                                       rgbaColors=[rgba] * n, physicsClientId=c)
+        col = p.createCollisionShapeArray(
+            [p.GEOM_BOX] * n,
+            halfExtents=[h for h, _ in parts],
+            collisionFramePositions=[o for _, o in parts],
+            physicsClientId=c,
+        )
+        vis = p.createVisualShapeArray(
+            [p.GEOM_BOX] * n,
+            halfExtents=[h for h, _ in parts],
+            visualFramePositions=[o for _, o in parts],
+            rgbaColors=[rgba] * n,
+            physicsClientId=c,
+        )
         return p.createMultiBody(mass, col, vis, pos, yaw_quat(p, yaw), physicsClientId=c)
 
     # ------------------------------------------------------------ clock
@@ -152,8 +166,10 @@ class Physics:
         if top_body is None or furniture not in self.furniture_top:
             return False
         top = self.furniture_top[furniture]
-        return any(cp[5][2] >= top - 0.02 for cp in self.p.getContactPoints(
-            bodyA=body, bodyB=top_body, physicsClientId=self.cid))
+        return any(
+            cp[5][2] >= top - 0.02
+            for cp in self.p.getContactPoints(bodyA=body, bodyB=top_body, physicsClientId=self.cid)
+        )
 
     def close(self) -> None:
         try:
@@ -165,8 +181,10 @@ class Physics:
 def open_box(hu: float, hv: float, hz: float, wall: float = 0.006) -> list:
     """Bottom and four walls of an open-top box (body frame: x = u, y = v), for
     :meth:`Physics.boxes`."""
-    return [((hu, hv, wall / 2), (0, 0, wall / 2)),
-            ((wall / 2, hv, hz), (hu - wall / 2, 0, hz)),
-            ((wall / 2, hv, hz), (-hu + wall / 2, 0, hz)),
-            ((hu, wall / 2, hz), (0, hv - wall / 2, hz)),
-            ((hu, wall / 2, hz), (0, -hv + wall / 2, hz))]
+    return [
+        ((hu, hv, wall / 2), (0, 0, wall / 2)),
+        ((wall / 2, hv, hz), (hu - wall / 2, 0, hz)),
+        ((wall / 2, hv, hz), (-hu + wall / 2, 0, hz)),
+        ((hu, wall / 2, hz), (0, hv - wall / 2, hz)),
+        ((hu, wall / 2, hz), (0, -hv + wall / 2, hz)),
+    ]

@@ -17,6 +17,7 @@ simulated robot. Each run records:
 Used for the kitchen domain (areas, two arms, drawers, a tray); the places of
 a domestic problem (``location``) work too.
 """
+
 from __future__ import annotations
 
 import math
@@ -30,7 +31,7 @@ from .faults import parse_faults
 from .interface import Check, Robot, SkillResult, check, skill
 from .world import number_arg
 
-ARM_REST = {"left": (0.1, 0.35, 0.9), "right": (0.1, -0.35, 0.9)}   # relative to the base
+ARM_REST = {"left": (0.1, 0.35, 0.9), "right": (0.1, -0.35, 0.9)}  # relative to the base
 BASE_SPEED, ARM_SPEED, ACTION_TIME = 0.5, 0.25, 1.0
 SURFACE_Z = 0.85
 
@@ -38,10 +39,11 @@ SURFACE_Z = 0.85
 @dataclass
 class FailureRates:
     """Probabilities that an action fails (its effect does not happen)."""
+
     navigate: float = 0.02
     detect: float = 0.03
     grasp: float = 0.04
-    grasp_busy: float = 0.10     # grasping while the other arm already holds something
+    grasp_busy: float = 0.10  # grasping while the other arm already holds something
     place: float = 0.02
     container: float = 0.03
     tray: float = 0.05
@@ -74,10 +76,10 @@ class Metrics:
 
 @dataclass
 class ProjectedWorld:
-    places: dict = field(default_factory=dict)      # name -> (x, y)
-    where: dict = field(default_factory=dict)       # object -> area or container or tray
+    places: dict = field(default_factory=dict)  # name -> (x, y)
+    where: dict = field(default_factory=dict)  # object -> area or container or tray
     containers: dict = field(default_factory=dict)  # container -> area
-    trays: dict = field(default_factory=dict)       # tray -> area (None while carried)
+    trays: dict = field(default_factory=dict)  # tray -> area (None while carried)
     start: Optional[str] = None
 
 
@@ -109,8 +111,13 @@ class ProjectionRobot(Robot):
 
     instantaneous = True
 
-    def __init__(self, world: ProjectedWorld, seed: int = 0,
-                 failures: Optional[FailureRates] = None, pose_noise: float = 0.25):
+    def __init__(
+        self,
+        world: ProjectedWorld,
+        seed: int = 0,
+        failures: Optional[FailureRates] = None,
+        pose_noise: float = 0.25,
+    ):
         self.world = world
         self.rng = random.Random(seed)
         self.rates = failures or FailureRates()
@@ -182,7 +189,7 @@ class ProjectionRobot(Robot):
             return SkillResult(False, f"unknown place {place}")
         failed = self._act("navigate")
         x, y = self._sample_near(place, self.noise)
-        if failed:   # stops somewhere on the way
+        if failed:  # stops somewhere on the way
             f = self.rng.uniform(0.3, 0.8)
             x, y = self.base[0] + (x - self.base[0]) * f, self.base[1] + (y - self.base[1]) * f
         d = math.dist(self.base, (x, y))
@@ -195,8 +202,10 @@ class ProjectionRobot(Robot):
     @skill("detect_object")
     def detect_object(self, obj: str, where: str) -> SkillResult:
         failed = self._act("detect")
-        if not failed and (self.where.get(obj) in (where, *self._contents_of(where))
-                           or self.trays.get(obj) == where):
+        if not failed and (
+            self.where.get(obj) in (where, *self._contents_of(where))
+            or self.trays.get(obj) == where
+        ):
             self.detections.add(obj)
         return SkillResult(True, "looked")
 
@@ -252,7 +261,7 @@ class ProjectionRobot(Robot):
         if arm is None:
             return SkillResult(True, f"{obj} is not in a hand")
         failed = self._act("place")
-        self._arm_motion(arm, "")           # the tray is beside the robot: no new base pose
+        self._arm_motion(arm, "")  # the tray is beside the robot: no new base pose
         if not failed:
             self.hands[arm] = None
             self.where[obj] = tray
@@ -262,7 +271,7 @@ class ProjectionRobot(Robot):
     def lift_tray(self, tray: str) -> SkillResult:
         failed = self._act("tray")
         self._arm_motion("left", self.trays.get(tray) or self.at)
-        self._arm_motion("right", "")       # both arms from the same base pose
+        self._arm_motion("right", "")  # both arms from the same base pose
         if not failed:
             self.carrying_tray, self.trays[tray] = tray, None
         return SkillResult(True, "both grippers closed on the tray")
@@ -280,7 +289,7 @@ class ProjectionRobot(Robot):
     def take_from_tray(self, obj: str, tray: str, arm: Optional[str] = None) -> SkillResult:
         arm = arm or ("left" if self.hands["left"] is None else "right")
         failed = self._act("grasp")
-        self._arm_motion(arm, "")           # the tray is beside the robot
+        self._arm_motion(arm, "")  # the tray is beside the robot
         if not failed and self.where.get(obj) == tray and self.hands.get(arm) is None:
             self.hands[arm] = obj
             self.where[obj] = ("hand", arm)
@@ -323,7 +332,10 @@ class ProjectionRobot(Robot):
     @check("still_held")
     @check("in_gripper")
     def check_in_gripper(self, obj: str) -> Check:
-        return Check(obj in self.hands.values(), f"{obj} {'in' if obj in self.hands.values() else 'not in'} a hand")
+        return Check(
+            obj in self.hands.values(),
+            f"{obj} {'in' if obj in self.hands.values() else 'not in'} a hand",
+        )
 
     @check("on")
     def check_on(self, obj: str, where: str) -> Check:
@@ -347,8 +359,10 @@ class ProjectionRobot(Robot):
 
     @check("opened")
     def check_opened(self, container: str, opened: bool) -> Check:
-        return Check((container in self.opened) == opened,
-                     f"{container} is {'open' if container in self.opened else 'closed'}")
+        return Check(
+            (container in self.opened) == opened,
+            f"{container} is {'open' if container in self.opened else 'closed'}",
+        )
 
     @check("on_tray")
     def check_on_tray(self, obj: str, tray: str) -> Check:

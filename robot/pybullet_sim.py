@@ -16,6 +16,7 @@ brings it within reach.
 Faults (``slip``, ``nav``, ``detect``, ``moved``) are injected with a seeded
 random generator, so the same seed gives the same run.
 """
+
 from __future__ import annotations
 
 import math
@@ -32,19 +33,25 @@ from .simulated import SimulatedRobot
 from .world import World
 
 MOUNT = (0.2, 0.0, 0.48)  # panda base relative to the husky base
-ARM_HOME = (1.5, -0.3, 0.0, -2.6, 0.0, 2.2, 0.785)   # tucked to the left, out of the camera's view
+ARM_HOME = (1.5, -0.3, 0.0, -2.6, 0.0, 2.2, 0.785)  # tucked to the left, out of the camera's view
 CAN_RADIUS, CAN_HEIGHT = 0.033, 0.12
 PERSON_RADIUS, PERSON_HEIGHT = 0.2, 1.6
-HAND_REACH = 0.7          # a person takes an object within this distance of their axis
+HAND_REACH = 0.7  # a person takes an object within this distance of their axis
 
 
 class PyBulletRobot(SimulatedRobot):
     """The simulated domestic robot; ``gui=True`` opens a window (needs a display)."""
 
-    def __init__(self, world: World, gui: bool = False, faults: Optional[Faults] = None,
-                 seed: int = 0, speech=None):
+    def __init__(
+        self,
+        world: World,
+        gui: bool = False,
+        faults: Optional[Faults] = None,
+        seed: int = 0,
+        speech=None,
+    ):
         self.seen_persons: dict[str, tuple] = {}
-        self._person_constraints: dict[str, tuple] = {}    # object -> (person, constraint)
+        self._person_constraints: dict[str, tuple] = {}  # object -> (person, constraint)
         super().__init__(world, gui, faults, seed, speech)
 
     # ------------------------------------------------------------ building
@@ -56,8 +63,9 @@ class PyBulletRobot(SimulatedRobot):
         ph.build_ground()
         for f in w.furniture.values():
             if f.kind == "tray":
-                bid = p.loadURDF("tray/traybox.urdf", [f.x, f.y, 0.0], useFixedBase=True,
-                                 physicsClientId=c)
+                bid = p.loadURDF(
+                    "tray/traybox.urdf", [f.x, f.y, 0.0], useFixedBase=True, physicsClientId=c
+                )
                 ph.body_of[f.name] = bid
                 ph.furniture_top[f.name] = p.getAABB(bid, physicsClientId=c)[1][2]
             else:
@@ -68,17 +76,26 @@ class PyBulletRobot(SimulatedRobot):
                 continue
             x, y, z = self._spot_on(t.on, slots.get(t.on, 0))
             slots[t.on] = slots.get(t.on, 0) + 1
-            ph.body_of[t.name] = ph.make_cylinder(CAN_RADIUS, CAN_HEIGHT, 0.15, [0.9, 0.2, 0.1, 1],
-                                                  x, y, z + CAN_HEIGHT / 2 + 0.002)
+            ph.body_of[t.name] = ph.make_cylinder(
+                CAN_RADIUS, CAN_HEIGHT, 0.15, [0.9, 0.2, 0.1, 1], x, y, z + CAN_HEIGHT / 2 + 0.002
+            )
         for person in w.persons.values():
-            col = p.createCollisionShape(p.GEOM_CAPSULE, radius=PERSON_RADIUS,
-                                         height=PERSON_HEIGHT - 2 * PERSON_RADIUS, physicsClientId=c)
-            vis = p.createVisualShape(p.GEOM_CAPSULE, radius=PERSON_RADIUS,
-                                      length=PERSON_HEIGHT - 2 * PERSON_RADIUS,
-                                      rgbaColor=[0.2, 0.4, 0.9, 1], physicsClientId=c)
-            ph.body_of[person.name] = p.createMultiBody(0, col, vis,
-                                                        [person.x, person.y, PERSON_HEIGHT / 2],
-                                                        physicsClientId=c)
+            col = p.createCollisionShape(
+                p.GEOM_CAPSULE,
+                radius=PERSON_RADIUS,
+                height=PERSON_HEIGHT - 2 * PERSON_RADIUS,
+                physicsClientId=c,
+            )
+            vis = p.createVisualShape(
+                p.GEOM_CAPSULE,
+                radius=PERSON_RADIUS,
+                length=PERSON_HEIGHT - 2 * PERSON_RADIUS,
+                rgbaColor=[0.2, 0.4, 0.9, 1],
+                physicsClientId=c,
+            )
+            ph.body_of[person.name] = p.createMultiBody(
+                0, col, vis, [person.x, person.y, PERSON_HEIGHT / 2], physicsClientId=c
+            )
         self.base = MobileBase(ph, w, self.draws, w.place(w.robot_at))
         self.arm = Arm(ph, self.base, self.draws, MOUNT)
         for j in range(-1, p.getNumJoints(self.base.body, physicsClientId=c)):
@@ -154,8 +171,12 @@ class PyBulletRobot(SimulatedRobot):
         self.draws.inject("moved", f"{obj} taken from {furniture} to {dest}")
         used = sum(1 for t, _ in self._resting_objects() if t == dest)
         x, y, z = self._spot_on(dest, used + 1)
-        ph.p.resetBasePositionAndOrientation(ph.body_of[obj], [x, y, z + CAN_HEIGHT / 2 + 0.002],
-                                             [0, 0, 0, 1], physicsClientId=ph.cid)
+        ph.p.resetBasePositionAndOrientation(
+            ph.body_of[obj],
+            [x, y, z + CAN_HEIGHT / 2 + 0.002],
+            [0, 0, 0, 1],
+            physicsClientId=ph.cid,
+        )
         yield from ph.settle(0.2)
 
     @skill("grasp")
@@ -195,7 +216,7 @@ class PyBulletRobot(SimulatedRobot):
         upright can, across the axis of a can lying on its side."""
         p, c = self.physics.p, self.physics.cid
         _, orn = p.getBasePositionAndOrientation(self.physics.body_of[obj], physicsClientId=c)
-        axis = p.getMatrixFromQuaternion(orn)[2::3]   # the cylinder's z axis in the world
+        axis = p.getMatrixFromQuaternion(orn)[2::3]  # the cylinder's z axis in the world
         if abs(axis[2]) > 0.7:
             return self.base.pose[2]
         return math.atan2(axis[1], axis[0])
@@ -206,8 +227,11 @@ class PyBulletRobot(SimulatedRobot):
         mx, my, _ = self.base.mount_pos(MOUNT)
         lx, ly = -math.sin(yaw), math.cos(yaw)
         fx, fy = math.cos(yaw), math.sin(yaw)
-        if not (yield from self.arm.reach([mx + 0.15 * fx + 0.3 * lx, my + 0.15 * fy + 0.3 * ly,
-                                           0.9], 0.7)):
+        if not (
+            yield from self.arm.reach(
+                [mx + 0.15 * fx + 0.3 * lx, my + 0.15 * fy + 0.3 * ly, 0.9], 0.7
+            )
+        ):
             yield from self.arm.move(ARM_HOME, 0.7)
         yield from self.physics.step(24)
 
@@ -276,8 +300,9 @@ class PyBulletRobot(SimulatedRobot):
         bpos, born = p.getBasePositionAndOrientation(body, physicsClientId=c)
         inv = p.invertTransform(ppos, porn)
         rel = p.multiplyTransforms(inv[0], inv[1], bpos, born)
-        cid = p.createConstraint(pb, -1, body, -1, p.JOINT_FIXED, [0, 0, 0], rel[0], [0, 0, 0],
-                                 rel[1], physicsClientId=c)
+        cid = p.createConstraint(
+            pb, -1, body, -1, p.JOINT_FIXED, [0, 0, 0], rel[0], [0, 0, 0], rel[1], physicsClientId=c
+        )
         self._person_constraints[ph.bodies_named[body]] = (person, cid)
 
     # ------------------------------------------------------------ checks (monitors)
@@ -330,8 +355,9 @@ class PyBulletRobot(SimulatedRobot):
         if at is None:
             x, y, yaw = self.base.pose
             at = "here"
-            facts.append(("location", ("here", round(x, 3), round(y, 3),
-                                       round(math.degrees(yaw), 2))))
+            facts.append(
+                ("location", ("here", round(x, 3), round(y, 3), round(math.degrees(yaw), 2)))
+            )
         facts.append(("robot_at", (w.robot, at)))
         held = self.arm.held
         if held is not None and self.check_in_gripper(held).ok:
@@ -342,8 +368,10 @@ class PyBulletRobot(SimulatedRobot):
             facts.append(("object_on", (t, f)))
         for obj, (person, _) in self._person_constraints.items():
             facts.append(("has", (person, obj)))
-        return [(p, tuple(float(a) if isinstance(a, (int, float)) else a for a in args))
-                for p, args in facts]
+        return [
+            (p, tuple(float(a) if isinstance(a, (int, float)) else a for a in args))
+            for p, args in facts
+        ]
 
     @property
     def arm_body(self) -> dict[str, int]:

@@ -11,6 +11,7 @@ builds its world and its parts in ``_build`` (the domestic robot,
 and offers the skills and checks the executor calls by name; those both
 robots share are here, with the grasp's preamble.
 """
+
 from __future__ import annotations
 
 from typing import Optional
@@ -30,13 +31,19 @@ class SimulatedRobot(Robot):
     """A PyBullet robot; ``gui=True`` opens a window (needs a display)."""
 
     steps_per_tick = STEPS_PER_TICK
-    GRIP_TOLERANCE = 0.05    # m: a held object's centre this close to its gripper counts as grasped
-    base: MobileBase          # the parts _build makes
+    GRIP_TOLERANCE = 0.05  # m: a held object's centre this close to its gripper counts as grasped
+    base: MobileBase  # the parts _build makes
     perception: Perception
     camera: OverviewCamera
 
-    def __init__(self, world: World, gui: bool = False, faults: Optional[Faults] = None,
-                 seed: int = 0, speech=None):
+    def __init__(
+        self,
+        world: World,
+        gui: bool = False,
+        faults: Optional[Faults] = None,
+        seed: int = 0,
+        speech=None,
+    ):
         self.world = world
         self.physics = Physics(gui)
         self.draws = FaultDraws(faults or Faults(), seed, lambda: self.physics.sim_time)
@@ -45,27 +52,27 @@ class SimulatedRobot(Robot):
         with quiet_fds():
             self._build()
         self.physics.name_bodies()
-        self.odometry = Odometry(self.physics, self.base)   # distances from here on
+        self.odometry = Odometry(self.physics, self.base)  # distances from here on
         self.odometry.sample()
         self.physics.after_step.append(self.odometry.sample)
 
-    def _build(self) -> None:   # pragma: no cover - each robot builds its own
+    def _build(self) -> None:  # pragma: no cover - each robot builds its own
         """The world's bodies and the robot's parts; the world settled."""
         raise NotImplementedError
 
     # ------------------------------------------------------------ what each robot says
-    def _holding(self, obj: str) -> Optional[Arm]:   # pragma: no cover
+    def _holding(self, obj: str) -> Optional[Arm]:  # pragma: no cover
         """The arm whose gripper holds ``obj``, if any."""
         raise NotImplementedError
 
-    def _carried_bodies(self) -> set:   # pragma: no cover
+    def _carried_bodies(self) -> set:  # pragma: no cover
         """Bodies the robot carries: touching them is no collision."""
         raise NotImplementedError
 
-    def detect_object(self, obj: str, where: str):   # pragma: no cover
+    def detect_object(self, obj: str, where: str):  # pragma: no cover
         raise NotImplementedError
 
-    def _move_object_elsewhere(self, obj: str, where: str):   # pragma: no cover
+    def _move_object_elsewhere(self, obj: str, where: str):  # pragma: no cover
         """The ``moved`` fault: somebody takes ``obj`` from ``where`` elsewhere."""
         raise NotImplementedError
 
@@ -89,7 +96,7 @@ class SimulatedRobot(Robot):
         self.spoken.append(message)
         if self.speech is not None:
             self.speech(text)
-        yield from self.physics.settle(0.05 * len(text))   # speaking takes time
+        yield from self.physics.settle(0.05 * len(text))  # speaking takes time
         return SkillResult(True, f'said "{text}"')
 
     def hold(self) -> None:
@@ -181,7 +188,7 @@ class SimulatedRobot(Robot):
         return self.base.body
 
     @property
-    def arm_body(self) -> dict[str, int]:   # pragma: no cover - each robot has its arms
+    def arm_body(self) -> dict[str, int]:  # pragma: no cover - each robot has its arms
         """The arms' bodies by name."""
         raise NotImplementedError
 

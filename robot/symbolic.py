@@ -16,6 +16,7 @@ execution reports an internal failure and does nothing (a driver error: the
 action is ``failed``, which only repair may try again).
 Each action takes one second of simulated time.
 """
+
 from __future__ import annotations
 
 import random
@@ -36,9 +37,16 @@ class SymbolicRobot(Robot):
     executes_operator_model = True
     instantaneous = True
 
-    def __init__(self, domain: S.Domain, instance: S.ProblemInstance, functions=None,
-                 faults: Optional[dict] = None, seed: int = 0):
+    def __init__(
+        self,
+        domain: S.Domain,
+        instance: S.ProblemInstance,
+        functions=None,
+        faults: Optional[dict] = None,
+        seed: int = 0,
+    ):
         from htn.jshop.search.planner import Planner
+
         self.model = Planner.for_state(domain, instance.state, functions)
         self.world = self.model.state
         self.dynamic = domain.dynamic_predicates()
@@ -47,7 +55,7 @@ class SymbolicRobot(Robot):
         self.rng = random.Random(seed)
         self.sim_time = 0.0
         self.injected: list[dict] = []
-        self._expected: dict = {}     # (name, args) -> (deleted, added) of its last execution
+        self._expected: dict = {}  # (name, args) -> (deleted, added) of its last execution
 
     @skill("operator")
     def apply_operator(self, name: str, args: tuple) -> SkillResult:
@@ -56,18 +64,22 @@ class SymbolicRobot(Robot):
         step = atom_str(name, args)
         if self.fail_fault and self.rng.random() < self.fail_fault:
             self.inject("fail", f"{step} reports an internal failure")
-            return SkillResult(False, f"internal failure: the skill for {step} stopped "
-                                      "with an error and did nothing")
+            return SkillResult(
+                False,
+                f"internal failure: the skill for {step} stopped with an error and did nothing",
+            )
         for op, env in self.model.step_options(name, args):
             deleted, added = self.model.effects(op, env)
             change = self.model.apply(op, env)
             if change is None:
-                continue      # it would delete a protected atom: try the next option
+                continue  # it would delete a protected atom: try the next option
             # what the operator model did, as JSHOP2 applies it (a forall
             # effect deleting while it enumerates may leave atoms in place)
             state = self.world
-            self._expected[(name, args)] = ([a for a in deleted if not state.has(*a)],
-                                             [a for a in added if state.has(*a)])
+            self._expected[(name, args)] = (
+                [a for a in deleted if not state.has(*a)],
+                [a for a in added if state.has(*a)],
+            )
             if self.effect_fault and self.rng.random() < self.effect_fault:
                 change.undo(state)
                 self.inject("effect", f"the effects of {step} do not happen")
@@ -85,8 +97,9 @@ class SymbolicRobot(Robot):
         kept = [a for a in deleted if state.has(*a)]
         if not missing and not kept:
             return Check(True, f"{len(added)} added, {len(deleted)} deleted atom(s) observed")
-        wrong = [f"{atom_str(*a)} missing" for a in missing] + \
-                [f"{atom_str(*a)} still holds" for a in kept]
+        wrong = [f"{atom_str(*a)} missing" for a in missing] + [
+            f"{atom_str(*a)} still holds" for a in kept
+        ]
         more = f" (+{len(wrong) - 3} more)" if len(wrong) > 3 else ""
         return Check(False, "; ".join(wrong[:3]) + more)
 

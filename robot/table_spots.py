@@ -1,6 +1,7 @@
 """Where things stand on an area's table (the kitchen robot): what occupies
 the table, and a free spot within an arm's reach. Geometry is in the area's
 frame (:mod:`~htn.robot.areas`)."""
+
 from __future__ import annotations
 
 import math
@@ -14,7 +15,7 @@ from .tray import tray_discs
 from .two_arms import Hands, SideArm
 from .world import World
 
-ROWS = (0.70, 0.84)                 # u of the spots where objects stand on a table
+ROWS = (0.70, 0.84)  # u of the spots where objects stand on a table
 SPOT_VS = tuple(round(-0.55 + 0.1 * i, 2) for i in range(12))
 
 
@@ -23,9 +24,16 @@ class TableSpots:
     built (objects are placed with it), so it is handed the drawers and the
     trays' bodies, the objects' radii and what the hands hold, not the arms."""
 
-    def __init__(self, physics: Physics, frames: AreaFrames, world: World,
-                 drawers: Mapping[str, Drawer], trays: Mapping[str, int],
-                 radius: Mapping[str, float], hands: Hands):
+    def __init__(
+        self,
+        physics: Physics,
+        frames: AreaFrames,
+        world: World,
+        drawers: Mapping[str, Drawer],
+        trays: Mapping[str, int],
+        radius: Mapping[str, float],
+        hands: Hands,
+    ):
         self.physics, self.frames, self.world = physics, frames, world
         self.drawers, self.trays, self.radius, self.hands = drawers, trays, radius, hands
 
@@ -51,8 +59,10 @@ class TableSpots:
         (x, y, table top) or None."""
         taken = self.footprints(area, skip)
         side = arm.side if arm is not None else 0.0
-        spots = sorted(((u, v) for u in ROWS for v in SPOT_VS),
-                       key=lambda s: (abs(s[1] - 0.15 * side) + 0.8 * (s[0] - ROWS[0])))
+        spots = sorted(
+            ((u, v) for u in ROWS for v in SPOT_VS),
+            key=lambda s: abs(s[1] - 0.15 * side) + 0.8 * (s[0] - ROWS[0]),
+        )
         top = self.physics.furniture_top[area]
         for u, v in spots:
             if all(math.hypot(u - tu, v - tv) > radius + tr + 0.04 for tu, tv, tr in taken):

@@ -8,6 +8,7 @@ its side. The base drives slower with it (see the kitchen robot's
 (:func:`make_tray`), before the arms that carry them exist; the
 :class:`Trays` part acts on them afterwards.
 """
+
 from __future__ import annotations
 
 import math
@@ -22,20 +23,21 @@ from .physics import Physics, open_box, yaw_quat
 from .two_arms import SIDE, TwoArms
 from .world import World
 
-Footprints = Callable[..., list[tuple[float, float, float]]]   # (area, skip=...) -> discs
+Footprints = Callable[..., list[tuple[float, float, float]]]  # (area, skip=...) -> discs
 
-TRAY_HALF = (0.13, 0.17, 0.045)     # half depth (u), half width (v), rim height
-TRAY_U = 0.88                       # where it stands on a table, in its area's frame
+TRAY_HALF = (0.13, 0.17, 0.045)  # half depth (u), half width (v), rim height
+TRAY_U = 0.88  # where it stands on a table, in its area's frame
 TRAY_SPOTS = ((-0.06, 0.06), (-0.06, -0.06), (0.06, 0.06), (0.06, -0.06))
 
 
 @dataclass
 class Hold:
     """The tray in both hands: it follows the left hand with this offset."""
+
     tray: str
     constraint: int
     rel: tuple
-    riders: tuple = ()              # what stood on the tray when it was lifted
+    riders: tuple = ()  # what stood on the tray when it was lifted
 
 
 def make_tray(physics: Physics, frames: AreaFrames, name: str, area: str) -> int:
@@ -44,8 +46,9 @@ def make_tray(physics: Physics, frames: AreaFrames, name: str, area: str) -> int
     yaw = frames.frame(area)[2]
     hu, hv, hz = TRAY_HALF
     x, y = frames.to_world(area, TRAY_U, 0.0)
-    bid = physics.boxes(open_box(hu, hv, hz / 2, wall=0.008), 0.6, [x, y, top + 0.002], yaw,
-                        (0.3, 0.3, 0.3, 1))
+    bid = physics.boxes(
+        open_box(hu, hv, hz / 2, wall=0.008), 0.6, [x, y, top + 0.002], yaw, (0.3, 0.3, 0.3, 1)
+    )
     physics.p.changeDynamics(bid, -1, lateralFriction=1.0, physicsClientId=physics.cid)
     physics.body_of[name] = bid
     return bid
@@ -61,8 +64,16 @@ class Trays:
     in both hands (``hold``). ``footprints`` says what occupies a table
     (:meth:`~htn.robot.table_spots.TableSpots.footprints`), where a tray is lowered."""
 
-    def __init__(self, physics: Physics, frames: AreaFrames, world: World, base: MobileBase,
-                 arms: TwoArms, footprints: Footprints, bodies: dict[str, int]):
+    def __init__(
+        self,
+        physics: Physics,
+        frames: AreaFrames,
+        world: World,
+        base: MobileBase,
+        arms: TwoArms,
+        footprints: Footprints,
+        bodies: dict[str, int],
+    ):
         self.physics, self.frames, self.world = physics, frames, world
         self.base, self.arms, self.footprints = base, arms, footprints
         self.bodies = bodies
@@ -77,8 +88,11 @@ class Trays:
             if t in self.arms.hands.values():
                 continue
             pos = ph.body_pos(t)
-            if ph.touching(ph.body_of[t], bid) and pos[2] > tp[2] and \
-                    math.hypot(*(pos[:2] - tp[:2])) < 0.25:
+            if (
+                ph.touching(ph.body_of[t], bid)
+                and pos[2] > tp[2]
+                and math.hypot(*(pos[:2] - tp[:2])) < 0.25
+            ):
                 out.append(t)
         return out
 
@@ -89,8 +103,13 @@ class Trays:
         p, c = self.physics.p, self.physics.cid
         ee_pos, ee_orn = p.getLinkState(self.arms.left.body, EE_LINK, physicsClientId=c)[4:6]
         pos, orn = p.multiplyTransforms(ee_pos, ee_orn, *self.hold.rel)
-        p.changeConstraint(self.hold.constraint, jointChildPivot=pos,
-                           jointChildFrameOrientation=orn, maxForce=300, physicsClientId=c)
+        p.changeConstraint(
+            self.hold.constraint,
+            jointChildPivot=pos,
+            jointChildFrameOrientation=orn,
+            maxForce=300,
+            physicsClientId=c,
+        )
 
     def free_spot(self, tray: str, arm: str) -> Optional[tuple[float, float, float]]:
         """A free spot on ``tray`` that ``arm`` reaches: world x, y and the tray's floor."""
@@ -99,8 +118,9 @@ class Trays:
         on = [self.physics.body_pos(t) for t in self.on_tray(tray)]
         for du, dv in sorted(TRAY_SPOTS, key=lambda s: -s[1] * SIDE[arm]):
             x, y = p.multiplyTransforms(tpos, torn, [du, dv, 0], [0, 0, 0, 1])[0][:2]
-            if all(math.hypot(x - o[0], y - o[1]) > 0.07 for o in on) and \
-                    self.arms[arm].reachable([x, y, tpos[2] + 0.2]):
+            if all(math.hypot(x - o[0], y - o[1]) > 0.07 for o in on) and self.arms[arm].reachable(
+                [x, y, tpos[2] + 0.2]
+            ):
                 return x, y, tpos[2] + 0.008
         return None
 
@@ -108,9 +128,12 @@ class Trays:
         """Where each hand holds the tray (posed at pos, orn): the middle of its side rim."""
         hv = TRAY_HALF[1] - 0.004
         z = TRAY_HALF[2] - 0.01
-        return {a: list(self.physics.p.multiplyTransforms(pos, orn, [0, SIDE[a] * hv, z],
-                                                          [0, 0, 0, 1])[0])
-                for a in self.arms.NAMES}
+        return {
+            a: list(
+                self.physics.p.multiplyTransforms(pos, orn, [0, SIDE[a] * hv, z], [0, 0, 0, 1])[0]
+            )
+            for a in self.arms.NAMES
+        }
 
     # ------------------------------------------------------------ skills
     def lift(self, tray: str):
@@ -133,15 +156,25 @@ class Trays:
                 yield from arms.home_both()
                 return SkillResult(False, f"{tray} is out of reach of both arms")
             yield from arms.move_both(qs, 0.8)
-        self._hands_touch_tray(bid, False)   # they hold its rims: no contact forces
+        self._hands_touch_tray(bid, False)  # they hold its rims: no contact forces
         for arm in arms.all():
             arm.set_fingers(0.004)
         yield from ph.step(6)
         ee_pos, ee_orn = p.getLinkState(arms.left.body, EE_LINK, physicsClientId=c)[4:6]
         inv = p.invertTransform(ee_pos, ee_orn)
         rel = p.multiplyTransforms(inv[0], inv[1], pos, orn)
-        cid = p.createConstraint(bid, -1, -1, -1, p.JOINT_FIXED, [0, 0, 0], [0, 0, 0], pos,
-                                 childFrameOrientation=orn, physicsClientId=c)
+        cid = p.createConstraint(
+            bid,
+            -1,
+            -1,
+            -1,
+            p.JOINT_FIXED,
+            [0, 0, 0],
+            [0, 0, 0],
+            pos,
+            childFrameOrientation=orn,
+            physicsClientId=c,
+        )
         self.hold = Hold(tray, cid, rel, tuple(self.on_tray(tray)))
         goals = {a: arms[a].ik(lifted[a]) for a in arms.NAMES}
         if any(q is None for q in goals.values()):
@@ -161,8 +194,11 @@ class Trays:
         yaw = self.base.pose[2]
         taken = self.footprints(where, skip=self.on_tray(tray))
         for v in (0.0, -0.1, 0.1, -0.2, 0.2, -0.3, 0.3):
-            if any(math.hypot(u - tu, w - tv) < tr + 0.1
-                   for u, w, _ in tray_discs(TRAY_U, v) for tu, tv, tr in taken):
+            if any(
+                math.hypot(u - tu, w - tv) < tr + 0.1
+                for u, w, _ in tray_discs(TRAY_U, v)
+                for tu, tv, tr in taken
+            ):
                 continue
             x, y = self.frames.to_world(where, TRAY_U, v)
             pos, orn = [x, y, top + 0.004], yaw_quat(p, yaw)
@@ -183,8 +219,9 @@ class Trays:
         p, c = self.physics.p, self.physics.cid
         for arm in self.arms.all():
             for link in (*FINGERS, 8, 7, 6):
-                p.setCollisionFilterPair(arm.body, tray_body, link, -1, int(touch),
-                                         physicsClientId=c)
+                p.setCollisionFilterPair(
+                    arm.body, tray_body, link, -1, int(touch), physicsClientId=c
+                )
 
     def _let_go(self):
         """Release the tray where it is: let it settle, open and raise both hands."""
@@ -216,4 +253,6 @@ class Trays:
             ok = self.hold is not None and self.hold.tray == tray and z > top + 0.06
             return Check(ok, f"{tray} held {z - top:.2f} m above the table tops")
         ok = self.hold is None and self.physics.on_top(bid, where)
-        return Check(ok, f"{tray} rests on " + (f"the table of {where}" if ok else "something else"))
+        return Check(
+            ok, f"{tray} rests on " + (f"the table of {where}" if ok else "something else")
+        )

@@ -2,6 +2,7 @@
 :class:`~htn.robot.arm.Arm` whose joints stay where they were last commanded
 (nothing pushes them around), with a side to rest at; both moved together
 in joint space for the tray."""
+
 from __future__ import annotations
 
 import math
@@ -12,7 +13,7 @@ from .base import MobileBase
 from .faults import FaultDraws
 from .physics import DT, Physics
 
-ARM_HOMES = {   # tucked to the robot's sides, out of the head camera's view
+ARM_HOMES = {  # tucked to the robot's sides, out of the head camera's view
     "left": (1.5, -0.3, 0.0, -2.6, 0.0, 2.2, 0.785),
     "right": (-1.5, -0.3, 0.0, -2.6, 0.0, 2.2, 0.785),
 }
@@ -20,7 +21,7 @@ MOUNTS = {"left": (0.25, 0.2, 0.48), "right": (0.25, -0.2, 0.48)}
 SIDE = {"left": 1.0, "right": -1.0}
 ARM_AND_FINGERS = [*ARM_JOINTS, *FINGERS]
 
-Hands = dict[str, Optional[str]]   # what each hand holds (None: nothing), by arm
+Hands = dict[str, Optional[str]]  # what each hand holds (None: nothing), by arm
 
 
 class SideArm(Arm):
@@ -29,8 +30,9 @@ class SideArm(Arm):
     written to ``hands``, which the parts that must not count a held object
     as lying somewhere read."""
 
-    def __init__(self, physics: Physics, base: MobileBase, draws: FaultDraws, name: str,
-                 hands: Hands):
+    def __init__(
+        self, physics: Physics, base: MobileBase, draws: FaultDraws, name: str, hands: Hands
+    ):
         self.hands = hands
         super().__init__(physics, base, draws, MOUNTS[name], name)
         self.side = SIDE[name]
@@ -66,9 +68,12 @@ class SideArm(Arm):
     def keep_joints(self) -> None:
         """Put the joints where they were commanded (before every physics step)."""
         f = self.f_cmd
-        self.physics.p.resetJointStatesMultiDof(self.body, ARM_AND_FINGERS,
-                                                [[v] for v in self.q_cmd] + [[f], [f]],
-                                                physicsClientId=self.physics.cid)
+        self.physics.p.resetJointStatesMultiDof(
+            self.body,
+            ARM_AND_FINGERS,
+            [[v] for v in self.q_cmd] + [[f], [f]],
+            physicsClientId=self.physics.cid,
+        )
 
     def reachable(self, pos) -> bool:
         return self.ik(pos) is not None
@@ -82,8 +87,9 @@ class SideArm(Arm):
         mx, my, _ = self.base.mount_pos(MOUNTS[self.name])
         lx, ly = -math.sin(yaw) * self.side, math.cos(yaw) * self.side
         fx, fy = math.cos(yaw), math.sin(yaw)
-        if not (yield from self.reach([mx + 0.2 * fx + 0.25 * lx, my + 0.2 * fy + 0.25 * ly, 0.95],
-                                      0.7)):
+        if not (
+            yield from self.reach([mx + 0.2 * fx + 0.25 * lx, my + 0.2 * fy + 0.25 * ly, 0.95], 0.7)
+        ):
             yield from self.move(ARM_HOMES[self.name], 0.7)
         yield from self.physics.step(12)
 
@@ -118,14 +124,16 @@ class TwoArms:
         return [o for o in self.hands.values() if o]
 
     def keep_joints(self) -> None:
-        for arm in self.by_name.values():   # nothing pushes the arms around
+        for arm in self.by_name.values():  # nothing pushes the arms around
             arm.keep_joints()
 
     def move_both(self, goals: dict, seconds: float):
         """The arms of ``goals`` (name -> joints) at once, in joint space."""
         p, c = self.physics.p, self.physics.cid
-        starts = {a: [p.getJointState(self.by_name[a].body, j, physicsClientId=c)[0]
-                      for j in ARM_JOINTS] for a in goals}
+        starts = {
+            a: [p.getJointState(self.by_name[a].body, j, physicsClientId=c)[0] for j in ARM_JOINTS]
+            for a in goals
+        }
         n = max(1, int(seconds / DT))
         for i in range(1, n + 1):
             k = i / n

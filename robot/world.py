@@ -7,6 +7,7 @@ simulation. The vocabulary is the domestic domain's (see its header):
 ``(person p x y)``, ``(person_at p l)``, ``(can_receive p)``, ``(robot r)``,
 ``(robot_at r l)``, ``(free_hand r)``, ``(holding r o)``.
 """
+
 from __future__ import annotations
 
 import math
@@ -21,7 +22,7 @@ class Place:
     name: str
     x: float
     y: float
-    theta: float          # radians
+    theta: float  # radians
 
     @property
     def pose(self) -> tuple[float, float, float]:
@@ -34,14 +35,14 @@ class Furniture:
     kind: str
     x: float
     y: float
-    approach: str         # name of the Place the robot works from
+    approach: str  # name of the Place the robot works from
 
 
 @dataclass
 class Thing:
     name: str
     kind: str
-    on: Optional[str] = None           # furniture name
+    on: Optional[str] = None  # furniture name
     grasps: tuple = ()
 
 
@@ -50,7 +51,7 @@ class Person:
     name: str
     x: float
     y: float
-    at: Optional[str] = None           # Place where the robot meets them
+    at: Optional[str] = None  # Place where the robot meets them
     can_receive: bool = False
 
 
@@ -63,11 +64,11 @@ class World:
     robot: str = "robot"
     robot_at: Optional[str] = None
     holding: Optional[str] = None
-    static_facts: list = field(default_factory=list)   # (pred, args) never changed by actions
+    static_facts: list = field(default_factory=list)  # (pred, args) never changed by actions
     # the kitchen (pick and place) vocabulary, see kitchen_world_from_state
-    containers: dict = field(default_factory=dict)     # container -> area
-    trays: dict = field(default_factory=dict)          # tray -> area
-    opened: set = field(default_factory=set)           # containers open at the start
+    containers: dict = field(default_factory=dict)  # container -> area
+    trays: dict = field(default_factory=dict)  # tray -> area
+    opened: set = field(default_factory=set)  # containers open at the start
 
     def place(self, name: str) -> Place:
         try:
@@ -92,11 +93,20 @@ def world_from_state(atoms) -> World:
         p, args, pos = a.pred, a.args, a.pos
         try:
             if p == "location":
-                w.places[args[0]] = Place(args[0], number_arg(args, 1, p, pos), number_arg(args, 2, p, pos),
-                                          math.radians(number_arg(args, 3, p, pos)))
+                w.places[args[0]] = Place(
+                    args[0],
+                    number_arg(args, 1, p, pos),
+                    number_arg(args, 2, p, pos),
+                    math.radians(number_arg(args, 3, p, pos)),
+                )
             elif p == "furniture":
-                w.furniture[args[0]] = Furniture(args[0], args[1], number_arg(args, 2, p, pos),
-                                                 number_arg(args, 3, p, pos), args[4])
+                w.furniture[args[0]] = Furniture(
+                    args[0],
+                    args[1],
+                    number_arg(args, 2, p, pos),
+                    number_arg(args, 3, p, pos),
+                    args[4],
+                )
             elif p == "object":
                 w.things.setdefault(args[0], Thing(args[0], args[1])).kind = args[1]
             elif p == "object_on":
@@ -130,7 +140,7 @@ def world_from_state(atoms) -> World:
 
 # ---------------------------------------------------------------- the kitchen
 
-TABLE_GAP = 0.58         # from an area's base pose to the near edge of its table
+TABLE_GAP = 0.58  # from an area's base pose to the near edge of its table
 TABLE_DEPTH, TABLE_WIDTH = 1.0, 1.5
 ROBOT_HALF_WIDTH = 0.45  # half the width of the corridor the base (arms tucked) sweeps
 
@@ -152,7 +162,7 @@ def kitchen_world_from_state(atoms) -> World:
     """
     w = World()
     areas: dict[str, tuple] = {}
-    said: dict[tuple, object] = {}     # (predicate, first argument) -> position in the file
+    said: dict[tuple, object] = {}  # (predicate, first argument) -> position in the file
     start_pos = None
     for a in atoms:
         p, args, pos = a.pred, a.args, a.pos
@@ -161,7 +171,7 @@ def kitchen_world_from_state(atoms) -> World:
         try:
             if p == "area":
                 areas[args[0]] = (number_arg(args, 1, p, pos), number_arg(args, 2, p, pos))
-            elif p in ("at", "in"):   # on an area's table, in a container
+            elif p in ("at", "in"):  # on an area's table, in a container
                 w.things.setdefault(args[0], Thing(args[0], _kind(args[0]))).on = args[1]
             elif p == "container":
                 w.containers[args[0]] = args[1]
@@ -172,29 +182,40 @@ def kitchen_world_from_state(atoms) -> World:
             elif p == "robot-at":
                 w.robot_at, start_pos = args[0], pos
             elif p == "holding":
-                raise HtnError.at(pos, "the simulated kitchen starts with empty hands "
-                                       f"(the state says (holding {' '.join(map(str, args))}))")
+                raise HtnError.at(
+                    pos,
+                    "the simulated kitchen starts with empty hands "
+                    f"(the state says (holding {' '.join(map(str, args))}))",
+                )
         except IndexError:
             raise HtnError.at(pos, f"({p} ...) has too few arguments")
     if w.robot_at is None:
         raise HtnError("the initial state has no (robot-at AREA) fact")
     if w.robot_at not in areas:
-        raise HtnError.at(start_pos, f"the robot is at '{w.robot_at}', which has no "
-                                     f"(area {w.robot_at} x y) fact")
+        raise HtnError.at(
+            start_pos, f"the robot is at '{w.robot_at}', which has no (area {w.robot_at} x y) fact"
+        )
     for kind, table in (("container", w.containers), ("tray", w.trays)):
         for name, where in table.items():
             if where not in areas:
-                raise HtnError.at(said.get((kind, name)),
-                                  f"{name} is at '{where}', which has no (area {where} x y) fact")
+                raise HtnError.at(
+                    said.get((kind, name)),
+                    f"{name} is at '{where}', which has no (area {where} x y) fact",
+                )
     for t in w.things.values():
         if t.on not in areas and t.on not in w.containers:
-            raise HtnError.at(said.get(("at", t.name), said.get(("in", t.name))),
-                              f"{t.name} is at '{t.on}', which is neither an area nor a container")
+            raise HtnError.at(
+                said.get(("at", t.name), said.get(("in", t.name))),
+                f"{t.name} is at '{t.on}', which is neither an area nor a container",
+            )
     # every area gets a table, but the robot's start is just a pose unless
     # something stands there
     used = {t.on for t in w.things.values()} | set(w.containers.values()) | set(w.trays.values())
-    tables = _layout_tables(areas, [a for a in areas if a != w.robot_at or a in used],
-                            {a: said.get(("area", a)) for a in areas})
+    tables = _layout_tables(
+        areas,
+        [a for a in areas if a != w.robot_at or a in used],
+        {a: said.get(("area", a)) for a in areas},
+    )
     for name, (x, y) in areas.items():
         yaw = tables[name][2] if name in tables else 0.0
         w.places[name] = Place(name, x, y, yaw)
@@ -213,12 +234,15 @@ def _table_rect(x: float, y: float, yaw: float) -> list:
     ux, uy = math.cos(yaw), math.sin(yaw)
     vx, vy = -uy, ux
     near, far, half = TABLE_GAP, TABLE_GAP + TABLE_DEPTH, TABLE_WIDTH / 2
-    return [(x + ux * u + vx * v, y + uy * u + vy * v)
-            for u, v in ((near, -half), (far, -half), (far, half), (near, half))]
+    return [
+        (x + ux * u + vx * v, y + uy * u + vy * v)
+        for u, v in ((near, -half), (far, -half), (far, half), (near, half))
+    ]
 
 
 def _seg_dist(a, b, c, d) -> float:
     """Distance between segments ab and cd (0 if they cross)."""
+
     def cross(o, p, q):
         return (p[0] - o[0]) * (q[1] - o[1]) - (p[1] - o[1]) * (q[0] - o[0])
 
@@ -234,8 +258,10 @@ def _seg_dist(a, b, c, d) -> float:
 
 
 def _inside(p, rect) -> bool:
-    signs = [(q[0] - o[0]) * (p[1] - o[1]) - (q[1] - o[1]) * (p[0] - o[0])
-             for o, q in zip(rect, rect[1:] + rect[:1])]
+    signs = [
+        (q[0] - o[0]) * (p[1] - o[1]) - (q[1] - o[1]) * (p[0] - o[0])
+        for o, q in zip(rect, rect[1:] + rect[:1])
+    ]
     return all(s >= 0 for s in signs) or all(s <= 0 for s in signs)
 
 
@@ -248,7 +274,7 @@ def _rect_seg_dist(rect, a, b) -> float:
 def _layout_tables(areas: dict, with_table: list, where_said: dict) -> dict:
     """Headings for the areas' tables: each table keeps clear of every straight
     drive between areas and of the tables placed before it."""
-    drives = [(areas[a], areas[b]) for i, a in enumerate(areas) for b in list(areas)[i + 1:]]
+    drives = [(areas[a], areas[b]) for i, a in enumerate(areas) for b in list(areas)[i + 1 :]]
     placed: dict[str, tuple] = {}
     rects: list = []
     # axis-aligned headings first, then diagonals, then the rest
@@ -264,17 +290,24 @@ def _layout_tables(areas: dict, with_table: list, where_said: dict) -> dict:
                 [_rect_seg_dist(rect, a, b) - ROBOT_HALF_WIDTH for a, b in drives]
                 # the robot stands at the other areas' base poses
                 + [_rect_seg_dist(rect, p, p) - 0.6 for n, p in areas.items() if n != name]
-                + [_seg_dist(c, d, e, f) - 0.3 for r in rects
-                   for c, d in zip(r, r[1:] + r[:1]) for e, f in edges],
-                default=1.0)
+                + [
+                    _seg_dist(c, d, e, f) - 0.3
+                    for r in rects
+                    for c, d in zip(r, r[1:] + r[:1])
+                    for e, f in edges
+                ],
+                default=1.0,
+            )
             if best is None or clear > best[0] + 1e-9:
                 best = (clear, yaw, rect)
             if clear >= 0.25:
                 break
         if best[0] < 0:
-            raise HtnError.at(where_said.get(name),
-                              f"cannot lay out the simulated kitchen: the table of area '{name}' "
-                              "would block a drive or another table (areas too close together?)")
+            raise HtnError.at(
+                where_said.get(name),
+                f"cannot lay out the simulated kitchen: the table of area '{name}' "
+                "would block a drive or another table (areas too close together?)",
+            )
         _, yaw, rect = best
         ux, uy = math.cos(yaw), math.sin(yaw)
         mid = TABLE_GAP + TABLE_DEPTH / 2

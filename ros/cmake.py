@@ -19,6 +19,7 @@ on 2 cores, and keeps colcon out of the ``ros`` extra: colcon-core pins
 pytest-cov, pytest-repeat and pytest-rerunfailures, plugins that every
 pytest run in that venv then loads.
 """
+
 from __future__ import annotations
 
 import importlib.util
@@ -34,8 +35,14 @@ from pathlib import Path
 
 INSTALL_HINT = "pip install 'htn[ros]'"
 # what configuring an interface package needs besides rclpy: share/<name>/ in the prefix
-BUILD_PACKAGES = ("ament_cmake", "ament_cmake_ros", "rosidl_default_generators",
-                  "rosidl_default_runtime", "python_cmake_module", "action_msgs")
+BUILD_PACKAGES = (
+    "ament_cmake",
+    "ament_cmake_ros",
+    "rosidl_default_generators",
+    "rosidl_default_runtime",
+    "python_cmake_module",
+    "action_msgs",
+)
 # the Python modules CMake's steps run: package.xml (catkin_pkg), the code
 # generators (empy, lark), the C headers of numpy
 BUILD_MODULES = ("catkin_pkg", "em", "lark", "numpy")
@@ -61,8 +68,7 @@ def ament_prefix() -> Path:
     return Path(sysconfig.get_path("data"))
 
 
-def check(distro: str, package: str,
-          which: Callable[[str], str | None] = shutil.which) -> None:
+def check(distro: str, package: str, which: Callable[[str], str | None] = shutil.which) -> None:
     """Raise :class:`InterfaceBuildError` naming everything a build of
     ``package`` lacks (``distro``: the ROS distribution found, empty: none);
     ``which`` finds a program (replaced in tests)."""
@@ -76,9 +82,12 @@ def check(distro: str, package: str,
     if lacking:
         missing.append(f"the ROS 2 build tools ({', '.join(lacking)})")
         hints.append(INSTALL_HINT)
-    for names, what in ((("cc", "gcc"), "a C compiler (cc or gcc)"),
-                        (("c++", "g++"), "a C++ compiler (c++ or g++)"),
-                        (("cmake",), "cmake"), (("make",), "make")):
+    for names, what in (
+        (("cc", "gcc"), "a C compiler (cc or gcc)"),
+        (("c++", "g++"), "a C++ compiler (c++ or g++)"),
+        (("cmake",), "cmake"),
+        (("make",), "make"),
+    ):
         if not any(which(n) for n in names):
             missing.append(what)
             hints.append("apt install build-essential cmake")
@@ -88,8 +97,10 @@ def check(distro: str, package: str,
         hints.append(f"apt install python{sys.version_info.major}-dev")
     if missing:
         todo = "; ".join(dict.fromkeys(hints))
-        raise InterfaceBuildError(f"cannot build {package}: missing {', '.join(missing)} "
-                                  f"(to install: {todo})", tuple(missing))
+        raise InterfaceBuildError(
+            f"cannot build {package}: missing {', '.join(missing)} (to install: {todo})",
+            tuple(missing),
+        )
 
 
 _INCLUDES = re.compile(r'(INTERFACE_INCLUDE_DIRECTORIES\s+")([^"]*)(")')
@@ -126,8 +137,9 @@ def fix_exports(prefix: Path | None = None) -> list[Path]:
                 tmp.write_text(new)
                 os.replace(tmp, path)
             except OSError as error:
-                raise InterfaceBuildError(f"cannot correct the ROS wheels' {path}: {error}") \
-                    from error
+                raise InterfaceBuildError(
+                    f"cannot correct the ROS wheels' {path}: {error}"
+                ) from error
             changed.append(path)
     return changed
 
@@ -163,21 +175,41 @@ def run(source: Path, work: Path, say: Progress) -> int:
     shutil.copytree(source, src, ignore=shutil.ignore_patterns("__pycache__"))
     prefix = ament_prefix()
     scripts = sysconfig.get_path("scripts")
-    env = {**os.environ, "PATH": os.pathsep.join([scripts, os.environ.get("PATH", "")]),
-           "AMENT_PREFIX_PATH": str(prefix), "CMAKE_PREFIX_PATH": str(prefix)}
-    env.pop("PYTHONPATH", None)                 # a sourced overlay is no input
-    steps = [["cmake", "-S", str(src), "-B", str(work / "build"),
-              f"-DCMAKE_INSTALL_PREFIX={work / 'install'}", "-DBUILD_TESTING=OFF",
-              f"-DPython3_EXECUTABLE={sys.executable}"],
-             ["cmake", "--build", str(work / "build"), "-j", str(os.cpu_count() or 1)],
-             ["cmake", "--install", str(work / "build")]]
+    env = {
+        **os.environ,
+        "PATH": os.pathsep.join([scripts, os.environ.get("PATH", "")]),
+        "AMENT_PREFIX_PATH": str(prefix),
+        "CMAKE_PREFIX_PATH": str(prefix),
+    }
+    env.pop("PYTHONPATH", None)  # a sourced overlay is no input
+    steps = [
+        [
+            "cmake",
+            "-S",
+            str(src),
+            "-B",
+            str(work / "build"),
+            f"-DCMAKE_INSTALL_PREFIX={work / 'install'}",
+            "-DBUILD_TESTING=OFF",
+            f"-DPython3_EXECUTABLE={sys.executable}",
+        ],
+        ["cmake", "--build", str(work / "build"), "-j", str(os.cpu_count() or 1)],
+        ["cmake", "--install", str(work / "build")],
+    ]
     began, shown = time.monotonic(), -1
     with open(work / "build.log", "w") as log:
         for command in steps:
             log.write("$ " + " ".join(command) + "\n")
             log.flush()
-            proc = subprocess.Popen(command, cwd=work, env=env, stdout=subprocess.PIPE,
-                                    stderr=subprocess.STDOUT, text=True, errors="replace")
+            proc = subprocess.Popen(
+                command,
+                cwd=work,
+                env=env,
+                stdout=subprocess.PIPE,
+                stderr=subprocess.STDOUT,
+                text=True,
+                errors="replace",
+            )
             for line in proc.stdout:
                 log.write(line)
                 m = re.match(r"\[\s*(\d+)%\]", line)

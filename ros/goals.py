@@ -23,6 +23,7 @@ needs only ``request.tasks`` and ``is_cancel_requested``.
   resumed, they end ``preempted``, saying why; so does a waiting goal that
   is cancelled, and every waiting goal when the node stops serving.
 """
+
 from __future__ import annotations
 
 import threading
@@ -43,11 +44,11 @@ class Goal:
         self.handle = handle
         self.tasks: str = handle.request.tasks
         self.number = 0
-        self.halt: Optional[str] = None     # a halt its run has yet to take (see Turns._halt)
-        self.why: Optional[str] = None      # why it was last asked to halt
-        self.waits = False                  # preempted, it waits to resume
-        self.wake = threading.Event()       # ... and its turn came, or it ends (drop)
-        self.drop: Optional[str] = None     # why it is not resumed
+        self.halt: Optional[str] = None  # a halt its run has yet to take (see Turns._halt)
+        self.why: Optional[str] = None  # why it was last asked to halt
+        self.waits = False  # preempted, it waits to resume
+        self.wake = threading.Event()  # ... and its turn came, or it ends (drop)
+        self.drop: Optional[str] = None  # why it is not resumed
 
     def cancelled(self) -> bool:
         return self.handle.is_cancel_requested
@@ -61,17 +62,22 @@ class Turns:
     ``goal-0001-resumed-1.jsonl``); ``emit(handle, record)``: each event of
     a goal, as logged (and the ``waiting`` event)."""
 
-    def __init__(self, agent: Agent, policy: str = "preempt", resume: bool = False,
-                 log_dir: Optional[str] = None,
-                 emit: Callable[[object, dict], None] = lambda handle, rec: None):
+    def __init__(
+        self,
+        agent: Agent,
+        policy: str = "preempt",
+        resume: bool = False,
+        log_dir: Optional[str] = None,
+        emit: Callable[[object, dict], None] = lambda handle, rec: None,
+    ):
         self.agent, self.policy, self.resume, self.log_dir = agent, policy, resume, log_dir
         self.emit = emit
-        self._turn = threading.Lock()           # one goal runs at a time
-        self._gate = threading.Lock()           # the fields below, between goals' threads
-        self._waiting = 0                       # new goals waiting for their turn
-        self._current: Optional[Goal] = None    # the goal whose turn it is
-        self._resumable: list = []              # preempted goals waiting to resume, newest last
-        self._serving = True                    # preempted goals may wait to resume
+        self._turn = threading.Lock()  # one goal runs at a time
+        self._gate = threading.Lock()  # the fields below, between goals' threads
+        self._waiting = 0  # new goals waiting for their turn
+        self._current: Optional[Goal] = None  # the goal whose turn it is
+        self._resumable: list = []  # preempted goals waiting to resume, newest last
+        self._serving = True  # preempted goals may wait to resume
         self._goals = 0
 
     def busy(self) -> bool:
@@ -96,9 +102,16 @@ class Turns:
             self._halt(running, NEWER, next_goal=goal.tasks)
         outcome = self._take_turn(goal, None)
         while goal.waits:
-            self.emit(handle, {"event": "waiting", "detail": (
-                f"{NEWER} after {outcome.verified} verified step(s): its remaining tasks "
-                f"{outcome.remaining} resume when the newer goal has ended")})
+            self.emit(
+                handle,
+                {
+                    "event": "waiting",
+                    "detail": (
+                        f"{NEWER} after {outcome.verified} verified step(s): its remaining tasks "
+                        f"{outcome.remaining} resume when the newer goal has ended"
+                    ),
+                },
+            )
             goal.wake.wait()
             if goal.drop is not None:
                 return replace(outcome, summary=f"{outcome.summary}; not resumed: {goal.drop}")
@@ -139,7 +152,7 @@ class Turns:
         way to a new goal waiting for its turn, and waits again."""
         with self._turn:
             with self._gate:
-                if before is not None and self._waiting:    # a new goal goes first
+                if before is not None and self._waiting:  # a new goal goes first
                     goal.wake.clear()
                     self._resumable.append(goal)
                     return None
@@ -166,10 +179,11 @@ class Turns:
             log = f"{self.log_dir}/goal-{goal.number:04d}{again}.jsonl"
 
         def on_event(rec):
-            if goal.halt is not None:       # asked before its run had begun
+            if goal.halt is not None:  # asked before its run had begun
                 why, goal.halt = goal.halt, None
                 self.agent.preempt(why)
             self.emit(goal.handle, rec)
+
         if before is None:
             return self.agent.execute(goal.tasks, log=log, on_event=on_event)
         return self.agent.resume(before, log=log, on_event=on_event)
@@ -180,8 +194,14 @@ class Turns:
         goal is woken, unless a new goal waits (which wakes it when it
         ends), or the goal ended failed or aborted (the waiting ones end)."""
         with self._gate:
-            if self.resume and self._serving and outcome.outcome == "preempted" \
-                    and outcome.remaining and goal.why == NEWER and not goal.cancelled():
+            if (
+                self.resume
+                and self._serving
+                and outcome.outcome == "preempted"
+                and outcome.remaining
+                and goal.why == NEWER
+                and not goal.cancelled()
+            ):
                 goal.waits = True
                 goal.wake.clear()
                 self._resumable.append(goal)

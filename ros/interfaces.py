@@ -36,6 +36,7 @@ actions and topics work across processes). Child processes get the classic
 environment instead (PYTHONPATH, LD_LIBRARY_PATH, AMENT_PREFIX_PATH), which
 :func:`activate` returns. Nothing here imports rclpy.
 """
+
 from __future__ import annotations
 
 import ctypes
@@ -66,6 +67,7 @@ PY = f"python{sys.version_info.major}.{sys.version_info.minor}"
 
 
 # --- where: the distribution, the cache, an importable workspace build --------
+
 
 def distro() -> str:
     """The ROS distribution: ``$ROS_DISTRO`` (set by a sourced ROS), else the
@@ -148,6 +150,7 @@ def available(package: str = PACKAGE) -> bool:
 
 # --- the build --------------------------------------------------------------------
 
+
 def check(which=shutil.which, package: str = PACKAGE) -> None:
     """Raise :class:`InterfaceBuildError` naming everything a build lacks
     here (see :func:`htn.ros.cmake.check`)."""
@@ -166,25 +169,28 @@ def build(progress: Progress | None = None, package: str = PACKAGE) -> Path:
     home = target.parent.parent
     home.mkdir(parents=True, exist_ok=True)
     with _locked(home / ".lock", say, package):
-        if target.is_dir():                      # built by the process we waited for
+        if target.is_dir():  # built by the process we waited for
             return target
-        for stale in home.glob(".build-*"):      # left by a process that died building
+        for stale in home.glob(".build-*"):  # left by a process that died building
             shutil.rmtree(stale, ignore_errors=True)
         cmake.fix_exports()
         work = Path(tempfile.mkdtemp(prefix=f".build-{target.parent.name}-", dir=home))
-        work.chmod(0o755)                        # mkdtemp's 0700 would stay on the entry
-        kept = home / f"build-{target.parent.name}.log"      # a failed build's log
-        say(f"building {package} for ROS 2 {distro()} and Python {sys.version.split()[0]} "
-            f"(once, about half a minute) in {home}")
+        work.chmod(0o755)  # mkdtemp's 0700 would stay on the entry
+        kept = home / f"build-{target.parent.name}.log"  # a failed build's log
+        say(
+            f"building {package} for ROS 2 {distro()} and Python {sys.version.split()[0]} "
+            f"(once, about half a minute) in {home}"
+        )
         try:
             code = cmake.run(SOURCES / package, work, say)
             if code != 0:
-                raise InterfaceBuildError(f"the build of {package} failed (exit code "
-                                          f"{code}): see {kept}")
-            for done in ("build", "src"):        # the objects: 14 MB nobody reads again
+                raise InterfaceBuildError(
+                    f"the build of {package} failed (exit code {code}): see {kept}"
+                )
+            for done in ("build", "src"):  # the objects: 14 MB nobody reads again
                 shutil.rmtree(work / done, ignore_errors=True)
-            shutil.rmtree(target.parent, ignore_errors=True)     # a remnant without install/
-            os.rename(work, target.parent)       # atomic: the entry appears complete
+            shutil.rmtree(target.parent, ignore_errors=True)  # a remnant without install/
+            os.rename(work, target.parent)  # atomic: the entry appears complete
         except BaseException:
             if (work / "build.log").is_file():
                 shutil.copy(work / "build.log", kept)
@@ -206,6 +212,7 @@ def _locked(path: Path, say: Progress, package: str):
 
 
 # --- using a build ------------------------------------------------------------------
+
 
 def activate(path: Path | str, package: str = PACKAGE) -> dict[str, str]:
     """Make the build at the install prefix ``path`` importable in this
@@ -229,8 +236,11 @@ def activate(path: Path | str, package: str = PACKAGE) -> dict[str, str]:
         rest = [p for p in os.environ.get(name, "").split(os.pathsep) if p and p != str(folder)]
         return os.pathsep.join([str(folder), *rest])
 
-    return {"PYTHONPATH": first(site, "PYTHONPATH"), "LD_LIBRARY_PATH": first(lib, "LD_LIBRARY_PATH"),
-            "AMENT_PREFIX_PATH": first(path, "AMENT_PREFIX_PATH")}
+    return {
+        "PYTHONPATH": first(site, "PYTHONPATH"),
+        "LD_LIBRARY_PATH": first(lib, "LD_LIBRARY_PATH"),
+        "AMENT_PREFIX_PATH": first(path, "AMENT_PREFIX_PATH"),
+    }
 
 
 def _preload(libraries: list[Path]) -> None:
@@ -248,7 +258,8 @@ def _preload(libraries: list[Path]) -> None:
             lib, error = next(iter(errors.items()))
             raise InterfaceBuildError(
                 f"cannot load {lib.name}: {error} (run the Python of the venv holding the "
-                "ROS wheels: its bootstrapper sets the library path at start)")
+                "ROS wheels: its bootstrapper sets the library path at start)"
+            )
         pending = list(errors)
 
 
@@ -268,9 +279,16 @@ def import_interfaces(progress: Progress | None = None) -> SimpleNamespace:
     msg = importlib.import_module(f"{PACKAGE}.msg")
     srv = importlib.import_module(f"{PACKAGE}.srv")
     action = importlib.import_module(f"{PACKAGE}.action")
-    return SimpleNamespace(Event=msg.Event, Facts=msg.Facts, ExecuteTasks=action.ExecuteTasks,
-                           PlanTasks=srv.PlanTasks, GetState=srv.GetState,
-                           UpdateFacts=srv.UpdateFacts, Skill=action.Skill, Check=srv.Check)
+    return SimpleNamespace(
+        Event=msg.Event,
+        Facts=msg.Facts,
+        ExecuteTasks=action.ExecuteTasks,
+        PlanTasks=srv.PlanTasks,
+        GetState=srv.GetState,
+        UpdateFacts=srv.UpdateFacts,
+        Skill=action.Skill,
+        Check=srv.Check,
+    )
 
 
 def import_type(name: str, progress: Progress | None = None):
@@ -289,8 +307,10 @@ def import_type(name: str, progress: Progress | None = None):
         elif workspace_prefix(package) is None:
             ensure(progress, package)
     elif importlib.util.find_spec(package) is None:
-        raise InterfaceBuildError(f"unknown ROS type {name}: no package {package} is installed "
-                                  "(source its workspace, or install its wheel)")
+        raise InterfaceBuildError(
+            f"unknown ROS type {name}: no package {package} is installed "
+            "(source its workspace, or install its wheel)"
+        )
     module = importlib.import_module(f"{package}.{kind}")
     found = getattr(module, type_name, None)
     if found is None:

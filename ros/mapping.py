@@ -33,6 +33,7 @@ the service ``check/<name>`` of type ``htn_interfaces/srv/Check``: what
 ``htn ros robot`` serves. Nothing here imports rclpy; errors are
 :class:`~htn.jshop.language.errors.HtnError` located in the file.
 """
+
 from __future__ import annotations
 
 import math
@@ -53,8 +54,10 @@ _SKILL = {"action", "type", "where", "goal"}
 _CHECK = {"service", "type", "request", "topic", "field", "equals", "where"}
 # a skill's and a check's: the key naming it, its kind of type, the default
 # type, the key of its fields, the default name's prefix
-_SERVED = {"skills": ("action", "action", SKILL_TYPE, "goal", "skill"),
-           "checks": ("service", "srv", CHECK_TYPE, "request", "check")}
+_SERVED = {
+    "skills": ("action", "action", SKILL_TYPE, "goal", "skill"),
+    "checks": ("service", "srv", CHECK_TYPE, "request", "check"),
+}
 _FUNCTION = re.compile(r"(yaw|yaw_degrees)\((.*)\)\Z")
 
 
@@ -68,12 +71,13 @@ def beside(domain: str | Path) -> Optional[Path]:
 @dataclass
 class Call:
     """One skill's action or one check's service or topic, resolved."""
-    name: str                      # the full ROS name (/robot/skill/grasp)
-    type: str                      # package/action|srv|msg/Name
-    fields: dict = field(default_factory=dict)     # dotted path -> value expression
+
+    name: str  # the full ROS name (/robot/skill/grasp)
+    type: str  # package/action|srv|msg/Name
+    fields: dict = field(default_factory=dict)  # dotted path -> value expression
     where: str = ""
-    field_name: str = ""           # a topic check: the field compared
-    equals: Any = None             # a topic check: the value that means ok
+    field_name: str = ""  # a topic check: the field compared
+    equals: Any = None  # a topic check: the value that means ok
 
     @property
     def is_topic(self) -> bool:
@@ -91,25 +95,24 @@ class Call:
 @dataclass
 class Mapping:
     """A mapping file read: the calls by skill and check name."""
+
     file: str = ""
     namespace: str = "/robot"
     observe: str = "observe"
     pose: str = "pose"
     wait: float = 5.0
-    skills: dict = field(default_factory=dict)     # name -> Call
-    checks: dict = field(default_factory=dict)     # name -> Call
+    skills: dict = field(default_factory=dict)  # name -> Call
+    checks: dict = field(default_factory=dict)  # name -> Call
 
     def full(self, name: str) -> str:
         """``name`` under the namespace unless it is absolute."""
         return name if name.startswith("/") else f"{self.namespace.rstrip('/')}/{name}"
 
     def skill(self, name: str) -> Call:
-        return self.skills.get(name) or Call(self.full(f"skill/{name}"), SKILL_TYPE,
-                                             {"args": "$*"})
+        return self.skills.get(name) or Call(self.full(f"skill/{name}"), SKILL_TYPE, {"args": "$*"})
 
     def check(self, name: str) -> Call:
-        return self.checks.get(name) or Call(self.full(f"check/{name}"), CHECK_TYPE,
-                                             {"args": "$*"})
+        return self.checks.get(name) or Call(self.full(f"check/{name}"), CHECK_TYPE, {"args": "$*"})
 
 
 def default(namespace: str = "/robot") -> Mapping:
@@ -130,8 +133,9 @@ def read(path: str | Path) -> Mapping:
     except tomllib.TOMLDecodeError as exc:
         m = re.search(r"\(at line (\d+), column (\d+)\)", str(exc))
         message = re.sub(r"\s*\(at line \d+, column \d+\)", "", str(exc))
-        raise HtnError(f"not TOML: {message}", path, int(m[1]) if m else None,
-                       int(m[2]) if m else None)
+        raise HtnError(
+            f"not TOML: {message}", path, int(m[1]) if m else None, int(m[2]) if m else None
+        )
     return _mapping(data, path, text)
 
 
@@ -150,8 +154,7 @@ def _mapping(data: dict, path: str, text: str) -> Mapping:
             setattr(m, key, data[key])
     if "wait" in data:
         wait = data["wait"]
-        if isinstance(wait, bool) or not isinstance(wait, (int, float)) \
-                or not (0 < wait <= 3600):
+        if isinstance(wait, bool) or not isinstance(wait, (int, float)) or not (0 < wait <= 3600):
             fail("'wait' must be a number of seconds in (0, 3600]", "wait")
         m.wait = float(wait)
     for kind, known, into in (("skills", _SKILL, m.skills), ("checks", _CHECK, m.checks)):
@@ -164,10 +167,10 @@ def _mapping(data: dict, path: str, text: str) -> Mapping:
                 fail(f"{where} must be a table", name)
             for key in spec:
                 if key not in known:
-                    fail(f"{where}: unknown key '{key}' (known: {', '.join(sorted(known))})",
-                         key)
-            into[name] = _call(kind, name, spec, m, lambda msg, key=name: fail(f"{where}: {msg}",
-                                                                                key))
+                    fail(f"{where}: unknown key '{key}' (known: {', '.join(sorted(known))})", key)
+            into[name] = _call(
+                kind, name, spec, m, lambda msg, key=name: fail(f"{where}: {msg}", key)
+            )
     return m
 
 
@@ -192,8 +195,10 @@ def _call(kind: str, name: str, spec: dict, m: Mapping, fail) -> Call:
     # a skill is an action, a check a service: their names, types and fields
     served, part, default_type, fields_key, prefix = _SERVED[kind]
     if typ is not None and f"/{part}/" not in typ:
-        fail(f"type '{typ}' is not " + ("an action" if kind == "skills" else
-                                        "a service (a check is a service or a topic)"))
+        fail(
+            f"type '{typ}' is not "
+            + ("an action" if kind == "skills" else "a service (a check is a service or a topic)")
+        )
     fields = spec.get(fields_key, {"args": "$*"} if typ in (None, default_type) else {})
     if not isinstance(fields, dict):
         fail(f"'{fields_key}' must be a table of field = value")
@@ -221,6 +226,7 @@ def _line_of(text: str, key: str) -> Optional[int]:
 
 
 # --- values --------------------------------------------------------------------------
+
 
 def _pattern(text: str, fail=None) -> tuple[str, list[str]]:
     tokens = text.strip().removeprefix("(").removesuffix(")").split()

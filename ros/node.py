@@ -32,6 +32,7 @@ Lifecycle: ``configure`` reads the domain and the problem and builds the
 robot (a located error fails the transition and is logged); ``activate``
 starts serving; ``deactivate`` preempts a running goal and stops serving.
 """
+
 from __future__ import annotations
 
 import json
@@ -53,22 +54,23 @@ from .interfaces import import_interfaces
 from .shutdown import end_within
 
 POLICIES = ("preempt", "reject", "queue")
-THREADS = 16        # callbacks at once: goals waiting for their turn or to resume block one each
+THREADS = 16  # callbacks at once: goals waiting for their turn or to resume block one each
 
 
 @dataclass
 class NodeSettings:
     """What ``htn ros node`` is told."""
+
     domain: str
     problem: Optional[str] = None
-    robot: str = "auto"                 # auto: ros where a mapping file lies beside the domain
+    robot: str = "auto"  # auto: ros where a mapping file lies beside the domain
     faults: str = ""
     seed: int = 0
     replan: bool = False
     on_new_goal: str = "preempt"
-    log_dir: Optional[str] = None       # a JSON Lines log per goal, as htn run --log writes
-    resume: bool = False                # a goal preempted by a newer one goes on after it
-    view: Optional[tuple] = None        # (host, port): the browser view of the goals
+    log_dir: Optional[str] = None  # a JSON Lines log per goal, as htn run --log writes
+    resume: bool = False  # a goal preempted by a newer one goes on after it
+    view: Optional[tuple] = None  # (host, port): the browser view of the goals
 
 
 def robot_for(name: str, domain: str) -> str:
@@ -77,6 +79,7 @@ def robot_for(name: str, domain: str) -> str:
     if name != "auto":
         return name
     from .mapping import beside
+
     return "ros" if beside(domain) is not None else "symbolic"
 
 
@@ -90,10 +93,10 @@ class HtnNode(LifecycleNode):
         self.agent: Optional[Agent] = None
         self.configure_error: Optional[str] = None
         self._group = ReentrantCallbackGroup()
-        self.turns: Optional[Turns] = None      # the goals, one at a time
+        self.turns: Optional[Turns] = None  # the goals, one at a time
         self._served: list = []
         self._events = None
-        self.view = None                        # the browser view of the goals, --view
+        self.view = None  # the browser view of the goals, --view
 
     # ------------------------------------------------------------ lifecycle
     def on_configure(self, state: State) -> TransitionCallbackReturn:
@@ -101,15 +104,22 @@ class HtnNode(LifecycleNode):
         try:
             if s.log_dir:
                 _log_folder(s.log_dir)
-            self.agent = Agent(s.domain, s.problem, robot=robot_for(s.robot, s.domain),
-                               faults=s.faults, seed=s.seed, replan=s.replan)
+            self.agent = Agent(
+                s.domain,
+                s.problem,
+                robot=robot_for(s.robot, s.domain),
+                faults=s.faults,
+                seed=s.seed,
+                replan=s.replan,
+            )
             if s.view is not None and self.view is None:
                 from htn.api.view import start_goals_view
+
                 self.view = start_goals_view(*s.view)
                 self.get_logger().info(f"the view of the goals: {self.view.url}")
         except HtnError as exc:
             self.configure_error = str(exc)
-            if self.managed:        # else serve() ends the process with it, in one line
+            if self.managed:  # else serve() ends the process with it, in one line
                 self.get_logger().error(f"configure: {exc}")
             return TransitionCallbackReturn.FAILURE
         self.turns = Turns(self.agent, s.on_new_goal, s.resume, s.log_dir, self._event)
@@ -119,9 +129,15 @@ class HtnNode(LifecycleNode):
     def on_activate(self, state: State) -> TransitionCallbackReturn:
         t, g = self.types, self._group
         self._served = [
-            ActionServer(self, t.ExecuteTasks, "~/execute", execute_callback=self._execute,
-                         goal_callback=self._goal, cancel_callback=self._cancel,
-                         callback_group=g),
+            ActionServer(
+                self,
+                t.ExecuteTasks,
+                "~/execute",
+                execute_callback=self._execute,
+                goal_callback=self._goal,
+                cancel_callback=self._cancel,
+                callback_group=g,
+            ),
             self.create_service(t.PlanTasks, "~/plan", self._plan, callback_group=g),
             self.create_service(t.GetState, "~/state", self._state, callback_group=g),
             self.create_service(t.UpdateFacts, "~/update_facts", self._update, callback_group=g),
@@ -190,11 +206,16 @@ class HtnNode(LifecycleNode):
     def _event(self, goal_handle, rec: dict) -> None:
         """``rec`` (an event of the goal's run, as logged, or the node's
         own: ``waiting``) as the goal's feedback and on ~/events."""
-        msg = self.types.Event(t=float(rec.get("t") or 0.0), sim_t=float(rec.get("sim_t") or 0.0),
-                               step=rec["step"] if rec.get("step") is not None else -1,
-                               action=rec.get("action") or "", event=rec["event"],
-                               attempt=rec.get("attempt") or 0, detail=str(rec.get("detail") or ""),
-                               record=json.dumps(rec, default=str))
+        msg = self.types.Event(
+            t=float(rec.get("t") or 0.0),
+            sim_t=float(rec.get("sim_t") or 0.0),
+            step=rec["step"] if rec.get("step") is not None else -1,
+            action=rec.get("action") or "",
+            event=rec["event"],
+            attempt=rec.get("attempt") or 0,
+            detail=str(rec.get("detail") or ""),
+            record=json.dumps(rec, default=str),
+        )
         feedback = self.types.ExecuteTasks.Feedback(event=msg)
         goal_handle.publish_feedback(feedback)
         if self._events is not None and self._events.is_activated:
@@ -203,9 +224,15 @@ class HtnNode(LifecycleNode):
             self.view.event(rec)
 
     def _result(self, r: GoalResult):
-        return self.types.ExecuteTasks.Result(outcome=r.outcome, summary=r.summary, error=r.error,
-                                              plan=list(r.plan), tree=r.tree, steps=r.steps,
-                                              verified=r.verified)
+        return self.types.ExecuteTasks.Result(
+            outcome=r.outcome,
+            summary=r.summary,
+            error=r.error,
+            plan=list(r.plan),
+            tree=r.tree,
+            steps=r.steps,
+            verified=r.verified,
+        )
 
     # ------------------------------------------------------------ services
     def _plan(self, request, response):
@@ -250,14 +277,14 @@ def _log_folder(path: str) -> None:
     """The folder of the goals' logs, made if missing (a one-line error if
     it cannot be, or is a file)."""
     import os
+
     try:
         os.makedirs(path, exist_ok=True)
     except OSError as exc:
         raise HtnError(f"--log-dir: cannot make the folder: {exc.strerror or exc}", path)
 
 
-def serve(settings: NodeSettings, managed: bool = False, name: str = "htn",
-          on_view=None) -> int:
+def serve(settings: NodeSettings, managed: bool = False, name: str = "htn", on_view=None) -> int:
     """Run the node until it is shut down (Ctrl-C, SIGTERM). Not
     ``managed``: it configures and activates itself, and a configure error
     ends it with exit code 2."""
@@ -289,8 +316,14 @@ def serve(settings: NodeSettings, managed: bool = False, name: str = "htn",
     return 0
 
 
-def send_goal(tasks: str, *, on_event=None, cancel_after: Optional[float] = None,
-              wait: float = 30.0, node_name: str = "htn"):
+def send_goal(
+    tasks: str,
+    *,
+    on_event=None,
+    cancel_after: Optional[float] = None,
+    wait: float = 30.0,
+    node_name: str = "htn",
+):
     """Send ``tasks`` to the node's ``/NODE/execute`` and wait for its
     result (the ``ExecuteTasks`` result); ``on_event`` gets each event (a
     dict, as logged) from the ``/NODE/events`` topic, in order and complete
@@ -306,23 +339,27 @@ def send_goal(tasks: str, *, on_event=None, cancel_after: Optional[float] = None
     client = rclpy.create_node("htn_send")
     try:
         events: list = []
-        client.create_subscription(types.Event, f"/{node_name}/events",
-                                   lambda m: events.append(json.loads(m.record)), 100)
+        client.create_subscription(
+            types.Event, f"/{node_name}/events", lambda m: events.append(json.loads(m.record)), 100
+        )
         action = ActionClient(client, types.ExecuteTasks, f"/{node_name}/execute")
         if not action.wait_for_server(timeout_sec=wait):
-            raise HtnError(f"no htn node answers on /{node_name}/execute within {wait:g} s "
-                           "(start one: htn ros node DOMAIN)")
+            raise HtnError(
+                f"no htn node answers on /{node_name}/execute within {wait:g} s "
+                "(start one: htn ros node DOMAIN)"
+            )
         # the events topic too, or the first events of the goal are lost
         deadline = time.monotonic() + wait
-        while client.count_publishers(f"/{node_name}/events") == 0 \
-                and time.monotonic() < deadline:
+        while client.count_publishers(f"/{node_name}/events") == 0 and time.monotonic() < deadline:
             rclpy.spin_once(client, timeout_sec=0.05)
         sent = action.send_goal_async(types.ExecuteTasks.Goal(tasks=tasks))
         rclpy.spin_until_future_complete(client, sent)
         handle = sent.result()
         if not handle.accepted:
-            raise HtnError("the node rejected the goal (a goal is running and it was started "
-                           "with --on-new-goal reject)")
+            raise HtnError(
+                "the node rejected the goal (a goal is running and it was started "
+                "with --on-new-goal reject)"
+            )
         done = handle.get_result_async()
         cancel_at = None if cancel_after is None else time.monotonic() + cancel_after
         shown = 0
@@ -335,8 +372,11 @@ def send_goal(tasks: str, *, on_event=None, cancel_after: Optional[float] = None
         result = done.result().result
         # the summary event is the log's last: wait for it (briefly) before returning
         until = time.monotonic() + 2.0
-        while result.outcome != "refused" and time.monotonic() < until \
-                and not any(e.get("event") == "summary" for e in events):
+        while (
+            result.outcome != "refused"
+            and time.monotonic() < until
+            and not any(e.get("event") == "summary" for e in events)
+        ):
             rclpy.spin_once(client, timeout_sec=0.02)
         _show(events, shown, on_event)
         return result

@@ -27,6 +27,7 @@ which needs no rclpy.
 This module imports rclpy; :mod:`htn.ros.record_commands` imports it only
 when the command runs.
 """
+
 from __future__ import annotations
 
 import os
@@ -42,13 +43,14 @@ from .interfaces import SOURCE, import_interfaces
 
 TOPICS = {"events": "htn_interfaces/msg/Event", "facts": "htn_interfaces/msg/Facts"}
 """The node's topics recorded (``/<node>/<name>``) and their types."""
-COMMIT_EVERY = 0.2          # seconds: what a killed recorder can lose, at most
-DEPTH = 1000                # messages a subscription keeps while the recorder writes
+COMMIT_EVERY = 0.2  # seconds: what a killed recorder can lose, at most
+DEPTH = 1000  # messages a subscription keeps while the recorder writes
 
 
 @dataclass
 class Recording:
     """What a recording wrote: ``counts`` of messages per topic."""
+
     path: str
     counts: dict = field(default_factory=dict)
 
@@ -66,8 +68,11 @@ def check_output(output: str) -> Path:
     exists, or if the folder it would be made in does not."""
     out = Path(output)
     if out.exists() or out.is_symlink():
-        raise HtnError("already exists: htn ros record writes a new bag and replaces nothing "
-                       "(give another name)", output)
+        raise HtnError(
+            "already exists: htn ros record writes a new bag and replaces nothing "
+            "(give another name)",
+            output,
+        )
     parent = out.parent if str(out.parent) else Path(".")
     if not parent.is_dir():
         raise HtnError(f"no such folder: {parent}", output)
@@ -78,11 +83,13 @@ def typestore():
     """Jazzy's types with htn_interfaces' messages registered (for the
     connections' definitions and hashes)."""
     from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+
     store = get_typestore(Stores.ROS2_JAZZY)
     found: dict = {}
     for path in sorted((SOURCE / "msg").glob("*.msg")):
-        found.update(get_types_from_msg(path.read_text(encoding="utf-8"),
-                                        f"htn_interfaces/msg/{path.stem}"))
+        found.update(
+            get_types_from_msg(path.read_text(encoding="utf-8"), f"htn_interfaces/msg/{path.stem}")
+        )
     store.register(found)
     return store
 
@@ -95,14 +102,17 @@ class BagWriter:
     def __init__(self, path: Path, topics: dict[str, str], store):
         from rosbags.rosbag2 import Writer
         from rosbags.rosbag2.errors import WriterError
+
         self.path = path
         try:
             self.writer = Writer(path, version=getattr(Writer, "VERSION_LATEST", 8))
             self.writer.open()
         except (WriterError, OSError) as exc:
             raise HtnError(f"cannot write the bag: {exc}", str(path)) from None
-        self.connections = {t: self.writer.add_connection(t, msgtype, typestore=store)
-                            for t, msgtype in topics.items()}
+        self.connections = {
+            t: self.writer.add_connection(t, msgtype, typestore=store)
+            for t, msgtype in topics.items()
+        }
         self.counts = {t: 0 for t in topics}
         self._last = 0
         self._dirty = False
@@ -110,10 +120,10 @@ class BagWriter:
         self._commit()
 
     def write(self, topic: str, data: bytes) -> None:
-        stamp = max(time.time_ns(), self._last + 1)     # the order received, whatever the clock
+        stamp = max(time.time_ns(), self._last + 1)  # the order received, whatever the clock
         try:
             self.writer.write(self.connections[topic], stamp, data)
-        except Exception as exc:    # noqa: BLE001 - sqlite: a full disk, a removed folder
+        except Exception as exc:  # noqa: BLE001 - sqlite: a full disk, a removed folder
             raise HtnError(f"cannot write the bag: {exc}", str(self.path)) from None
         self._last = stamp
         self.counts[topic] += 1
@@ -137,12 +147,18 @@ class BagWriter:
         if self.writer.storage is not None:
             try:
                 self.writer.close()
-            except Exception as exc:    # noqa: BLE001 - as write's
+            except Exception as exc:  # noqa: BLE001 - as write's
                 raise HtnError(f"cannot finish the bag: {exc}", str(self.path)) from None
 
 
-def record(output: str, node_name: str = "htn", duration: Optional[float] = None, *,
-           say: Callable[[str], None] = lambda line: None, held=nullcontext) -> Recording:
+def record(
+    output: str,
+    node_name: str = "htn",
+    duration: Optional[float] = None,
+    *,
+    say: Callable[[str], None] = lambda line: None,
+    held=nullcontext,
+) -> Recording:
     """Record ``/<node_name>/events`` and ``/<node_name>/facts`` into the new
     bag ``output`` until ``duration`` seconds have passed (None: no limit)
     or a ``KeyboardInterrupt`` (Ctrl-C, SIGTERM) comes, which ends the
@@ -159,26 +175,29 @@ def record(output: str, node_name: str = "htn", duration: Optional[float] = None
     store = typestore()
     topics = {f"/{node_name}/{name}": msgtype for name, msgtype in TOPICS.items()}
     classes = {TOPICS["events"]: types.Event, TOPICS["facts"]: types.Facts}
-    rclpy.init(signal_handler_options=SignalHandlerOptions.NO)     # htn's own handlers stay
+    rclpy.init(signal_handler_options=SignalHandlerOptions.NO)  # htn's own handlers stay
     node = None
     bag = None
     try:
         node = rclpy.create_node(f"htn_record_{os.getpid()}")
         bag = BagWriter(out, topics, store)
-        qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=DEPTH,
-                         reliability=ReliabilityPolicy.RELIABLE)
+        qos = QoSProfile(
+            history=HistoryPolicy.KEEP_LAST, depth=DEPTH, reliability=ReliabilityPolicy.RELIABLE
+        )
 
         def writer(topic):
             def write(data):
                 with held():
                     bag.write(topic, data)
+
             return write
+
         for topic, msgtype in topics.items():
             node.create_subscription(classes[msgtype], topic, writer(topic), qos, raw=True)
         say(f"recording {', '.join(topics)} into {out} (Ctrl-C stops)")
         _spin(node, bag, next(iter(topics)), node_name, duration, say)
     except KeyboardInterrupt:
-        if bag is None:         # before the bag existed: nothing was recorded
+        if bag is None:  # before the bag existed: nothing was recorded
             raise
     finally:
         if bag is not None:
@@ -190,11 +209,13 @@ def record(output: str, node_name: str = "htn", duration: Optional[float] = None
     return Recording(str(out), dict(bag.counts))
 
 
-def _spin(node, bag: BagWriter, events: str, node_name: str, duration: Optional[float],
-          say) -> None:
+def _spin(
+    node, bag: BagWriter, events: str, node_name: str, duration: Optional[float], say
+) -> None:
     """Take messages until ``duration`` is over (or an interrupt); say when
     the node's events topic gets (or loses) its publisher."""
     import rclpy
+
     end = None if duration is None else time.monotonic() + duration
     publishers = 0
     say(f"waiting for a publisher on {events} (htn ros node --name {node_name})")
@@ -203,6 +224,8 @@ def _spin(node, bag: BagWriter, events: str, node_name: str, duration: Optional[
         bag.tick()
         n = node.count_publishers(events)
         if n != publishers:
-            say(f"{events}: {n} publisher{'s' if n != 1 else ''}"
-                + ("" if n else " (the node has gone; still recording)"))
+            say(
+                f"{events}: {n} publisher{'s' if n != 1 else ''}"
+                + ("" if n else " (the node has gone; still recording)")
+            )
             publishers = n

@@ -2,6 +2,7 @@
 which ``htn view BAG`` shows as it shows a log. The command parses, calls
 the recorder (imported when it runs: ``htn ros --help`` imports no rclpy)
 and prints."""
+
 from __future__ import annotations
 
 import math
@@ -29,17 +30,29 @@ def _seconds(ctx, param, value):
 def _node_name(ctx, param, value):
     """``--node``: a ROS name (``htn``, ``robot1/htn``), its topics ``/NAME/...``."""
     if not NODE_NAME.fullmatch(value):
-        raise click.BadParameter(f"{value[:40]!r} is not a ROS node name (letters, digits "
-                                 "and _, not starting with a digit; / between namespaces)")
+        raise click.BadParameter(
+            f"{value[:40]!r} is not a ROS node name (letters, digits "
+            "and _, not starting with a digit; / between namespaces)"
+        )
     return value.strip("/")
 
 
 @click.command("record")
 @click.argument("output", type=click.Path())
-@click.option("--node", "node_name", default="htn", show_default=True, callback=_node_name,
-              help="The node's name: its topics /NODE/events and /NODE/facts are recorded.")
-@click.option("--duration", callback=_seconds, metavar="SECONDS",
-              help="Stop after this long (default: at Ctrl-C or SIGTERM).")
+@click.option(
+    "--node",
+    "node_name",
+    default="htn",
+    show_default=True,
+    callback=_node_name,
+    help="The node's name: its topics /NODE/events and /NODE/facts are recorded.",
+)
+@click.option(
+    "--duration",
+    callback=_seconds,
+    metavar="SECONDS",
+    help="Stop after this long (default: at Ctrl-C or SIGTERM).",
+)
 def record(output, node_name, duration):
     """Record the node's events (every executor event of every goal, as
     htn run --log writes them) and the facts others send it into a new
@@ -57,8 +70,14 @@ def record(output, node_name, duration):
     from htn.process import Stops
 
     from .record import record as record_bag
+
     stops = click.get_current_context().ensure_object(Stops)
-    recording = record_bag(output, node_name, duration, held=stops.held,
-                           say=lambda line: click.echo(f"record: {line}", err=True))
-    stops.consume()                 # Ctrl-C or SIGTERM is how a recording ends: exit 0
+    recording = record_bag(
+        output,
+        node_name,
+        duration,
+        held=stops.held,
+        say=lambda line: click.echo(f"record: {line}", err=True),
+    )
+    stops.consume()  # Ctrl-C or SIGTERM is how a recording ends: exit 0
     click.echo(recording.line())

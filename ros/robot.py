@@ -18,6 +18,7 @@ a restarted or moved robot is planned for as it is; the faults a simulated
 robot injects arrive on ``<namespace>/faults`` and become the log's
 ``fault`` events; the robot's clock is its pose topic's stamp.
 """
+
 from __future__ import annotations
 
 import json
@@ -35,9 +36,9 @@ from htn.robot.interface import Check, Robot, SkillResult
 from . import mapping as mapping_file
 from .interfaces import InterfaceBuildError, import_interfaces, import_type
 
-TICK = 0.005        # s a tick waits for a result before the executor goes on
-SILENT = 1.5        # s without a pose message that mean the robot has gone
-RETRY = 0.25        # s before a service call without answer is sent again
+TICK = 0.005  # s a tick waits for a result before the executor goes on
+SILENT = 1.5  # s without a pose message that mean the robot has gone
+RETRY = 0.25  # s before a service call without answer is sent again
 ENDED = (GoalStatus.STATUS_SUCCEEDED, GoalStatus.STATUS_ABORTED, GoalStatus.STATUS_CANCELED)
 
 
@@ -45,8 +46,10 @@ def make_robot(request):
     """The ``ros`` back end for a :class:`~htn.robot.backends.RobotRequest`:
     the mapping file beside the domain (or the default names)."""
     if request.faults:
-        raise HtnError("--faults: the ros robot injects no faults itself (a simulated robot "
-                       "does: htn ros robot --sim --faults ...)")
+        raise HtnError(
+            "--faults: the ros robot injects no faults itself (a simulated robot "
+            "does: htn ros robot --sim --faults ...)"
+        )
     found = mapping_file.beside(request.domain.file) if request.domain.file else None
     table = mapping_file.read(found) if found else mapping_file.default()
     facts = [(a.pred, tuple(a.args)) for a in request.instance.state]
@@ -61,8 +64,9 @@ class RosRobot(Robot):
 
     steps_per_tick = 1
 
-    def __init__(self, table: mapping_file.Mapping, facts: list, dynamic=(),
-                 node_name: str = "htn_robot"):
+    def __init__(
+        self, table: mapping_file.Mapping, facts: list, dynamic=(), node_name: str = "htn_robot"
+    ):
         try:
             self.types = import_interfaces()
         except InterfaceBuildError as exc:
@@ -71,7 +75,7 @@ class RosRobot(Robot):
         self.observes_world = bool(table.observe)
         self.injected: list[dict] = []
         self._clock = 0.0
-        self._heard = 0.0                     # monotonic time of the last pose message
+        self._heard = 0.0  # monotonic time of the last pose message
         self._owns_rclpy = not rclpy.ok()
         if self._owns_rclpy:
             rclpy.init()
@@ -79,10 +83,11 @@ class RosRobot(Robot):
         self._lock = threading.Lock()
         self._actions: dict[str, ActionClient] = {}
         self._services: dict = {}
-        self._topics: dict = {}               # topic check name -> last message
-        self._goals: dict = {}                # id -> a goal's sending future, until it ends
+        self._topics: dict = {}  # topic check name -> last message
+        self._goals: dict = {}  # id -> a goal's sending future, until it ends
         if table.pose:
             from geometry_msgs.msg import PoseStamped
+
             self.node.create_subscription(PoseStamped, table.full(table.pose), self._pose, 10)
         self.node.create_subscription(self.types.Event, table.full("faults"), self._fault, 100)
         self._executor = SingleThreadedExecutor()
@@ -95,7 +100,7 @@ class RosRobot(Robot):
         try:
             while rclpy.ok() and not getattr(self, "_closed", False):
                 self._executor.spin_once(timeout_sec=0.05)
-        except Exception:    # the context shut down under us: nothing left to serve
+        except Exception:  # the context shut down under us: nothing left to serve
             pass
 
     def _pose(self, msg) -> None:
@@ -111,7 +116,7 @@ class RosRobot(Robot):
         self.injected.append({"kind": kind, "sim_t": round(msg.sim_t, 4), "detail": msg.detail})
 
     @property
-    def sim_time(self) -> float:          # type: ignore[override]
+    def sim_time(self) -> float:  # type: ignore[override]
         return self._clock
 
     @sim_time.setter
@@ -139,8 +144,11 @@ class RosRobot(Robot):
         """The robot's pose topic, heard before, has been silent too long,
         counting from ``since`` at the earliest (when the skill began: a
         robot node started again is not silent before it could speak)."""
-        return bool(self.mapping.pose) and self._heard > 0 \
+        return (
+            bool(self.mapping.pose)
+            and self._heard > 0
             and time.monotonic() - max(self._heard, since) > SILENT
+        )
 
     # ------------------------------------------------------------ skills
     def act(self, name: str, *args):
@@ -156,24 +164,29 @@ class RosRobot(Robot):
         until = time.monotonic() + self.mapping.wait
         while not client.server_is_ready():
             if time.monotonic() > until:
-                return SkillResult(False, f"no action server {call.name} (waited "
-                                          f"{self.mapping.wait:g} s)")
+                return SkillResult(
+                    False, f"no action server {call.name} (waited {self.mapping.wait:g} s)"
+                )
             yield
             time.sleep(TICK)
         began = time.monotonic()
 
         def gone() -> bool:
             return not client.server_is_ready() or self._silent(began)
+
         sent = client.send_goal_async(goal, feedback_callback=self._feedback)
-        self._goals[id(sent)] = sent       # until it ends: hold() cancels it
+        self._goals[id(sent)] = sent  # until it ends: hold() cancels it
         try:
             ready, until = _event(sent), time.monotonic() + self.mapping.wait
             while not sent.done():
                 if gone():
                     return SkillResult(False, f"the action server {call.name} went away")
                 if time.monotonic() > until:
-                    return SkillResult(False, f"the action server {call.name} did not answer "
-                                              f"the goal within {self.mapping.wait:g} s")
+                    return SkillResult(
+                        False,
+                        f"the action server {call.name} did not answer "
+                        f"the goal within {self.mapping.wait:g} s",
+                    )
                 yield
                 ready.wait(TICK)
             handle = sent.result()
@@ -197,7 +210,7 @@ class RosRobot(Robot):
             return self._ended(call, done.result())
         finally:
             if self._goals.pop(id(sent), None) is not None:
-                _cancel(sent)        # halted, or the server went: cancel the goal, sent or not
+                _cancel(sent)  # halted, or the server went: cancel the goal, sent or not
 
     def _feedback(self, msg) -> None:
         sim_t = getattr(msg.feedback, "sim_t", None)
@@ -212,8 +225,11 @@ class RosRobot(Robot):
         detail = getattr(result, "detail", "") or getattr(result, "error_msg", "")
         if status != GoalStatus.STATUS_SUCCEEDED:
             names = {GoalStatus.STATUS_ABORTED: "aborted", GoalStatus.STATUS_CANCELED: "canceled"}
-            return SkillResult(False, f"{call.name} {names.get(status, f'status {status}')}"
-                                      + (f": {detail}" if detail else ""))
+            return SkillResult(
+                False,
+                f"{call.name} {names.get(status, f'status {status}')}"
+                + (f": {detail}" if detail else ""),
+            )
         ok = bool(getattr(result, "ok", True)) and not getattr(result, "error_code", 0)
         return SkillResult(ok, detail or ("done" if ok else "failed"))
 
@@ -259,8 +275,12 @@ class RosRobot(Robot):
     def _topic_check(self, name: str, call) -> Check:
         if name not in self._topics:
             self._topics[name] = None
-            self.node.create_subscription(import_type(call.type), call.name,
-                                          lambda m, n=name: self._topics.__setitem__(n, m), 10)
+            self.node.create_subscription(
+                import_type(call.type),
+                call.name,
+                lambda m, n=name: self._topics.__setitem__(n, m),
+                10,
+            )
         until = time.monotonic() + self.mapping.wait
         while self._topics[name] is None and time.monotonic() < until:
             time.sleep(TICK)
@@ -276,7 +296,9 @@ class RosRobot(Robot):
     def observe(self) -> list[tuple[str, tuple]]:
         if not self.mapping.observe:
             return []
-        call = mapping_file.Call(self.mapping.full(self.mapping.observe), "htn_interfaces/srv/GetState")
+        call = mapping_file.Call(
+            self.mapping.full(self.mapping.observe), "htn_interfaces/srv/GetState"
+        )
         _, client = self._service(call)
         response = self._call(client, self.types.GetState.Request(pattern=""))
         if response is None:
@@ -304,11 +326,13 @@ def _cancel(sent) -> None:
     """Cancel the goal whose sending is the future ``sent``: now if the
     server has answered, else as soon as it does (a goal halted before it
     was accepted must not run on)."""
+
     def cancel(future) -> None:
         handle = future.result()
         if handle is not None and handle.accepted:
             handle.cancel_goal_async()
             _cancel_again(handle, tries=5)
+
     if sent.done():
         cancel(sent)
     else:
@@ -319,11 +343,13 @@ def _cancel_again(handle, tries: int) -> None:
     """Send the cancel again while the goal's status still says it runs (a
     request can be dropped when the server has not yet matched this client's
     reply channel: a robot must not drive on), every 0.3 s, ``tries`` times."""
+
     def check() -> None:
         if handle.status in (GoalStatus.STATUS_ACCEPTED, GoalStatus.STATUS_EXECUTING):
             handle.cancel_goal_async()
             if tries > 1:
                 _cancel_again(handle, tries - 1)
+
     timer = threading.Timer(0.3, check)
     timer.daemon = True
     timer.start()
@@ -348,4 +374,5 @@ def parse_fact(text: str) -> tuple[str, tuple]:
             return float(token)
         except ValueError:
             return token
+
     return tokens[0], tuple(value(t) for t in tokens[1:])

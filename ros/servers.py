@@ -19,6 +19,7 @@ The simulation runs at ``speed`` times real time (0: as fast as it can). One
 lock serialises everything that touches the simulation: a skill advances it
 one tick at a time, and checks, observations and poses are taken between ticks.
 """
+
 from __future__ import annotations
 
 import json
@@ -48,10 +49,11 @@ POSE_HZ = 20.0
 @dataclass
 class RobotSettings:
     """What ``htn ros robot`` is told."""
-    problem: Optional[str] = None       # the world; default: the bundled bring_object problem
+
+    problem: Optional[str] = None  # the world; default: the bundled bring_object problem
     faults: str = ""
     seed: int = 0
-    speed: float = 1.0                  # times real time; 0: as fast as it can
+    speed: float = 1.0  # times real time; 0: as fast as it can
     namespace: str = "/robot"
     gui: bool = False
 
@@ -59,33 +61,53 @@ class RobotSettings:
 class RobotNode(Node):
     """Serves ``robot``'s skills and checks (see the module's docstring)."""
 
-    def __init__(self, robot, speed: float = 1.0, namespace: str = "/robot",
-                 name: str = "htn_robot_sim"):
+    def __init__(
+        self, robot, speed: float = 1.0, namespace: str = "/robot", name: str = "htn_robot_sim"
+    ):
         super().__init__(name)
         self.robot, self.speed = robot, speed
         self.ns = namespace.rstrip("/")
         self.types = import_interfaces()
-        self._sim = threading.Lock()        # the simulation: one toucher at a time
-        self._acting = threading.Lock()     # one skill at a time
+        self._sim = threading.Lock()  # the simulation: one toucher at a time
+        self._acting = threading.Lock()  # one skill at a time
         self._faults_sent = 0
         group = ReentrantCallbackGroup()
         t = self.types
-        self.skill_servers = [ActionServer(self, t.Skill, f"{self.ns}/skill/{name}",
-                                     execute_callback=self._skill_callback(name),
-                                     goal_callback=lambda _: GoalResponse.ACCEPT,
-                                     cancel_callback=lambda _: CancelResponse.ACCEPT,
-                                     callback_group=group)
-                        for name in sorted(type(robot)._skills)]
+        self.skill_servers = [
+            ActionServer(
+                self,
+                t.Skill,
+                f"{self.ns}/skill/{name}",
+                execute_callback=self._skill_callback(name),
+                goal_callback=lambda _: GoalResponse.ACCEPT,
+                cancel_callback=lambda _: CancelResponse.ACCEPT,
+                callback_group=group,
+            )
+            for name in sorted(type(robot)._skills)
+        ]
         if "move_base" in type(robot)._skills:
-            self.skill_servers.append(ActionServer(
-                self, import_type("nav2_msgs/action/NavigateToPose"), NAVIGATE,
-                execute_callback=self._navigate, goal_callback=lambda _: GoalResponse.ACCEPT,
-                cancel_callback=lambda _: CancelResponse.ACCEPT, callback_group=group))
-        self.check_services = [self.create_service(t.Check, f"{self.ns}/check/{name}",
-                                             self._check_callback(name), callback_group=group)
-                         for name in robot.check_names()]
-        self.check_services.append(self.create_service(t.GetState, f"{self.ns}/observe",
-                                                 self._observe, callback_group=group))
+            self.skill_servers.append(
+                ActionServer(
+                    self,
+                    import_type("nav2_msgs/action/NavigateToPose"),
+                    NAVIGATE,
+                    execute_callback=self._navigate,
+                    goal_callback=lambda _: GoalResponse.ACCEPT,
+                    cancel_callback=lambda _: CancelResponse.ACCEPT,
+                    callback_group=group,
+                )
+            )
+        self.check_services = [
+            self.create_service(
+                t.Check, f"{self.ns}/check/{name}", self._check_callback(name), callback_group=group
+            )
+            for name in robot.check_names()
+        ]
+        self.check_services.append(
+            self.create_service(
+                t.GetState, f"{self.ns}/observe", self._observe, callback_group=group
+            )
+        )
         self._pose = self.create_publisher(PoseStamped, f"{self.ns}/pose", 10)
         self._faults = self.create_publisher(t.Event, f"{self.ns}/faults", 100)
         self.create_timer(1.0 / POSE_HZ, self._publish_pose, callback_group=group)
@@ -93,11 +115,17 @@ class RobotNode(Node):
     # ------------------------------------------------------------ skills
     def _skill_callback(self, name: str):
         def execute(handle):
-            result = self._act(handle, name, tuple(handle.request.args),
-                               lambda: self.types.Skill.Feedback(sim_t=self.robot.sim_time),
-                               fails_as_result=True)
-            return self.types.Skill.Result(ok=result.ok, detail=result.detail,
-                                           sim_t=self.robot.sim_time)
+            result = self._act(
+                handle,
+                name,
+                tuple(handle.request.args),
+                lambda: self.types.Skill.Feedback(sim_t=self.robot.sim_time),
+                fails_as_result=True,
+            )
+            return self.types.Skill.Result(
+                ok=result.ok, detail=result.detail, sim_t=self.robot.sim_time
+            )
+
         return execute
 
     def _navigate(self, handle):
@@ -109,29 +137,34 @@ class RobotNode(Node):
 
         def feedback():
             x, y, _ = self.robot.base.pose
-            fb = kind.Feedback(current_pose=self._pose_message(),
-                               distance_remaining=float(math.hypot(pose.position.x - x,
-                                                                   pose.position.y - y)))
+            fb = kind.Feedback(
+                current_pose=self._pose_message(),
+                distance_remaining=float(math.hypot(pose.position.x - x, pose.position.y - y)),
+            )
             fb.navigation_time.sec = int(self.robot.sim_time - began)
             return fb
+
         result = self._act(handle, "move_base", (place,), feedback, fails_as_result=False)
-        return kind.Result(error_code=0 if result.ok else 1,
-                           error_msg="" if result.ok else result.detail)
+        return kind.Result(
+            error_code=0 if result.ok else 1, error_msg="" if result.ok else result.detail
+        )
 
     def _place_at(self, x: float, y: float, yaw: float) -> str:
         """The world's place at this pose, or a new one named after it."""
         from htn.robot.world import Place
+
         places = self.robot.world.places
         for name, p in places.items():
-            if math.hypot(p.x - x, p.y - y) < 0.02 and abs(math.remainder(p.theta - yaw,
-                                                                          math.tau)) < 0.02:
+            if (
+                math.hypot(p.x - x, p.y - y) < 0.02
+                and abs(math.remainder(p.theta - yaw, math.tau)) < 0.02
+            ):
                 return name
         name = f"pose_{x:.2f}_{y:.2f}_{math.degrees(yaw):.0f}"
         places[name] = Place(name, x, y, yaw)
         return name
 
-    def _act(self, handle, name: str, args: tuple, feedback,
-             fails_as_result: bool) -> SkillResult:
+    def _act(self, handle, name: str, args: tuple, feedback, fails_as_result: bool) -> SkillResult:
         """Run skill ``name`` to its end, a cancel, or an error, and set the
         goal's state (the caller returns the result message): canceled,
         succeeded, or for a failed skill aborted unless ``fails_as_result``
@@ -140,7 +173,7 @@ class RobotNode(Node):
             with self._sim:
                 started = self.robot.act(name, *args)
             result = self._tick(handle, started, feedback)
-            self._publish_pose()      # the clock where the skill ended, before its result
+            self._publish_pose()  # the clock where the skill ended, before its result
             if handle.is_active:
                 if handle.is_cancel_requested:
                     handle.canceled()
@@ -177,17 +210,24 @@ class RobotNode(Node):
         except StopIteration as stop:
             self._send_faults()
             return stop.value
-        except Exception as exc:        # a skill's own error: the goal fails, the node lives
+        except Exception as exc:  # a skill's own error: the goal fails, the node lives
             with self._sim:
                 self.robot.hold()
             return SkillResult(False, f"internal error: {type(exc).__name__}: {exc}")
 
     def _send_faults(self) -> None:
-        for f in self.robot.injected_faults()[self._faults_sent:]:
+        for f in self.robot.injected_faults()[self._faults_sent :]:
             self._faults_sent += 1
-            self._faults.publish(self.types.Event(
-                t=time.time(), sim_t=float(f["sim_t"]), step=-1, event="fault",
-                detail=f["detail"], record=json.dumps({"kind": f["kind"], **f})))
+            self._faults.publish(
+                self.types.Event(
+                    t=time.time(),
+                    sim_t=float(f["sim_t"]),
+                    step=-1,
+                    event="fault",
+                    detail=f["detail"],
+                    record=json.dumps({"kind": f["kind"], **f}),
+                )
+            )
 
     # ------------------------------------------------------------ checks, state
     def _check_callback(self, name: str):
@@ -196,6 +236,7 @@ class RobotNode(Node):
                 seen = self.robot.check(name, *request.args)
             response.ok, response.detail = bool(seen.ok), seen.detail
             return response
+
         return answer
 
     def _observe(self, request, response):
@@ -225,11 +266,13 @@ def build_robot(settings: RobotSettings):
     from htn.jshop.readers.load import load_problem
     from htn.robot import simulated_robot
     from htn.robot.faults import Faults, parse_faults
+
     path = settings.problem or str(files("htn.problems") / "bring_object.jshop")
     problem = load_problem(path)
     faults = Faults(**parse_faults(settings.faults, Faults.kinds()))
-    return simulated_robot(problem.instances[0].state, gui=settings.gui, faults=faults,
-                           seed=settings.seed)
+    return simulated_robot(
+        problem.instances[0].state, gui=settings.gui, faults=faults, seed=settings.seed
+    )
 
 
 def serve(settings: RobotSettings, name: str = "htn_robot_sim", on_ready=None) -> int:

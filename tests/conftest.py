@@ -1,5 +1,6 @@
 """Shared fixtures: where the JSHOP2 corpus is, how to run ``htn`` (in this
 process, or as a process of its own), and the markers of slow tests."""
+
 from __future__ import annotations
 
 import json
@@ -44,15 +45,28 @@ def run_htn_process(*args, timeout=600, input=None, env=None):
     """Run the real command line as ``python -m htn ARGS``, a process of its
     own (for tests about processes: signals, pipes, start-up, workers, file
     descriptors, interpreter settings); returns CompletedProcess."""
-    return subprocess.run(htn_command(*args), cwd=ROOT, capture_output=True, text=True,
-                          timeout=timeout, input=input, env=env)
+    return subprocess.run(
+        htn_command(*args),
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        input=input,
+        env=env,
+    )
 
 
 def start_htn(*args, **popen):
     """Start the real command line in a subprocess, stdout and stderr piped
     (text), without waiting for it; returns the Popen (to signal, read, kill)."""
-    return subprocess.Popen(htn_command(*args), cwd=ROOT, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True, **popen)
+    return subprocess.Popen(
+        htn_command(*args),
+        cwd=ROOT,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        **popen,
+    )
 
 
 def wait_until(condition, what: str, proc=None, timeout: float = 60.0, every: float = 0.01):
@@ -63,8 +77,9 @@ def wait_until(condition, what: str, proc=None, timeout: float = 60.0, every: fl
     while not condition():
         ended = proc is not None and proc.poll() is not None
         if ended or time.monotonic() > deadline:
-            message = f"{what}: " + ("the process ended first" if ended
-                                     else f"not within {timeout:g} s")
+            message = f"{what}: " + (
+                "the process ended first" if ended else f"not within {timeout:g} s"
+            )
             if proc is not None:
                 proc.kill()
                 _, err = proc.communicate()
@@ -82,14 +97,14 @@ def interrupt_run(proc, sig: int, log: Path):
     out, err = proc.communicate(timeout=60)
     assert proc.returncode == 128 + sig, out + err
     assert "Traceback" not in err
-    events = [json.loads(line) for line in log.read_text().splitlines()]   # all lines parse
+    events = [json.loads(line) for line in log.read_text().splitlines()]  # all lines parse
     assert events[-2]["event"] == "interrupted"
     assert events[-1]["event"] == "summary" and events[-1]["result"] == "interrupted"
     return out, err, events
 
+
 # The IPC 2020 competition's plan verifier (see shared/tools/pandaPIparser/README.md)
-PANDA_PI = Path(os.environ.get("HTN_PANDAPI",
-                               SHARED / "tools" / "pandaPIparser" / "pandaPIparser"))
+PANDA_PI = Path(os.environ.get("HTN_PANDAPI", SHARED / "tools" / "pandaPIparser" / "pandaPIparser"))
 
 
 def pandapi_verify(domain, problem, plan) -> tuple:
@@ -98,8 +113,12 @@ def pandapi_verify(domain, problem, plan) -> tuple:
     Any exit status but 0 is "not verified" (it crashes on some bad plans)."""
     if not PANDA_PI.is_file():
         return None, f"pandaPIparser not found at {PANDA_PI}"
-    r = subprocess.run([str(PANDA_PI), "-C", "--verify", str(domain), str(problem), str(plan)],
-                       capture_output=True, text=True, timeout=600)
+    r = subprocess.run(
+        [str(PANDA_PI), "-C", "--verify", str(domain), str(problem), str(plan)],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     return r.returncode == 0 and "Plan verification result: true" in r.stdout, r.stdout
 
 
@@ -139,17 +158,32 @@ def checkout_wheel(tmp_path_factory) -> Path:
     workers: pip builds it in the checkout's ``build/`` folder, so two
     builds at once collide (``File exists: build/bdist.../htn-0.1.0.dist-info``)."""
     import fcntl
+
     base = tmp_path_factory.getbasetemp()
     if os.environ.get("PYTEST_XDIST_WORKER"):
-        base = base.parent                  # the run's folder, above each worker's
+        base = base.parent  # the run's folder, above each worker's
     folder = base / "checkout-wheel"
     with open(base / "checkout-wheel.lock", "w") as lock:
         fcntl.flock(lock, fcntl.LOCK_EX)
         wheels = list(folder.glob("htn-*.whl"))
         if not wheels:
-            r = subprocess.run([sys.executable, "-m", "pip", "wheel", "-q", "--no-deps", "-w",
-                                str(folder), str(ROOT)], cwd=base, capture_output=True,
-                               text=True, timeout=900)
+            r = subprocess.run(
+                [
+                    sys.executable,
+                    "-m",
+                    "pip",
+                    "wheel",
+                    "-q",
+                    "--no-deps",
+                    "-w",
+                    str(folder),
+                    str(ROOT),
+                ],
+                cwd=base,
+                capture_output=True,
+                text=True,
+                timeout=900,
+            )
             assert r.returncode == 0, r.stdout + r.stderr
             wheels = list(folder.glob("htn-*.whl"))
     (wheel,) = wheels
@@ -163,16 +197,21 @@ def pytest_collection_modifyitems(config, items):
     """Tests marked ``corpus`` are skipped when the corpus is not there."""
     if corpus_available():
         return
-    skip = pytest.mark.skip(reason=f"JSHOP2 corpus not found at {CORPUS} "
-                                   "(set HTN_SHARED to the shared/ folder)")
+    skip = pytest.mark.skip(
+        reason=f"JSHOP2 corpus not found at {CORPUS} (set HTN_SHARED to the shared/ folder)"
+    )
     for item in items:
         if item.get_closest_marker("corpus"):
             item.add_marker(skip)
 
 
 def pytest_addoption(parser):
-    parser.addoption("--update-golden", action="store_true", default=False,
-                     help="rewrite tests/golden/* from the current output instead of comparing")
+    parser.addoption(
+        "--update-golden",
+        action="store_true",
+        default=False,
+        help="rewrite tests/golden/* from the current output instead of comparing",
+    )
 
 
 @pytest.fixture
@@ -191,4 +230,5 @@ def golden(request):
             return
         assert path.is_file(), f"missing golden file {path} (run pytest --update-golden)"
         assert text == path.read_text(), f"output differs from {path}"
+
     return check

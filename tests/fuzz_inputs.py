@@ -26,6 +26,7 @@ and an exit 2 about an input file located at ``file:line:col:`` (or at
 the whole file, ``file: ``, where no place in it is to blame); a usage
 error of an option is click's ``Error:`` line.
 """
+
 from __future__ import annotations
 
 import re
@@ -88,8 +89,9 @@ def hddl_cases() -> list[tuple[str, str, str]]:
         for d in sorted(p for p in folder.iterdir() if (p / "domain.hddl").is_file()):
             problems = sorted(d.glob("p*.hddl"), key=lambda p: p.stat().st_size)
             if problems:
-                cases.append((f"{corpus}/{d.name}", (d / "domain.hddl").read_text(),
-                              problems[0].read_text()))
+                cases.append(
+                    (f"{corpus}/{d.name}", (d / "domain.hddl").read_text(), problems[0].read_text())
+                )
     return cases
 
 
@@ -115,8 +117,17 @@ PARAMS = re.compile(r":parameters\s*\(([^()]*)\)")
 TYPES = re.compile(r"\(:types\s")
 LABELLED = re.compile(r"\((\w[\w-]*)\s+\([A-Za-z]")
 ORDER = re.compile(r"\(\s*(<)\s+(\w[\w-]*)\s+(\w[\w-]*)\s*\)|\(\s*(\w[\w-]*)\s+<\s+(\w[\w-]*)\s*\)")
-SLIPS = ["arity", "arity", "arity", "duplicate parameter", "type cycle", "label twice",
-         "unknown label", "ordering cycle", "method of an action"]
+SLIPS = [
+    "arity",
+    "arity",
+    "arity",
+    "duplicate parameter",
+    "type cycle",
+    "label twice",
+    "unknown label",
+    "ordering cycle",
+    "method of an action",
+]
 
 
 @st.composite
@@ -134,35 +145,42 @@ def slipped(draw, text: str) -> tuple[str, str]:
         else:
             args = args + [draw(st.sampled_from(["?zz", *(args[:1] or ["?zz"]), "depot"]))]
         new = f"({m.group(1)}{''.join(' ' + a for a in args)})"
-        return slip, text[:m.start()] + new + text[m.end():]
+        return slip, text[: m.start()] + new + text[m.end() :]
     if slip == "duplicate parameter":
         lists = [m for m in PARAMS.finditer(text) if "?" in m.group(1)]
         if not lists:
             return slip, text
         m = draw(st.sampled_from(lists), label="parameters")
         first = re.search(r"\?[\w-]+", m.group(1)).group()
-        return slip, text[:m.end(1)] + f" {first}" + text[m.end(1):]
+        return slip, text[: m.end(1)] + f" {first}" + text[m.end(1) :]
     if slip == "type cycle":
         m = TYPES.search(text)
         kind = draw(st.sampled_from(["two", "three", "self", "new"]), label="cycle")
-        names = re.findall(r"(?<=\s)([A-Za-z][\w-]*)(?=\s)", text[m.end():text.find(")", m.end())]
-                           ) if m else []
+        names = (
+            re.findall(r"(?<=\s)([A-Za-z][\w-]*)(?=\s)", text[m.end() : text.find(")", m.end())])
+            if m
+            else []
+        )
         names = [n for n in names if n != "object"] or ["ta", "tb", "tc"]
         a = draw(st.sampled_from(names), label="type")
         b, c = f"{a}-b", f"{a}-c"
-        extra = {"two": f"{a} - {b} {b} - {a}", "three": f"{b} - {c} {c} - {a} {a} - {b}",
-                 "self": f"{a} - {a}", "new": "ta - tb tb - ta"}[kind]
+        extra = {
+            "two": f"{a} - {b} {b} - {a}",
+            "three": f"{b} - {c} {c} - {a} {a} - {b}",
+            "self": f"{a} - {a}",
+            "new": "ta - tb tb - ta",
+        }[kind]
         if m is None:
             at = text.find("(:predicates")
             return slip, text[:at] + f"(:types {extra})\n  " + text[at:] if at >= 0 else text
-        return slip, text[:m.end()] + extra + " " + text[m.end():]
+        return slip, text[: m.end()] + extra + " " + text[m.end() :]
     if slip == "label twice":
         labels = list(LABELLED.finditer(text))
         if len(labels) < 2:
             return slip, text
         i = draw(st.integers(1, len(labels) - 1), label="label")
         m = labels[i]
-        return slip, text[:m.start(1)] + labels[i - 1].group(1) + text[m.end(1):]
+        return slip, text[: m.start(1)] + labels[i - 1].group(1) + text[m.end(1) :]
     if slip in ("unknown label", "ordering cycle"):
         orders = list(ORDER.finditer(text))
         if not orders:
@@ -170,33 +188,79 @@ def slipped(draw, text: str) -> tuple[str, str]:
         m = draw(st.sampled_from(orders), label="ordering")
         a, b = (m.group(2), m.group(3)) if m.group(1) else (m.group(4), m.group(5))
         new = f"(< {a} nolabel)" if slip == "unknown label" else f"(< {a} {b}) (< {b} {a})"
-        return slip, text[:m.start()] + new + text[m.end():]
+        return slip, text[: m.start()] + new + text[m.end() :]
     # a method that decomposes an action
     actions = re.findall(r"\(:action\s+([\w-]+)", text)
     tasks = list(re.finditer(r":task\s+\(([\w-]+)", text))
     if not actions or not tasks:
         return slip, text
     m = draw(st.sampled_from(tasks), label="method")
-    return slip, text[:m.start(1)] + draw(st.sampled_from(actions)) + text[m.end(1):]
+    return slip, text[: m.start(1)] + draw(st.sampled_from(actions)) + text[m.end(1) :]
 
 
 # ------------------------------------------------------------------ options
 
-NUMBERS = ["nan", "NaN", "-nan", "inf", "-inf", "Infinity", "1e400", "-1e400", "0", "-0",
-           "-0.0", "-1", "1", "2", "0.5", "1.5", "1e-9", "1e3", "3", "10", "65536", "-65537",
-           "1" + "0" * 30, "-" + "1" * 25, "9223372036854775808", "2147483648", "0x10", "1_000",
-           "", " ", "ten", "½", "٣", "1e", "--", "\x7f"]
+NUMBERS = [
+    "nan",
+    "NaN",
+    "-nan",
+    "inf",
+    "-inf",
+    "Infinity",
+    "1e400",
+    "-1e400",
+    "0",
+    "-0",
+    "-0.0",
+    "-1",
+    "1",
+    "2",
+    "0.5",
+    "1.5",
+    "1e-9",
+    "1e3",
+    "3",
+    "10",
+    "65536",
+    "-65537",
+    "1" + "0" * 30,
+    "-" + "1" * 25,
+    "9223372036854775808",
+    "2147483648",
+    "0x10",
+    "1_000",
+    "",
+    " ",
+    "ten",
+    "½",
+    "٣",
+    "1e",
+    "--",
+    "\x7f",
+]
 OPTIONS = {
-    "plan": {"-n": NUMBERS, "--max-depth": NUMBERS, "--max-memory": NUMBERS,
-             "--timeout": NUMBERS, "--search": ["dfs", "gbfs", "wastar", "auto", "bfs", ""],
-             "-f": ["jshop", "json", "text", "ipc", "xml"]},
+    "plan": {
+        "-n": NUMBERS,
+        "--max-depth": NUMBERS,
+        "--max-memory": NUMBERS,
+        "--timeout": NUMBERS,
+        "--search": ["dfs", "gbfs", "wastar", "auto", "bfs", ""],
+        "-f": ["jshop", "json", "text", "ipc", "xml"],
+    },
     "stats": {"--repeat": NUMBERS, "--timeout": NUMBERS},
-    "transform": {"--timeout": NUMBERS, "--metric": ["navigation", "actions", "speed", ""],
-                  "--rules": ["tray", "tray,nosuch", ",", "", "both-hands"]},
+    "transform": {
+        "--timeout": NUMBERS,
+        "--metric": ["navigation", "actions", "speed", ""],
+        "--rules": ["tray", "tray,nosuch", ",", "", "both-hands"],
+    },
     "validate": {"--plan-index": NUMBERS, "--timeout": NUMBERS},
-    "run": {"--seed": NUMBERS, "--plan-index": NUMBERS, "--timeout": NUMBERS,
-            "--retries": [f"say={n}" for n in NUMBERS[:12]] + ["=", "say", "say=1,=2"],
-            "--faults": [f"effect={n}" for n in NUMBERS[:12]] + ["effect", "nosuch=0.1"]},
+    "run": {
+        "--seed": NUMBERS,
+        "--plan-index": NUMBERS,
+        "--timeout": NUMBERS,
+        "--retries": [f"say={n}" for n in NUMBERS[:12]] + ["=", "say", "say=1,=2"],
+        "--faults": [f"effect={n}" for n in NUMBERS[:12]] + ["effect", "nosuch=0.1"],
+    },
 }
 # what bounds each command in the run (the long run's budget per input)
 LIMIT = "0.5"
@@ -204,16 +268,16 @@ LIMIT = "0.5"
 
 @dataclass
 class Input:
-    kind: str                       # hddl slip, hddl mutant, jshop2 mutant, options
+    kind: str  # hddl slip, hddl mutant, jshop2 mutant, options
     command: str
-    files: dict = field(default_factory=dict)       # name -> bytes
+    files: dict = field(default_factory=dict)  # name -> bytes
     options: list = field(default_factory=list)
     detail: str = ""
-    case: str = ""                  # the example it was made from (its plan file)
+    case: str = ""  # the example it was made from (its plan file)
 
     def argv(self, folder: Path, plan_file: Path | None) -> list:
         d, p = folder / self.name("domain"), folder / self.name("problem")
-        if self.command == "run":       # the files given by name are this input's
+        if self.command == "run":  # the files given by name are this input's
             options = [folder / o if o in self.files else o for o in self.options]
             return ["run", plan_file, "--robot", "symbolic", "-q", *options]
         if self.command == "validate":
@@ -232,27 +296,39 @@ def _bounded(options: list) -> list:
 
 @st.composite
 def inputs(draw) -> Input:
-    kind = draw(st.sampled_from(["options", "hddl slip", "hddl mutant", "hddl slip",
-                                 "jshop2 mutant"]), label="kind")
+    kind = draw(
+        st.sampled_from(["options", "hddl slip", "hddl mutant", "hddl slip", "jshop2 mutant"]),
+        label="kind",
+    )
     if kind == "options":
         command = draw(st.sampled_from(sorted(OPTIONS)), label="command")
-        name, d, p = draw(st.sampled_from(JSHOP2 if command == "run" else HDDL[:1] + JSHOP2),
-                          label="example")
+        name, d, p = draw(
+            st.sampled_from(JSHOP2 if command == "run" else HDDL[:1] + JSHOP2), label="example"
+        )
         option = draw(st.sampled_from(sorted(OPTIONS[command])), label="option")
         value = draw(st.sampled_from(OPTIONS[command][option]), label="value")
         if option == "--timeout" and command == "stats":
             value = value if _seconds(value) is None or _seconds(value) <= 5 else "2"
         ext = "hddl" if name == "mini" else "jshop"
-        return Input(kind, command, {f"domain.{ext}": d.encode(), f"problem.{ext}": p.encode()},
-                     _bounded([option, value]), f"{option} {value!r}", name)
-    command = draw(st.sampled_from(["plan", "plan", "plan", "stats", "transform", "validate",
-                                    "run"]), label="command")
+        return Input(
+            kind,
+            command,
+            {f"domain.{ext}": d.encode(), f"problem.{ext}": p.encode()},
+            _bounded([option, value]),
+            f"{option} {value!r}",
+            name,
+        )
+    command = draw(
+        st.sampled_from(["plan", "plan", "plan", "stats", "transform", "validate", "run"]),
+        label="command",
+    )
     if kind == "jshop2 mutant":
         name, d, p = draw(st.sampled_from(JSHOP2), label="example")
         ext = "jshop"
     else:
-        name, d, p = draw(st.sampled_from(HDDL if draw(st.integers(0, 2)) else HDDL[:1]),
-                          label="example")
+        name, d, p = draw(
+            st.sampled_from(HDDL if draw(st.integers(0, 2)) else HDDL[:1]), label="example"
+        )
         ext = "hddl"
     which = draw(st.sampled_from(["domain", "domain", "problem", "both"]), label="mutate")
     detail = []
@@ -266,12 +342,16 @@ def inputs(draw) -> Input:
                 detail.append(slip)
         files = {f"domain.{ext}": d.encode(), f"problem.{ext}": p.encode()}
     else:
-        files = {f"domain.{ext}": draw(mutants(d)) if which != "problem" else d.encode(),
-                 f"problem.{ext}": draw(mutants(p)) if which != "domain" else p.encode()}
+        files = {
+            f"domain.{ext}": draw(mutants(d)) if which != "problem" else d.encode(),
+            f"problem.{ext}": draw(mutants(p)) if which != "domain" else p.encode(),
+        }
     if command == "run" and ext == "hddl":
-        command = "plan"        # the symbolic robot runs JSHOP2 plans of its domains
-    options = {"stats": ["--repeat", "1"], "run": ["--domain", f"domain.{ext}",
-                                                  "--problem", f"problem.{ext}"]}.get(command, [])
+        command = "plan"  # the symbolic robot runs JSHOP2 plans of its domains
+    options = {
+        "stats": ["--repeat", "1"],
+        "run": ["--domain", f"domain.{ext}", "--problem", f"problem.{ext}"],
+    }.get(command, [])
     return Input(kind, command, files, _bounded(options), f"{name}: {', '.join(detail)}", name)
 
 
@@ -305,5 +385,5 @@ def verdict(code: int, err: str, files: list) -> str | None:
             return None
         return f"an error about a file without its place: {first[:200]}"
     if USAGE.search(err) or first.startswith("--"):
-        return None         # a usage error of an option (click's, or --retries/--faults)
+        return None  # a usage error of an option (click's, or --retries/--faults)
     return f"an exit 2 that names no file and no option: {first[:200]}"

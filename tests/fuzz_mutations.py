@@ -3,6 +3,7 @@
 duplicated or replaced (the result still parses, and reaches the checks
 and the planner), and raw slips of characters (it does not), some of them
 breaking UTF-8."""
+
 from __future__ import annotations
 
 import re
@@ -12,23 +13,91 @@ from hypothesis import strategies as st
 # what a mutation may insert: the language's pieces, and the inputs the
 # audit found crashes with
 TOKENS = [
-    "(", ")", "((", "))", "()", "nil", "NIL", "?x", "?y", "?new", "a", "b", "0", "-1",
-    "3.5", "1e400", "-0", "!op", "!!op", ":unordered", ":immediate", ":first", "and",
-    "or", "not", "imply", "forall", "assign", "call", ":method", ":operator", ":-",
-    ":protection", ":sort-by", "(call - )", "(call -)", "(call + ?x a)", "(call / 1 0)",
-    "(call member a b)", "(call undefinedfn 1)", "(a . b)", "(?x . ?y)", ". ",
-    "(not (p ?z))", "(forall (?x) (p ?x) (q ?x))", "(assign ?z (call + 1 2))",
-    "(:sort-by ?x < (p ?x))", "(:sort-by ?x > (p ?x))", "(:first (p ?x))",
-    "(:operator (!o ?a) () () ((r ?b)))", "(:method (m ?a) () ((!o ?a ?a)))",
-    "(defproblem p other () ())", "defdomain", "defproblem", ";", "; comment\n", "\n",
-    "\t", "é", "\ufeff", "\x00", "#", "\"", "'", "{", "\\",
+    "(",
+    ")",
+    "((",
+    "))",
+    "()",
+    "nil",
+    "NIL",
+    "?x",
+    "?y",
+    "?new",
+    "a",
+    "b",
+    "0",
+    "-1",
+    "3.5",
+    "1e400",
+    "-0",
+    "!op",
+    "!!op",
+    ":unordered",
+    ":immediate",
+    ":first",
+    "and",
+    "or",
+    "not",
+    "imply",
+    "forall",
+    "assign",
+    "call",
+    ":method",
+    ":operator",
+    ":-",
+    ":protection",
+    ":sort-by",
+    "(call - )",
+    "(call -)",
+    "(call + ?x a)",
+    "(call / 1 0)",
+    "(call member a b)",
+    "(call undefinedfn 1)",
+    "(a . b)",
+    "(?x . ?y)",
+    ". ",
+    "(not (p ?z))",
+    "(forall (?x) (p ?x) (q ?x))",
+    "(assign ?z (call + 1 2))",
+    "(:sort-by ?x < (p ?x))",
+    "(:sort-by ?x > (p ?x))",
+    "(:first (p ?x))",
+    "(:operator (!o ?a) () () ((r ?b)))",
+    "(:method (m ?a) () ((!o ?a ?a)))",
+    "(defproblem p other () ())",
+    "defdomain",
+    "defproblem",
+    ";",
+    "; comment\n",
+    "\n",
+    "\t",
+    "é",
+    "\ufeff",
+    "\x00",
+    "#",
+    '"',
+    "'",
+    "{",
+    "\\",
     " ".join(f"(p{i} ?x)" for i in range(25)),
     "(" * 40 + "a" + ")" * 40,
     # HDDL
-    ":parameters", ":task", ":subtasks", ":ordered-subtasks", ":ordering", "(< t1 t2)",
-    "(t2 < t1)", "- object", "- undeclared_type", "(exists (?v - object) (p ?v))",
-    "(when (p ?x) (not (p ?x)))", "(= ?x ?y)", "(imply (p a) (q a))", ":precondition ()",
-    "(:goal (and))", "(define (domain other))",
+    ":parameters",
+    ":task",
+    ":subtasks",
+    ":ordered-subtasks",
+    ":ordering",
+    "(< t1 t2)",
+    "(t2 < t1)",
+    "- object",
+    "- undeclared_type",
+    "(exists (?v - object) (p ?v))",
+    "(when (p ?x) (not (p ?x)))",
+    "(= ?x ?y)",
+    "(imply (p a) (q a))",
+    ":precondition ()",
+    "(:goal (and))",
+    "(define (domain other))",
 ]
 
 
@@ -41,10 +110,11 @@ def mutants(draw, text: str) -> bytes:
         raw = draw(st.integers(0, 4)) == 0
         text = draw(_mutation(text) if raw else _balanced_mutation(text))
     data = text.encode("utf-8", "surrogatepass")
-    if draw(st.integers(0, 39)) == 0:            # bytes that are not UTF-8
+    if draw(st.integers(0, 39)) == 0:  # bytes that are not UTF-8
         at = draw(st.integers(0, len(data)))
-        data = data[:at] + draw(st.sampled_from([b"\xff", b"\xc3", b"\xe2\x82", b"\x80"])) \
-            + data[at:]
+        data = (
+            data[:at] + draw(st.sampled_from([b"\xff", b"\xc3", b"\xe2\x82", b"\x80"])) + data[at:]
+        )
     if draw(st.integers(0, 39)) == 0:
         data = b"\xef\xbb\xbf" + data
     return data
@@ -57,10 +127,10 @@ def _mutation(text: str):
     words = list(re.finditer(r"[^\s()]+", text))
 
     def delete(s):
-        return text[:s[0]] + text[s[1]:]
+        return text[: s[0]] + text[s[1] :]
 
     def duplicate(s):
-        return text[:s[1]] + text[s[0]:s[1]] + text[s[1]:]
+        return text[: s[1]] + text[s[0] : s[1]] + text[s[1] :]
 
     def insert(args):
         at, token = args
@@ -73,28 +143,38 @@ def _mutation(text: str):
     def truncate(at):
         return text[:at]
 
-    options = [span.map(delete), span.map(duplicate),
-               st.tuples(position, st.sampled_from(TOKENS)).map(insert),
-               st.tuples(span, st.sampled_from([1, 3, 200, 1001, 10_000])).map(nest),
-               position.map(truncate)]
+    options = [
+        span.map(delete),
+        span.map(duplicate),
+        st.tuples(position, st.sampled_from(TOKENS)).map(insert),
+        st.tuples(span, st.sampled_from([1, 3, 200, 1001, 10_000])).map(nest),
+        position.map(truncate),
+    ]
     if len(words) > 1:
         pick = st.integers(0, len(words) - 1)
 
         def replace(args):
             i, token = args
             w = words[i]
-            return text[:w.start()] + token + text[w.end():]
+            return text[: w.start()] + token + text[w.end() :]
 
         def swap(args):
             i, j = sorted(args)
             if i == j:
                 return text
             a, b = words[i], words[j]
-            return (text[:a.start()] + b.group() + text[a.end():b.start()] + a.group()
-                    + text[b.end():])
+            return (
+                text[: a.start()]
+                + b.group()
+                + text[a.end() : b.start()]
+                + a.group()
+                + text[b.end() :]
+            )
 
-        options += [st.tuples(pick, st.sampled_from(TOKENS + [w.group() for w in words[:50]]))
-                    .map(replace), st.tuples(pick, pick).map(swap)]
+        options += [
+            st.tuples(pick, st.sampled_from(TOKENS + [w.group() for w in words[:50]])).map(replace),
+            st.tuples(pick, pick).map(swap),
+        ]
     return st.one_of(options)
 
 
@@ -119,10 +199,10 @@ def _balanced_mutation(text: str):
     span = st.sampled_from(spans)
 
     def delete(s):
-        return text[:s[0]] + text[s[1]:]
+        return text[: s[0]] + text[s[1] :]
 
     def duplicate(s):
-        return text[:s[1]] + " " + text[s[0]:s[1]] + text[s[1]:]
+        return text[: s[1]] + " " + text[s[0] : s[1]] + text[s[1] :]
 
     def replace(args):
         (a, b), (c, d) = args
@@ -130,9 +210,15 @@ def _balanced_mutation(text: str):
 
     def reword(args):
         (a, b), old, new = args
-        return text[:a] + re.sub(rf"(?<![^\s(]){re.escape(old)}(?![^\s)])", lambda m: new,
-                                 text[a:b], count=1) + text[b:]
+        return (
+            text[:a]
+            + re.sub(rf"(?<![^\s(]){re.escape(old)}(?![^\s)])", lambda m: new, text[a:b], count=1)
+            + text[b:]
+        )
 
-    return st.one_of(span.map(delete), span.map(duplicate), st.tuples(span, span).map(replace),
-                     st.tuples(span, st.sampled_from(words), st.sampled_from(words + TOKENS))
-                     .map(reword))
+    return st.one_of(
+        span.map(delete),
+        span.map(duplicate),
+        st.tuples(span, span).map(replace),
+        st.tuples(span, st.sampled_from(words), st.sampled_from(words + TOKENS)).map(reword),
+    )

@@ -25,6 +25,7 @@ configuration (``DASK_*``, read when Dask is imported). Tests about
 processes (signals, closed pipes, start-up, installs, Dask workers, file
 descriptors) use :func:`conftest.run_htn_process`.
 """
+
 from __future__ import annotations
 
 import io
@@ -40,7 +41,7 @@ from contextlib import contextmanager
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-STARTUP_VARIABLES = ("PYTHON", "DASK_")      # read once, when a process or Dask starts
+STARTUP_VARIABLES = ("PYTHON", "DASK_")  # read once, when a process or Dask starts
 CHECKED_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGALRM, signal.SIGPIPE)
 
 
@@ -78,8 +79,9 @@ class _Pipe(io.BytesIO):
     def __init__(self, errors: str = "strict"):
         super().__init__()
         self.kept = b""
-        self.text = io.TextIOWrapper(self, encoding="utf-8", errors=errors, newline="\n",
-                                     write_through=True)
+        self.text = io.TextIOWrapper(
+            self, encoding="utf-8", errors=errors, newline="\n", write_through=True
+        )
 
     def close(self) -> None:
         if not self.closed:
@@ -100,6 +102,7 @@ class _Pipe(io.BytesIO):
 def _main(argv: list[str]) -> int:
     """The exit code of ``htn ARGV``, as the interpreter would make it."""
     from htn.cli.main import main
+
     try:
         main(argv)
     except SystemExit as exc:
@@ -107,21 +110,26 @@ def _main(argv: list[str]) -> int:
             return exc.code or 0
         print(exc.code, file=sys.stderr)
         return 1
-    except KeyboardInterrupt:           # Python ends such a process by SIGINT
+    except KeyboardInterrupt:  # Python ends such a process by SIGINT
         traceback.print_exc()
         return -signal.SIGINT
-    except BaseException:               # noqa: B036 - an uncaught error: a traceback, 1
+    except BaseException:  # noqa: B036 - an uncaught error: a traceback, 1
         traceback.print_exc()
         return 1
     return 0
 
 
 def _refuse_startup_changes(env: dict) -> None:
-    changed = sorted(k for k in {*env, *os.environ} if k.startswith(STARTUP_VARIABLES)
-                     and env.get(k) != os.environ.get(k))
+    changed = sorted(
+        k
+        for k in {*env, *os.environ}
+        if k.startswith(STARTUP_VARIABLES) and env.get(k) != os.environ.get(k)
+    )
     if changed:
-        raise ValueError(f"{', '.join(changed)} take effect when a process starts: "
-                         "use run_htn_process for this test")
+        raise ValueError(
+            f"{', '.join(changed)} take effect when a process starts: "
+            "use run_htn_process for this test"
+        )
 
 
 class _Watchdog:
@@ -138,6 +146,7 @@ class _Watchdog:
 
     def _fire(self):
         import _thread
+
         self.fired = True
         _thread.interrupt_main()
 
@@ -186,8 +195,7 @@ def _process_state(cwd, env, argv):
         _restore_loggers(saved_loggers)
         _as_at_exit()
     if leaks:
-        raise LeakedState(f"htn {' '.join(argv)} left process state behind: "
-                          + "; ".join(leaks))
+        raise LeakedState(f"htn {' '.join(argv)} left process state behind: " + "; ".join(leaks))
 
 
 def _leaks(started: dict, mask: set) -> list[str]:
@@ -207,8 +215,9 @@ def _leaks(started: dict, mask: set) -> list[str]:
 def _loggers() -> dict:
     manager = logging.Logger.manager
     found = {"": logging.getLogger()}
-    found.update((n, lg) for n, lg in list(manager.loggerDict.items())
-                 if isinstance(lg, logging.Logger))
+    found.update(
+        (n, lg) for n, lg in list(manager.loggerDict.items()) if isinstance(lg, logging.Logger)
+    )
     return {n: (lg.level, lg.handlers[:], lg.propagate, lg.disabled) for n, lg in found.items()}
 
 
@@ -230,6 +239,6 @@ def _as_at_exit() -> None:
     caches = sys.modules.get("htn.jshop.logic.caches")
     if caches is not None:
         caches.clear_caches()
-    files = sys.modules.get("htn.files")     # AtomicFile's temporaries
+    files = sys.modules.get("htn.files")  # AtomicFile's temporaries
     if files is not None:
         files._remove_pending()

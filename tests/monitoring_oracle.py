@@ -12,6 +12,7 @@ the robot's checks, at the moment each event is emitted:
 
 Used by ``tests/robot/test_monitoring.py`` and ``benchmarks/bench_recovery.py``.
 """
+
 from __future__ import annotations
 
 import math
@@ -28,13 +29,14 @@ class Oracle:
     def __init__(self, robot, domain, instance):
         from htn.jshop.language import syntax as S
         from htn.jshop.search.planner import Planner
+
         self.robot, self.p, self.c = robot, robot.p, robot.cid
         self.domain, self.instance = domain, instance
         self.model = Planner(domain, S.ProblemInstance(instance.state, S.TaskList([])))
         self.held_at_start: list = []
         self.aborts = 0
         self.unexplained: list[str] = []
-        self.fault_to_abort: list[tuple] = []     # (kind, fault sim_t, detail, abort sim_t, action)
+        self.fault_to_abort: list[tuple] = []  # (kind, fault sim_t, detail, abort sim_t, action)
         self._last_fault = None
 
     # ------------------------------------------------------------ simulator truth
@@ -49,15 +51,17 @@ class Oracle:
         """Is a constraint holding ``obj`` to an arm (the simulator's grasp)?"""
         p, c, body, arms = self.p, self.c, self.robot.body_of[obj], set(self._arms())
         for i in range(p.getNumConstraints(physicsClientId=c)):
-            info = p.getConstraintInfo(p.getConstraintUniqueId(i, physicsClientId=c),
-                                       physicsClientId=c)
+            info = p.getConstraintInfo(
+                p.getConstraintUniqueId(i, physicsClientId=c), physicsClientId=c
+            )
             if info[0] in arms and info[2] == body:
                 return True
         return False
 
     def _pos(self, name):
-        return self.p.getBasePositionAndOrientation(self.robot.body_of[name],
-                                                    physicsClientId=self.c)[0]
+        return self.p.getBasePositionAndOrientation(
+            self.robot.body_of[name], physicsClientId=self.c
+        )[0]
 
     def _at_gripper(self, obj, within):
         o = self._pos(obj)
@@ -68,14 +72,20 @@ class Oracle:
 
     def _on(self, obj, furniture):
         top = self.robot.furniture_top[furniture]
-        return any(cp[5][2] >= top - 0.02 for cp in self.p.getContactPoints(
-            bodyA=self.robot.body_of[obj], bodyB=self.robot.body_of[furniture],
-            physicsClientId=self.c)) and not self._at_gripper(obj, 0.06)
+        return any(
+            cp[5][2] >= top - 0.02
+            for cp in self.p.getContactPoints(
+                bodyA=self.robot.body_of[obj],
+                bodyB=self.robot.body_of[furniture],
+                physicsClientId=self.c,
+            )
+        ) and not self._at_gripper(obj, 0.06)
 
     def _base_at(self, place):
         pl = self.robot.world.places[place]
-        (x, y, _), orn = self.p.getBasePositionAndOrientation(self.robot.husky,
-                                                              physicsClientId=self.c)
+        (x, y, _), orn = self.p.getBasePositionAndOrientation(
+            self.robot.husky, physicsClientId=self.c
+        )
         yaw = self.p.getEulerFromQuaternion(orn)[2]
         dyaw = abs((pl.theta - yaw + math.pi) % (2 * math.pi) - math.pi)
         return math.hypot(pl.x - x, pl.y - y) <= POSE_TOLERANCE and dyaw <= YAW_TOLERANCE
@@ -91,8 +101,11 @@ class Oracle:
         own = {self.robot.plane, self.robot.husky, *(b for b, _ in self.robot._mounted())}
         own |= self.robot._carried_bodies()
         mine = [self.robot.husky, *(b for b, _ in self.robot._mounted())]
-        return any(cp[2] not in own for b in mine
-                   for cp in self.p.getContactPoints(bodyA=b, physicsClientId=self.c))
+        return any(
+            cp[2] not in own
+            for b in mine
+            for cp in self.p.getContactPoints(bodyA=b, physicsClientId=self.c)
+        )
 
     def holds(self, pred, args) -> bool:
         """Does the simulation show the atom ``(pred args...)``?"""
@@ -113,15 +126,16 @@ class Oracle:
             return args[1] in self.robot._person_constraints
         if pred == "opened":
             return self.robot._is_open(self.robot.drawers[args[0]])
-        return True     # free hands, trays, ...: not what the monitors here judge
+        return True  # free hands, trays, ...: not what the monitors here judge
 
     # ------------------------------------------------------------ events
     def event(self, rec) -> None:
         if rec["event"] == "fault":
             self._last_fault = (rec["kind"], rec["sim_t"], rec["detail"])
         if rec["event"] == "start":
-            self.held_at_start = [o for o in self.robot.world.things
-                                  if o in self.robot.body_of and self._attached(o)]
+            self.held_at_start = [
+                o for o in self.robot.world.things if o in self.robot.body_of and self._attached(o)
+            ]
         if rec["event"] != "aborted":
             return
         self.aborts += 1
@@ -137,9 +151,11 @@ class Oracle:
         if hold == "no collision":
             return self._touching()
         if hold is not None:
-            return any(not (self._attached(o) and self._at_gripper(o, 0.15))
-                       for o in self.held_at_start)
+            return any(
+                not (self._attached(o) and self._at_gripper(o, 0.15)) for o in self.held_at_start
+            )
         from htn.jshop.readers.jshop2 import parse_step
+
         step = parse_step(rec["action"], "<log>", 1)
         added = set()
         for op, env in self.model.step_options(step.name, tuple(step.args)):
@@ -153,10 +169,12 @@ class Oracle:
             from htn.executor.repair import observed_instance
             from htn.jshop.language import syntax as S
             from htn.jshop.search.planner import Planner
+
             seen = observed_instance(self.domain, self.instance, self.robot)
             self.model = Planner(self.domain, S.ProblemInstance(seen.state, S.TaskList([])))
         if rec["event"] == "verified":
             from htn.jshop.readers.jshop2 import parse_step
+
             step = parse_step(rec["action"], "<log>", 1)
             self.model.apply_step(step.name, tuple(step.args))
 
@@ -169,15 +187,20 @@ def _load(problem_file: str):
     if problem_file not in _LOADED:
         from htn.jshop import load_domain, load_problem
         from htn.robot.world import is_kitchen_state
+
         inst = load_problem(problem_file).instances[0]
-        domain = str(ROOT / "domains" / ("kitchen.jshop" if is_kitchen_state(inst.state)
-                                         else "domestic.jshop"))
+        domain = str(
+            ROOT
+            / "domains"
+            / ("kitchen.jshop" if is_kitchen_state(inst.state) else "domestic.jshop")
+        )
         _LOADED[problem_file] = (load_domain(domain), inst, domain)
     return _LOADED[problem_file]
 
 
-def run_checked(problem: str, faults: str, seed: int, replan: bool, steps=None,
-                problem_file=None) -> dict:
+def run_checked(
+    problem: str, faults: str, seed: int, replan: bool, steps=None, problem_file=None
+) -> dict:
     """One monitored run in PyBullet with the oracle listening."""
     from htn.executor.config import load_retries
     from htn.executor.dispatcher import TaskDispatcher
@@ -185,6 +208,7 @@ def run_checked(problem: str, faults: str, seed: int, replan: bool, steps=None,
     from htn.jshop import Planner
     from htn.robot import simulated_robot
     from htn.robot.faults import Faults
+
     dom, inst, domain = _load(str(problem_file or ROOT / "problems" / f"{problem}.jshop"))
     tree = None
     if steps is None:
@@ -195,13 +219,20 @@ def run_checked(problem: str, faults: str, seed: int, replan: bool, steps=None,
         log = EventLog(None, clock=lambda: robot.sim_time)
         oracle = Oracle(robot, dom, inst)
         log.listeners += [oracle.event, oracle.verified]
-        summary = TaskDispatcher(robot, dom, inst, steps, load_retries(domain), log,
-                                 replan=replan, tree=tree).run()
-        return {"seed": seed, "result": summary.result, "aborts": oracle.aborts,
-                "false_alarms": oracle.unexplained, "faults": len(robot.injected),
-                "kinds": sorted({f["kind"] for f in robot.injected}),
-                "fault_to_abort": oracle.fault_to_abort,
-                "repaired": [e["path"] for e in log.events if e["event"] == "replanned"],
-                "sim_time": summary.sim_time, "summary": summary}
+        summary = TaskDispatcher(
+            robot, dom, inst, steps, load_retries(domain), log, replan=replan, tree=tree
+        ).run()
+        return {
+            "seed": seed,
+            "result": summary.result,
+            "aborts": oracle.aborts,
+            "false_alarms": oracle.unexplained,
+            "faults": len(robot.injected),
+            "kinds": sorted({f["kind"] for f in robot.injected}),
+            "fault_to_abort": oracle.fault_to_abort,
+            "repaired": [e["path"] for e in log.events if e["event"] == "replanned"],
+            "sim_time": summary.sim_time,
+            "summary": summary,
+        }
     finally:
         robot.close()

@@ -1,5 +1,6 @@
 """The package's modules and their imports, as the layout tests read them
 (:mod:`test_layout`, and the API tests' check of the use-case registry)."""
+
 from __future__ import annotations
 
 import ast
@@ -8,8 +9,22 @@ from pathlib import Path
 from conftest import ROOT
 
 # the folders of the repository that are parts of the htn package
-PACKAGE_DIRS = ("", "api", "cli", "process", "jshop", "executor", "robot", "transform",
-                "evaluation", "view", "up", "ros", "domains", "problems")
+PACKAGE_DIRS = (
+    "",
+    "api",
+    "cli",
+    "process",
+    "jshop",
+    "executor",
+    "robot",
+    "transform",
+    "evaluation",
+    "view",
+    "up",
+    "ros",
+    "domains",
+    "problems",
+)
 
 
 def package_modules() -> dict[str, Path]:
@@ -88,6 +103,7 @@ def cycles(graph: dict[str, set]) -> list[list[str]]:
                             break
                     if len(comp) > 1:
                         out.append(sorted(comp))
+
     for v in sorted(graph):
         if v not in index:
             visit(v)

@@ -22,6 +22,7 @@ API (as in the paper): :meth:`Framework.register_transformation`,
 with the built-in rules and the plugins' is
 :func:`htn.transform.registered.default_framework`.
 """
+
 from __future__ import annotations
 
 import math
@@ -39,11 +40,22 @@ from htn.jshop.readers.load import parse_text
 from .rules import KITCHEN, RULES_FILE
 from .workspace import Unit, Vocabulary, Workspace
 
-__all__ = ["Framework", "Transformation", "Unit", "Vocabulary", "Workspace", "METRICS",
-           "RULES_FILE", "navigation_distance", "projected", "tree_facts"]
+__all__ = [
+    "Framework",
+    "Transformation",
+    "Unit",
+    "Vocabulary",
+    "Workspace",
+    "METRICS",
+    "RULES_FILE",
+    "navigation_distance",
+    "projected",
+    "tree_facts",
+]
 
 
 # ------------------------------------------------------------------ facts
+
 
 def tree_facts(ws: Workspace, vocabulary: Vocabulary = KITCHEN) -> list[tuple[str, tuple]]:
     """Facts about the current task list and its plan, for applicability rules.
@@ -60,8 +72,11 @@ def tree_facts(ws: Workspace, vocabulary: Vocabulary = KITCHEN) -> list[tuple[st
     k = 0
     for unit in ws.units:
         unit_nodes = [next(nodes) for _ in unit.tasks]
-        if len(unit.tasks) != 1 or unit.tasks[0].name != "transporting" \
-                or unit.paths[0] in ws.frozen:
+        if (
+            len(unit.tasks) != 1
+            or unit.tasks[0].name != "transporting"
+            or unit.paths[0] in ws.frozen
+        ):
             facts.extend(("transformed", (p,)) for p in unit.paths)
             continue
         (atom,), (path,), (node,) = unit.tasks, unit.paths, unit_nodes
@@ -74,8 +89,11 @@ def tree_facts(ws: Workspace, vocabulary: Vocabulary = KITCHEN) -> list[tuple[st
         else:
             facts.append(("fetch-area", (path, src)))
         facts.append(("deliver-area", (path, dst)))
-        arms = {ws.plan.steps[leaf.step].args[-1] for leaf in node.leaves()
-                if ws.plan.steps[leaf.step].name in vocabulary.handling}
+        arms = {
+            ws.plan.steps[leaf.step].args[-1]
+            for leaf in node.leaves()
+            if ws.plan.steps[leaf.step].name in vocabulary.handling
+        }
         if len(arms) == 1:
             facts.append(("one-arm", (path,)))
     return facts
@@ -83,11 +101,14 @@ def tree_facts(ws: Workspace, vocabulary: Vocabulary = KITCHEN) -> list[tuple[st
 
 # ------------------------------------------------------------------ metrics
 
-def navigation_distance(instance: S.ProblemInstance, plan,
-                        navigate: str = KITCHEN.navigate) -> float:
+
+def navigation_distance(
+    instance: S.ProblemInstance, plan, navigate: str = KITCHEN.navigate
+) -> float:
     """Sum of straight-line distances of the plan's ``navigate`` steps (the
     operator of a vocabulary that moves the robot between two areas)."""
     from htn.robot.projection import world_from_atoms  # area coordinates, checked
+
     where = world_from_atoms([a for a in instance.state if a.pred == "area"]).places
     total = 0.0
     for s in plan.steps:
@@ -104,14 +125,19 @@ def projected(metric: str) -> Callable:
     """A cost: the mean of ``metric`` over projected runs of the plan on the
     projection robot, with the same seeds for every plan (a paired comparison,
     so the same plan always gets the same cost)."""
+
     def cost(ws: "Workspace", plan) -> float:
         from htn.executor.config import load_retries
 
         from .projection import project
+
         retries = load_retries(ws.domain.file, ws.domain.operators)
-        runs = [project(ws.domain, ws.instance, plan.steps, seed, retries=retries)
-                for seed in PROJECTION_SEEDS]
+        runs = [
+            project(ws.domain, ws.instance, plan.steps, seed, retries=retries)
+            for seed in PROJECTION_SEEDS
+        ]
         return statistics.fmean(r[metric] for r in runs)
+
     return cost
 
 
@@ -126,11 +152,12 @@ METRICS: dict[str, Callable] = {
 
 # ------------------------------------------------------------------ framework
 
+
 @dataclass
 class Transformation:
     name: str
-    function: Callable          # (workspace, [schemas]) -> (description, paths) or None
-    rule: str                   # query atom, e.g. "(both-hands ?first ?second)"
+    function: Callable  # (workspace, [schemas]) -> (description, paths) or None
+    rule: str  # query atom, e.g. "(both-hands ?first ?second)"
     enabled: bool = True
 
 
@@ -139,15 +166,17 @@ class Framework:
 
     def __init__(self, rules_file: Path = RULES_FILE, vocabulary: Vocabulary = KITCHEN):
         self.rules_text = Path(rules_file).read_text()
-        self.vocabulary = vocabulary        # the operators its facts read the plan by
+        self.vocabulary = vocabulary  # the operators its facts read the plan by
         self.transformations: list[Transformation] = []
-        self.priorities: list[tuple[str, str]] = []     # (superior, inferior) names
+        self.priorities: list[tuple[str, str]] = []  # (superior, inferior) names
 
     # -- the paper's API
-    def register_transformation(self, function: Callable, applicability_rule: str,
-                                name: Optional[str] = None) -> Transformation:
-        t = Transformation(name or function.__name__.replace("_", "-"), function,
-                           applicability_rule)
+    def register_transformation(
+        self, function: Callable, applicability_rule: str, name: Optional[str] = None
+    ) -> Transformation:
+        t = Transformation(
+            name or function.__name__.replace("_", "-"), function, applicability_rule
+        )
         self.transformations = [x for x in self.transformations if x.name != t.name] + [t]
         return t
 
@@ -172,31 +201,37 @@ class Framework:
         order = list(self.transformations)
         for _ in range(len(order) ** 2 + 1):
             pos = {t.name: i for i, t in enumerate(order)}
-            wrong = [(a, b) for a, b in priorities
-                     if a in pos and b in pos and pos[a] > pos[b]]
+            wrong = [(a, b) for a, b in priorities if a in pos and b in pos and pos[a] > pos[b]]
             if not wrong:
                 self.priorities, self.transformations = priorities, order
                 return
             a, b = wrong[0]
             moved = order.pop(pos[a])
             order.insert(pos[b], moved)
-        raise HtnError(f"{sup.name} before {inf.name} contradicts the other priorities "
-                       f"{self.priorities}: they would form a cycle")
+        raise HtnError(
+            f"{sup.name} before {inf.name} contradicts the other priorities "
+            f"{self.priorities}: they would form a cycle"
+        )
 
-    def apply_all_transformations(self, ws: Workspace, metric: str = "navigation",
-                                  on_phase: Optional[Callable[[str], None]] = None) -> Workspace:
+    def apply_all_transformations(
+        self,
+        ws: Workspace,
+        metric: str = "navigation",
+        on_phase: Optional[Callable[[str], None]] = None,
+    ) -> Workspace:
         """Apply every enabled transformation, highest priority first, each as
         often as its rule finds untransformed tasks; keep only those that leave
         a valid plan that is not costlier on ``metric``. ``on_phase`` gets a
         few words as each rule is tried (progress for a caller)."""
         metric_cost = METRICS[metric]
-        known: dict = {}      # id(plan) -> (plan, cost): each plan is projected once
+        known: dict = {}  # id(plan) -> (plan, cost): each plan is projected once
         say = on_phase or (lambda text: None)
 
         def cost(ws, plan):
             if id(plan) not in known:
                 known[id(plan)] = (plan, metric_cost(ws, plan))
             return known[id(plan)][1]
+
         for t in self.transformations:
             if not t.enabled:
                 continue
@@ -216,19 +251,30 @@ class Framework:
                 if plan is None:
                     ws.units = before_units
                     ws.frozen.update(paths)
-                    ws.log.append((t.name, "rolled back", f"{described}: the transformed task "
-                                   "list has no valid plan"))
+                    ws.log.append(
+                        (
+                            t.name,
+                            "rolled back",
+                            f"{described}: the transformed task list has no valid plan",
+                        )
+                    )
                     continue
                 after_cost = cost(ws, plan)
                 if after_cost > before_cost + 1e-9:
                     ws.units = before_units
                     ws.frozen.update(paths)
-                    ws.log.append((t.name, "rolled back", f"{described}: {metric} "
-                                   f"{before_cost:g} -> {after_cost:g}"))
+                    ws.log.append(
+                        (
+                            t.name,
+                            "rolled back",
+                            f"{described}: {metric} {before_cost:g} -> {after_cost:g}",
+                        )
+                    )
                     continue
                 ws.plan = plan
-                ws.log.append((t.name, "applied", f"{described}: {metric} "
-                               f"{before_cost:g} -> {after_cost:g}"))
+                ws.log.append(
+                    (t.name, "applied", f"{described}: {metric} {before_cost:g} -> {after_cost:g}")
+                )
         return ws
 
     def query(self, ws: Workspace, rule: str) -> list[dict]:
@@ -252,6 +298,7 @@ class Framework:
 
 def _vars_of(expr) -> list:
     from htn.jshop.language.walk import walk_expr
+
     found: list = []
     walk_expr(expr, found.append)
     return found

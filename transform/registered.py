@@ -3,6 +3,7 @@
 those of plugins (the entry-point group ``htn.transformations`` names
 functions called with the framework to register theirs), and the paper's
 module-level API over it."""
+
 from __future__ import annotations
 
 from typing import Optional
@@ -27,6 +28,7 @@ def default_framework() -> Framework:
 
 def _load_plugins(fw: Framework) -> None:
     from importlib.metadata import entry_points
+
     for ep in entry_points(group="htn.transformations"):
         ep.load()(fw)
 

@@ -13,6 +13,7 @@ domain: its applicability rules (:data:`RULES_FILE`) and the operators it
 reads the plans by (:data:`KITCHEN`), the defaults of
 :class:`~htn.transform.framework.Framework`.
 """
+
 from __future__ import annotations
 
 import itertools
@@ -28,8 +29,7 @@ RULES_FILE = Path(__file__).with_name("rules.jshop")
 
 # the kitchen's operators that take or put down an object (the arm last) and
 # the one that moves the robot between two areas
-KITCHEN = Vocabulary(handling=frozenset({"!grasp", "!grasp-from", "!place"}),
-                     navigate="!navigate")
+KITCHEN = Vocabulary(handling=frozenset({"!grasp", "!grasp-from", "!place"}), navigate="!navigate")
 
 _fresh = itertools.count(1)
 
@@ -58,9 +58,16 @@ def both_hands(ws, schemas):
     u2, (o2, f2, d2) = _transport(ws, second)
     a1, a2 = _arm(), _arm()
     new1 = Unit([_task("searching", o1, f1), _task("fetching", o1, f1, a1)], [first], "both-hands")
-    new2 = Unit([_task("searching", o2, f2), _task("fetching", o2, f2, a2),
-                 _task("delivering", o1, d1, a1), _task("delivering", o2, d2, a2)],
-                [second], "both-hands")
+    new2 = Unit(
+        [
+            _task("searching", o2, f2),
+            _task("fetching", o2, f2, a2),
+            _task("delivering", o1, d1, a1),
+            _task("delivering", o2, d2, a2),
+        ],
+        [second],
+        "both-hands",
+    )
     ws.units = [new1 if u is u1 else new2 if u is u2 else u for u in ws.units]
     return f"{first} + {second}", [first, second]
 
@@ -74,8 +81,7 @@ def container(ws, schemas):
             by_container[s["c"]].append(s["t"])
     c, paths = next(iter(by_container.items()))
     order = [p for u in ws.units for p in u.paths if p in paths]
-    area = next(a.args[1] for a in ws.instance.state
-                if a.pred == "container" and a.args[0] == c)
+    area = next(a.args[1] for a in ws.instance.state if a.pred == "container" and a.args[0] == c)
     replaced = {}
     for i, path in enumerate(order):
         unit, (obj, src, dst) = _transport(ws, path)

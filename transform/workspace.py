@@ -3,6 +3,7 @@
 operators that the generic framework reads a plan by (:class:`Vocabulary`,
 declared by a rule set: the built-in one's is
 :data:`htn.transform.rules.KITCHEN`)."""
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -21,6 +22,7 @@ class Vocabulary:
     transport whose steps of these use one arm is ``one-arm``); ``navigate``,
     the one that moves the robot from an area to another, ``(navigate ?from
     ?to)`` (the ``navigation-static`` metric sums its distances)."""
+
     handling: frozenset
     navigate: str
 
@@ -29,8 +31,9 @@ class Vocabulary:
 class Unit:
     """One entry of the top-level task list: task atoms that replace one or
     more original top-level tasks (``paths``)."""
-    tasks: list                      # [S.TaskAtom]
-    paths: list                      # node paths of the original tasks it stands for
+
+    tasks: list  # [S.TaskAtom]
+    paths: list  # node paths of the original tasks it stands for
     transformed_by: Optional[str] = None
 
 
@@ -38,12 +41,13 @@ class Unit:
 class Workspace:
     """A plan being transformed: domain, problem instance, top-level units,
     and the plan and tree they currently give."""
+
     domain: S.Domain
     instance: S.ProblemInstance
     units: list
     plan: object = None
-    log: list = field(default_factory=list)     # (rule, status, detail)
-    frozen: set = field(default_factory=set)    # paths of rolled-back rewrites
+    log: list = field(default_factory=list)  # (rule, status, detail)
+    frozen: set = field(default_factory=set)  # paths of rolled-back rewrites
 
     @classmethod
     def from_problem(cls, domain: S.Domain, instance: S.ProblemInstance) -> "Workspace":
@@ -63,13 +67,13 @@ class Workspace:
         transformation carries the replacement tasks in its code-replacement
         slot (the paper's mechanism, here filled in for inspection)."""
         from htn.jshop.language.terms import source_atom
+
         tree = self.plan.tree
         nodes = iter(tree.children)
         for unit in self.units:
             for node in [next(nodes) for _ in unit.tasks]:
                 if unit.transformed_by:
-                    node.code_replacement = [
-                        source_atom(t.name, t.args) for t in unit.tasks]
+                    node.code_replacement = [source_atom(t.name, t.args) for t in unit.tasks]
         return tree
 
     def replan(self, units=None):

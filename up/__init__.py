@@ -17,9 +17,10 @@ does not import this module.
 The engine is :class:`htn.up.engine.HtnEngine`; its problem kind is in
 :mod:`htn.up.kind`, the conversion of UP problems in :mod:`htn.up.convert`.
 """
+
 from __future__ import annotations
 
-ENGINE = ("htn.up.engine", "HtnEngine")     # module and class, as UP's factory takes them
+ENGINE = ("htn.up.engine", "HtnEngine")  # module and class, as UP's factory takes them
 
 
 def register(environment=None, name: str = "htn") -> None:
@@ -27,6 +28,7 @@ def register(environment=None, name: str = "htn") -> None:
     default) under ``name``, unless an engine of that name is there already
     (an ``up.ini`` may have registered it)."""
     from unified_planning.environment import get_environment
+
     factory = get_environment(environment).factory
     if name not in factory.engines:
         factory.add_engine(name, *ENGINE)

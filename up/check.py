@@ -18,6 +18,7 @@ AAAI 2020) when
 
 :func:`check` says which of these fails first, in one line.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -33,9 +34,10 @@ from .convert import Conversion
 @dataclass
 class Check:
     """The outcome of checking one hierarchical plan."""
+
     valid: bool
     message: str = ""
-    failed_action: Optional[Any] = None    # the UP action instance that cannot be applied
+    failed_action: Optional[Any] = None  # the UP action instance that cannot be applied
     goal_failed: bool = False
 
 
@@ -46,8 +48,9 @@ class Invalid(Exception):
 def check(conv: Conversion, plan) -> Check:
     """Validate a UP ``HierarchicalPlan`` (see the module docstring)."""
     actions = list(plan.action_plan.actions)
-    steps = [Step("!" + a.action.name, tuple(_name(x) for x in a.actual_parameters))
-             for a in actions]
+    steps = [
+        Step("!" + a.action.name, tuple(_name(x) for x in a.actual_parameters)) for a in actions
+    ]
     check_steps(conv.domain, steps, "")
     verdict = validate_plan(conv.domain, conv.instance, Plan(steps, None))
     if not verdict.valid:
@@ -73,6 +76,7 @@ class _Walk:
 
     def __init__(self, conv: Conversion, actions: list):
         from htn.jshop.search.planner import Planner
+
         self.conv = conv
         self.actions = actions
         self.next = 0
@@ -87,8 +91,10 @@ class _Walk:
             self._top(binding)
         self._walk(decomposition, order, binding)
         if self.next != len(self.actions):
-            raise Invalid(f"the decomposition accounts for {self.next} of the plan's "
-                          f"{len(self.actions)} actions")
+            raise Invalid(
+                f"the decomposition accounts for {self.next} of the plan's "
+                f"{len(self.actions)} actions"
+            )
 
     # ------------------------------------------------------------ the initial network
     def _network_variables(self, decomposition, order) -> dict:
@@ -101,8 +107,10 @@ class _Walk:
                 if arg.is_parameter_exp():
                     name = arg.parameter().name
                     if binding.setdefault(name, value) != value:
-                        raise Invalid(f"variable {name} of the initial task network is both "
-                                      f"{binding[name]} and {value}")
+                        raise Invalid(
+                            f"variable {name} of the initial task network is both "
+                            f"{binding[name]} and {value}"
+                        )
         return binding
 
     def _top(self, binding: dict) -> None:
@@ -110,16 +118,21 @@ class _Walk:
         names = [v.name for v in self.conv.problem.task_network.variables]
         unset = [n for n in names if n not in binding]
         if unset:
-            raise Invalid(f"no subtask gives variable(s) {', '.join(unset)} of the initial "
-                          "task network a value")
+            raise Invalid(
+                f"no subtask gives variable(s) {', '.join(unset)} of the initial "
+                "task network a value"
+            )
         if not self._holds(m, [binding.get(n) for n in names]):
-            raise Invalid("the values of the initial task network's variables ("
-                          + ", ".join(f"{n} = {binding.get(n)}" for n in names)
-                          + ") do not satisfy its constraints")
+            raise Invalid(
+                "the values of the initial task network's variables ("
+                + ", ".join(f"{n} = {binding.get(n)}" for n in names)
+                + ") do not satisfy its constraints"
+            )
 
     # ------------------------------------------------------------ the walk
     def _walk(self, decomposition, order, env: dict) -> None:
         from unified_planning.plans.hierarchical_plan import MethodInstance
+
         work = [(iter(order), decomposition, env)]
         while work:
             it, dec, env = work[-1]
@@ -128,8 +141,9 @@ class _Walk:
                 work.pop()
                 continue
             impl = dec.subtasks[st.identifier]
-            wanted = tuple(env[a.parameter().name] if a.is_parameter_exp() else _name(a)
-                           for a in st.parameters)
+            wanted = tuple(
+                env[a.parameter().name] if a.is_parameter_exp() else _name(a) for a in st.parameters
+            )
             if isinstance(impl, MethodInstance):
                 inner = self._method(st, impl, wanted)
                 order_in = self.conv.method_order[impl.method.name]
@@ -142,39 +156,53 @@ class _Walk:
         method = impl.method
         task = method.achieved_task
         if method.name not in self.conv.methods or task.task.name != st.task.name:
-            raise Invalid(f"subtask {st.identifier} ({st.task.name}) is decomposed by "
-                          f"{method.name}, which is not a method of {st.task.name}")
+            raise Invalid(
+                f"subtask {st.identifier} ({st.task.name}) is decomposed by "
+                f"{method.name}, which is not a method of {st.task.name}"
+            )
         if len(impl.parameters) != len(method.parameters):
-            raise Invalid(f"method {method.name} takes {len(method.parameters)} parameters, "
-                          f"given {len(impl.parameters)}")
+            raise Invalid(
+                f"method {method.name} takes {len(method.parameters)} parameters, "
+                f"given {len(impl.parameters)}"
+            )
         values = [_name(v) for v in impl.parameters]
         env = {p.name: v for p, v in zip(method.parameters, values)}
         if tuple(env[p.name] for p in task.parameters) != wanted:
-            raise Invalid(f"method {method.name} decomposes {task.task.name}"
-                          f"{tuple(env[p.name] for p in task.parameters)}, not subtask "
-                          f"{st.identifier} {st.task.name}{wanted}")
+            raise Invalid(
+                f"method {method.name} decomposes {task.task.name}"
+                f"{tuple(env[p.name] for p in task.parameters)}, not subtask "
+                f"{st.identifier} {st.task.name}{wanted}"
+            )
         if not self._holds(self.conv.methods[method.name], values):
-            raise Invalid(f"the precondition of method {method.name}"
-                          f"({', '.join(values)}) does not hold before action "
-                          f"{self.next + 1} (subtask {st.identifier})")
+            raise Invalid(
+                f"the precondition of method {method.name}"
+                f"({', '.join(values)}) does not hold before action "
+                f"{self.next + 1} (subtask {st.identifier})"
+            )
         return env
 
     def _action(self, st, impl, wanted: tuple) -> None:
         if impl.action.name != st.task.name or self._arguments(impl) != wanted:
-            raise Invalid(f"subtask {st.identifier} {st.task.name}{wanted} is achieved by "
-                          f"{impl}, another action")
+            raise Invalid(
+                f"subtask {st.identifier} {st.task.name}{wanted} is achieved by "
+                f"{impl}, another action"
+            )
         k = self.next
         if k >= len(self.actions) or not self.actions[k].is_semantically_equivalent(impl):
-            what = f"action {k + 1} is {self.actions[k]}" if k < len(self.actions) else \
-                "the plan has no more actions"
+            what = (
+                f"action {k + 1} is {self.actions[k]}"
+                if k < len(self.actions)
+                else "the plan has no more actions"
+            )
             raise Invalid(f"subtask {st.identifier} is achieved by {impl}, but {what}")
         if not self.replay.apply_step("!" + impl.action.name, wanted):
-            raise Invalid(f"action {k + 1} ({impl}) cannot be applied")     # pragma: no cover
+            raise Invalid(f"action {k + 1} ({impl}) cannot be applied")  # pragma: no cover
         self.next += 1
 
     # ------------------------------------------------------------ helpers
     def _arguments(self, impl) -> tuple:
         from unified_planning.plans.hierarchical_plan import MethodInstance
+
         if isinstance(impl, MethodInstance):
             env = {p.name: _name(v) for p, v in zip(impl.method.parameters, impl.parameters)}
             return tuple(env.get(p.name) for p in impl.method.achieved_task.parameters)
@@ -188,7 +216,7 @@ class _Walk:
             head = tuple(Var(f"p{i}", i) for i in range(len(values)))
             self.compiled[key] = self.replay.logic.precondition(m.branches[0].pre, head)
         env = [None] * m.nvars
-        env[:len(values)] = values
+        env[: len(values)] = values
         return next(iter(self.compiled[key](env)), None) is not None
 
 
@@ -197,7 +225,9 @@ def _same_ids(decomposition, order, owner: str) -> None:
     want = {st.identifier for st in order}
     if have != want:
         missing, extra = sorted(want - have), sorted(have - want)
-        raise Invalid(f"the decomposition of {owner} "
-                      + (f"lacks subtask(s) {', '.join(missing)}" if missing else "")
-                      + ("; " if missing and extra else "")
-                      + (f"has unknown subtask(s) {', '.join(extra)}" if extra else ""))
+        raise Invalid(
+            f"the decomposition of {owner} "
+            + (f"lacks subtask(s) {', '.join(missing)}" if missing else "")
+            + ("; " if missing and extra else "")
+            + (f"has unknown subtask(s) {', '.join(extra)}" if extra else "")
+        )

@@ -12,6 +12,7 @@ initial state and asking, in the state where the method was applied (before
 its first action, in a total order), for a satisfier of its precondition that
 gives its subtasks the arguments they have in the tree.
 """
+
 from __future__ import annotations
 
 from htn.jshop.language.terms import subst
@@ -23,6 +24,7 @@ from .convert import Conversion
 def action_instances(conv: Conversion, plan) -> list:
     """The plan's steps as UP ``ActionInstance`` s, in order."""
     from unified_planning.plans import ActionInstance
+
     problem = conv.problem
     objects: dict = {}
 
@@ -30,13 +32,17 @@ def action_instances(conv: Conversion, plan) -> list:
         if name not in objects:
             objects[name] = problem.object(name)
         return objects[name]
-    return [ActionInstance(problem.action(s.name[1:]), tuple(obj(a) for a in s.args))
-            for s in plan.steps]
+
+    return [
+        ActionInstance(problem.action(s.name[1:]), tuple(obj(a) for a in s.args))
+        for s in plan.steps
+    ]
 
 
 def sequential_plan(conv: Conversion, plan):
     """The plan as a UP ``SequentialPlan``."""
     from unified_planning.plans import SequentialPlan
+
     return SequentialPlan(action_instances(conv, plan), conv.problem.environment)
 
 
@@ -44,12 +50,13 @@ def hierarchical_plan(conv: Conversion, plan):
     """The plan (recorded with its task tree) as a UP ``HierarchicalPlan``."""
     from unified_planning.plans import SequentialPlan
     from unified_planning.plans.hierarchical_plan import Decomposition, HierarchicalPlan
+
     actions = action_instances(conv, plan)
     flat = SequentialPlan(actions, conv.problem.environment)
     if plan.tree is None:
         raise ValueError("the plan has no task tree (plan with record_trees=True)")
     nodes = plan.tree.children
-    if conv.instance.top is not None:      # the root task binding the network's variables
+    if conv.instance.top is not None:  # the root task binding the network's variables
         nodes = nodes[0].children
     root = Decomposition({})
     _Rebuild(conv, actions).run(nodes, root)
@@ -61,6 +68,7 @@ class _Rebuild:
 
     def __init__(self, conv: Conversion, actions: list):
         from htn.jshop.search.planner import Planner
+
         self.conv = conv
         self.actions = actions
         self.replay = Planner.for_state(conv.domain, conv.instance.state)
@@ -70,6 +78,7 @@ class _Rebuild:
 
     def run(self, nodes: list, root) -> None:
         from unified_planning.plans.hierarchical_plan import Decomposition, MethodInstance
+
         problem = self.conv.problem
         work = [(iter(zip(nodes, self.conv.network_order)), root.subtasks)]
         while work:
@@ -87,8 +96,12 @@ class _Rebuild:
             method = problem.method(node.branch)
             instance = MethodInstance(method, self.parameters(node, method), Decomposition({}))
             sink[subtask.identifier] = instance
-            work.append((iter(zip(node.children, self.conv.method_order[method.name])),
-                         instance.decomposition.subtasks))
+            work.append(
+                (
+                    iter(zip(node.children, self.conv.method_order[method.name])),
+                    instance.decomposition.subtasks,
+                )
+            )
 
     def parameters(self, node, method) -> tuple:
         """The values of the UP method's parameters in this decomposition."""
@@ -96,8 +109,10 @@ class _Rebuild:
         branch = m.branches[0]
         key = id(m)
         if key not in self.compiled:
-            self.compiled[key] = (head_unifier(m.head.args),
-                                  self.replay.logic.precondition(branch.pre, m.head.args))
+            self.compiled[key] = (
+                head_unifier(m.head.args),
+                self.replay.logic.precondition(branch.pre, m.head.args),
+            )
         unify, sat = self.compiled[key]
         env = [None] * m.nvars
         if not unify(tuple(node.args), env):

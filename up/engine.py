@@ -46,6 +46,7 @@ found, if any) at ``timeout`` seconds (wall clock, conversion included);
 conversion cannot express (with ``skip_checks``). Log messages say what
 happened in one line each; ``metrics`` has ``engine_internal_time``.
 """
+
 from __future__ import annotations
 
 import time
@@ -94,12 +95,12 @@ CREDITS = Credits(
     website="the htn project's README (unified-planning section)",
     license="MIT",
     short_description="htn: a JSHOP2-compatible HTN planner that reads HDDL, with "
-                      "depth-first and heuristic searches.",
+    "depth-first and heuristic searches.",
     long_description="htn plans with JSHOP2's depth-first decomposition under HDDL's "
-                     "semantics (type predicates, precondition pull-up, loop check), or with "
-                     "greedy best-first or weighted A* search on the grounded problem (the "
-                     "relaxed composition heuristic), or a portfolio of them (the 'search' "
-                     "option), and returns hierarchical plans.",
+    "semantics (type predicates, precondition pull-up, loop check), or with "
+    "greedy best-first or weighted A* search on the grounded problem (the "
+    "relaxed composition heuristic), or a portfolio of them (the 'search' "
+    "option), and returns hierarchical plans.",
 )
 
 
@@ -109,21 +110,21 @@ def parse_options(options: dict) -> dict:
     out = {name: default for name, (_, default) in OPTIONS.items()}
     for name, value in options.items():
         if name not in OPTIONS:
-            raise UPUsageError(f"htn has no option {name!r}; its options are "
-                               f"{', '.join(OPTIONS)}")
+            raise UPUsageError(f"htn has no option {name!r}; its options are {', '.join(OPTIONS)}")
         wanted = OPTIONS[name][0]
-        if wanted is int and (isinstance(value, bool) or not isinstance(value, int)
-                              or value < 1):
+        if wanted is int and (isinstance(value, bool) or not isinstance(value, int) or value < 1):
             raise UPUsageError(f"htn option {name} must be a positive integer, not {value!r}")
         if wanted is not int and not isinstance(value, wanted):
             raise UPUsageError(f"htn option {name} must be a {wanted.__name__}, not {value!r}")
         out[name] = value
     if out["search"] not in SEARCHES:
-        raise UPUsageError(f"htn option search must be one of {', '.join(SEARCHES)}, "
-                           f"not {out['search']!r}")
+        raise UPUsageError(
+            f"htn option search must be one of {', '.join(SEARCHES)}, not {out['search']!r}"
+        )
     if out["plan_kind"] not in PLAN_KINDS:
-        raise UPUsageError(f"htn option plan_kind must be one of {', '.join(PLAN_KINDS)}, "
-                           f"not {out['plan_kind']!r}")
+        raise UPUsageError(
+            f"htn option plan_kind must be one of {', '.join(PLAN_KINDS)}, not {out['plan_kind']!r}"
+        )
     return out
 
 
@@ -160,24 +161,37 @@ class HtnEngine(Engine, OneshotPlannerMixin, PlanValidatorMixin):
         return CREDITS
 
     # ------------------------------------------------------------ planning
-    def _solve(self, problem, heuristic: Optional[Callable] = None,
-               timeout: Optional[float] = None,
-               output_stream: Optional[IO[str]] = None) -> PlanGenerationResult:
+    def _solve(
+        self,
+        problem,
+        heuristic: Optional[Callable] = None,
+        timeout: Optional[float] = None,
+        output_stream: Optional[IO[str]] = None,
+    ) -> PlanGenerationResult:
         from .search import search
+
         started = time.perf_counter()
         logs: list = []
         if heuristic is not None:
-            warnings.warn("htn does not use a heuristic given by the caller: its searches "
-                          "use their own (the 'search' option)")
+            warnings.warn(
+                "htn does not use a heuristic given by the caller: its searches "
+                "use their own (the 'search' option)"
+            )
             logs.append(LogMessage(LogLevel.WARNING, "heuristic ignored"))
         try:
             conv = checked(problem)
         except Unsupported as e:
             extra = kind.unsupported_features(problem.kind)
-            logs.append(LogMessage(LogLevel.ERROR, f"unsupported problem: {e}" + (
-                f" (features htn does not support: {', '.join(extra)})" if extra else "")))
-            return PlanGenerationResult(Status.UNSUPPORTED_PROBLEM, None, self.name,
-                                        log_messages=logs)
+            logs.append(
+                LogMessage(
+                    LogLevel.ERROR,
+                    f"unsupported problem: {e}"
+                    + (f" (features htn does not support: {', '.join(extra)})" if extra else ""),
+                )
+            )
+            return PlanGenerationResult(
+                Status.UNSUPPORTED_PROBLEM, None, self.name, log_messages=logs
+            )
         logs += [LogMessage(LogLevel.WARNING, w) for w in conv.warnings]
         try:
             return search(self, conv, self.options, started, timeout, output_stream, logs)
@@ -191,6 +205,7 @@ class HtnEngine(Engine, OneshotPlannerMixin, PlanValidatorMixin):
         from unified_planning.plans import HierarchicalPlan
 
         from .check import check
+
         started = time.perf_counter()
         if not isinstance(plan, HierarchicalPlan):
             return self._unknown(f"htn validates hierarchical plans, not {plan.kind.name}")
@@ -203,21 +218,31 @@ class HtnEngine(Engine, OneshotPlannerMixin, PlanValidatorMixin):
             clear_caches()
         metrics = {"engine_internal_time": str(time.perf_counter() - started)}
         if verdict.valid:
-            return ValidationResult(ValidationResultStatus.VALID, self.name, [],
-                                    metric_evaluations=_metric_values(problem, plan),
-                                    metrics=metrics)
+            return ValidationResult(
+                ValidationResultStatus.VALID,
+                self.name,
+                [],
+                metric_evaluations=_metric_values(problem, plan),
+                metrics=metrics,
+            )
         reason = None
         if verdict.failed_action is not None:
             reason = FailedValidationReason.INAPPLICABLE_ACTION
         elif verdict.goal_failed:
             reason = FailedValidationReason.UNSATISFIED_GOALS
-        return ValidationResult(ValidationResultStatus.INVALID, self.name,
-                                [LogMessage(LogLevel.INFO, verdict.message)], reason=reason,
-                                inapplicable_action=verdict.failed_action, metrics=metrics)
+        return ValidationResult(
+            ValidationResultStatus.INVALID,
+            self.name,
+            [LogMessage(LogLevel.INFO, verdict.message)],
+            reason=reason,
+            inapplicable_action=verdict.failed_action,
+            metrics=metrics,
+        )
 
     def _unknown(self, message: str) -> ValidationResult:
-        return ValidationResult(ValidationResultStatus.UNKNOWN, self.name,
-                                [LogMessage(LogLevel.ERROR, message)])
+        return ValidationResult(
+            ValidationResultStatus.UNKNOWN, self.name, [LogMessage(LogLevel.ERROR, message)]
+        )
 
 
 def _metric_values(problem, plan) -> Optional[dict]:

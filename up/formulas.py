@@ -21,6 +21,7 @@ al., AAAI 2020) unchanged:
 Anything else (numbers, time, fluent-valued assignments) raises
 :class:`Unsupported`, which the engine reports as an unsupported problem.
 """
+
 from __future__ import annotations
 
 from htn.jshop.language import syntax as S
@@ -97,8 +98,10 @@ class Expressions:
         if e.is_bool_constant():
             return S.And([]) if e.bool_constant_value() else S.Or([])
         if e.is_fluent_exp():
-            return self._literal(lambda lifted: S.Atom(
-                e.fluent().name, tuple(self.term(a, lifted) for a in e.args)), e)
+            return self._literal(
+                lambda lifted: S.Atom(e.fluent().name, tuple(self.term(a, lifted) for a in e.args)),
+                e,
+            )
         if e.is_equals():
             return self._literal(lambda lifted: self._equals(e, lifted), e)
         raise Unsupported(f"the condition {e} ({e.node_type.name.lower()}) is not supported")
@@ -117,8 +120,11 @@ class Expressions:
         if not left.type.is_user_type():
             raise Unsupported(f"{e}: htn compares objects only")
         for f, other in ((left, right), (right, left)):
-            if f.is_fluent_exp() and f.fluent().name in self.object_fluents \
-                    and not (other.is_fluent_exp() and other.fluent().name in self.object_fluents):
+            if (
+                f.is_fluent_exp()
+                and f.fluent().name in self.object_fluents
+                and not (other.is_fluent_exp() and other.fluent().name in self.object_fluents)
+            ):
                 args = tuple(self.term(a, lifted) for a in f.args)
                 return S.Atom(f.fluent().name, args + (self.term(other, lifted),))
         return S.Equal(self.term(left, lifted), self.term(right, lifted))
@@ -132,8 +138,7 @@ class Expressions:
             if eff.is_conditional():
                 items = [EffectWhen([], self.formula(eff.condition), items)]
             if eff.is_forall():
-                items = [EffectForall([param(v, f"variable {v.name}") for v in eff.forall],
-                                      items)]
+                items = [EffectForall([param(v, f"variable {v.name}") for v in eff.forall], items)]
             out += items
         return out
 
@@ -145,13 +150,16 @@ class Expressions:
         value = eff.value
         if fluent.type.is_bool_type():
             if not value.is_bool_constant():
-                raise Unsupported(f"the effect {eff} assigns an expression; htn assigns "
-                                  "true or false")
+                raise Unsupported(
+                    f"the effect {eff} assigns an expression; htn assigns true or false"
+                )
             atom = S.Atom(fluent.name, args)
             return [atom] if value.bool_constant_value() else [S.Not(atom)]
         if fluent.name not in self.object_fluents:
             raise Unsupported(f"the effect {eff} assigns a {fluent.type} fluent")
         new = self.term(value)
         old = Param(f"?{fluent.name}#old", (self.object_fluents[fluent.name],))
-        return [EffectForall([old], [S.Not(S.Atom(fluent.name, args + (Var(old.name),)))]),
-                S.Atom(fluent.name, args + (new,))]
+        return [
+            EffectForall([old], [S.Not(S.Atom(fluent.name, args + (Var(old.name),)))]),
+            S.Atom(fluent.name, args + (new,)),
+        ]

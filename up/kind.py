@@ -14,31 +14,46 @@ the planner is a total-order planner today; once it searches partial orders,
 adding ``"TASK_ORDER_PARTIAL"`` there widens the kind (the conversion already
 passes a partial order through).
 """
+
 from __future__ import annotations
 
 # UP's feature names, grouped as in unified_planning.model.problem_kind
 PROBLEM_CLASS = ("HIERARCHICAL",)
 TASK_ORDERS = ("TASK_ORDER_TOTAL",)
-HIERARCHICAL = ("METHOD_PRECONDITIONS", "TASK_NETWORK_CONSTRAINTS",
-                "INITIAL_TASK_NETWORK_VARIABLES")
-CONDITIONS = ("NEGATIVE_CONDITIONS", "DISJUNCTIVE_CONDITIONS", "EQUALITIES",
-              "EXISTENTIAL_CONDITIONS", "UNIVERSAL_CONDITIONS")
+HIERARCHICAL = (
+    "METHOD_PRECONDITIONS",
+    "TASK_NETWORK_CONSTRAINTS",
+    "INITIAL_TASK_NETWORK_VARIABLES",
+)
+CONDITIONS = (
+    "NEGATIVE_CONDITIONS",
+    "DISJUNCTIVE_CONDITIONS",
+    "EQUALITIES",
+    "EXISTENTIAL_CONDITIONS",
+    "UNIVERSAL_CONDITIONS",
+)
 EFFECTS = ("CONDITIONAL_EFFECTS", "FORALL_EFFECTS")
 TYPING = ("FLAT_TYPING", "HIERARCHICAL_TYPING")
 FLUENTS = ("OBJECT_FLUENTS",)
 # a cost is a number per action (the operator's cost); the plan's cost is their
 # sum, and the plan length is that sum with every cost 1
-METRICS = ("ACTIONS_COST", "PLAN_LENGTH", "INT_NUMBERS_IN_ACTIONS_COST",
-           "REAL_NUMBERS_IN_ACTIONS_COST")
+METRICS = (
+    "ACTIONS_COST",
+    "PLAN_LENGTH",
+    "INT_NUMBERS_IN_ACTIONS_COST",
+    "REAL_NUMBERS_IN_ACTIONS_COST",
+)
 
-FEATURES = (PROBLEM_CLASS + TASK_ORDERS + HIERARCHICAL + CONDITIONS + EFFECTS + TYPING
-            + FLUENTS + METRICS)
+FEATURES = (
+    PROBLEM_CLASS + TASK_ORDERS + HIERARCHICAL + CONDITIONS + EFFECTS + TYPING + FLUENTS + METRICS
+)
 
 
 def supported_kind():
     """The ``ProblemKind`` of :data:`FEATURES` (UP's latest kind version)."""
     from unified_planning.model import ProblemKind
     from unified_planning.model.problem_kind_versioning import LATEST_PROBLEM_KIND_VERSION
+
     return ProblemKind(set(FEATURES), version=LATEST_PROBLEM_KIND_VERSION)
 
 

@@ -20,6 +20,7 @@ each ``frame``, the JPEG as a binary message. An ``events`` message says
 when it was sent (``sent``, wall-clock seconds), so a page can tell the
 server's share of an event's delay from its own.
 """
+
 from __future__ import annotations
 
 import asyncio
@@ -28,15 +29,15 @@ import threading
 import time
 from typing import Optional
 
-BATCH = 20000           # events per message, at most (a page shows each message at once)
+BATCH = 20000  # events per message, at most (a page shows each message at once)
 
 
 class _Page:
     """One connected page: how far it got."""
 
     def __init__(self):
-        self.sent = 0              # events sent
-        self.frame = 0             # number of the last frame sent
+        self.sent = 0  # events sent
+        self.frame = 0  # number of the last frame sent
         self.wake = asyncio.Event()
 
 
@@ -47,21 +48,27 @@ class Hub:
     ``wall_start`` the wall-clock time (``time.time()``) of the log's ``t``
     = 0, when known, so a page can tell how late an event reached it."""
 
-    def __init__(self, mode: str, records=(), title: str = "", camera: bool = False,
-                 wall_start: Optional[float] = None):
+    def __init__(
+        self,
+        mode: str,
+        records=(),
+        title: str = "",
+        camera: bool = False,
+        wall_start: Optional[float] = None,
+    ):
         self.mode, self.title, self.camera, self.wall_start = mode, title, camera, wall_start
         self.history: list[dict] = list(records)
-        self.frame: Optional[tuple[int, float, bytes]] = None    # (number, sim_t, jpeg)
+        self.frame: Optional[tuple[int, float, bytes]] = None  # (number, sim_t, jpeg)
         self.frames = 0
-        self.pages = 0                       # connected now (read by the robot's thread)
+        self.pages = 0  # connected now (read by the robot's thread)
         self.loop: Optional[asyncio.AbstractEventLoop] = None
         self._pages: set = set()
         self._poked = False
         self._closed = False
-        self.next_goal = False               # closed because another run begins (a node's goals)
+        self.next_goal = False  # closed because another run begins (a node's goals)
         self._texts: dict = {}
-        self.begun = mode != "live"           # a live run's pages wait for begin()
-        self.watching = threading.Event()    # set once a page has shown what it got
+        self.begun = mode != "live"  # a live run's pages wait for begin()
+        self.watching = threading.Event()  # set once a page has shown what it got
 
     # ------------------------------------------------------------ the robot's thread
     def publish(self, record: dict) -> None:
@@ -96,18 +103,24 @@ class Hub:
         self._poked = True
         try:
             loop.call_soon_threadsafe(self._wake)
-        except RuntimeError:      # the loop has stopped: nobody is listening
+        except RuntimeError:  # the loop has stopped: nobody is listening
             pass
 
     # ------------------------------------------------------------ the server's loop
     def _wake(self) -> None:
-        self._poked = False       # first: what comes after this gets a wake-up of its own
+        self._poked = False  # first: what comes after this gets a wake-up of its own
         for page in self._pages:
             page.wake.set()
 
     def hello(self) -> dict:
-        return {"type": "hello", "mode": self.mode, "title": self.title, "camera": self.camera,
-                "wall_start": self.wall_start, "events": len(self.history)}
+        return {
+            "type": "hello",
+            "mode": self.mode,
+            "title": self.title,
+            "camera": self.camera,
+            "wall_start": self.wall_start,
+            "events": len(self.history),
+        }
 
     async def serve(self, send_text, send_bytes) -> None:
         """Send one page everything, then each change, until the hub closes
@@ -116,7 +129,7 @@ class Hub:
         self._pages.add(page)
         self.pages += 1
         try:
-            while not self.begun and not self._closed:   # the robot is still being built
+            while not self.begun and not self._closed:  # the robot is still being built
                 page.wake.clear()
                 await page.wake.wait()
             await send_text(json.dumps(self.hello()))
@@ -156,12 +169,13 @@ class Hub:
     async def _send_new(self, page: _Page, send_text, send_bytes) -> None:
         while page.sent < len(self.history):
             start = page.sent
-            batch = self.history[start:start + BATCH]
+            batch = self.history[start : start + BATCH]
             page.sent = start + len(batch)
             await send_text(self._batch_text(start, batch))
         frame = self.frame
         if frame is not None and frame[0] != page.frame:
             page.frame = frame[0]
-            await send_text(json.dumps({"type": "frame", "number": frame[0],
-                                        "sim_t": round(frame[1], 4)}))
+            await send_text(
+                json.dumps({"type": "frame", "number": frame[0], "sim_t": round(frame[1], 4)})
+            )
             await send_bytes(frame[2])

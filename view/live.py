@@ -13,6 +13,7 @@ and at most ``CAMERA_SHARE`` of the robot thread's time (a frame that took
 ``d`` seconds to render is followed by none for ``d / CAMERA_SHARE``); a
 last frame is rendered when the run ends.
 """
+
 from __future__ import annotations
 
 import time
@@ -22,8 +23,8 @@ from .hub import Hub
 from .model import title_of
 from .server import ViewServer
 
-FRAME_RATE = 4.0          # camera frames a second, at most
-CAMERA_SHARE = 0.25       # of the robot thread's time, at most
+FRAME_RATE = 4.0  # camera frames a second, at most
+CAMERA_SHARE = 0.25  # of the robot thread's time, at most
 FRAME_SIZE = (320, 240)
 
 
@@ -35,7 +36,7 @@ class RunView:
         self.server = ViewServer(self.hub, host, port)
         self.robot = None
         self._next_frame = 0.0
-        self.camera_seconds = 0.0          # spent rendering, in the robot's thread
+        self.camera_seconds = 0.0  # spent rendering, in the robot's thread
 
     @property
     def url(self) -> str:
@@ -49,11 +50,16 @@ class RunView:
         """Show the run of ``dispatcher`` on ``robot`` whose events go to ``log``:
         the events so far, then each as it is emitted."""
         from htn.robot.interface import Robot
+
         hub = self.hub
         header = next((r for r in log.events if r["event"] == "header"), None)
         camera = type(robot).camera_frame is not Robot.camera_frame
-        hub.begin(list(log.events), title_of(header) if header else "", camera,
-                  time.time() - (time.perf_counter() - log.start))
+        hub.begin(
+            list(log.events),
+            title_of(header) if header else "",
+            camera,
+            time.time() - (time.perf_counter() - log.start),
+        )
         log.listeners.append(hub.publish)
         if camera:
             self.robot = robot
@@ -115,8 +121,9 @@ class GoalsView:
         """One event of the goal being run (its ``header`` begins a new run)."""
         if record.get("event") == "header":
             hub = Hub("live")
-            hub.begin([record], title_of(record), False,
-                      time.time() - float(record.get("t") or 0.0))
+            hub.begin(
+                [record], title_of(record), False, time.time() - float(record.get("t") or 0.0)
+            )
             self.server.switch(hub)
         else:
             self.server.hub.publish(record)

@@ -11,6 +11,7 @@ A log written before ``tree`` events existed has no task tree: the view
 then shows one node per step number (:func:`page_records` adds that tree as
 a record marked ``synthetic``, which no timeline lists).
 """
+
 from __future__ import annotations
 
 import json
@@ -40,21 +41,22 @@ def read_log(path: str) -> tuple[list[dict], Optional[str]]:
     last = len(lines) - 1
     while last >= 0 and not lines[last].strip():
         last -= 1
-    for number, line in enumerate(lines[:last + 1], 1):
+    for number, line in enumerate(lines[: last + 1], 1):
         if not line.strip():
             continue
         try:
             rec = json.loads(line)
         except ValueError as exc:
-            if number == len(lines) and records:      # no newline after it: cut short
+            if number == len(lines) and records:  # no newline after it: cut short
                 warning = f"{path}:{number}: the last line is incomplete; left out"
                 break
             raise HtnError(f"not a JSON line: {exc.msg}", path, number, exc.colno)
         if not isinstance(rec, dict) or not isinstance(rec.get("event"), str):
-            raise HtnError("not an event of htn run --log (no \"event\")", path, number, 1)
+            raise HtnError('not an event of htn run --log (no "event")', path, number, 1)
         if not records and rec["event"] != "header":
-            raise HtnError("not a log of htn run --log: its first line is no header event",
-                           path, number, 1)
+            raise HtnError(
+                "not a log of htn run --log: its first line is no header event", path, number, 1
+            )
         records.append(rec)
     if not records:
         raise HtnError("not a log of htn run --log: the file is empty", path)
@@ -73,12 +75,22 @@ def page_records(records: list[dict]) -> list[dict]:
             numbers[r["step"]] = (len(numbers) + 1, r.get("action") or f"step {r['step']}")
     nodes = [{"id": 0, "parent": None, "task": "(root)", "label": ""}]
     for step, (number, text) in sorted(numbers.items()):
-        nodes.append({"id": number, "parent": 0, "task": text, "label": f"step {step}",
-                      "step": step})
-    tree = {"t": records[0].get("t", 0.0), "sim_t": records[0].get("sim_t", 0.0),
-            "step": None, "action": None, "event": "tree", "attempt": None,
-            "detail": "no task tree in this log: one node per step", "nodes": nodes,
-            "parent": None, "replaces": [], "synthetic": True}
+        nodes.append(
+            {"id": number, "parent": 0, "task": text, "label": f"step {step}", "step": step}
+        )
+    tree = {
+        "t": records[0].get("t", 0.0),
+        "sim_t": records[0].get("sim_t", 0.0),
+        "step": None,
+        "action": None,
+        "event": "tree",
+        "attempt": None,
+        "detail": "no task tree in this log: one node per step",
+        "nodes": nodes,
+        "parent": None,
+        "replaces": [],
+        "synthetic": True,
+    }
     out = [records[0], tree]
     for r in records[1:]:
         if r.get("step") is not None and "node" not in r:

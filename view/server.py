@@ -10,6 +10,7 @@ The server's event loop runs in a daemon thread; the robot's thread only
 hands records to the hub. The port is bound before the thread starts, so a
 port in use is an input error before the run begins.
 """
+
 from __future__ import annotations
 
 import asyncio
@@ -29,10 +30,10 @@ from .hub import Hub
 STATIC = Path(__file__).resolve().parent / "static"
 HEADERS = {
     "Cache-Control": "no-store",
-    "Referrer-Policy": "no-referrer",     # the token stays in this page's URL
+    "Referrer-Policy": "no-referrer",  # the token stays in this page's URL
     "X-Content-Type-Options": "nosniff",
     "Content-Security-Policy": "default-src 'self'; img-src 'self' blob:; "
-                               "connect-src 'self'; style-src 'self'; script-src 'self'",
+    "connect-src 'self'; style-src 'self'; script-src 'self'",
 }
 FORBIDDEN = "403 forbidden: open the URL that htn printed (it holds this run's token)\n"
 
@@ -63,8 +64,10 @@ class TokenGate:
                     await send({"type": "websocket.close", "code": 1008})
                     return
                 from starlette.responses import PlainTextResponse
+
                 await PlainTextResponse(FORBIDDEN, status_code=403, headers=HEADERS)(
-                    scope, receive, send)
+                    scope, receive, send
+                )
                 return
         await self.app(scope, receive, send)
 
@@ -83,19 +86,21 @@ def make_app(source, token: str):
 
     async def index(request):
         text = page.replace("{{TOKEN}}", html.escape(token)).replace(
-            "{{TITLE}}", html.escape(source.hub.title or "htn view"))
+            "{{TITLE}}", html.escape(source.hub.title or "htn view")
+        )
         return HTMLResponse(text, headers=HEADERS)
 
     async def websocket(ws):
         await ws.accept()
         hub = source.hub
 
-        async def drain():          # what the page says, until it goes
+        async def drain():  # what the page says, until it goes
             try:
                 while True:
                     hub.page_said(await ws.receive_text())
             except (WebSocketDisconnect, RuntimeError):
                 pass
+
         sender = asyncio.ensure_future(hub.serve(ws.send_text, ws.send_bytes))
         reader = asyncio.ensure_future(drain())
         try:
@@ -106,9 +111,9 @@ def make_app(source, token: str):
             await asyncio.gather(sender, reader, return_exceptions=True)
         if sender.done() and not sender.cancelled() and sender.exception() is None:
             try:
-                await ws.close(code=1000)     # the hub closed: the view is over
+                await ws.close(code=1000)  # the hub closed: the view is over
             except (WebSocketDisconnect, RuntimeError):
-                pass        # the page went first (starlette turns a send to it into this)
+                pass  # the page went first (starlette turns a send to it into this)
 
     class Static(StaticFiles):
         async def get_response(self, path, scope):
@@ -116,8 +121,13 @@ def make_app(source, token: str):
             response.headers.update(HEADERS)
             return response
 
-    app = Starlette(routes=[Route("/", index), WebSocketRoute("/ws", websocket),
-                            Mount("/static", Static(directory=str(STATIC)), name="static")])
+    app = Starlette(
+        routes=[
+            Route("/", index),
+            WebSocketRoute("/ws", websocket),
+            Mount("/static", Static(directory=str(STATIC)), name="static"),
+        ]
+    )
     return TokenGate(app, token)
 
 
@@ -144,10 +154,17 @@ class ViewServer:
 
     def start(self, timeout: float = 10.0) -> "ViewServer":
         import uvicorn
-        config = uvicorn.Config(make_app(self, self.token), log_level="warning",
-                                access_log=False, lifespan="off", ws=_ws_protocol(),
-                                timeout_graceful_shutdown=1, log_config=None,
-                                ws_per_message_deflate=False)   # loopback: nothing to save
+
+        config = uvicorn.Config(
+            make_app(self, self.token),
+            log_level="warning",
+            access_log=False,
+            lifespan="off",
+            ws=_ws_protocol(),
+            timeout_graceful_shutdown=1,
+            log_config=None,
+            ws_per_message_deflate=False,
+        )  # loopback: nothing to save
         self._server = uvicorn.Server(config)
         ready = threading.Event()
 
@@ -161,6 +178,7 @@ class ViewServer:
             finally:
                 self.hub.loop = self.loop = None
                 loop.close()
+
         self._thread = threading.Thread(target=serve, name="htn-view", daemon=True)
         self._thread.start()
         if not ready.wait(timeout):
@@ -194,6 +212,7 @@ def _ws_protocol() -> str:
     """uvicorn's WebSocket protocol on the websockets library: its sans-I/O
     implementation where this uvicorn has it (the older one is deprecated)."""
     from uvicorn.config import WS_PROTOCOLS
+
     return "websockets-sansio" if "websockets-sansio" in WS_PROTOCOLS else "websockets"
 
 

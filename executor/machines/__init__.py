@@ -6,6 +6,7 @@ A plugin registers its own with ``@htn.executor.machines.action("!op")``, and
 says which predicate names what the robot carries with
 ``htn.executor.machines.carried_by("holding", domain=...)``.
 """
+
 from .base import ActionMachine, HoldMonitor, action, all_of, carried_by, machine_for
 
 __all__ = ["ActionMachine", "HoldMonitor", "action", "all_of", "carried_by", "machine_for"]

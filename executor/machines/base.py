@@ -25,6 +25,7 @@ are loaded the first time a machine is looked up. The machines for the
 bundled domains are in :mod:`htn.executor.machines.domestic` and
 :mod:`htn.executor.machines.kitchen`.
 """
+
 from __future__ import annotations
 
 from importlib import import_module
@@ -32,7 +33,7 @@ from typing import Callable, Optional
 
 from htn.robot.interface import Check, Robot, SkillResult
 
-HoldMonitor = tuple[str, Callable[[], Check]]    # (what must hold, how to check it)
+HoldMonitor = tuple[str, Callable[[], Check]]  # (what must hold, how to check it)
 
 
 class ActionMachine:
@@ -57,21 +58,23 @@ class ActionMachine:
         return []
 
 
-REGISTRY: dict[tuple, type] = {}      # (domain or None, operator) -> machine class
+REGISTRY: dict[tuple, type] = {}  # (domain or None, operator) -> machine class
 
 
 def action(operator: str, domain: Optional[str] = None):
     """Class decorator: register an :class:`ActionMachine` for an operator name,
     for every domain or (``domain=``) for one domain whose operator of the same
     name means something else."""
+
     def register(cls):
         cls.name = operator
         REGISTRY[(domain, operator)] = cls
         return cls
+
     return register
 
 
-CARRIED: dict[Optional[str], str] = {}   # domain or None -> predicate of what is carried
+CARRIED: dict[Optional[str], str] = {}  # domain or None -> predicate of what is carried
 
 
 def carried_by(predicate: str, domain: Optional[str] = None) -> None:
@@ -104,20 +107,23 @@ def load_plugins() -> None:
 
     from htn.jshop.language.errors import HtnError
 
-    for module in BUNDLED:      # their @action decorators register
+    for module in BUNDLED:  # their @action decorators register
         import_module(module)
     for ep in entry_points(group="htn.actions"):
         try:
             obj = ep.load()
             if callable(obj) and not inspect.isclass(obj):
                 obj()
-        except Exception as exc:   # a broken plugin: say which, no traceback
-            raise HtnError(f"action plugin '{ep.name}' ({ep.value}) failed to load: "
-                           f"{type(exc).__name__}: {exc}")
+        except Exception as exc:  # a broken plugin: say which, no traceback
+            raise HtnError(
+                f"action plugin '{ep.name}' ({ep.value}) failed to load: "
+                f"{type(exc).__name__}: {exc}"
+            )
 
 
-def machine_for(operator: str, domain: Optional[str] = None,
-                robot: Optional[Robot] = None) -> Optional[ActionMachine]:
+def machine_for(
+    operator: str, domain: Optional[str] = None, robot: Optional[Robot] = None
+) -> Optional[ActionMachine]:
     """The action state machine for an operator: the operator model's on a
     robot that executes it, else the one registered for this domain, else
     the one registered for every domain, else None."""
@@ -149,5 +155,13 @@ def all_of(*checks: Check) -> Check:
     return Check(not bad, "; ".join(c.detail for c in (bad or checks)))
 
 
-__all__ = ["ActionMachine", "action", "carried_by", "machine_for", "all_of", "SkillResult",
-           "Check", "HoldMonitor"]
+__all__ = [
+    "ActionMachine",
+    "action",
+    "carried_by",
+    "machine_for",
+    "all_of",
+    "SkillResult",
+    "Check",
+    "HoldMonitor",
+]

@@ -1,5 +1,6 @@
 """Action state machines of the domestic robot domain (``domains/domestic.jshop``):
 the paper's RoboCup@Home operators on the PyBullet domestic robot."""
+
 from __future__ import annotations
 
 from .base import ActionMachine, action, all_of, carried_by
@@ -11,6 +12,7 @@ def no_collision(robot):
 
 # (holding ROBOT-OR-ARM OBJECT): what the robot carries, checked while it acts
 carried_by("holding", domain="domestic")
+
 
 @action("!move_base")
 class MoveBase(ActionMachine):

@@ -1,5 +1,6 @@
 """Action state machines of the kitchen pick-and-place domain
 (``domains/kitchen.jshop``): two arms, drawers and a tray."""
+
 from __future__ import annotations
 
 from .base import ActionMachine, action, all_of, carried_by
@@ -7,6 +8,7 @@ from .domestic import no_collision
 
 # (holding ROBOT-OR-ARM OBJECT): what the robot carries, checked while it acts
 carried_by("holding", domain="kitchen")
+
 
 @action("!navigate", domain="kitchen")
 class Navigate(ActionMachine):

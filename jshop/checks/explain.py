@@ -19,6 +19,7 @@ is the dead end reached with the longest plan prefix (the first such one);
 a goal that does not hold at the end of a complete decomposition is a dead
 end too. ``--explain-all`` keeps every dead end, in the order met.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -34,27 +35,35 @@ from .unsatisfied import show as _show
 @dataclass
 class Attempt:
     """One operator or method branch tried on a dead-end task."""
-    what: str                    # "operator (!pick ?x)" / "method deliver, branch m1"
+
+    what: str  # "operator (!pick ?x)" / "method deliver, branch m1"
     where: Optional[S.Pos]
     reason: str
     literal_at: Optional[S.Pos] = None
 
     def to_dict(self) -> dict:
-        return {"what": self.what, "at": str(self.where) if self.where else None,
-                "reason": self.reason,
-                "literal_at": str(self.literal_at) if self.literal_at else None}
+        return {
+            "what": self.what,
+            "at": str(self.where) if self.where else None,
+            "reason": self.reason,
+            "literal_at": str(self.literal_at) if self.literal_at else None,
+        }
 
 
 @dataclass
 class DeadEnd:
     task: str
-    where: Optional[S.Pos]       # where the task is written (method body or problem)
-    steps: int                   # plan steps before it
+    where: Optional[S.Pos]  # where the task is written (method body or problem)
+    steps: int  # plan steps before it
     attempts: list = field(default_factory=list)
 
     def to_dict(self) -> dict:
-        return {"task": self.task, "at": str(self.where) if self.where else None,
-                "after_steps": self.steps, "attempts": [a.to_dict() for a in self.attempts]}
+        return {
+            "task": self.task,
+            "at": str(self.where) if self.where else None,
+            "after_steps": self.steps,
+            "attempts": [a.to_dict() for a in self.attempts],
+        }
 
     def lines(self, limit: Optional[int] = None) -> list:
         at = f" ({self.where})" if self.where else ""
@@ -92,7 +101,7 @@ class Explainer:
         task = node.task
         d = DeadEnd(str(task), getattr(task.src, "pos", None), steps)
         if task.primitive:
-            node.subtasks = []           # as while the search applied it
+            node.subtasks = []  # as while the search applied it
             d.attempts = self._operators(planner, task)
             node.subtasks = None
         else:
@@ -107,9 +116,14 @@ class Explainer:
         env = [None] * inst.goal_nvars
         item, bound = failing_literal(planner.logic, expr, env, self._prefixes)
         d = DeadEnd("the goal", inst.goal.pos, len(planner._steps))
-        d.attempts = [Attempt("goal", inst.goal.pos,
-                              f"{_show(item, bound)} does not hold in the final state",
-                              getattr(item, "pos", None))]
+        d.attempts = [
+            Attempt(
+                "goal",
+                inst.goal.pos,
+                f"{_show(item, bound)} does not hold in the final state",
+                getattr(item, "pos", None),
+            )
+        ]
         self._keep(d)
 
     def _keep(self, d: DeadEnd) -> None:
@@ -130,8 +144,14 @@ class Explainer:
             satisfiers = list(_first(pre(env), 50))
             if not satisfiers:
                 item, bound = failing_literal(planner.logic, op.pre.expr, env, self._prefixes)
-                out.append(Attempt(what, op.pos, f"precondition {_show(item, bound)} has no "
-                                   "satisfier", getattr(item, "pos", None)))
+                out.append(
+                    Attempt(
+                        what,
+                        op.pos,
+                        f"precondition {_show(item, bound)} has no satisfier",
+                        getattr(item, "pos", None),
+                    )
+                )
                 continue
             out.append(Attempt(what, op.pos, self._why_not_applied(planner, op, satisfiers)))
         return out
@@ -141,8 +161,11 @@ class Explainer:
         for nb in satisfiers:
             dels, _adds = planner.effects(op, nb)
             change, ok = planner._apply(op, nb)
-            broken = ok and planner.guard is not None and \
-                planner.guard.broken(change, state, planner.root)
+            broken = (
+                ok
+                and planner.guard is not None
+                and planner.guard.broken(change, state, planner.root)
+            )
             change.undo(state)
             if not ok:
                 protected = [atom_str(*a) for a in dels if state.is_protected(*a)]
@@ -150,7 +173,7 @@ class Explainer:
                 return f"it would delete the protected atom{atom} (manual 3.9)"
             if broken:
                 return "it breaks a goal atom that no task left can make true again"
-        return "it applies, but no plan continues from it"    # pragma: no cover
+        return "it applies, but no plan continues from it"  # pragma: no cover
 
     def _methods(self, planner, task) -> list:
         out = []
@@ -158,22 +181,38 @@ class Explainer:
         for index, (m, unify_head, branches) in enumerate(methods):
             env = [None] * m.nvars
             if not unify_head(task.args, env):
-                out.append(Attempt(f"method {source_atom(m.head.name, m.head.args)}", m.pos, _mismatch(m.head, task)))
+                out.append(
+                    Attempt(
+                        f"method {source_atom(m.head.name, m.head.args)}",
+                        m.pos,
+                        _mismatch(m.head, task),
+                    )
+                )
                 continue
             for k, (sat, _reduce, _ordered) in enumerate(branches):
                 branch = m.branches[k]
                 what = f"method {source_atom(m.head.name, m.head.args)}, branch {branch.label}"
                 satisfiers = list(_first(sat(env), 1))
                 if satisfiers:
-                    out.append(Attempt(what, branch.pos or m.pos, "every binding of its "
-                                       "precondition is already being decomposed in this "
-                                       "state (a loop)"))
-                    break         # JSHOP2: later branches are not considered
-                item, bound = failing_literal(planner.logic, branch.pre.expr, env,
-                                              self._prefixes)
-                out.append(Attempt(what, branch.pos or m.pos, f"precondition "
-                                   f"{_show(item, bound)} has no satisfier",
-                                   getattr(item, "pos", None)))
+                    out.append(
+                        Attempt(
+                            what,
+                            branch.pos or m.pos,
+                            "every binding of its "
+                            "precondition is already being decomposed in this "
+                            "state (a loop)",
+                        )
+                    )
+                    break  # JSHOP2: later branches are not considered
+                item, bound = failing_literal(planner.logic, branch.pre.expr, env, self._prefixes)
+                out.append(
+                    Attempt(
+                        what,
+                        branch.pos or m.pos,
+                        f"precondition {_show(item, bound)} has no satisfier",
+                        getattr(item, "pos", None),
+                    )
+                )
         return out
 
     # ------------------------------------------------------------ output
@@ -185,22 +224,24 @@ class Explainer:
             for d in self.all:
                 out += ["  " + line for line in d.lines()]
             return out
-        return ([f"explain: the search got deepest at this dead end ({self.count} in all; "
-                 "--explain-all lists every one):"]
-                + ["  " + line for line in self.deepest.lines(limit=12)])
+        return [
+            f"explain: the search got deepest at this dead end ({self.count} in all; "
+            "--explain-all lists every one):"
+        ] + ["  " + line for line in self.deepest.lines(limit=12)]
 
     def to_dict(self, full: bool = False) -> dict:
-        d = {"dead_ends": self.count,
-             "deepest": self.deepest.to_dict() if self.deepest else None}
+        d = {"dead_ends": self.count, "deepest": self.deepest.to_dict() if self.deepest else None}
         if full:
             d["all"] = [x.to_dict() for x in self.all]
         return d
 
 
-def explain_search(domain, instance, functions=None, keep_all: bool = False,
-                   **options) -> Explainer:
+def explain_search(
+    domain, instance, functions=None, keep_all: bool = False, **options
+) -> Explainer:
     """Run a whole search of ``instance`` recording its dead ends."""
     from htn.jshop.search.planner import Planner
+
     explainer = Explainer(keep_all=keep_all)
     for _ in Planner(domain, instance, functions, explain=explainer, **options).plans():
         pass
@@ -216,6 +257,5 @@ def _first(it, n: int):
 
 def _mismatch(head: S.TaskAtom, task) -> str:
     if len(head.args) != len(task.args):
-        return (f"its head takes {len(head.args)} argument(s), the task has "
-                f"{len(task.args)}")
+        return f"its head takes {len(head.args)} argument(s), the task has {len(task.args)}"
     return "its head does not match the task's arguments"

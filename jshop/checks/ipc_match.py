@@ -21,6 +21,7 @@ Unlike the verifier, a line must list all of its method's subtasks: the
 verifier stops matching when every listed id is matched, so a line that
 leaves out a subtask whose actions have no effect can pass there.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -37,15 +38,16 @@ from htn.jshop.readers.hddl_model import TOP, TOP_METHOD
 class Shape:
     """What a method requires of a decomposition line, in the method's
     variables (numbered as JSHOP2's binding array)."""
+
     name: str
     task: str
-    head: tuple                  # the :task arguments (terms)
-    subtasks: list               # [(name, terms, label)]
-    pairs: list                  # [(i, j)]: subtask i before subtask j
-    preds: list                  # preds[j]: the i of the pairs (i, j)
-    params: list                 # [(Var, types)]
-    pre: S.Precondition          # written precondition, :constraints, parameter types
-    bound: tuple                 # the variables the head and the subtasks bind
+    head: tuple  # the :task arguments (terms)
+    subtasks: list  # [(name, terms, label)]
+    pairs: list  # [(i, j)]: subtask i before subtask j
+    preds: list  # preds[j]: the i of the pairs (i, j)
+    params: list  # [(Var, types)]
+    pre: S.Precondition  # written precondition, :constraints, parameter types
+    bound: tuple  # the variables the head and the subtasks bind
     nvars: int
     pos: Optional[S.Pos] = None
 
@@ -54,6 +56,7 @@ class Shape:
 class Match:
     """One way a line's ids are the method's subtasks: ``order[k]`` is the
     method's subtask of the k-th listed id; ``env`` the binding."""
+
     order: tuple
     env: list
 
@@ -62,6 +65,7 @@ class Match:
 class Mismatch:
     """Why a line does not instantiate its method: the message, and the
     position in the line's id list it is about (None: the line itself)."""
+
     message: str
     at: Optional[int] = None
     depth: int = -1
@@ -76,8 +80,10 @@ def shape(m, predicates: dict) -> Shape:
     f.outer.update(v.index for v in params)
     head = tuple(f.term(x, names, m.task.pos) for x in m.task.args)
     net = m.network
-    subs = [(st.name, tuple(f.term(x, names, st.pos) for x in st.args), st.label)
-            for st in (net.subtasks if net is not None else [])]
+    subs = [
+        (st.name, tuple(f.term(x, names, st.pos) for x in st.args), st.label)
+        for st in (net.subtasks if net is not None else [])
+    ]
     conds, types = f.conjuncts(m.pre, names)
     more, more_types = f.conjuncts(net.constraints if net is not None else None, names)
     conds += more
@@ -91,17 +97,34 @@ def shape(m, predicates: dict) -> Shape:
     for i, j in pairs:
         preds[j].add(i)
     bound_vars = tuple(scope.var(n) for n, i in scope.slots.items() if i in bound)
-    return Shape(m.name, m.task.name, head, subs, pairs, preds,
-                 list(zip(params, (p.types for p in m.params))),
-                 S.Precondition(S.And(items), pos=m.pos), bound_vars, scope.size, m.pos)
+    return Shape(
+        m.name,
+        m.task.name,
+        head,
+        subs,
+        pairs,
+        preds,
+        list(zip(params, (p.types for p in m.params))),
+        S.Precondition(S.And(items), pos=m.pos),
+        bound_vars,
+        scope.size,
+        m.pos,
+    )
 
 
 def top_shape(problem_model, predicates: dict) -> Shape:
     """The problem's initial task network as the method ``__top_method``."""
     from htn.jshop.readers.hddl_model import MethodDef, Network, Subtask
+
     net = problem_model.network or Network()
-    top = MethodDef(TOP_METHOD, problem_model.params, Subtask(None, TOP, (), problem_model.pos),
-                    None, net, problem_model.pos)
+    top = MethodDef(
+        TOP_METHOD,
+        problem_model.params,
+        Subtask(None, TOP, (), problem_model.pos),
+        None,
+        net,
+        problem_model.pos,
+    )
     return shape(top, predicates)
 
 
@@ -131,12 +154,15 @@ def matchings(sh: Shape, args: tuple, children: list, of_type, limit: int = 64):
     for k, (term, value) in enumerate(zip(sh.head, args)):
         clash = _bind(term, value, env)
         if clash:
-            return [], Mismatch(f"argument {k + 1} of the task is {value}, but method "
-                                f"{sh.name} decomposes ({sh.task} "
-                                f"{' '.join(_term(t) for t in sh.head)}){clash}")
+            return [], Mismatch(
+                f"argument {k + 1} of the task is {value}, but method "
+                f"{sh.name} decomposes ({sh.task} "
+                f"{' '.join(_term(t) for t in sh.head)}){clash}"
+            )
     if len(children) != len(sh.subtasks):
-        return [], Mismatch(f"method {sh.name} has {len(sh.subtasks)} subtask(s), the line "
-                            f"lists {len(children)}")
+        return [], Mismatch(
+            f"method {sh.name} has {len(sh.subtasks)} subtask(s), the line lists {len(children)}"
+        )
     found: list = []
     worst = Mismatch("", None, -1)
 
@@ -168,8 +194,12 @@ def matchings(sh: Shape, args: tuple, children: list, of_type, limit: int = 64):
             search(k + 1, done + (i,), new)
         if not found and k >= worst.depth:
             allowed = "; ".join(tried) if tried else "none"
-            worst = Mismatch(f"({' '.join((name, *values))}) is not a subtask of method "
-                             f"{sh.name} that may come here (allowed: {allowed})", k, k)
+            worst = Mismatch(
+                f"({' '.join((name, *values))}) is not a subtask of method "
+                f"{sh.name} that may come here (allowed: {allowed})",
+                k,
+                k,
+            )
 
     search(0, (), env)
     return found, (None if found else worst)
@@ -208,6 +238,7 @@ def _show_sub(name: str, terms: tuple, label) -> str:
 @dataclass
 class Shapes:
     """The shapes of a domain's methods, made when first asked."""
+
     model: object
     cache: dict = field(default_factory=dict)
 

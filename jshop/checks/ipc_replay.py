@@ -14,6 +14,7 @@ in no state where it could be (between the last action ordered before the
 task and the first action below it). No branching: HDDL methods have no
 effects, so taking a start as early as possible never loses a plan.
 """
+
 from __future__ import annotations
 
 from collections import deque
@@ -28,6 +29,7 @@ from .validate import why_goal, why_step
 @dataclass
 class Finding:
     """A reason why a plan is invalid, at its line and column."""
+
     line: int
     col: int
     message: str
@@ -130,18 +132,27 @@ class Replay:
                     continue
                 seen.add(p)
                 if p[0] == "s" and all(q in self.done for q in self.preds.get(p, ())):
-                    return self.precondition_fails(p[1], f"before action id {a.id} (line "
-                                                         f"{a.line})")
+                    return self.precondition_fails(p[1], f"before action id {a.id} (line {a.line})")
                 stack.append(p)
-        return Finding(a.line, a.col, f"action id {a.id} comes before an action the "
-                                      "decomposition orders before it")
+        return Finding(
+            a.line,
+            a.col,
+            f"action id {a.id} comes before an action the decomposition orders before it",
+        )
 
     def precondition_fails(self, ident: int, where: str) -> Finding:
         c = self.c
         d, sh = c._decomposition(ident), c.shape_of[ident]
         item, bound = failing_literal(c.planner.logic, sh.pre.expr, list(self.chosen[ident].env))
         why = f": {show(item, bound)} has no satisfier" if item is not None else ""
-        what = ("the problem's initial task network" if ident < 0 else
-                f"id {ident} ({d.text}) -> {sh.name}")
-        return Finding(d.line, d.method_col, f"{what}: the method's precondition does not hold "
-                                             f"{where}, nor earlier where it may be applied{why}")
+        what = (
+            "the problem's initial task network"
+            if ident < 0
+            else f"id {ident} ({d.text}) -> {sh.name}"
+        )
+        return Finding(
+            d.line,
+            d.method_col,
+            f"{what}: the method's precondition does not hold "
+            f"{where}, nor earlier where it may be applied{why}",
+        )

@@ -31,6 +31,7 @@ the files write them; lines that list each other in a cycle apart from the
 root are not reached from it, where the verifier only asks that every id be
 listed by some line.
 """
+
 from __future__ import annotations
 
 import itertools
@@ -43,7 +44,7 @@ from htn.jshop.plans.ipc import IpcLine, IpcPlan
 from .ipc_match import TOP, TOP_METHOD, Shapes, matchings, top_shape
 from .ipc_replay import Finding, Replay
 
-MAX_COMBINATIONS = 256      # ambiguous matchings tried together in the execution check
+MAX_COMBINATIONS = 256  # ambiguous matchings tried together in the execution check
 
 
 @dataclass
@@ -54,12 +55,15 @@ class IpcVerdict:
     findings: list = field(default_factory=list)
 
 
-def verify_ipc_plan(domain: S.Domain, problem: S.Problem, plan: IpcPlan,
-                    functions=None) -> IpcVerdict:
+def verify_ipc_plan(
+    domain: S.Domain, problem: S.Problem, plan: IpcPlan, functions=None
+) -> IpcVerdict:
     """Check ``plan`` against an HDDL domain and problem (module docstring)."""
     if domain.hddl is None or problem.hddl is None:
-        raise HtnError.at(domain.pos if domain.hddl is None else problem.pos,
-                          "an IPC plan is checked against an HDDL domain and problem")
+        raise HtnError.at(
+            domain.pos if domain.hddl is None else problem.pos,
+            "an IPC plan is checked against an HDDL domain and problem",
+        )
     return _Check(domain, problem, plan, functions).run()
 
 
@@ -72,16 +76,18 @@ class _Check:
         self.top_shape = top_shape(problem.hddl, self.h.predicates)
         self.findings: list = []
         self.lines: dict = {}
-        self.top = None            # the decomposition line of the root (maybe made up)
+        self.top = None  # the decomposition line of the root (maybe made up)
         self.planner = self._planner()
-        self.shape_of: dict = {}   # id -> Shape
-        self.choices: dict = {}    # id -> [Match]
+        self.shape_of: dict = {}  # id -> Shape
+        self.choices: dict = {}  # id -> [Match]
 
     def _planner(self):
         from htn.jshop.search.planner import Planner
+
         inst = self.instance
-        return Planner.for_state(self.domain, inst.state, self.functions, goal=inst.goal,
-                                 goal_nvars=inst.goal_nvars)
+        return Planner.for_state(
+            self.domain, inst.state, self.functions, goal=inst.goal, goal_nvars=inst.goal_nvars
+        )
 
     def add(self, line: int, col: int, message: str) -> None:
         self.findings.append(Finding(line, col, message))
@@ -92,16 +98,20 @@ class _Check:
             if self.findings:
                 break
         plan = self.plan
-        return IpcVerdict(not self.findings, len(plan.actions), len(plan.decompositions),
-                          self.findings)
+        return IpcVerdict(
+            not self.findings, len(plan.actions), len(plan.decompositions), self.findings
+        )
 
     # ------------------------------------------------------------ 1. ids
     def ids(self) -> None:
         plan = self.plan
         for e in (*plan.actions, *plan.decompositions):
             if e.id in self.lines:
-                self.add(e.line, e.col, f"id {e.id} is used twice (first on line "
-                                        f"{self.lines[e.id].line})")
+                self.add(
+                    e.line,
+                    e.col,
+                    f"id {e.id} is used twice (first on line {self.lines[e.id].line})",
+                )
             else:
                 self.lines[e.id] = e
         if not plan.root_line:
@@ -111,33 +121,42 @@ class _Check:
         if first is not None and first.method is not None and first.name == TOP:
             self.top = first
         else:
-            self.top = IpcLine(-1, TOP, (), plan.root_line, 1, (1,), TOP_METHOD, 1,
-                               plan.root, plan.root_cols)
+            self.top = IpcLine(
+                -1, TOP, (), plan.root_line, 1, (1,), TOP_METHOD, 1, plan.root, plan.root_cols
+            )
         parent: dict = {}
         self._refer("the root", None, plan.root, plan.root_cols, plan.root_line, parent)
         for d in plan.decompositions:
-            self._refer(f"id {d.id} (line {d.line})", d.id, d.children, d.child_cols, d.line,
-                        parent)
+            self._refer(
+                f"id {d.id} (line {d.line})", d.id, d.children, d.child_cols, d.line, parent
+            )
         reached, stack = set(), [i for i in plan.root if i in self.lines]
-        while stack:          # from the root: a cycle of lines that list each other is not
+        while stack:  # from the root: a cycle of lines that list each other is not
             i = stack.pop()
             if i not in reached:
                 reached.add(i)
                 stack.extend(c for c in self.lines[i].children if c in self.lines)
         for e in (*plan.actions, *plan.decompositions):
             if e.id not in reached and self.lines.get(e.id) is e:
-                why = ("no line lists it as a subtask" if e.id not in parent else
-                       f"it is a subtask of {parent[e.id]}, which is not reached either")
-                self.add(e.line, e.col, f"id {e.id} ({e.text}) is not reached from the root: "
-                                        + why)
+                why = (
+                    "no line lists it as a subtask"
+                    if e.id not in parent
+                    else f"it is a subtask of {parent[e.id]}, which is not reached either"
+                )
+                self.add(
+                    e.line, e.col, f"id {e.id} ({e.text}) is not reached from the root: " + why
+                )
 
     def _refer(self, owner: str, own, ids, cols, line: int, parent: dict) -> None:
         for i, col in zip(ids, cols):
             if i == own:
                 self.add(line, col, f"id {i} lists itself as a subtask")
             elif i not in self.lines:
-                self.add(line, col, f"subtask id {i} is not defined: no action or "
-                                    "decomposition line has it")
+                self.add(
+                    line,
+                    col,
+                    f"subtask id {i} is not defined: no action or decomposition line has it",
+                )
             elif i in parent:
                 self.add(line, col, f"id {i} is already a subtask of {parent[i]}")
             else:
@@ -153,9 +172,14 @@ class _Check:
         for e in self.plan.actions:
             a = h.actions.get(e.name)
             if a is None:
-                self.add(e.line, e.cols[0], f"{e.name} is a compound task, not an action: it "
-                         "needs a decomposition line after 'root'" if e.name in h.tasks else
-                         f"the domain has no action {e.name}")
+                self.add(
+                    e.line,
+                    e.cols[0],
+                    f"{e.name} is a compound task, not an action: it "
+                    "needs a decomposition line after 'root'"
+                    if e.name in h.tasks
+                    else f"the domain has no action {e.name}",
+                )
             else:
                 self._arguments(e, a.params, "action")
         for d in self.plan.decompositions:
@@ -165,28 +189,45 @@ class _Check:
                 continue
             t = h.tasks.get(d.name)
             if t is None:
-                self.add(d.line, d.cols[0], f"{d.name} is an action, not a compound task: it "
-                         "cannot be decomposed" if d.name in h.actions else
-                         f"the domain has no task {d.name}")
+                self.add(
+                    d.line,
+                    d.cols[0],
+                    f"{d.name} is an action, not a compound task: it cannot be decomposed"
+                    if d.name in h.actions
+                    else f"the domain has no task {d.name}",
+                )
             else:
                 self._arguments(d, t.params, "task")
 
     def _arguments(self, e: IpcLine, params: list, kind: str) -> None:
         if len(params) != len(e.args):
-            self.add(e.line, e.cols[0], f"{kind} {e.name} takes {len(params)} argument(s), "
-                                        f"given {len(e.args)}")
+            self.add(
+                e.line,
+                e.cols[0],
+                f"{kind} {e.name} takes {len(params)} argument(s), given {len(e.args)}",
+            )
             return
         for k, (value, p) in enumerate(zip(e.args, params)):
             if not self.of_type(value, p.types):
-                self.add(e.line, e.cols[k + 1], f"argument {k + 1} of {e.name}, {value}, is not "
-                                                f"an object of type {' or '.join(p.types)}")
+                self.add(
+                    e.line,
+                    e.cols[k + 1],
+                    f"argument {k + 1} of {e.name}, {value}, is not "
+                    f"an object of type {' or '.join(p.types)}",
+                )
 
     # ------------------------------------------------------------ 3. methods
     def methods(self) -> None:
         for d in (*self.plan.decompositions, *([self.top] if self.top.id < 0 else [])):
             if d.name == TOP:
-                sh, why = self.top_shape, ("" if d.method == TOP_METHOD else
-                                           f"the root task {TOP} is decomposed by {TOP_METHOD}")
+                sh, why = (
+                    self.top_shape,
+                    (
+                        ""
+                        if d.method == TOP_METHOD
+                        else f"the root task {TOP} is decomposed by {TOP_METHOD}"
+                    ),
+                )
             else:
                 sh, why = self.shapes.get(d.name, d.method)
             if why:
@@ -196,8 +237,11 @@ class _Check:
             found, mismatch = matchings(sh, d.args, children, self.of_type)
             if not found:
                 col = d.child_cols[mismatch.at] if mismatch.at is not None else d.method_col
-                what = ("the root tasks are not the problem's initial task network"
-                        if d.id < 0 else f"id {d.id} ({d.text}) -> {d.method}")
+                what = (
+                    "the root tasks are not the problem's initial task network"
+                    if d.id < 0
+                    else f"id {d.id} ({d.text}) -> {d.method}"
+                )
                 self.add(d.line, col, f"{what}: {mismatch.message}")
                 continue
             self.shape_of[d.id] = sh
@@ -214,8 +258,9 @@ class _Check:
             kept, first_bad = [], None
             for match in found:
                 child = {i: d.children[k] for k, i in enumerate(match.order)}
-                bad = next(((i, j) for i, j in sh.pairs
-                            if _after(span[child[i]], span[child[j]])), None)
+                bad = next(
+                    ((i, j) for i, j in sh.pairs if _after(span[child[i]], span[child[j]])), None
+                )
                 if bad is None:
                     kept.append(match)
                 elif first_bad is None:
@@ -226,11 +271,14 @@ class _Check:
             (i, j), child = first_bad
             a = self.plan.actions[span[child[i]][1]]
             b = self.plan.actions[span[child[j]][0]]
-            self.add(d.line, d.child_cols[d.children.index(child[j])],
-                     f"method {sh.name} orders {_label(sh, i)} (id {child[i]}) before "
-                     f"{_label(sh, j)} "
-                     f"(id {child[j]}), but action id {a.id} (line {a.line}) comes after action "
-                     f"id {b.id} (line {b.line})")
+            self.add(
+                d.line,
+                d.child_cols[d.children.index(child[j])],
+                f"method {sh.name} orders {_label(sh, i)} (id {child[i]}) before "
+                f"{_label(sh, j)} "
+                f"(id {child[j]}), but action id {a.id} (line {a.line}) comes after action "
+                f"id {b.id} (line {b.line})",
+            )
 
     def _spans(self) -> dict:
         """id -> (first, last) position of the actions below it, () if none;
@@ -277,16 +325,17 @@ def _after(before: tuple, after: tuple) -> bool:
     return bool(before) and bool(after) and before[1] > after[0]
 
 
-def verify_ipc_text(domain: S.Domain, problem: S.Problem, text: str, file: str,
-                    plan_index=None, functions=None) -> list:
+def verify_ipc_text(
+    domain: S.Domain, problem: S.Problem, text: str, file: str, plan_index=None, functions=None
+) -> list:
     """``[(IpcPlan, IpcVerdict)]`` for the IPC plans of a file's ``text`` (the
     ``plan_index``-th only, 1-based, if given); :class:`HtnError` for a file
     that cannot be read as IPC plans."""
     from htn.jshop.plans.ipc import read_ipc_plans
+
     plans = read_ipc_plans(text, file)
     if plan_index is not None:
         if plan_index > len(plans):
-            raise HtnError(f"--plan-index {plan_index}: the file holds {len(plans)} plan(s)",
-                           file)
+            raise HtnError(f"--plan-index {plan_index}: the file holds {len(plans)} plan(s)", file)
         plans = [plans[plan_index - 1]]
     return [(p, verify_ipc_plan(domain, problem, p, functions)) for p in plans]

@@ -10,6 +10,7 @@ planner's plans in that order. An older transformed plan's file notes its
 task list (``; tasks:``), which is planned instead. A plan no decomposition
 gives (a hand-written one) has no recoverable tree; it runs as one sequence.
 """
+
 from __future__ import annotations
 
 from typing import Optional
@@ -19,21 +20,31 @@ from htn.jshop.language.errors import HtnError
 from htn.jshop.language.terms import Var
 from htn.jshop.search.planner import Planner
 
-RECOVER_TIMEOUT = 5.0     # seconds of search
-RECOVER_PLANS = 50        # plans looked at, at most
+RECOVER_TIMEOUT = 5.0  # seconds of search
+RECOVER_PLANS = 50  # plans looked at, at most
 
 
-def recover_tree(domain: S.Domain, instance: S.ProblemInstance, steps, functions=None,
-                 timeout: float = RECOVER_TIMEOUT, max_plans: int = RECOVER_PLANS,
-                 tasks: Optional[str] = None):
+def recover_tree(
+    domain: S.Domain,
+    instance: S.ProblemInstance,
+    steps,
+    functions=None,
+    timeout: float = RECOVER_TIMEOUT,
+    max_plans: int = RECOVER_PLANS,
+    tasks: Optional[str] = None,
+):
     """The task tree of the first plan of ``instance`` whose steps are ``steps``,
     or None. ``tasks`` (a task list's text, as ``htn transform -o`` notes it)
     replaces the problem's task list."""
     if tasks:
         from htn.jshop.readers.load import parse_text
+
         try:
-            listed = parse_text(f"(defproblem tasks {domain.name} () ({tasks}))",
-                                "<tasks>").instances[0].tasks
+            listed = (
+                parse_text(f"(defproblem tasks {domain.name} () ({tasks}))", "<tasks>")
+                .instances[0]
+                .tasks
+            )
         except HtnError:
             return None
         instance = S.ProblemInstance(instance.state, listed, instance.pos)
@@ -58,24 +69,39 @@ def _variable(term) -> Optional[Var]:
     return None
 
 
-def check_runnable(domain: S.Domain, instance: S.ProblemInstance, plan,
-                   plan_file: Optional[str], functions=None, lines=()) -> None:
+def check_runnable(
+    domain: S.Domain,
+    instance: S.ProblemInstance,
+    plan,
+    plan_file: Optional[str],
+    functions=None,
+    lines=(),
+) -> None:
     """Before the robot moves: every step is ground, and the steps apply in
     sequence from the problem's initial state (manual 5.2.1; the plan's cost
     is not checked). A bad step is an input error at its line of the plan
     file (``lines``: the file's text, which locates a variable's column)."""
     from htn.jshop.checks.validate import validate_plan
     from htn.jshop.plans.plan import Plan
+
     for s in plan.steps:
         var = next((v for v in map(_variable, s.args) if v is not None), None)
         if var is not None:
             text = lines[s.line - 1] if 0 < s.line <= len(lines) else ""
             col = text.find(var.name) + 1 if var.name in text else 1
             shown = text.strip() or s.name
-            raise HtnError(f"{shown} has a variable, {var.name}: a plan to run must be ground",
-                           plan_file, s.line or None, col if s.line else None)
+            raise HtnError(
+                f"{shown} has a variable, {var.name}: a plan to run must be ground",
+                plan_file,
+                s.line or None,
+                col if s.line else None,
+            )
     verdict = validate_plan(domain, instance, Plan(plan.steps, None), functions)
     if not verdict.valid:
         where = verdict.line or None
-        raise HtnError(f"step {verdict.failed_step + 1} cannot run: {verdict.reason}",
-                       plan_file, where, 1 if where else None)
+        raise HtnError(
+            f"step {verdict.failed_step + 1} cannot run: {verdict.reason}",
+            plan_file,
+            where,
+            1 if where else None,
+        )

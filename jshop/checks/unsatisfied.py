@@ -5,6 +5,7 @@
 here": the first conjunct, in evaluation order (manual 4.2: left to right),
 that has no satisfier under the bindings found for the conjuncts before it.
 """
+
 from __future__ import annotations
 
 from typing import Optional
@@ -26,7 +27,7 @@ def failing_literal(logic, expr, env: list, cache: Optional[dict] = None):
         key = (id(expr), j)
         sat = cache.get(key)
         if sat is None:
-            sat = cache[key] = logic.expr(S.And(list(items[:j + 1])) if j else items[0])
+            sat = cache[key] = logic.expr(S.And(list(items[: j + 1])) if j else items[0])
         found = next(iter(sat(env)), None)
         if found is None:
             return items[j], bound
@@ -38,6 +39,7 @@ def show(e, env) -> str:
     """An expression in source form, variables replaced by their bindings."""
     from htn.jshop.language.functions import STDLIB_JAVA_NAMES
     from htn.jshop.language.terms import CallTerm
+
     written = {java: name for name, java in STDLIB_JAVA_NAMES.items()}
 
     def term(t):
@@ -50,6 +52,7 @@ def show(e, env) -> str:
         if type(t) is tuple:
             return "(" + " ".join(term(x) for x in t) + ")" if t else "nil"
         return term_str(t)
+
     if isinstance(e, S.Atom):
         return "(" + " ".join([e.pred, *[term(a) for a in e.args]]) + ")"
     if isinstance(e, S.Not):

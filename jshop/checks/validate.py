@@ -15,6 +15,7 @@ applicable operator sequence with the right cost (and reaching the goal) is
 valid; a plan in the IPC 2020 format (``htn plan -f ipc``) carries its
 decomposition, which :mod:`htn.jshop.checks.ipc_verify` checks as well.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -31,12 +32,13 @@ from .unsatisfied import show as _show
 @dataclass
 class Verdict:
     """The outcome of validating one plan."""
+
     valid: bool
     steps: int
-    cost: float                  # the steps' cost (of the deepest replay)
-    failed_step: Optional[int] = None    # 0-based index of the step that fails
+    cost: float  # the steps' cost (of the deepest replay)
+    failed_step: Optional[int] = None  # 0-based index of the step that fails
     reason: str = ""
-    line: int = 0                # the plan file's line of that step (or of its cost)
+    line: int = 0  # the plan file's line of that step (or of its cost)
 
 
 def check_steps(domain: S.Domain, steps, file: str) -> None:
@@ -44,23 +46,32 @@ def check_steps(domain: S.Domain, steps, file: str) -> None:
     for s in steps:
         ops = domain.operators.get(s.name)
         if not ops:
-            raise HtnError(f"unknown operator {s.name}: the domain has no such operator",
-                           file, s.line or None, 1 if s.line else None)
+            raise HtnError(
+                f"unknown operator {s.name}: the domain has no such operator",
+                file,
+                s.line or None,
+                1 if s.line else None,
+            )
         if all(len(o.head.args) != len(s.args) for o in ops):
-            raise HtnError(f"{s.name} takes {len(ops[0].head.args)} argument(s), given "
-                           f"{len(s.args)}", file, s.line or None, 1 if s.line else None)
+            raise HtnError(
+                f"{s.name} takes {len(ops[0].head.args)} argument(s), given {len(s.args)}",
+                file,
+                s.line or None,
+                1 if s.line else None,
+            )
 
 
-def validate_plan(domain: S.Domain, instance: S.ProblemInstance, plan,
-                  functions=None) -> Verdict:
+def validate_plan(domain: S.Domain, instance: S.ProblemInstance, plan, functions=None) -> Verdict:
     """Replay ``plan`` (a :class:`~htn.jshop.plans.plan.Plan`) from ``instance``'s
     initial state; see the module docstring for what valid means."""
     from htn.jshop.search.planner import Planner
-    planner = Planner.for_state(domain, instance.state, functions, goal=instance.goal,
-                                goal_nvars=instance.goal_nvars)
+
+    planner = Planner.for_state(
+        domain, instance.state, functions, goal=instance.goal, goal_nvars=instance.goal_nvars
+    )
     steps = plan.steps
     n = len(steps)
-    changes: list = []            # applied change of each step so far
+    changes: list = []  # applied change of each step so far
     costs: list = []
     frames = [_options(planner, steps[0])] if n else []
     deepest = Verdict(False, n, 0.0)
@@ -74,20 +85,29 @@ def validate_plan(domain: S.Domain, instance: S.ProblemInstance, plan,
                 return Verdict(True, n, total)
             if not goal_ok:
                 if deepest.failed_step is None or deepest.failed_step < n:
-                    deepest = Verdict(False, n, total, n, why_goal(planner, instance),
-                                      getattr(plan, "line", 0))
+                    deepest = Verdict(
+                        False, n, total, n, why_goal(planner, instance), getattr(plan, "line", 0)
+                    )
             elif deepest.failed_step is None:
-                deepest = Verdict(False, n, total, n, f"the plan's cost is "
-                                  f"{term_str(float(plan.cost))} but its steps cost "
-                                  f"{term_str(float(total))}", getattr(plan, "line", 0))
-            if not _undo_last(planner, changes, costs):   # try the last step's next choice
+                deepest = Verdict(
+                    False,
+                    n,
+                    total,
+                    n,
+                    f"the plan's cost is "
+                    f"{term_str(float(plan.cost))} but its steps cost "
+                    f"{term_str(float(total))}",
+                    getattr(plan, "line", 0),
+                )
+            if not _undo_last(planner, changes, costs):  # try the last step's next choice
                 return deepest
             continue
         option = next(frames[-1], None)
         if option is None:
             if deepest.failed_step is None or k > deepest.failed_step:
-                deepest = Verdict(False, n, sum(costs), k, why_step(planner, steps[k]),
-                                  steps[k].line)
+                deepest = Verdict(
+                    False, n, sum(costs), k, why_step(planner, steps[k]), steps[k].line
+                )
             frames.pop()
             if not frames or not _undo_last(planner, changes, costs):
                 return deepest
@@ -96,8 +116,14 @@ def validate_plan(domain: S.Domain, instance: S.ProblemInstance, plan,
         change = planner.apply(op, env)
         if change is None:
             if deepest.failed_step is None or k > deepest.failed_step:
-                deepest = Verdict(False, n, sum(costs), k,
-                                  f"{steps[k]} would delete a protected atom", steps[k].line)
+                deepest = Verdict(
+                    False,
+                    n,
+                    sum(costs),
+                    k,
+                    f"{steps[k]} would delete a protected atom",
+                    steps[k].line,
+                )
             continue
         changes.append(change)
         costs.append(cost)
@@ -133,6 +159,7 @@ def why_step(planner, step) -> str:
     """Why no operator applies to ``step``: the first literal of a
     precondition that has no satisfier, under the step's bindings."""
     from htn.jshop.logic.compile import head_unifier
+
     reasons = []
     for op in planner.domain.operators.get(step.name, ()):
         env = [None] * op.nvars
@@ -143,8 +170,9 @@ def why_step(planner, step) -> str:
         if item is None:
             reasons.append(f"precondition of {step} does not hold")
         else:
-            reasons.append(f"precondition of {step} does not hold: "
-                           f"{_show(item, bound)} has no satisfier")
+            reasons.append(
+                f"precondition of {step} does not hold: {_show(item, bound)} has no satisfier"
+            )
     return "; ".join(reasons) or f"no operator applies to {step}"
 
 

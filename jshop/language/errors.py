@@ -1,6 +1,7 @@
 """User-facing errors: each names the place in the input it is about; and
 the stops (interrupts, the deadline) htn raises into the program, told apart
 from what user code raises."""
+
 from __future__ import annotations
 
 from typing import Optional
@@ -13,8 +14,13 @@ class HtnError(Exception):
     offending source line when it is known) and exits with code 2.
     """
 
-    def __init__(self, message: str, file: Optional[str] = None,
-                 line: Optional[int] = None, col: Optional[int] = None):
+    def __init__(
+        self,
+        message: str,
+        file: Optional[str] = None,
+        line: Optional[int] = None,
+        col: Optional[int] = None,
+    ):
         super().__init__(message)
         self.message = message
         self.file = file
@@ -51,7 +57,7 @@ class HtnError(Exception):
         return None
 
 
-SHOWN = 200   # characters of a source line echoed under an error
+SHOWN = 200  # characters of a source line echoed under an error
 
 
 def _with_caret(text: str, at: int) -> str:

@@ -22,6 +22,7 @@ again as soon as its function returns, and the watchdog
 (:mod:`htn.process.watchdog`) ends user code that does not return (the guard
 names what runs).
 """
+
 from __future__ import annotations
 
 import hashlib
@@ -60,7 +61,7 @@ def _mult(args):
 
 def _fold(op, name):
     def f(args):
-        if len(args) == 2:     # the common case
+        if len(args) == 2:  # the common case
             a, b = args
             if type(a) is float and type(b) is float:
                 return op(a, b)
@@ -68,6 +69,7 @@ def _fold(op, name):
         for a in args[1:]:
             res = op(res, _num(a, name))
         return res
+
     return f
 
 
@@ -89,7 +91,7 @@ def _pow(a, b):
 
 def _chain(test, name):
     def f(args):
-        if len(args) == 2:     # the common case, without zip and slicing
+        if len(args) == 2:  # the common case, without zip and slicing
             a, b = args
             if type(a) is not float or type(b) is not float:
                 _num(a, name), _num(b, name)
@@ -98,6 +100,7 @@ def _chain(test, name):
             if not test(_num(a, name), _num(b, name)):
                 return NIL
         return TRUE
+
     return f
 
 
@@ -149,7 +152,9 @@ def arity_error(name: str, given: int) -> str | None:
     """Why ``(call name ...)`` with ``given`` arguments can never work, or None."""
     least, most = STDLIB_ARITY.get(name, (0, None))
     if given < least:
-        return f"call {name} needs at least {least} argument{'s' if least > 1 else ''}, given {given}"
+        return (
+            f"call {name} needs at least {least} argument{'s' if least > 1 else ''}, given {given}"
+        )
     if most is not None and given > most:
         return f"call {name} takes {most} arguments, given {given}"
     return None
@@ -157,10 +162,18 @@ def arity_error(name: str, given: int) -> str | None:
 
 # Names JSHOP2 prints for standard functions inside an unevaluated call term.
 STDLIB_JAVA_NAMES = {
-    "+": "StdLib.plus", "-": "StdLib.minus", "*": "StdLib.mult",
-    "/": "StdLib.div", "^": "StdLib.power", "<": "StdLib.less",
-    "<=": "StdLib.lessEq", ">": "StdLib.more", ">=": "StdLib.moreEq",
-    "=": "StdLib.equal", "!=": "StdLib.notEq", "member": "StdLib.member",
+    "+": "StdLib.plus",
+    "-": "StdLib.minus",
+    "*": "StdLib.mult",
+    "/": "StdLib.div",
+    "^": "StdLib.power",
+    "<": "StdLib.less",
+    "<=": "StdLib.lessEq",
+    ">": "StdLib.more",
+    ">=": "StdLib.moreEq",
+    "=": "StdLib.equal",
+    "!=": "StdLib.notEq",
+    "member": "StdLib.member",
 }
 
 
@@ -204,7 +217,7 @@ def _shown(v: Any, limit: int = 80) -> str:
     """A user value for a message: its repr, cut to ``limit`` characters
     (built-in values only: a user class's ``__repr__`` is not called)."""
     if type(v) in (int, float, str, bool, type(None)):
-        text = repr(v) if type(v) is not str or len(v) <= 4 * limit else repr(v[:4 * limit])
+        text = repr(v) if type(v) is not str or len(v) <= 4 * limit else repr(v[: 4 * limit])
     elif type(v) in (list, tuple, dict):
         text = f"a {type(v).__name__} of {len(v)} element(s)"
     else:
@@ -213,7 +226,7 @@ def _shown(v: Any, limit: int = 80) -> str:
 
 
 def _clip(text: str, limit: int) -> str:
-    return text if len(text) <= limit else text[:limit - 3] + "..."
+    return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
 class Guard:
@@ -254,7 +267,7 @@ def _user_frame(exc: BaseException, files) -> tuple:
 def _message(exc: BaseException) -> str:
     try:
         text = BaseException.__str__(exc)
-    except BaseException:   # noqa: BLE001 - a user exception whose str fails
+    except BaseException:  # noqa: BLE001 - a user exception whose str fails
         text = ""
     return f"{type(exc).__name__}: {_clip(text, 160)}" if text else type(exc).__name__
 
@@ -269,7 +282,7 @@ def user_error(what: str, exc: BaseException, files=()) -> HtnError:
         text = f"{what} raised {_message(exc)}"
     file, line = _user_frame(exc, files)
     err = HtnError(text, file, line)
-    err.in_user_code = file is not None      # at_call adds where the domain called it
+    err.in_user_code = file is not None  # at_call adds where the domain called it
     return err
 
 
@@ -288,14 +301,14 @@ def run_user_code(what: str, fn: Callable, *args, guard: Guard = PLAIN) -> Any:
             raise
         stop = guard.dropped(token)
         if stop is not None:
-            raise stop from None        # it turned our stop into its own
+            raise stop from None  # it turned our stop into its own
         code = getattr(fn, "__code__", None)
         raise user_error(what, exc, {code.co_filename} if code else ()) from None
     finally:
         guard.leave(token)
     stop = guard.dropped(token)
     if stop is not None:
-        raise stop      # it swallowed a stop: the command stops all the same
+        raise stop  # it swallowed a stop: the command stops all the same
     return result
 
 
@@ -303,13 +316,19 @@ def wrap_user_function(name: str, fn: Callable, table: "FunctionTable") -> Calla
     what = f"function {name}"
 
     def call(args):
-        result = run_user_code(what, fn, *[a if type(a) is str or type(a) is float
-                                           else to_python(a) for a in args], guard=table.guard)
+        result = run_user_code(
+            what,
+            fn,
+            *[a if type(a) is str or type(a) is float else to_python(a) for a in args],
+            guard=table.guard,
+        )
         try:
             return from_python(result)
         except (OverflowError, RecursionError, ValueError):  # huge, nested in itself, NaN int
-            raise HtnError(f"function {name} returned {_shown(result)}, which is not a term") \
-                from None
+            raise HtnError(
+                f"function {name} returned {_shown(result)}, which is not a term"
+            ) from None
+
     call.__name__ = name
     return call
 
@@ -323,8 +342,9 @@ def compare(name: str, fn: Callable, a: Any, b: Any, guard: Guard = PLAIN) -> in
         # the built-in value, without calling a subclass's methods
         n = int.__index__(r) if isinstance(r, int) else float.__float__(r)
     if n is None or n != n:
-        raise HtnError(f"comparator {name} returned {_shown(r)}, not a number "
-                       "(negative, zero or positive)")
+        raise HtnError(
+            f"comparator {name} returned {_shown(r)}, not a number (negative, zero or positive)"
+        )
     return (n > 0) - (n < 0)
 
 
@@ -332,11 +352,11 @@ class FunctionTable:
     """Maps call names (case-insensitive) to callables on term tuples."""
 
     def __init__(self, guard: Guard = PLAIN):
-        self.guard = guard      # how user code runs (a command's stops)
+        self.guard = guard  # how user code runs (a command's stops)
         self.calls: dict[str, Callable] = dict(STDLIB)
         self.user: dict[str, Callable] = {}
         self.source: str | None = None
-        self.sha256: str | None = None      # of the bytes of the file loaded
+        self.sha256: str | None = None  # of the bytes of the file loaded
 
     def lookup(self, name: str) -> Callable | None:
         return self.calls.get(name.lower())
@@ -366,8 +386,9 @@ class FunctionTable:
         try:
             exec(compile(data, path, "exec", dont_inherit=True), module.__dict__)
         except SyntaxError as exc:
-            raise HtnError(f"syntax error: {_clip(str(exc.msg), 160)}", path, exc.lineno,
-                           exc.offset) from None
+            raise HtnError(
+                f"syntax error: {_clip(str(exc.msg), 160)}", path, exc.lineno, exc.offset
+            ) from None
         except HtnError:
             raise
         except BaseException as exc:  # noqa: BLE001 - the file failed to load: one line

@@ -3,6 +3,7 @@
 Every element keeps ``pos``, a :class:`Pos` pointing at its source text, so that
 any later error or warning can name ``file:line:col``.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -23,9 +24,11 @@ class Pos:
 
 # ------------------------------------------------------ logical expressions
 
+
 @dataclass
 class Atom:
     """A logical atom ``(p t1 .. tn)`` (3.3); ``args`` is a tuple of terms."""
+
     pred: str
     args: tuple
     pos: Optional[Pos] = None
@@ -34,6 +37,7 @@ class Atom:
 @dataclass
 class VarAtom:
     """A variable standing for an atom, bound at planning time (3.14)."""
+
     var: Var
     pos: Optional[Pos] = None
 
@@ -59,6 +63,7 @@ class Not:
 @dataclass
 class ForAll:
     """``(forall V Y Z)``: every satisfier of Y must satisfy Z (3.4.5)."""
+
     vars: list
     cond: Any
     then: Any
@@ -69,6 +74,7 @@ class ForAll:
 class Equal:
     """``(= t1 t2)`` (HDDL/PDDL equality): true when both sides are the same
     term; a side that is an unbound variable is bound to the other side."""
+
     left: Any
     right: Any
     pos: Optional[Pos] = None
@@ -84,6 +90,7 @@ class Assign:
 @dataclass
 class CallExpr:
     """A call expression: true unless the call returns NIL (3.4.7)."""
+
     call: Any  # a CallTerm
     pos: Optional[Pos] = None
 
@@ -91,14 +98,16 @@ class CallExpr:
 @dataclass
 class Precondition:
     """A logical precondition (3.5): plain, ``:first`` or ``:sort-by``."""
+
     expr: Any
     first: bool = False
     sort_var: Optional[Var] = None
-    comparator: Optional[str] = None   # '<', '>' or a user function name
+    comparator: Optional[str] = None  # '<', '>' or a user function name
     pos: Optional[Pos] = None
 
 
 # ------------------------------------------------------ operator effects
+
 
 @dataclass
 class Protection:
@@ -109,6 +118,7 @@ class Protection:
 @dataclass
 class EffectForAll:
     """``(forall V Y (a1 .. an))`` in a delete or add list (3.9)."""
+
     vars: list
     cond: Any
     atoms: list
@@ -118,11 +128,13 @@ class EffectForAll:
 @dataclass
 class Effects:
     """A delete or add list: a list of elements, or one variable (3.14)."""
+
     items: list = field(default_factory=list)
     var: Optional[Var] = None
 
 
 # ------------------------------------------------------ tasks
+
 
 @dataclass
 class TaskAtom:
@@ -145,6 +157,7 @@ class PartialOrder(tuple):
     It is falsy, like the ``ordered`` flag of an unordered list, so that
     every test "is this list totally ordered?" stays a truth test; JSHOP2's
     ``:unordered`` is the partial order with no pair ordered."""
+
     __slots__ = ()
 
     def __bool__(self) -> bool:
@@ -161,6 +174,7 @@ class TaskList:
     ``ordered`` lists run in order, others interleave (``:unordered``);
     ``order``, set by the HDDL reader only, is the partial order of an
     unordered list's members (None: no two members are ordered)."""
+
     items: list
     ordered: bool = True
     pos: Optional[Pos] = None
@@ -184,13 +198,14 @@ def task_atoms(tl):
 
 # ------------------------------------------------------ domain elements
 
+
 @dataclass
 class Operator:
     head: TaskAtom
     pre: Precondition
     delete: Effects
     add: Effects
-    cost: Any            # a term; default 1.0
+    cost: Any  # a term; default 1.0
     nvars: int = 0
     pos: Optional[Pos] = None
     # PDDL/HDDL semantics: every effect condition (forall, when) is evaluated
@@ -247,21 +262,21 @@ class Axiom:
 @dataclass
 class Domain:
     name: str
-    operators: dict = field(default_factory=dict)   # name -> [Operator]
-    methods: dict = field(default_factory=dict)     # name -> [Method]
-    axioms: dict = field(default_factory=dict)      # pred -> [Axiom]
+    operators: dict = field(default_factory=dict)  # name -> [Operator]
+    methods: dict = field(default_factory=dict)  # name -> [Method]
+    axioms: dict = field(default_factory=dict)  # pred -> [Axiom]
     file: str = ""
     pos: Optional[Pos] = None
-    language: str = "jshop2"                        # or "hddl": the file it was read from
+    language: str = "jshop2"  # or "hddl": the file it was read from
     # HDDL typing (empty for JSHOP2): ground atoms true in every problem (the
     # domain's constants and their types), and for a type predicate the
     # predicates of its supertypes ((truck t) also means (vehicle t)).
-    facts: list = field(default_factory=list)       # [Atom]
-    implied: dict = field(default_factory=dict)     # pred -> [pred]
-    spelling: dict = field(default_factory=dict)    # lower-case name -> as written
-    hddl: Any = None                                # the HDDL model it was read from
-    pullup: bool = False                            # HDDL: methods test pulled-up conditions
-    sha256: str = ""                                # of the bytes it was parsed from
+    facts: list = field(default_factory=list)  # [Atom]
+    implied: dict = field(default_factory=dict)  # pred -> [pred]
+    spelling: dict = field(default_factory=dict)  # lower-case name -> as written
+    hddl: Any = None  # the HDDL model it was read from
+    pullup: bool = False  # HDDL: methods test pulled-up conditions
+    sha256: str = ""  # of the bytes it was parsed from
 
     def elements(self):
         for ops in self.operators.values():
@@ -278,8 +293,11 @@ class Domain:
             for op in ops:
                 for eff in (op.delete, op.add):
                     for item in eff.items:
-                        atoms = item.atoms if isinstance(item, EffectForAll) else [
-                            item.atom if isinstance(item, Protection) else item]
+                        atoms = (
+                            item.atoms
+                            if isinstance(item, EffectForAll)
+                            else [item.atom if isinstance(item, Protection) else item]
+                        )
                         preds.update(a.pred for a in atoms if isinstance(a, Atom))
         return preds
 
@@ -296,7 +314,8 @@ class Domain:
 class ProblemInstance:
     """One state/task-list pair of a ``defproblem`` (3.12); an HDDL problem
     also has a goal, which a plan's final state must satisfy."""
-    state: list      # [Atom], ground
+
+    state: list  # [Atom], ground
     tasks: TaskList
     pos: Optional[Pos] = None
     goal: Optional[Precondition] = None
@@ -317,18 +336,20 @@ class Problem:
     instances: list
     file: str = ""
     pos: Optional[Pos] = None
-    domain_pos: Optional[Pos] = None   # where the domain's name is written
+    domain_pos: Optional[Pos] = None  # where the domain's name is written
     language: str = "jshop2"
-    spelling: dict = field(default_factory=dict)    # lower-case name -> as written
-    hddl: Any = None                                # the HDDL model it was read from
-    sha256: str = ""                                # of the bytes it was parsed from
+    spelling: dict = field(default_factory=dict)  # lower-case name -> as written
+    hddl: Any = None  # the HDDL model it was read from
+    sha256: str = ""  # of the bytes it was parsed from
 
 
 def root_method(instance: ProblemInstance) -> "Method":
     """The root method of an HDDL instance whose initial task network has
     parameters (``instance.top``), as the reader built it with the domain."""
     if instance.root is None:
-        raise ValueError("an HDDL problem whose initial task network has parameters is "
-                         "planned once it is paired with its domain "
-                         "(htn.jshop.readers.load.paired, or htn.api's readers)")
+        raise ValueError(
+            "an HDDL problem whose initial task network has parameters is "
+            "planned once it is paired with its domain "
+            "(htn.jshop.readers.load.paired, or htn.api's readers)"
+        )
     return instance.root

@@ -21,6 +21,7 @@ belong to another domain element (their indices mean nothing in this
 element's binding), so binding them in would be meaningless - JSHOP2 indexes
 the wrong binding there and fails.
 """
+
 from __future__ import annotations
 
 from typing import Any, Callable, Sequence
@@ -54,12 +55,13 @@ class Dotted:
         self._hash = None
 
     def __eq__(self, other: object) -> bool:
-        return (type(other) is Dotted and self.items == other.items
-                and self.tail == other.tail)
+        return type(other) is Dotted and self.items == other.items and self.tail == other.tail
 
     def __hash__(self) -> int:
         if self._hash is None:
-            self._hash = hash((self.items, "."), ) ^ hash(self.tail)
+            self._hash = hash(
+                (self.items, "."),
+            ) ^ hash(self.tail)
         return self._hash
 
     def __repr__(self) -> str:
@@ -99,7 +101,7 @@ def at_call(exc: HtnError, call: CallTerm) -> HtnError:
     if exc.file is None and call.pos is not None:
         exc.file, exc.line, exc.col = call.pos.file, call.pos.line, call.pos.col
     elif getattr(exc, "in_user_code", False) and call.pos is not None:
-        exc.in_user_code = False    # placed at the user's line; say where it was called
+        exc.in_user_code = False  # placed at the user's line; say where it was called
         exc.message += f" (called at {call.pos.file}:{call.pos.line}:{call.pos.col})"
     return exc
 
@@ -110,7 +112,7 @@ def is_ground(t: Any) -> bool:
         return True
     if tt is tuple:
         for x in t:
-            tx = type(x)     # symbols and numbers without a call: most atoms
+            tx = type(x)  # symbols and numbers without a call: most atoms
             if tx is not str and tx is not float and not is_ground(x):
                 return False
         return True
@@ -210,6 +212,7 @@ def _unify_dotted(p: Dotted, t: Any, env: list) -> bool:
 
 # --------------------------------------------------------------- printing
 
+
 def java_double(x: float) -> str:
     """Format a float as Java's ``String.valueOf(double)`` does.
 
@@ -224,7 +227,7 @@ def java_double(x: float) -> str:
     if x == 0.0:
         return "-0.0" if str(x).startswith("-") else "0.0"
     a = abs(x)
-    if a < 1e7 and a >= 1.0 and x.is_integer():    # the common case, printed fast
+    if a < 1e7 and a >= 1.0 and x.is_integer():  # the common case, printed fast
         return f"{int(x)}.0"
     if 1e-3 <= a < 1e7:
         s = repr(x)
@@ -265,8 +268,7 @@ def term_str(t: Any) -> str:
             return "NIL"
         return "(" + " ".join([term_str(x) for x in t]) + ")"
     if tt is Dotted:
-        return ("(" + " ".join([term_str(x) for x in t.items]) + " . "
-                + term_str(t.tail) + ")")
+        return "(" + " ".join([term_str(x) for x in t.items]) + " . " + term_str(t.tail) + ")"
     if tt is Var:
         return f"VAR{t.index}"
     if tt is CallTerm:
@@ -275,7 +277,7 @@ def term_str(t: Any) -> str:
     return str(t)
 
 
-SHOWN_TERM = 200     # characters of a term quoted in a message
+SHOWN_TERM = 200  # characters of a term quoted in a message
 
 
 def shown_term(t: Any, limit: int = SHOWN_TERM) -> str:
@@ -297,7 +299,7 @@ def shown_term(t: Any, limit: int = SHOWN_TERM) -> str:
                 piece = "("
                 stack.append(_CLOSE)
                 # only as many elements as can still be shown are looked at
-                items = x[:limit - size + 1]
+                items = x[: limit - size + 1]
                 if len(items) < len(x):
                     stack.append(_MORE)
                 for i in range(len(items) - 1, -1, -1):
@@ -328,7 +330,7 @@ def shown_term(t: Any, limit: int = SHOWN_TERM) -> str:
         size += len(piece)
     text = "".join(out)
     if stack or len(text) > limit:
-        return text[:max(limit - 3, 0)] + "..."
+        return text[: max(limit - 3, 0)] + "..."
     return text
 
 
@@ -357,8 +359,7 @@ def source_str(t: Any) -> str:
     if tt is tuple:
         return "(" + " ".join(source_str(x) for x in t) + ")" if t else "nil"
     if tt is Dotted:
-        return ("(" + " ".join(source_str(x) for x in t.items) + " . "
-                + source_str(t.tail) + ")")
+        return "(" + " ".join(source_str(x) for x in t.items) + " . " + source_str(t.tail) + ")"
     if tt is CallTerm:
         return "(call " + " ".join([t.name] + [source_str(x) for x in t.args]) + ")"
     return term_str(t)
@@ -391,5 +392,6 @@ def atom_from_term(t, pos) -> tuple[str, tuple]:
     """A list term ``(p a1 .. an)`` used as an atom (manual 3.14)."""
     if type(t) is tuple and t and type(t[0]) is str:
         return t[0], t[1:]
-    raise PlanningError.at(pos, f"a variable used as an atom is bound to {shown_term(t)}, "
-                           "which is not an atom")
+    raise PlanningError.at(
+        pos, f"a variable used as an atom is bound to {shown_term(t)}, which is not an atom"
+    )

@@ -2,6 +2,7 @@
 and effects: ``cb(var)`` for every :class:`~htn.jshop.language.terms.Var` in
 textual order. The readers number variables with them (manual 5.1.1); the
 checks, the compiled conjunctions and the HDDL builder collect variables."""
+
 from __future__ import annotations
 
 from . import syntax as S
@@ -33,7 +34,7 @@ def walk_expr(e, cb) -> None:
         cb(e.var)
     elif isinstance(e, S.CallExpr):
         walk_term(e.call, cb)
-    elif isinstance(e, S.Equal):        # HDDL's (= a b)
+    elif isinstance(e, S.Equal):  # HDDL's (= a b)
         walk_term((e.left, e.right), cb)
 
 

@@ -9,6 +9,7 @@ domains (the unified-planning engine, a robot's node) calls
 :func:`clear_caches` between domains, and every cache has a bound besides,
 so that memory stays flat whatever the caller does.
 """
+
 from __future__ import annotations
 
 from typing import Any, Callable, Hashable, Optional
@@ -16,7 +17,7 @@ from typing import Any, Callable, Hashable, Optional
 _REGISTERED: list = []
 _HOOKS: list = []
 
-LIMIT = 200_000     # entries of one cache: past it the cache starts again empty
+LIMIT = 200_000  # entries of one cache: past it the cache starts again empty
 
 
 class IdentityCache:

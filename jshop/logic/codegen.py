@@ -17,6 +17,7 @@ microsecond per character of source), and a small search runs most pieces a
 few times only: see :mod:`~htn.jshop.logic.warming` for when a piece is
 compiled.
 """
+
 from __future__ import annotations
 
 import linecache
@@ -25,7 +26,7 @@ import re
 
 from .caches import on_clear
 
-_SOURCES: dict = {}       # file name -> source compiled under it
+_SOURCES: dict = {}  # file name -> source compiled under it
 
 
 def where(pos) -> str:

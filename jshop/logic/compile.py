@@ -19,6 +19,7 @@ deeply nested list terms or atoms with many arguments. Long chains are split
 into statements, long conjunctions run on an explicit stack, and list terms
 nested deeper than :data:`FAST_PATH_DEPTH` take the generic path.
 """
+
 from __future__ import annotations
 
 from typing import Callable
@@ -68,14 +69,18 @@ def substituter(args: tuple, what: str = None) -> Callable[[list], tuple]:
                 else:
                     ns[f"c{i}"] = a
                     parts.append(f"c{i}")
-            define(f"def sub(env):\n    return ({''.join(p + ', ' for p in parts)})",
-                   what or f"substitution into {_shown(args)}", ns)
+            define(
+                f"def sub(env):\n    return ({''.join(p + ', ' for p in parts)})",
+                what or f"substitution into {_shown(args)}",
+                ns,
+            )
             fn = ns["sub"]
         else:
             bind = binder(args, what)
 
             def fn(env, bind=bind):
                 return bind(env)[1]
+
         _SUBSTITUTERS.put(args, fn)
     return fn
 
@@ -85,7 +90,7 @@ def head_unifier(head: tuple, what: str = None) -> Callable[[tuple, list], bool]
     return _UNIFIERS.make(head, lambda: make_head_unifier(head, what))
 
 
-GENERIC = 1 << 30   # a scan key meaning "use the generic scanner"
+GENERIC = 1 << 30  # a scan key meaning "use the generic scanner"
 
 
 def make_binder(args: tuple, what: str = None) -> Callable[[list], tuple]:
@@ -100,10 +105,10 @@ def make_binder(args: tuple, what: str = None) -> Callable[[list], tuple]:
     if not args:
         return lambda env: (None, ())
     consts = {}
-    parts = []       # expression of each element, bound
-    unbound = []     # same, but keeping unbound variables
-    tests = []       # groundness test of each non-constant element
-    keys = []        # key contribution of each non-constant element
+    parts = []  # expression of each element, bound
+    unbound = []  # same, but keeping unbound variables
+    tests = []  # groundness test of each non-constant element
+    keys = []  # key contribution of each non-constant element
     lines = []
     seen = set()
     for i, a in enumerate(args):
@@ -115,8 +120,10 @@ def make_binder(args: tuple, what: str = None) -> Callable[[list], tuple]:
                 seen.add(a.index)
                 consts[f"v{a.index}"] = a
                 lines.append(f"    {name} = env[{a.index}]")
-                lines.append(f"    g{a.index} = {name} is not None and (type({name}) is str or "
-                             f"type({name}) is float or is_ground({name}))")
+                lines.append(
+                    f"    g{a.index} = {name} is not None and (type({name}) is str or "
+                    f"type({name}) is float or is_ground({name}))"
+                )
                 tests.append(f"g{a.index}")
                 keys.append(f"(0 if g{a.index} else {bit} if {name} is None else GENERIC)")
             parts.append(name)
@@ -133,8 +140,10 @@ def make_binder(args: tuple, what: str = None) -> Callable[[list], tuple]:
                     name = f"x{x.index}"
                     consts[f"v{x.index}"] = x
                     lines.append(f"    {name} = env[{x.index}]")
-                    inner_tests.append(f"({name} is not None and (type({name}) is str or "
-                                       f"type({name}) is float or is_ground({name})))")
+                    inner_tests.append(
+                        f"({name} is not None and (type({name}) is str or "
+                        f"type({name}) is float or is_ground({name})))"
+                    )
                     inner.append(name)
                     inner_unbound.append(f"({name} if {name} is not None else v{x.index})")
                 else:
@@ -157,11 +166,15 @@ def make_binder(args: tuple, what: str = None) -> Callable[[list], tuple]:
     if not tests:
         return lambda env: (None, args)
     fast = _fast_path(args, consts)
-    src = ["def bind(env):", *fast, *lines,
-           f"    if {' and '.join(tests)}:",
-           f"        return None, ({', '.join(parts)},)",
-           *_or_lines("key", keys),
-           f"    return key, ({', '.join(unbound)},)"]
+    src = [
+        "def bind(env):",
+        *fast,
+        *lines,
+        f"    if {' and '.join(tests)}:",
+        f"        return None, ({', '.join(parts)},)",
+        *_or_lines("key", keys),
+        f"    return key, ({', '.join(unbound)},)",
+    ]
     ns = dict(consts, is_ground=is_ground, subst=subst, GENERIC=GENERIC)
     define("\n".join(src), what or f"binding of {_shown(args)}", ns)
     return ns["bind"]
@@ -173,11 +186,11 @@ def _or_lines(name: str, exprs: list, chunk: int = 32) -> list:
     lines = []
     for k in range(0, len(exprs), chunk):
         op = "=" if k == 0 else "|="
-        lines.append(f"    {name} {op} {' | '.join(exprs[k:k + chunk])}")
+        lines.append(f"    {name} {op} {' | '.join(exprs[k : k + chunk])}")
     return lines
 
 
-FAST_PATH_DEPTH = 16   # list terms nested deeper than this use the generic subst
+FAST_PATH_DEPTH = 16  # list terms nested deeper than this use the generic subst
 
 
 def _depth(args: tuple) -> int:
@@ -205,7 +218,7 @@ def _fast_path(args: tuple, ns: dict) -> list:
     If a call fails, the generated code falls through to the general code,
     whose ``subst`` evaluates again and reports the failing call's place."""
     if all(type(a) in (str, float, Var) for a in args):
-        return []   # flat tuples are already handled well by the general code
+        return []  # flat tuples are already handled well by the general code
     if _depth(args) > FAST_PATH_DEPTH:
         return []
     seen: dict = {}
@@ -235,14 +248,18 @@ def _fast_path(args: tuple, ns: dict) -> list:
     except _NoFastPath:
         return []
     lines = [f"    f{i} = env[{i}]" for i in seen]
-    test = " and ".join(f"(type(f{i}) is str or type(f{i}) is float or f{i} == ())"
-                        for i in seen) or "True"
+    test = (
+        " and ".join(f"(type(f{i}) is str or type(f{i}) is float or f{i} == ())" for i in seen)
+        or "True"
+    )
     ns["HtnError"] = HtnError
-    return lines + [f"    if {test}:",
-                    "        try:",
-                    f"            return None, {body}",
-                    "        except HtnError:",
-                    "            pass"]
+    return lines + [
+        f"    if {test}:",
+        "        try:",
+        f"            return None, {body}",
+        "        except HtnError:",
+        "            pass",
+    ]
 
 
 class _NoFastPath(Exception):
@@ -273,12 +290,15 @@ def make_scanner(args: tuple, key: int, what: str = None) -> Callable:
                 continue
         pre.append(f"    b{i} = bound[{i}]")
         conds.append(f"a[{i}] == b{i}")
-    src = ["def scan(lst, bound, env):", *pre,
-           "    for a in lst:",
-           f"        if {' and '.join(conds)}:",
-           "            new = env[:]",
-           *[f"            {x}" for x in assigns],
-           "            yield new"]
+    src = [
+        "def scan(lst, bound, env):",
+        *pre,
+        "    for a in lst:",
+        f"        if {' and '.join(conds)}:",
+        "            new = env[:]",
+        *[f"            {x}" for x in assigns],
+        "            yield new",
+    ]
     ns: dict = {}
     define("\n".join(src), f"{what or 'atoms matching ' + _shown(args)} (unbound: {key:b})", ns)
     return ns["scan"]
@@ -294,7 +314,7 @@ def term_binder(term, what: str = None) -> Callable[[list], tuple]:
     return _TERMS.make(term, lambda: make_binder((term,), what))
 
 
-NESTED_CONJUNCTS = 16   # Python allows 20 nested blocks; longer conjunctions use a stack
+NESTED_CONJUNCTS = 16  # Python allows 20 nested blocks; longer conjunctions use a stack
 
 
 def conjunction(sats: list) -> Callable:
@@ -336,6 +356,7 @@ def _stacked_conjunction(sats: list) -> Callable:
                     break
             else:
                 open_.pop()
+
     return conj
 
 
@@ -349,6 +370,7 @@ def make_head_unifier(head: tuple, what: str = None) -> Callable[[tuple, list], 
     head term with the task's term (a variable in the task binds nothing)."""
     n = len(head)
     if not all(type(a) in (str, float, Var) for a in head):
+
         def generic(args, env, head=head, n=n):
             if len(args) != n:
                 return False
@@ -356,6 +378,7 @@ def make_head_unifier(head: tuple, what: str = None) -> Callable[[tuple, list], 
                 if not unify(p, t, env):
                     return False
             return True
+
         return generic
     ns: dict = {"Var": Var, "is_ground": is_ground}
     src = ["def unify_head(args, env):", f"    if len(args) != {n}:", "        return False"]
@@ -369,14 +392,18 @@ def make_head_unifier(head: tuple, what: str = None) -> Callable[[tuple, list], 
                 seen.add(a.index)
                 src.append(f"    if {known}: env[{a.index}] = t")
             else:
-                src += [f"    if {known}:",
-                        f"        v = env[{a.index}]",
-                        f"        if v is None: env[{a.index}] = t",
-                        "        elif not (v == t and type(v) is type(t)): return False"]
+                src += [
+                    f"    if {known}:",
+                    f"        v = env[{a.index}]",
+                    f"        if v is None: env[{a.index}] = t",
+                    "        elif not (v == t and type(v) is type(t)): return False",
+                ]
         else:
             ns[f"c{i}"] = a
-            src.append(f"    if type(t) is not Var and not (type(t) is type(c{i}) and t == c{i}):"
-                       " return False")
+            src.append(
+                f"    if type(t) is not Var and not (type(t) is type(c{i}) and t == c{i}):"
+                " return False"
+            )
     src.append("    return True")
     define("\n".join(src), what or f"unifier of the head {_shown(head)}", ns)
     return ns["unify_head"]

@@ -3,6 +3,7 @@
 negation, a call, an assignment, an axiom, or anything else, which is asked
 of the general engine), with its variables, the calls the generated code
 makes, and the lengths a predicate's atoms can have (:func:`arities`)."""
+
 from __future__ import annotations
 
 from typing import Optional
@@ -33,8 +34,9 @@ def call_nested(func, args, term):
 
 def term_vars(t, out: set) -> set:
     """Add the indices of the variables of a term or expression to ``out``."""
-    if isinstance(t, (S.Atom, S.VarAtom, S.And, S.Or, S.Not, S.ForAll, S.Equal, S.Assign,
-                      S.CallExpr)):
+    if isinstance(
+        t, (S.Atom, S.VarAtom, S.And, S.Or, S.Not, S.ForAll, S.Equal, S.Assign, S.CallExpr)
+    ):
         walk_expr(t, lambda v: out.add(v.index))
     else:
         out.update(v.index for v in variables(t, []))
@@ -55,6 +57,7 @@ def evaluable(t) -> bool:
 
 class Literal:
     """What one conjunct is, independently of the mode."""
+
     __slots__ = ("kind", "expr", "pred", "args", "vars", "binds", "facts")
 
     def __init__(self, expr, axioms: dict):
@@ -72,12 +75,13 @@ class Literal:
             plain = all(flat_term(a) for a in atom.args)
             # a flat list argument, like (on ?x ?z) in (goal (on ?x ?z)), is
             # matched element by element in the loop as well
-            lists = all(flat_term(a) or (type(a) is tuple and all(map(flat_term, a)))
-                        for a in atom.args)
+            lists = all(
+                flat_term(a) or (type(a) is tuple and all(map(flat_term, a))) for a in atom.args
+            )
             if lists and (not axs or facts_only(axs)):
                 self.kind, self.pred, self.args = kind, atom.pred, atom.args
                 self.facts = bool(axs)
-            elif plain:       # proved by its axioms, asked directly (Logic.solver)
+            elif plain:  # proved by its axioms, asked directly (Logic.solver)
                 self.kind = AXIOM if kind == ATOM else NOT_AXIOM
                 self.pred, self.args = atom.pred, atom.args
         elif isinstance(expr, S.CallExpr) and evaluable(expr.call):
@@ -88,7 +92,8 @@ class Literal:
     def sized(self, arities) -> bool:
         """Can an atom of another length be met (must the length be tested)?"""
         return self.kind in (ATOM, NOT_ATOM) and bool(
-            self.facts or arities is None or arities.get(self.pred, set()) - {len(self.args)})
+            self.facts or arities is None or arities.get(self.pred, set()) - {len(self.args)}
+        )
 
 
 def has_call(t) -> bool:
@@ -134,7 +139,7 @@ def arities(domain: S.Domain, state) -> Optional[dict]:
                 return None
             for item in op.add.items:
                 if isinstance(item, S.Protection):
-                    continue         # protects an atom, adds none
+                    continue  # protects an atom, adds none
                 for a in item.atoms if isinstance(item, S.EffectForAll) else [item]:
                     if not isinstance(a, S.Atom):
                         return None

@@ -12,6 +12,7 @@ Axioms follow 3.6: a later branch is tried only if no earlier branch had a
 satisfier. ``:first`` keeps the first satisfier, ``:sort-by`` sorts all of them
 with Java's sort algorithm (see :mod:`~htn.jshop.logic.java_sort`).
 """
+
 from __future__ import annotations
 
 from typing import Callable, Iterator
@@ -44,6 +45,7 @@ _HEADS = cache()
 def head_variables(args: tuple) -> frozenset:
     """The indices of the variables of a head (cached by the head's tuple)."""
     return _HEADS.make(args, lambda: frozenset(v.index for v in variables(args, [])))
+
 
 Sat = Callable[[list], Iterator[list]]
 
@@ -94,13 +96,26 @@ class Logic:
         unifier and binder warming: compiled ones replace them in place)."""
         args = ax.head.args
         head = source_atom(ax.head.pred, args)
-        seg = [ax, None, None, [self.precondition(b.pre, args, f"precondition of axiom {head} "
-                                                  f"branch {b.label}") for b in ax.branches],
-               all(type(a) in (str, float, Var) for a in args)]
-        seg[1] = warm.head_unifier(args, lambda: described(f"unifier of the axiom head {head}",
-                                                           ax.pos), lambda f: seg.__setitem__(1, f))
-        seg[2] = warm.binder(args, lambda: described(f"binding of the axiom head {head}", ax.pos),
-                             lambda f: seg.__setitem__(2, f))
+        seg = [
+            ax,
+            None,
+            None,
+            [
+                self.precondition(b.pre, args, f"precondition of axiom {head} branch {b.label}")
+                for b in ax.branches
+            ],
+            all(type(a) in (str, float, Var) for a in args),
+        ]
+        seg[1] = warm.head_unifier(
+            args,
+            lambda: described(f"unifier of the axiom head {head}", ax.pos),
+            lambda f: seg.__setitem__(1, f),
+        )
+        seg[2] = warm.binder(
+            args,
+            lambda: described(f"binding of the axiom head {head}", ax.pos),
+            lambda f: seg.__setitem__(2, f),
+        )
         return seg
 
     # ------------------------------------------------------------ preconditions
@@ -110,18 +125,19 @@ class Logic:
         asked (the binding is fresh), so only they decide its binding mode.
         ``what`` names the generated code (``precondition of !grasp``)."""
         e = pre.expr
-        if isinstance(e, (S.Atom, S.Not)):   # one literal: compiled as a conjunction of one
+        if isinstance(e, (S.Atom, S.Not)):  # one literal: compiled as a conjunction of one
             e = _single(e)
         if isinstance(e, S.And) and e.items and (head is not None or what is not None):
-            sat = compile_conjunction(self, e, None if head is None else head_variables(head),
-                                      what)
+            sat = compile_conjunction(self, e, None if head is None else head_variables(head), what)
         else:
             sat = self.expr(e)
         if pre.first:
+
             def first(env, sat=sat):
                 for e in sat(env):
                     yield e
                     return
+
             return first
         if pre.sort_var is not None:
             return sorted_by(sat, pre, self.functions)
@@ -143,6 +159,7 @@ class Logic:
         def disj(env):
             for s in sats:
                 yield from s(env)
+
         return disj
 
     def _not(self, e: S.Not) -> Sat:
@@ -154,6 +171,7 @@ class Logic:
             for _ in sat(env):
                 return
             yield env
+
         return neg
 
     def _forall(self, e: S.ForAll) -> Sat:
@@ -166,6 +184,7 @@ class Logic:
                 else:
                     return
             yield env
+
         return forall
 
     def _equal(self, e: S.Equal) -> Sat:
@@ -175,8 +194,9 @@ class Logic:
             a, b = subst(left, env), subst(right, env)
             if type(a) is Var:
                 if type(b) is Var:
-                    raise PlanningError.at(pos, f"(= {a.name} {b.name}) compares two "
-                                           "unbound variables")
+                    raise PlanningError.at(
+                        pos, f"(= {a.name} {b.name}) compares two unbound variables"
+                    )
                 new = env[:]
                 new[a.index] = b
                 yield new
@@ -186,11 +206,13 @@ class Logic:
                 yield new
             elif a == b and type(a) is type(b):
                 yield env
+
         return equal
 
     def _term_binder(self, term, pos, install):
-        return warm.term_binder(term, lambda: described(f"value of {source_str(term)}", pos),
-                                install)
+        return warm.term_binder(
+            term, lambda: described(f"value of {source_str(term)}", pos), install
+        )
 
     def _assign(self, e: S.Assign) -> Sat:
         idx = e.var.index
@@ -198,6 +220,7 @@ class Logic:
         def install(f):
             nonlocal bind
             bind = f
+
         bind = self._term_binder(e.term, e.pos, install)
 
         def assign(env):
@@ -207,12 +230,14 @@ class Logic:
             new = env[:]
             new[idx] = bind(env)[1][0]
             yield new
+
         return assign
 
     def _callexpr(self, e: S.CallExpr) -> Sat:
         def install(f):
             nonlocal bind
             bind = f
+
         bind = self._term_binder(e.call, e.pos, install)
 
         def callexpr(env):
@@ -220,6 +245,7 @@ class Logic:
             if type(v) is tuple and not v:
                 return
             yield env
+
         return callexpr
 
     def _varatom(self, e: S.VarAtom) -> Sat:
@@ -228,10 +254,12 @@ class Logic:
         def varatom(env):
             t = env[idx]
             if t is None:
-                raise PlanningError.at(pos, f"variable {e.var.name} is used as an atom "
-                                       "but is not bound")
+                raise PlanningError.at(
+                    pos, f"variable {e.var.name} is used as an atom but is not bound"
+                )
             pred, args = atom_from_term(t, pos)
             yield from self.match(pred, args, env)
+
         return varatom
 
     def _lookup(self, e: S.Atom, install) -> tuple:
@@ -240,17 +268,27 @@ class Logic:
         and set (the state keeps them for good), its axioms, and a function
         giving the scanner of a binding key (warming too)."""
         pred, args = e.pred, e.args
-        shown = lambda: source_atom(pred, args)   # noqa: E731 - names compiled code
+        shown = lambda: source_atom(pred, args)  # noqa: E731 - names compiled code
         scanners: dict = {}
 
         def scanner(key):
             scan = scanners[key] = warm.scanner(
-                args, key, lambda: described(f"atoms matching {shown()}", e.pos),
-                lambda f: scanners.__setitem__(key, f))
+                args,
+                key,
+                lambda: described(f"atoms matching {shown()}", e.pos),
+                lambda f: scanners.__setitem__(key, f),
+            )
             return scan
+
         bind = warm.binder(args, lambda: described(f"binding of {shown()}", e.pos), install)
-        return (bind, self.state.bucket(pred), self.state.members[pred],
-                self._axioms.get(pred), scanners, scanner)
+        return (
+            bind,
+            self.state.bucket(pred),
+            self.state.members[pred],
+            self._axioms.get(pred),
+            scanners,
+            scanner,
+        )
 
     def _atom(self, e: S.Atom) -> Sat:
         prove = self._prove
@@ -258,6 +296,7 @@ class Logic:
         def install(f):
             nonlocal bind
             bind = f
+
         bind, lst, members, axioms, scanners, scanner = self._lookup(e, install)
 
         def atom(env):
@@ -271,6 +310,7 @@ class Logic:
                 yield from (scanners.get(key) or scanner(key))(lst, bound, env)
             if axioms:
                 yield from prove(axioms, bound, env, key is None)
+
         return atom
 
     def _not_atom(self, e: S.Atom) -> Sat:
@@ -282,6 +322,7 @@ class Logic:
         def install(f):
             nonlocal bind
             bind = f
+
         bind, lst, members, axioms, scanners, scanner = self._lookup(e, install)
 
         def neg(env):
@@ -297,6 +338,7 @@ class Logic:
             if axioms and next(prove(axioms, bound, env, key is None), None) is not None:
                 return
             yield env
+
         return neg
 
     # ------------------------------------------------------------ atoms
@@ -317,6 +359,7 @@ class Logic:
                 yield from scan_atoms(lst, bound, env)
             if axioms:
                 yield from prove(axioms, bound, env, ground)
+
         return solve
 
     def match(self, pred: str, bound: tuple, env: list) -> Iterator[list]:
@@ -340,7 +383,7 @@ class Logic:
         if ground is None:
             ground = is_ground(bound)
         for ax, unify_head, bind_head, branches, flat in axioms:
-            if ax is _FACTS:     # (unify_head, bind_head) are (heads, counts) here
+            if ax is _FACTS:  # (unify_head, bind_head) are (heads, counts) here
                 if ground:
                     for _ in range(bind_head.get(bound, 0)):
                         yield env
@@ -366,10 +409,12 @@ class Logic:
                         if _unify_args(bound, head, new):
                             found = True
                             yield new
-                except RecursionError:   # JSHOP2 overflows its stack here too
-                    raise PlanningError.at(ax.pos, f"proving an axiom for {ax.head.pred} "
-                                           "recursed too deeply: does it depend on itself?") \
-                        from None
+                except RecursionError:  # JSHOP2 overflows its stack here too
+                    raise PlanningError.at(
+                        ax.pos,
+                        f"proving an axiom for {ax.head.pred} "
+                        "recursed too deeply: does it depend on itself?",
+                    ) from None
                 if found:
                     break
 
@@ -387,4 +432,4 @@ def _true(env):
     yield env
 
 
-_FACTS = object()    # marks a run of fact axioms, see Logic._segments
+_FACTS = object()  # marks a run of fact axioms, see Logic._segments

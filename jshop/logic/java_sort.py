@@ -1,5 +1,6 @@
 """Java 17's ``Arrays.sort(Object[], Comparator)``, with which JSHOP2 sorts
 the satisfiers of a ``:sort-by`` precondition (manual 3.6), and that sort."""
+
 from __future__ import annotations
 
 from functools import cmp_to_key
@@ -42,7 +43,7 @@ def java_sort(a: list, cmp) -> list:
                 right = mid
             else:
                 left = mid + 1
-        a[left + 1:start + 1] = a[left:start]
+        a[left + 1 : start + 1] = a[left:start]
         a[left] = pivot
     return a
 
@@ -59,11 +60,14 @@ def sorted_by(sat, pre, functions):
         def cmp(a, b):
             x, y = a[idx], b[idx]
             if type(x) is not float or type(y) is not float:
-                raise PlanningError.at(pre.pos, f":sort-by {name} needs numbers, got "
-                                       f"{shown_term(x)} and {shown_term(y)}")
+                raise PlanningError.at(
+                    pre.pos,
+                    f":sort-by {name} needs numbers, got {shown_term(x)} and {shown_term(y)}",
+                )
             return sign * ((x > y) - (x < y))
     else:
         from htn.jshop.language.functions import compare
+
         user = functions.comparator(name) if functions else None
         if user is None:
             raise HtnError.at(pre.pos, f"undefined comparator '{name}'")
@@ -71,9 +75,10 @@ def sorted_by(sat, pre, functions):
         def cmp(a, b):
             try:
                 return compare(name, user, a[idx], b[idx], functions.guard)
-            except HtnError as exc:    # placed at the :sort-by that called it
+            except HtnError as exc:  # placed at the :sort-by that called it
                 raise PlanningError.at(pre.pos, exc.message) from None
 
     def sorted_sat(env):
         yield from java_sort(list(sat(env)), cmp)
+
     return sorted_sat

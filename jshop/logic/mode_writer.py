@@ -1,5 +1,6 @@
 """The code of one conjunction under one binding mode: nested loops over
 Python locals (see :mod:`htn.jshop.logic.modes`, which compiles and caches it)."""
+
 from __future__ import annotations
 
 from itertools import chain
@@ -33,12 +34,17 @@ class CodeWriter:
         self.sized = sized
         self.entry = set(known)
         self.known = set(known)
-        self.ns: dict = {"call_at": call_at, "call_nested": call_nested, "chain": chain,
-                         "is_ground": is_ground, "HtnError": HtnError}
+        self.ns: dict = {
+            "call_at": call_at,
+            "call_nested": call_nested,
+            "chain": chain,
+            "is_ground": is_ground,
+            "HtnError": HtnError,
+        }
         self.lines: list = []
-        self.depth = 2           # indentation, in levels of four spaces
+        self.depth = 2  # indentation, in levels of four spaces
         self.loops = 0
-        self.base = "env"        # the binding list holding every variable not in a local
+        self.base = "env"  # the binding list holding every variable not in a local
         self.local: set = set()  # variables held in locals and not yet in ``base``
         self.n = 0
 
@@ -90,9 +96,11 @@ class CodeWriter:
         mode gains nothing (every conjunct would take the general path).
         ``what`` names the code (see :mod:`~htn.jshop.logic.codegen`)."""
         lits = self.lits
-        if all(lit.kind == GENERAL
-               or (lit.kind == ASSIGN and not term_vars(lit.expr.term, set()) <= self.known)
-               for lit in lits):
+        if all(
+            lit.kind == GENERAL
+            or (lit.kind == ASSIGN and not term_vars(lit.expr.term, set()) <= self.known)
+            for lit in lits
+        ):
             return None
         for v in sorted(self.entry & set().union(*(lit.vars for lit in lits))):
             self.emit(f"x{v} = env[{v}]")
@@ -106,8 +114,12 @@ class CodeWriter:
         params = []
         for k in range(len(lits)):
             params += [f"L{k}", f"M{k}", f"H{k}", f"G{k}", f"R{k}"]
-        src = [f"def make({', '.join(params)}):", "    def run(env):", *self.lines,
-               "    return run"]
+        src = [
+            f"def make({', '.join(params)}):",
+            "    def run(env):",
+            *self.lines,
+            "    return run",
+        ]
         define("\n".join(src), what, self.ns)
         return self.ns["make"]
 
@@ -125,8 +137,11 @@ class CodeWriter:
         conjunction was handed to the general path)."""
         lit = self.lits[k]
         kind = lit.kind
-        if kind == ASSIGN and lit.expr.var.index not in self.known \
-                and not term_vars(lit.expr.term, set()) <= self.known:
+        if (
+            kind == ASSIGN
+            and lit.expr.var.index not in self.known
+            and not term_vars(lit.expr.term, set()) <= self.known
+        ):
             kind = GENERAL
         if kind == ATOM or kind == NOT_ATOM:
             self.atom(k, lit, kind == NOT_ATOM)
@@ -148,7 +163,7 @@ class CodeWriter:
             self.depth += 1
         elif kind == ASSIGN:
             v = lit.expr.var.index
-            if v not in self.known:     # an earlier binding wins, as in JSHOP2
+            if v not in self.known:  # an earlier binding wins, as in JSHOP2
                 self.value(f"x{v}", lit.expr.term)
                 self.known.add(v)
                 self.local.add(v)
@@ -163,7 +178,7 @@ class CodeWriter:
         if tt is CallTerm and term_vars(t, set()) <= self.known:
             self.emit(self.term(t))
         elif tt is CallTerm or tt is tuple:
-            for x in (t.args if tt is CallTerm else t):
+            for x in t.args if tt is CallTerm else t:
                 self.inner_calls(x)
 
     def atom(self, k: int, lit: Literal, negated: bool) -> None:
@@ -175,7 +190,7 @@ class CodeWriter:
                 if lit.facts:
                     test += f" and {tup} not in H{k}[1]"
                 self.emit(f"if {test}:")
-            elif lit.facts:    # a ground fact may be stated more than once
+            elif lit.facts:  # a ground fact may be stated more than once
                 self.emit(f"t{k} = {tup}")
                 self.emit(f"for _ in range((t{k} in M{k}) + H{k}[1].get(t{k}, 0)):")
                 self.loops += 1
@@ -185,7 +200,7 @@ class CodeWriter:
             return
         conds = [f"len(t) == {len(args)}"] if self.sized[k] else []
         binds = []
-        first: dict = {}      # variable -> where it is first met in ``t``
+        first: dict = {}  # variable -> where it is first met in ``t``
         for i, a in enumerate(args):
             if type(a) is tuple and a and not term_vars(a, set()) <= self.known:
                 # a list with a free variable: its shape, then element by element
@@ -233,8 +248,15 @@ class CodeWriter:
     def bound(self, args: tuple) -> str:
         """The atom's arguments as the general engine's binder gives them:
         bound variables by their values, unbound ones as themselves."""
-        return "(" + "".join((f"x{a.index}" if type(a) is Var and a.index in self.known
-                              else self.const(a)) + ", " for a in args) + ")"
+        return (
+            "("
+            + "".join(
+                (f"x{a.index}" if type(a) is Var and a.index in self.known else self.const(a))
+                + ", "
+                for a in args
+            )
+            + ")"
+        )
 
     def general(self, k: int, lit: Literal, call: str = "G{k}({})") -> bool:
         """Conjunct ``k`` asked of the general engine (``call`` names the
@@ -259,8 +281,11 @@ class CodeWriter:
         if new:
             for v in new:
                 self.emit(f"x{v} = b{k}[{v}]")
-            ground = " and ".join(f"(type(x{v}) is str or type(x{v}) is float or "
-                                  f"(x{v} is not None and is_ground(x{v})))" for v in new)
+            ground = " and ".join(
+                f"(type(x{v}) is str or type(x{v}) is float or "
+                f"(x{v} is not None and is_ground(x{v})))"
+                for v in new
+            )
             self.emit(f"if not ({ground}):")
             self.emit(f"    yield from R{k}(b{k})")
             self.emit("    continue")

@@ -29,6 +29,7 @@ right with backtracking. The generated source depends only on the
 conjunction and the mode; the code is cached per conjunction object and mode,
 and each planner binds it to its own state's lists when a mode first occurs.
 """
+
 from __future__ import annotations
 
 from typing import Callable
@@ -44,10 +45,10 @@ from .compile import conjunction
 from .conjuncts import ATOM, AXIOM, GENERAL, NOT_ATOM, NOT_AXIOM, Literal, flatten
 from .mode_writer import CodeWriter
 
-MAX_LITERALS = 40     # longer conjunctions stay on the general path (indentation)
-MAX_VARS = 60         # a mode is a bit mask over the conjunction's variables
+MAX_LITERALS = 40  # longer conjunctions stay on the general path (indentation)
+MAX_VARS = 60  # a mode is a bit mask over the conjunction's variables
 
-_CODE = cache()      # (id(conjunction), mode, sized, entry) -> factory or None
+_CODE = cache()  # (id(conjunction), mode, sized, entry) -> factory or None
 _LITERALS = cache()  # id(conjunction) -> (conjunctions, _Literals, variables)
 _NONE = object()
 
@@ -58,7 +59,7 @@ def compile_conjunction(logic, e: S.And, entry: frozenset = None, what: str = No
     precondition's head variables), or None for any. ``what`` names the
     generated code (``precondition of !grasp``; see :mod:`~htn.jshop.logic.codegen`)."""
     hit = _LITERALS.get(e)
-    if hit is None:     # the same for every planner of the domain
+    if hit is None:  # the same for every planner of the domain
         items = flatten(e.items)
         lits = [Literal(x, logic.domain.axioms) for x in items]
         hit = _LITERALS.put(e, (items, lits, sorted(set().union(*(lit.vars for lit in lits)))))
@@ -91,8 +92,9 @@ def compile_conjunction(logic, e: S.And, entry: frozenset = None, what: str = No
             if met[1] < warming.WARM:
                 return test if mode == full else None
             known = {v for j, v in enumerate(names) if mode >> j & 1}
-            factory = _CODE.put(e, CodeWriter(lits, known, sized).factory(
-                _mode_name(what, e, known, lits)), key)
+            factory = _CODE.put(
+                e, CodeWriter(lits, known, sized).factory(_mode_name(what, e, known, lits)), key
+            )
         f = gen if factory is None else factory(*constants)
         modes[mode] = f
         return f
@@ -106,18 +108,27 @@ def _tester(logic, lits: list):
     conjunct; an operator's precondition is often just that), or None."""
     plan = []
     for lit in lits:
-        if lit.kind not in (ATOM, NOT_ATOM) or lit.facts or \
-                not all(type(a) in (str, float, Var) for a in lit.args):
+        if (
+            lit.kind not in (ATOM, NOT_ATOM)
+            or lit.facts
+            or not all(type(a) in (str, float, Var) for a in lit.args)
+        ):
             return None
         logic.state.bucket(lit.pred)
-        plan.append((logic.state.members[lit.pred], lit.kind == NOT_ATOM,
-                     tuple((type(a) is Var, a.index if type(a) is Var else a) for a in lit.args)))
+        plan.append(
+            (
+                logic.state.members[lit.pred],
+                lit.kind == NOT_ATOM,
+                tuple((type(a) is Var, a.index if type(a) is Var else a) for a in lit.args),
+            )
+        )
 
     def test(env):
         for members, negated, parts in plan:
             if (tuple([env[x] if var else x for var, x in parts]) in members) is negated:
                 return
         yield env
+
     return test
 
 
@@ -154,6 +165,7 @@ def _rest(general: list, k: int) -> Callable:
             tail = general[k:]
             made.append(conjunction(tail) if len(tail) > 1 else tail[0])
         return made[0](env)
+
     return rest
 
 
@@ -175,29 +187,36 @@ def _entry(names: list):
     make = _ENTRIES.get(key)
     if make is not None:
         return make
-    lines = ["def make(state, gen, modes, build):",
-             "    def sat(env):",
-             "        if state.nonground:",
-             "            return gen(env)",
-             "        m = 0"]
+    lines = [
+        "def make(state, gen, modes, build):",
+        "    def sat(env):",
+        "        if state.nonground:",
+        "            return gen(env)",
+        "        m = 0",
+    ]
     for j, v in enumerate(names):
-        lines += [f"        x = env[{v}]",
-                  "        if x is not None:",
-                  "            if type(x) is str or type(x) is float or is_ground(x):",
-                  f"                m |= {1 << j}",
-                  "            else:",
-                  "                return gen(env)"]
-    lines += ["        f = modes.get(m)",
-              "        if f is None:",
-              "            f = build(m)",
-              "            if f is None:",
-              "                return gen(env)",
-              "        return f(env)",
-              "    return sat"]
+        lines += [
+            f"        x = env[{v}]",
+            "        if x is not None:",
+            "            if type(x) is str or type(x) is float or is_ground(x):",
+            f"                m |= {1 << j}",
+            "            else:",
+            "                return gen(env)",
+        ]
+    lines += [
+        "        f = modes.get(m)",
+        "        if f is None:",
+        "            f = build(m)",
+        "            if f is None:",
+        "                return gen(env)",
+        "        return f(env)",
+        "    return sat",
+    ]
     ns = {"is_ground": is_ground}
-    define("\n".join(lines), f"binding mode of a conjunction over variables "
-           f"{', '.join(map(str, names)) or 'none'}", ns)
+    define(
+        "\n".join(lines),
+        f"binding mode of a conjunction over variables {', '.join(map(str, names)) or 'none'}",
+        ns,
+    )
     make = _ENTRIES[key] = ns["make"]
     return make
-
-

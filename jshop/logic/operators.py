@@ -13,6 +13,7 @@ Each operator's delete and add lists are compiled into small programs when
 the planner starts: plain atoms become ``(pred, substituter)`` pairs, the common case
 that needs no condition at all.
 """
+
 from __future__ import annotations
 
 from typing import Optional
@@ -35,9 +36,9 @@ class Operators:
     def __init__(self, state, logic):
         self.state = state
         self.logic = logic
-        self._programs: dict = {}     # id(op) -> (plain dels, plain adds, dels, adds, op)
-        self._general: dict = {}      # id(op) -> (dels, adds) compiled in general form
-        for ops in logic.domain.operators.values():    # compiled before searching
+        self._programs: dict = {}  # id(op) -> (plain dels, plain adds, dels, adds, op)
+        self._general: dict = {}  # id(op) -> (dels, adds) compiled in general form
+        for ops in logic.domain.operators.values():  # compiled before searching
             for op in ops:
                 self.program(op)
 
@@ -58,8 +59,13 @@ class Operators:
         out = []
         for item in eff.items:
             if isinstance(item, S.EffectForAll):
-                out.append((_FORALL, self.logic.expr(item.cond),
-                            [_atom_program(a, op) for a in item.atoms]))
+                out.append(
+                    (
+                        _FORALL,
+                        self.logic.expr(item.cond),
+                        [_atom_program(a, op) for a in item.atoms],
+                    )
+                )
             elif isinstance(item, S.Protection):
                 out.append((_PROTECT, _atom_program(item.atom, op), None))
             else:
@@ -74,7 +80,7 @@ class Operators:
         state = self.state
         prog = self._programs.get(id(op)) or self.program(op)
         dels, adds = prog[0], prog[1]
-        if dels is not None and adds is not None:    # no conditions: nothing to evaluate
+        if dels is not None and adds is not None:  # no conditions: nothing to evaluate
             protections = state.protections
             deleted, added = change.deleted, change.added
             for pred, bind in dels:
@@ -122,11 +128,14 @@ class Operators:
     def atoms(self, program, env: list, op):
         """Ground atoms of a compiled delete/add list; protections come as
         ``(None, atom)``. Lazy: see the module docstring."""
-        if not isinstance(program, list):       # the list is a variable (3.14)
+        if not isinstance(program, list):  # the list is a variable (3.14)
             lst = env[program.index]
             if type(lst) is not tuple:
-                raise PlanningError.at(op.pos, f"the effect list variable {program.name} "
-                                       f"of {op.name} is bound to {shown_term(lst)}")
+                raise PlanningError.at(
+                    op.pos,
+                    f"the effect list variable {program.name} "
+                    f"of {op.name} is bound to {shown_term(lst)}",
+                )
             for t in lst:
                 yield atom_from_term(t, op.pos)
             return
@@ -147,14 +156,16 @@ class Operators:
         current state (protections left out)."""
         general = self._general.get(id(op))
         if general is None:
-            general = self._general[id(op)] = (self._compile(op.delete, op),
-                                               self._compile(op.add, op))
+            general = self._general[id(op)] = (
+                self._compile(op.delete, op),
+                self._compile(op.add, op),
+            )
         dels = [a for a in self.atoms(general[0], env, op) if a[0] is not None]
         adds = [a for a in self.atoms(general[1], env, op) if a[0] is not None]
         return dels, adds
 
 
-_PLAIN = cache()     # id(op) -> (dels, adds): the same for every planner
+_PLAIN = cache()  # id(op) -> (dels, adds): the same for every planner
 
 
 def _plain_lists(op: S.Operator) -> tuple:
@@ -175,8 +186,11 @@ def _plain(eff: S.Effects, op: S.Operator) -> Optional[list]:
 
 
 def _substituter(a: S.Atom, op: S.Operator, install):
-    return warm.substituter(a.args, lambda: described(
-        f"effect {source_atom(a.pred, a.args)} of {op.name}", a.pos or op.pos), install)
+    return warm.substituter(
+        a.args,
+        lambda: described(f"effect {source_atom(a.pred, a.args)} of {op.name}", a.pos or op.pos),
+        install,
+    )
 
 
 def _atom_program(a, op: S.Operator) -> list:

@@ -1,4 +1,5 @@
 """Matching a pattern against the atoms of one predicate, in the state's order."""
+
 from __future__ import annotations
 
 from typing import Iterator
@@ -29,7 +30,7 @@ def scan_atoms(lst: list, bound: tuple, env: list) -> Iterator[list]:
             others.append((i, t))
         i += 1
     if not others and len(consts) == 1:
-        (ci, c), = consts
+        ((ci, c),) = consts
         for args in lst:
             if len(args) == n and args[ci] == c:
                 new = env[:]

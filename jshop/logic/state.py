@@ -5,6 +5,7 @@ Atoms are kept per predicate in insertion order, exactly like JSHOP2's
 and put back at that index on backtracking. Satisfiers are enumerated in this
 order, so keeping it is what makes plans come out in JSHOP2's order.
 """
+
 from __future__ import annotations
 
 from htn.jshop.language.terms import is_ground
@@ -14,10 +15,10 @@ class State:
     __slots__ = ("atoms", "members", "protections", "nonground")
 
     def __init__(self):
-        self.atoms: dict[str, list] = {}      # pred -> [args tuple], in order
-        self.members: dict[str, set] = {}     # pred -> {ground args tuple}
+        self.atoms: dict[str, list] = {}  # pred -> [args tuple], in order
+        self.members: dict[str, set] = {}  # pred -> {ground args tuple}
         self.protections: dict[tuple, int] = {}  # (pred, args) -> counter
-        self.nonground = 0    # atoms with variables in them (see htn.jshop.logic.modes)
+        self.nonground = 0  # atoms with variables in them (see htn.jshop.logic.modes)
 
     def bucket(self, pred: str) -> list:
         """The live list of ``pred``'s atoms (created empty on first use)."""
@@ -37,7 +38,7 @@ class State:
         if m is None:
             self.bucket(pred)
             m = self.members[pred]
-        for x in args:      # is_ground(args), the common flat atom without a call
+        for x in args:  # is_ground(args), the common flat atom without a call
             tx = type(x)
             if tx is not str and tx is not float and not is_ground(x):
                 self.nonground += 1
@@ -74,7 +75,7 @@ class State:
     def retract(self, pred: str, args: tuple) -> None:
         """Undo an :meth:`add` (the atom was appended, so look from the end)."""
         lst = self.atoms[pred]
-        if lst[-1] == args:     # undone in reverse order: usually still the last
+        if lst[-1] == args:  # undone in reverse order: usually still the last
             lst.pop()
         else:
             for i in range(len(lst) - 2, -1, -1):
@@ -84,7 +85,7 @@ class State:
         m = self.members[pred]
         if args in m:
             m.remove(args)
-        else:                  # only ground atoms are members
+        else:  # only ground atoms are members
             self.nonground -= 1
 
     def is_protected(self, pred: str, args: tuple) -> bool:
@@ -127,6 +128,7 @@ class HashedState(State):
     """A state that keeps a hash of its atoms up to date (``key``), so that
     two states can be compared in constant time (see :mod:`htn.jshop.search.loops`).
     Equal states have equal keys; unequal states almost surely differ."""
+
     __slots__ = ("key",)
 
     def __init__(self):
@@ -156,13 +158,14 @@ class HashedState(State):
 
 class Change:
     """What one operator application did, to be undone on backtracking."""
+
     __slots__ = ("deleted", "added", "unprotected", "protected")
 
     def __init__(self):
-        self.deleted: list = []      # (pred, args, index)
-        self.added: list = []        # (pred, args)
+        self.deleted: list = []  # (pred, args, index)
+        self.added: list = []  # (pred, args)
         self.unprotected: list = _NONE  # (pred, args); a list of its own once used
-        self.protected: list = _NONE    # (pred, args)
+        self.protected: list = _NONE  # (pred, args)
 
     def undo(self, state: State) -> None:
         """JSHOP2's ``State.undo``: added out, deleted back in place, protections."""
@@ -176,4 +179,4 @@ class Change:
             state.protect(pred, args)
 
 
-_NONE: tuple = ()    # no protection changes (most operators): nothing allocated
+_NONE: tuple = ()  # no protection changes (most operators): nothing allocated

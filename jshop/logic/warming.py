@@ -15,6 +15,7 @@ Each interpreted equivalent computes exactly what the compiled code computes
 (the compiled code's docstrings say "equivalent to subst/unify"), so when
 the switch happens changes the speed only, never a result or its order.
 """
+
 from __future__ import annotations
 
 from typing import Callable
@@ -32,8 +33,7 @@ from .scan import scan_atoms
 WARM = 32
 
 
-def warming(slow: Callable, compile_fast: Callable, install: Callable, piece,
-            kind="") -> Callable:
+def warming(slow: Callable, compile_fast: Callable, install: Callable, piece, kind="") -> Callable:
     """``slow``, counting the calls of ``piece`` (a domain object, and the
     ``kind`` of code made of it: the count is the process's, over all
     planners): the :data:`WARM`-th call also compiles the fast equivalent
@@ -46,10 +46,11 @@ def warming(slow: Callable, compile_fast: Callable, install: Callable, piece,
         if count[1] >= WARM:
             install(compile_fast())
         return slow(*args)
+
     return warm
 
 
-_CALLS = cache()    # (id(piece), kind) -> [piece, calls]
+_CALLS = cache()  # (id(piece), kind) -> [piece, calls]
 
 
 def calls(piece, kind="") -> list:
@@ -81,9 +82,11 @@ def binder(args: tuple, what: Callable, install: Callable) -> Callable:
                         ground = is_ground(v)
             return (None if ground else C.GENERIC), tuple(b)
     else:
+
         def bind(env):
             b = subst(args, env)
             return (None, b) if is_ground(b) else (C.GENERIC, b)
+
     return warming(bind, lambda: C.binder(args, what()), install, args, "bind")
 
 
@@ -92,8 +95,13 @@ def term_binder(term, what: Callable, install: Callable) -> Callable:
     fast = C._TERMS.get(term)
     if fast is not None:
         return fast
-    return warming(lambda env: (None, (subst(term, env),)),
-                   lambda: C.term_binder(term, what()), install, term, "term")
+    return warming(
+        lambda env: (None, (subst(term, env),)),
+        lambda: C.term_binder(term, what()),
+        install,
+        term,
+        "term",
+    )
 
 
 def scanner(args: tuple, key: int, what: Callable, install: Callable) -> Callable:
@@ -109,8 +117,9 @@ def substituter(args: tuple, what: Callable, install: Callable) -> Callable:
     fast = C._SUBSTITUTERS.get(args)
     if fast is not None:
         return fast
-    return warming(interpreted_substitution(args), lambda: C.substituter(args, what()), install,
-                   args, "subst")
+    return warming(
+        interpreted_substitution(args), lambda: C.substituter(args, what()), install, args, "subst"
+    )
 
 
 def interpreted_substitution(args: tuple) -> Callable[[list], tuple]:
@@ -127,6 +136,7 @@ def interpreted_substitution(args: tuple) -> Callable[[list], tuple]:
             if v is not None:
                 b[i] = v
         return tuple(b)
+
     return sub
 
 
@@ -144,4 +154,5 @@ def head_unifier(head: tuple, what: Callable, install: Callable) -> Callable:
             if not unify(p, t, env):
                 return False
         return True
+
     return warming(unify_head, lambda: C.head_unifier(head, what()), install, head, "head")

@@ -22,6 +22,7 @@ Needs the plan's task tree (the planner records it with ``record_trees``).
 :func:`read_ipc_plans` reads the format back (``htn validate``); what it
 means for such a plan to be valid is :mod:`htn.jshop.checks.ipc_verify`'s.
 """
+
 from __future__ import annotations
 
 import re
@@ -34,6 +35,7 @@ from htn.jshop.language.terms import term_str
 
 def ipc_text(plan, spelling: dict) -> str:
     """The plan (with its ``tree``) as IPC 2020 text, ``==>`` to ``<==``."""
+
     def spell(name: str) -> str:
         name = name.lstrip("!")
         return spelling.get(name, name)
@@ -58,25 +60,28 @@ def ipc_text(plan, spelling: dict) -> str:
         if node.step is None:
             children = " ".join(str(ids[id(c)]) for c in node.children)
             method = spell(node.branch or node.method or "")
-            out.append(f"{ids[id(node)]} {line(node.name, node.args)} -> {method} {children}"
-                       .rstrip())
+            out.append(
+                f"{ids[id(node)]} {line(node.name, node.args)} -> {method} {children}".rstrip()
+            )
     out.append("<==")
     return "\n".join(out) + "\n"
 
 
 # ------------------------------------------------------------------ reading
 
+
 @dataclass
 class IpcLine:
     """One line of an IPC plan: an action (``method`` None) or a
     decomposition. Names are lower-cased (HDDL names are case-insensitive);
     ``cols`` are the 1-based columns of the name and of each argument."""
+
     id: int
     name: str
     args: tuple
     line: int
-    col: int                        # column of the id
-    cols: tuple                     # columns of the name and the arguments
+    col: int  # column of the id
+    cols: tuple  # columns of the name and the arguments
     method: Optional[str] = None
     method_col: int = 0
     children: tuple = ()
@@ -90,17 +95,18 @@ class IpcLine:
 @dataclass
 class IpcPlan:
     """One ``==>`` ... ``<==`` block of a plan file."""
-    actions: list = field(default_factory=list)        # [IpcLine], in execution order
+
+    actions: list = field(default_factory=list)  # [IpcLine], in execution order
     root: tuple = ()
     root_cols: tuple = ()
     root_line: int = 0
     decompositions: list = field(default_factory=list)  # [IpcLine]
-    line: int = 0                   # the line of its ``==>``
-    end_line: int = 0               # the line of its ``<==``
+    line: int = 0  # the line of its ``==>``
+    end_line: int = 0  # the line of its ``<==``
     index: int = 0
 
 
-_TOKEN = re.compile(r"[^\s()]+")    # parentheses separate, as in the verifier's reader
+_TOKEN = re.compile(r"[^\s()]+")  # parentheses separate, as in the verifier's reader
 
 
 def is_ipc_text(text: str) -> bool:
@@ -132,12 +138,17 @@ def read_ipc_plans(text: str, file: str) -> list:
             current = None
             continue
         if head == "==>":
-            raise HtnError(f"a new plan starts before the plan of line {current.line} ends "
-                           "with '<=='", file, n, col)
+            raise HtnError(
+                f"a new plan starts before the plan of line {current.line} ends with '<=='",
+                file,
+                n,
+                col,
+            )
         if head == "root":
             if section != "actions":
-                raise HtnError(f"a second 'root' line (the first is line {current.root_line})",
-                               file, n, col)
+                raise HtnError(
+                    f"a second 'root' line (the first is line {current.root_line})", file, n, col
+                )
             current.root = tuple(_ident(t, c, file, n) for t, c in tokens[1:])
             current.root_cols = tuple(c for _, c in tokens[1:])
             current.root_line = n
@@ -145,29 +156,39 @@ def read_ipc_plans(text: str, file: str) -> list:
             continue
         ident = _ident(head, col, file, n)
         if len(tokens) < 2 or tokens[1][0] == "->":
-            raise HtnError(f"line {ident}: an action or task name must follow the id",
-                           file, n, tokens[1][1] if len(tokens) > 1 else col)
+            raise HtnError(
+                f"line {ident}: an action or task name must follow the id",
+                file,
+                n,
+                tokens[1][1] if len(tokens) > 1 else col,
+            )
         arrow = next((i for i, (t, _) in enumerate(tokens) if t == "->"), None)
         if section == "actions":
             if arrow is not None:
-                raise HtnError("a decomposition line ('->') before the 'root' line", file, n,
-                               tokens[arrow][1])
+                raise HtnError(
+                    "a decomposition line ('->') before the 'root' line", file, n, tokens[arrow][1]
+                )
             current.actions.append(_line(ident, col, tokens[1:], n))
             continue
         if arrow is None:
-            raise HtnError("a decomposition line needs '-> METHOD SUBTASK-IDS' after the "
-                           "task", file, n, tokens[-1][1] + len(tokens[-1][0]))
+            raise HtnError(
+                "a decomposition line needs '-> METHOD SUBTASK-IDS' after the task",
+                file,
+                n,
+                tokens[-1][1] + len(tokens[-1][0]),
+            )
         if arrow + 1 >= len(tokens):
             raise HtnError("a method name must follow '->'", file, n, tokens[arrow][1])
         entry = _line(ident, col, tokens[1:arrow], n)
         entry.method, entry.method_col = tokens[arrow + 1][0].lower(), tokens[arrow + 1][1]
-        rest = tokens[arrow + 2:]
+        rest = tokens[arrow + 2 :]
         entry.children = tuple(_ident(t, c, file, n) for t, c in rest)
         entry.child_cols = tuple(c for _, c in rest)
         current.decompositions.append(entry)
     if current is not None:
-        raise HtnError(f"the plan of line {current.line} does not end with '<=='", file,
-                       current.line, 1)
+        raise HtnError(
+            f"the plan of line {current.line} does not end with '<=='", file, current.line, 1
+        )
     if not plans:
         raise HtnError("the file holds no IPC plan (a '==>' ... '<==' block)", file)
     return plans
@@ -175,11 +196,16 @@ def read_ipc_plans(text: str, file: str) -> list:
 
 def _ident(token: str, col: int, file: str, line: int) -> int:
     if not token.isdigit():
-        raise HtnError(f"expected a task id (a number 0, 1, ...), found {token!r}", file,
-                       line, col)
+        raise HtnError(f"expected a task id (a number 0, 1, ...), found {token!r}", file, line, col)
     return int(token)
 
 
 def _line(ident: int, col: int, tokens: list, line: int) -> IpcLine:
-    return IpcLine(ident, tokens[0][0].lower(), tuple(t.lower() for t, _ in tokens[1:]), line,
-                   col, tuple(c for _, c in tokens))
+    return IpcLine(
+        ident,
+        tokens[0][0].lower(),
+        tuple(t.lower() for t, _ in tokens[1:]),
+        line,
+        col,
+        tuple(c for _, c in tokens),
+    )

@@ -1,4 +1,5 @@
 """Plans: sequences of ground operator instances with a cost (manual 3.13)."""
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -12,10 +13,11 @@ SEPARATOR = "--------------------"
 @dataclass
 class Step:
     """One operator instance in a plan; ``internal`` for ``!!`` operators."""
+
     name: str
     args: tuple
     cost: float = 1.0
-    line: int = 0            # line in a plan file it was read from (0: not read)
+    line: int = 0  # line in a plan file it was read from (0: not read)
 
     @property
     def internal(self) -> bool:
@@ -29,9 +31,9 @@ class Step:
 class Plan:
     steps: list
     cost: float
-    tree: Optional[Any] = None   # a jshop.tree.TaskTree, when recorded
-    index: int = 0               # 0-based position in the planner's stream
-    line: int = 0                # line of its 'Plan cost:' in a plan file it was read from
+    tree: Optional[Any] = None  # a jshop.tree.TaskTree, when recorded
+    index: int = 0  # 0-based position in the planner's stream
+    line: int = 0  # line of its 'Plan cost:' in a plan file it was read from
 
     def __len__(self) -> int:
         return len(self.steps)

@@ -56,6 +56,7 @@ Other ``; key: value`` lines are kept as notes: ``htn transform -o`` writes
 the transformed task list as ``; tasks:``. Plain JSHOP2 output (no header)
 is a plan file too; its domain and problem are then given on the command line.
 """
+
 from __future__ import annotations
 
 import hashlib
@@ -74,8 +75,13 @@ from .tree_text import TREE_HEAD, TREE_NODE, read_tree, tree_text
 NAMED = ("domain", "problem", "functions")
 
 
-def header(out_path: str, domain: str, problem: str, functions: Optional[str] = None,
-           functions_sha256: Optional[str] = None) -> str:
+def header(
+    out_path: str,
+    domain: str,
+    problem: str,
+    functions: Optional[str] = None,
+    functions_sha256: Optional[str] = None,
+) -> str:
     """The comment lines that name the files a plan was made from
     (``functions_sha256``: of the functions file's bytes as they were loaded)."""
     base = os.path.dirname(os.path.abspath(out_path))
@@ -104,11 +110,11 @@ def plan_text(plan: Plan) -> str:
 class PlanFile:
     path: str
     plans: list = field(default_factory=list)
-    named: dict = field(default_factory=dict)    # "domain" -> [(candidate path, line)]
-    notes: dict = field(default_factory=dict)    # other "; key: value" lines -> (value, line)
-    lines: list = field(default_factory=list)    # the file's text, line by line
-    sha256: str = ""                             # of the file's bytes, as read
-    trees: list = field(default_factory=list)    # per plan: its tree's [(line, text)] or None
+    named: dict = field(default_factory=dict)  # "domain" -> [(candidate path, line)]
+    notes: dict = field(default_factory=dict)  # other "; key: value" lines -> (value, line)
+    lines: list = field(default_factory=list)  # the file's text, line by line
+    sha256: str = ""  # of the file's bytes, as read
+    trees: list = field(default_factory=list)  # per plan: its tree's [(line, text)] or None
 
     def file(self, kind: str) -> Optional[str]:
         """The ``kind`` ("domain", "problem", "functions") file the header
@@ -122,8 +128,12 @@ class PlanFile:
             if os.path.isfile(path):
                 return path
         shown = " nor ".join(p for p, _ in candidates)
-        raise HtnError(f"the {kind} file named here is missing: {shown} (give it with "
-                       f"htn run --{kind} FILE)", self.path, candidates[0][1], 1)
+        raise HtnError(
+            f"the {kind} file named here is missing: {shown} (give it with htn run --{kind} FILE)",
+            self.path,
+            candidates[0][1],
+            1,
+        )
 
     def named_functions(self) -> Optional[tuple]:
         """(path as written, line, SHA-256 or None) of the functions file the
@@ -166,13 +176,13 @@ def read_plan_file(path: str) -> PlanFile:
             data = fh.read()
     except OSError as exc:
         raise HtnError(f"cannot read: {exc.strerror}", path)
-    lines = decode_source(data, path).splitlines()    # UTF-8, BOM or not; bad bytes at line:col
+    lines = decode_source(data, path).splitlines()  # UTF-8, BOM or not; bad bytes at line:col
     base = os.path.dirname(os.path.abspath(path))
     pf = PlanFile(path, lines=lines, sha256=hashlib.sha256(data).hexdigest())
     steps: list = []
     cost = None
     cost_line = 0
-    tree: Optional[list] = None      # the task tree lines before the next plan
+    tree: Optional[list] = None  # the task tree lines before the next plan
     in_tree = False
     for n, line in enumerate(lines, 1):
         text = line.strip()
@@ -223,8 +233,9 @@ def read_plan_file(path: str) -> PlanFile:
             continue
         raise HtnError(f"unexpected line in plan file: {text[:40]!r}", path, n, 1)
     if cost is not None:
-        raise HtnError("the last plan is not terminated by '--------------------'", path,
-                       len(lines), 1)
+        raise HtnError(
+            "the last plan is not terminated by '--------------------'", path, len(lines), 1
+        )
     if not pf.plans:
         raise HtnError("the plan file holds no plan", path)
     return pf

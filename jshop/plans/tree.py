@@ -11,6 +11,7 @@ The planner takes a snapshot of the task network when it finds a plan, so each
 plan's tree holds only the decompositions of that plan, never those of a branch
 the search backtracked over.
 """
+
 from __future__ import annotations
 
 from collections import Counter
@@ -23,16 +24,17 @@ from htn.jshop.language.terms import atom_str, term_str
 @dataclass
 class TaskTree:
     """One node of a task tree; the root is the problem's task list."""
+
     name: str
     args: tuple = ()
     path: str = ""
-    method: Optional[str] = None       # method head name that decomposed it
+    method: Optional[str] = None  # method head name that decomposed it
     method_index: Optional[int] = None  # which of the methods for that task (0-based)
-    branch: Optional[str] = None       # that method's branch label
-    step: Optional[int] = None         # index in the plan, for primitive tasks
+    branch: Optional[str] = None  # that method's branch label
+    step: Optional[int] = None  # index in the plan, for primitive tasks
     children: list = field(default_factory=list)
-    outcome: Optional[str] = None      # after an execution or projection (annotate())
-    code_replacement: Optional[list] = None   # what a transformation put in its place
+    outcome: Optional[str] = None  # after an execution or projection (annotate())
+    code_replacement: Optional[list] = None  # what a transformation put in its place
 
     @property
     def primitive(self) -> bool:
@@ -71,8 +73,14 @@ class TaskTree:
             node, parent = stack.pop()
             args = [term_str(a) for a in node.args]
             task = ("(" + " ".join([node.name, *args]) + ")") if node.name else "(root)"
-            d: dict[str, Any] = {"id": len(nodes), "parent": parent, "task": task,
-                                 "name": node.name, "args": args, "path": node.path}
+            d: dict[str, Any] = {
+                "id": len(nodes),
+                "parent": parent,
+                "task": task,
+                "name": node.name,
+                "args": args,
+                "path": node.path,
+            }
             if node.method is not None:
                 d["method"] = node.method
                 d["method_index"] = node.method_index
@@ -113,7 +121,7 @@ class TaskTree:
             label = n.task if n.name else "root"
             if n.method:
                 label += f"\\n[{n.branch}]"
-            shape = ', style=rounded' if n.step is not None else ""
+            shape = ", style=rounded" if n.step is not None else ""
             out.append(f'  n{i} [label="{_dot_escape(label)}"{shape}];')
         for n in self.walk():
             for c in n.children:
@@ -127,13 +135,13 @@ def annotate(tree: TaskTree, step_outcomes: dict) -> TaskTree:
     outcome (``verified``, ``aborted``, ``failed``, or ``not run``); a task is
     ``verified`` when all its children are, else the first other outcome."""
     order = list(tree.walk())
-    for node in reversed(order):          # children before parents
+    for node in reversed(order):  # children before parents
         if node.step is not None:
             node.outcome = step_outcomes.get(node.step, "not run")
         elif node.children:
             outs = [c.outcome for c in node.children]
             node.outcome = next((o for o in outs if o != "verified"), "verified")
-        elif node.method is not None:      # decomposed into nothing: nothing to do
+        elif node.method is not None:  # decomposed into nothing: nothing to do
             node.outcome = "verified"
     return tree
 

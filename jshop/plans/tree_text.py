@@ -6,6 +6,7 @@ depth first (the format is described in :mod:`htn.jshop.plans.planfile`).
 domain's methods, checks each method and branch), refusing a corrupted
 tree with the ``file:line:col`` of the line that does not fit.
 """
+
 from __future__ import annotations
 
 import re
@@ -66,44 +67,61 @@ class _TreeReader:
         if not count.isdigit():
             raise self.error(f"{count!r} is not a number of nodes", head_line, head, count)
         if int(count) != len(nodes):
-            raise self.error(f"the header says {count} nodes, {len(nodes)} follow",
-                             head_line, head, count)
+            raise self.error(
+                f"the header says {count} nodes, {len(nodes)} follow", head_line, head, count
+            )
         root = TaskTree(name="", path="")
-        stack = [(0, root)]             # (depth, node) from the root down to the last node
+        stack = [(0, root)]  # (depth, node) from the root down to the last node
         next_step = 0
         for n, text in nodes:
             depth_text, _, rest = text.lstrip("; ").partition(" ")
             depth = int(depth_text) if depth_text.isdigit() else -1
             if depth < 1 or depth > stack[-1][0] + 1:
-                raise self.error(f"depth {depth_text} does not follow depth {stack[-1][0]} "
-                                 f"(a node is at most one level below the one before)",
-                                 n, text, depth_text)
+                raise self.error(
+                    f"depth {depth_text} does not follow depth {stack[-1][0]} "
+                    f"(a node is at most one level below the one before)",
+                    n,
+                    text,
+                    depth_text,
+                )
             del stack[depth:]
             parent = stack[-1][1]
             if parent.step is not None or (parent is not root and parent.method is None):
-                raise self.error(f"{parent.task} has no children (it is not reduced by a "
-                                 "method)", n, text, depth_text)
-            node = self.step_node(n, text, rest, next_step) if rest.startswith("step") \
+                raise self.error(
+                    f"{parent.task} has no children (it is not reduced by a method)",
+                    n,
+                    text,
+                    depth_text,
+                )
+            node = (
+                self.step_node(n, text, rest, next_step)
+                if rest.startswith("step")
                 else self.task_node(n, text, rest)
+            )
             if node.step is not None:
                 next_step += 1
             parent.children.append(node)
             stack.append((depth, node))
         if next_step != len(self.steps):
-            raise self.error(f"the tree has {next_step} of the plan's {len(self.steps)} steps",
-                             head_line)
+            raise self.error(
+                f"the tree has {next_step} of the plan's {len(self.steps)} steps", head_line
+            )
         _set_paths(root)
         return root
 
     def step_node(self, n: int, text: str, rest: str, expected: int) -> TaskTree:
-        number = rest[len("step"):].strip()
+        number = rest[len("step") :].strip()
         if not number.isdigit():
             raise self.error(f"expected 'step N', found {rest!r}", n, text, rest)
         if int(number) != expected + 1:
-            raise self.error(f"step {number} out of order: the plan's next step is "
-                             f"{expected + 1}" if expected < len(self.steps) else
-                             f"step {number}: the plan has {len(self.steps)} steps",
-                             n, text, number)
+            raise self.error(
+                f"step {number} out of order: the plan's next step is {expected + 1}"
+                if expected < len(self.steps)
+                else f"step {number}: the plan has {len(self.steps)} steps",
+                n,
+                text,
+                number,
+            )
         step = self.steps[expected]
         return TaskTree(name=step.name, args=tuple(step.args), step=expected)
 
@@ -115,16 +133,21 @@ class _TreeReader:
         try:
             atom = parse_step(rest[:end], self.path, n)
         except HtnError as exc:
-            raise HtnError(f"task tree: {exc.message}", self.path, n,
-                           offset + (exc.col or 1)) from None
+            raise HtnError(
+                f"task tree: {exc.message}", self.path, n, offset + (exc.col or 1)
+            ) from None
         how = rest[end:].split()
         node = TaskTree(name=atom.name, args=_with_indices(tuple(atom.args)))
         if how == ["unreduced"]:
             return node
         if len(how) != 3 or how[0] != "method" or not how[1].isdigit() or int(how[1]) < 1:
             shown = " ".join(how) or "nothing"
-            raise self.error(f"expected 'method K LABEL' or 'unreduced' after the task, "
-                             f"found {shown!r}", n, text, how[0] if how else "")
+            raise self.error(
+                f"expected 'method K LABEL' or 'unreduced' after the task, found {shown!r}",
+                n,
+                text,
+                how[0] if how else "",
+            )
         node.method, node.method_index, node.branch = atom.name, int(how[1]) - 1, how[2]
         if self.methods is not None:
             self.check_method(node, n, text, how)
@@ -135,17 +158,31 @@ class _TreeReader:
         if not methods:
             raise self.error(f"the domain has no method for {node.name}", n, text, node.name)
         if node.method_index >= len(methods):
-            raise self.error(f"the domain has {len(methods)} method(s) for {node.name}, "
-                             f"not {how[1]}", n, text, f"method {how[1]}")
+            raise self.error(
+                f"the domain has {len(methods)} method(s) for {node.name}, not {how[1]}",
+                n,
+                text,
+                f"method {how[1]}",
+            )
         method = methods[node.method_index]
         if len(method.head.args) != len(node.args):
-            raise self.error(f"method {how[1]} of {node.name} takes "
-                             f"{len(method.head.args)} argument(s), the task has "
-                             f"{len(node.args)}", n, text, node.name)
+            raise self.error(
+                f"method {how[1]} of {node.name} takes "
+                f"{len(method.head.args)} argument(s), the task has "
+                f"{len(node.args)}",
+                n,
+                text,
+                node.name,
+            )
         labels = [b.label for b in method.branches]
         if node.branch not in labels:
-            raise self.error(f"method {how[1]} of {node.name} has no branch {node.branch} "
-                             f"(its branches: {', '.join(labels)})", n, text, node.branch)
+            raise self.error(
+                f"method {how[1]} of {node.name} has no branch {node.branch} "
+                f"(its branches: {', '.join(labels)})",
+                n,
+                text,
+                node.branch,
+            )
 
 
 def _atom_text(name: str, args) -> str:
@@ -197,6 +234,8 @@ def _set_paths(root: TaskTree) -> None:
         seen: Counter = Counter()
         for child in node.children:
             seen[child.name] += 1
-            label = child.name if counts[child.name] == 1 else f"{child.name} :call {seen[child.name]}"
+            label = (
+                child.name if counts[child.name] == 1 else f"{child.name} :call {seen[child.name]}"
+            )
             child.path = f"{node.path}/{label}" if node.path else label
             work.append(child)

@@ -17,6 +17,7 @@ the domain it names), and an add-list atom with a variable that neither the
 operator's head nor its precondition binds (a state holds ground atoms only,
 manual 5.1.2; such an atom would carry an unbound variable into the state).
 """
+
 from __future__ import annotations
 
 from collections import Counter
@@ -63,21 +64,30 @@ def check_problem(domain: S.Domain, problem: S.Problem) -> list[Warning_]:
     """Raise :class:`HtnError` for tasks the problem asks that cannot exist."""
     warnings: list[Warning_] = []
     check_domain_name(domain, problem)
-    if problem.domain_name != domain.name:      # HDDL: see check_domain_name
-        warnings.append(Warning_(problem.domain_pos or problem.pos,
-                                 f"problem '{problem.name}' names domain "
-                                 f"'{problem.domain_name}', not '{domain.name}'"))
+    if problem.domain_name != domain.name:  # HDDL: see check_domain_name
+        warnings.append(
+            Warning_(
+                problem.domain_pos or problem.pos,
+                f"problem '{problem.name}' names domain "
+                f"'{problem.domain_name}', not '{domain.name}'",
+            )
+        )
     arities = _arities(domain)
     for inst in problem.instances:
         for t in S.task_atoms(inst.tasks):
             known = arities.get(t.name)
             if not known:
                 kind = "operator" if t.primitive else "method"
-                raise HtnError.at(t.pos, f"unknown {_describe_task(t)} '{t.name}': "
-                                  f"the domain has no {kind} for it")
+                raise HtnError.at(
+                    t.pos,
+                    f"unknown {_describe_task(t)} '{t.name}': the domain has no {kind} for it",
+                )
             if len(t.args) not in known:
-                raise HtnError.at(t.pos, f"'{t.name}' takes {_plural(known)}, "
-                                  f"given {len(t.args)}{_heads(domain, t.name)}")
+                raise HtnError.at(
+                    t.pos,
+                    f"'{t.name}' takes {_plural(known)}, "
+                    f"given {len(t.args)}{_heads(domain, t.name)}",
+                )
     for name, open_ in _open_positions(domain, problem).items():
         for op in domain.operators.get(name, ()):
             _unbound_effect_vars(op, open_)
@@ -88,8 +98,7 @@ def _heads(domain: S.Domain, name: str) -> str:
     """`` (it is (!brew ?robot ?cup) at coffee.jshop:8:14)``: the heads a
     task's arguments must match (the first two, if there are more)."""
     heads = [x.head for x in (*domain.operators.get(name, ()), *domain.methods.get(name, ()))]
-    shown = {source_atom(h.name, h.args) + (f" at {h.pos}" if h.pos else ""): None
-             for h in heads}
+    shown = {source_atom(h.name, h.args) + (f" at {h.pos}" if h.pos else ""): None for h in heads}
     text = " or ".join(list(shown)[:2]) + (" or ..." if len(shown) > 2 else "")
     return f" (it is {text})" if text else ""
 
@@ -110,14 +119,24 @@ def check_domain(domain: S.Domain) -> list[Warning_]:
                 for t in S.task_atoms(b.tasks):
                     known = arities.get(t.name)
                     if not known:
-                        warnings.append(Warning_(t.pos, f"{_describe_task(t)} '{t.name}' has no "
-                                                 f"{'operator' if t.primitive else 'method'}; "
-                                                 f"branch {b.label} of {m.name} can never succeed"))
+                        warnings.append(
+                            Warning_(
+                                t.pos,
+                                f"{_describe_task(t)} '{t.name}' has no "
+                                f"{'operator' if t.primitive else 'method'}; "
+                                f"branch {b.label} of {m.name} can never succeed",
+                            )
+                        )
                     elif len(t.args) not in known:
-                        warnings.append(Warning_(t.pos, f"'{t.name}' takes {_plural(known)}, "
-                                                 f"given {len(t.args)}; branch {b.label} of "
-                                                 f"{m.name} can never succeed"
-                                                 f"{_heads(domain, t.name)}"))
+                        warnings.append(
+                            Warning_(
+                                t.pos,
+                                f"'{t.name}' takes {_plural(known)}, "
+                                f"given {len(t.args)}; branch {b.label} of "
+                                f"{m.name} can never succeed"
+                                f"{_heads(domain, t.name)}",
+                            )
+                        )
     elements = []
     for ops in domain.operators.values():
         for op in ops:
@@ -125,8 +144,11 @@ def check_domain(domain: S.Domain) -> list[Warning_]:
             elements.append(("operator", op.name, _operator_atoms(op)))
     for ms in domain.methods.values():
         elements.extend(("method", m.name, _method_atoms(m)) for m in ms)
-    used = Counter(c for *_, atoms in elements for c in
-                   {a for x in atoms for a in x.args if isinstance(a, str)})
+    used = Counter(
+        c
+        for *_, atoms in elements
+        for c in {a for x in atoms for a in x.args if isinstance(a, str)}
+    )
     for kind, name, atoms in elements:
         warnings.extend(_constants_like_variables(kind, name, atoms, used))
     return warnings
@@ -205,14 +227,23 @@ def _constants_like_variables(kind: str, name: str, atoms: list, used: Counter) 
     out, seen = [], set()
     for a in atoms:
         for arg in a.args:
-            if isinstance(arg, str) and f"?{arg}" in names and (id(a), arg) not in seen \
-                    and used[arg] < 2 and not any(getattr(x, "name", None) == f"?{arg}"
-                                                  for x in a.args):
+            if (
+                isinstance(arg, str)
+                and f"?{arg}" in names
+                and (id(a), arg) not in seen
+                and used[arg] < 2
+                and not any(getattr(x, "name", None) == f"?{arg}" for x in a.args)
+            ):
                 seen.add((id(a), arg))
                 text = source_atom(getattr(a, "pred", None) or a.name, a.args)
-                out.append(Warning_(a.pos, f"{kind} {name}: '{arg}' in {text} is a constant, "
-                                    f"while ?{arg} is a variable of this {kind}; did you mean "
-                                    f"?{arg}? (variables start with '?', manual 3.1)"))
+                out.append(
+                    Warning_(
+                        a.pos,
+                        f"{kind} {name}: '{arg}' in {text} is a constant, "
+                        f"while ?{arg} is a variable of this {kind}; did you mean "
+                        f"?{arg}? (variables start with '?', manual 3.1)",
+                    )
+                )
     return out
 
 
@@ -267,19 +298,31 @@ def _unbound_effect_vars(op: S.Operator, open_: dict | None = None) -> list[Warn
                 atoms, known = [item.atom if isinstance(item, S.Protection) else item], bound
             for a in atoms:
                 free = [v.name for v in _vars_of(a) if v.name not in known]
-                if free and eff is op.add and isinstance(a, S.Atom) \
-                        and not isinstance(item, S.Protection):
-                    raise HtnError.at(a.pos or op.pos, f"operator {op.name} adds ({a.pred} ...) "
-                                      f"with {free[0]} unbound: {_why_unbound(op, free[0], open_)}"
-                                      ", and a state holds only ground atoms")
+                if (
+                    free
+                    and eff is op.add
+                    and isinstance(a, S.Atom)
+                    and not isinstance(item, S.Protection)
+                ):
+                    raise HtnError.at(
+                        a.pos or op.pos,
+                        f"operator {op.name} adds ({a.pred} ...) "
+                        f"with {free[0]} unbound: {_why_unbound(op, free[0], open_)}"
+                        ", and a state holds only ground atoms",
+                    )
                 for name in free:
                     found.setdefault(name)
         if eff.var is not None and eff.var.name not in bound:
             found.setdefault(eff.var.name)
     walk_term(op.cost, lambda v: v.name in bound or found.setdefault(v.name))
-    return [Warning_(op.pos, f"operator {op.name}: variable {name} in its effects or cost is "
-                     "bound by neither its head nor its precondition")
-            for name in found]
+    return [
+        Warning_(
+            op.pos,
+            f"operator {op.name}: variable {name} in its effects or cost is "
+            "bound by neither its head nor its precondition",
+        )
+        for name in found
+    ]
 
 
 def _why_unbound(op: S.Operator, name: str, open_: dict) -> str:
@@ -292,6 +335,7 @@ def _why_unbound(op: S.Operator, name: str, open_: dict) -> str:
 @dataclass
 class _Source:
     """A task (as written, and where) that may pass an unbound variable on."""
+
     task: S.TaskAtom
 
     @property
@@ -311,8 +355,11 @@ def _open_positions(domain: S.Domain, problem: S.Problem) -> dict[str, dict[int,
     def mark(t: S.TaskAtom, bound: set | None) -> None:
         for j, arg in enumerate(t.args):
             names = {v.name for v in variables(arg, [])}
-            if names and (bound is None or not names <= bound) \
-                    and j not in open_.setdefault(t.name, {}):
+            if (
+                names
+                and (bound is None or not names <= bound)
+                and j not in open_.setdefault(t.name, {})
+            ):
                 open_[t.name][j] = _Source(t)
                 todo.append(t.name)
 
@@ -338,14 +385,17 @@ def _vars_of(a) -> list:
 def compat_warning(domain: S.Domain):
     """The one warning ``--jshop2-compat`` gives for a domain whose method
     bodies are written ``(:unordered ...)`` (they will run in order), or None."""
-    bodies = [b for ms in domain.methods.values() for m in ms for b in m.branches
-              if not b.tasks.ordered]
+    bodies = [
+        b for ms in domain.methods.values() for m in ms for b in m.branches if not b.tasks.ordered
+    ]
     if not bodies:
         return None
     more = f" (and {len(bodies) - 1} more)" if len(bodies) > 1 else ""
-    return Warning_(bodies[0].tasks.pos or bodies[0].pos,
-                    f"--jshop2-compat: this (:unordered ...) method body{more} runs in "
-                    "order, as in JSHOP2 1.0.3; without the option it is unordered")
+    return Warning_(
+        bodies[0].tasks.pos or bodies[0].pos,
+        f"--jshop2-compat: this (:unordered ...) method body{more} runs in "
+        "order, as in JSHOP2 1.0.3; without the option it is unordered",
+    )
 
 
 def check_domain_name(domain: S.Domain, problem: S.Problem) -> None:
@@ -355,6 +405,8 @@ def check_domain_name(domain: S.Domain, problem: S.Problem) -> None:
     do not compare the names, and Barman-BDI's problems name ``barman_htn``
     while its domain is ``barman_agent``."""
     if problem.domain_name != domain.name and domain.language != "hddl":
-        raise HtnError.at(problem.domain_pos or problem.pos,
-                          f"problem '{problem.name}' is for domain '{problem.domain_name}', "
-                          f"but {domain.file or 'the domain'} defines '{domain.name}'")
+        raise HtnError.at(
+            problem.domain_pos or problem.pos,
+            f"problem '{problem.name}' is for domain '{problem.domain_name}', "
+            f"but {domain.file or 'the domain'} defines '{domain.name}'",
+        )

@@ -13,6 +13,7 @@ symbols); the spelling of the first occurrence of each name is kept so that
 IPC plans (``-f ipc``) print names as the files write them, which is what the
 competition's verifier compares.
 """
+
 from __future__ import annotations
 
 from functools import lru_cache
@@ -46,11 +47,17 @@ from .lark_compat import with_meta
 
 GRAMMAR = Path(__file__).with_name("hddl.lark")
 
+
 @lru_cache(maxsize=1)
 def _lark() -> Lark:
     lark_errors.check_lark()
-    return Lark(GRAMMAR.read_text(), parser="lalr", propagate_positions=True,
-                maybe_placeholders=False, cache=True)
+    return Lark(
+        GRAMMAR.read_text(),
+        parser="lalr",
+        propagate_positions=True,
+        maybe_placeholders=False,
+        cache=True,
+    )
 
 
 class Builder(Transformer_NonRecursive):
@@ -178,8 +185,9 @@ class Builder(Transformer_NonRecursive):
         name, *rest = items
         amount = rest[-1]
         if str(name) != "total-cost" or rest[:-1]:
-            raise HtnError.at(self.pos(meta), f"only (increase (total-cost) N) is supported, "
-                              f"not ({name} ...)")
+            raise HtnError.at(
+                self.pos(meta), f"only (increase (total-cost) N) is supported, not ({name} ...)"
+            )
         if not (isinstance(amount, Token) and amount.type == "NUMBER"):
             raise HtnError.at(self.pos(meta), "the cost increase must be a number")
         return EffectCost(float(amount), self.pos(meta))
@@ -266,15 +274,21 @@ class Builder(Transformer_NonRecursive):
     def method(self, meta, items):
         name, (_, params), task, *rest = items
         parts = dict(x for x in rest if isinstance(x, tuple))
-        return MethodDef(str(name), params, task, parts.get("precondition"), rest[-1],
-                         self.tpos(name))
+        return MethodDef(
+            str(name), params, task, parts.get("precondition"), rest[-1], self.tpos(name)
+        )
 
     @with_meta
     def action(self, meta, items):
         name, *rest = items
         parts = dict(rest)
-        return ActionDef(str(name), parts.get("parameters", []), parts.get("precondition"),
-                         parts.get("effect", []), self.tpos(name))
+        return ActionDef(
+            str(name),
+            parts.get("parameters", []),
+            parts.get("precondition"),
+            parts.get("effect", []),
+            self.tpos(name),
+        )
 
     @with_meta
     def domain(self, meta, items):
@@ -316,7 +330,7 @@ class Builder(Transformer_NonRecursive):
         return items[0]
 
     def init_function(self, items):
-        return None       # numeric fluents (e.g. total-cost = 0): nothing to keep
+        return None  # numeric fluents (e.g. total-cost = 0): nothing to keep
 
     def init(self, items):
         return ("init", [a for a in items if a is not None])
@@ -349,16 +363,22 @@ class Builder(Transformer_NonRecursive):
 
 def _define(table: dict, item, kind: str) -> None:
     if item.name in table:
-        raise HtnError.at(item.pos, f"{kind} {item.name} is defined twice "
-                          f"(first at {table[item.name].pos})")
+        raise HtnError.at(
+            item.pos, f"{kind} {item.name} is defined twice (first at {table[item.name].pos})"
+        )
     table[item.name] = item
 
 
 # ------------------------------------------------------------------ entry points
 
 _TOKEN_NAMES = {
-    "LPAR": "'('", "RPAR": "')'", "NAME": "a name", "VAR": "a variable (?name)",
-    "NUMBER": "a number", "$END": "end of file", "MINUS": "'-'",
+    "LPAR": "'('",
+    "RPAR": "')'",
+    "NAME": "a name",
+    "VAR": "a variable (?name)",
+    "NUMBER": "a number",
+    "$END": "end of file",
+    "MINUS": "'-'",
 }
 
 

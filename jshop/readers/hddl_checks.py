@@ -14,6 +14,7 @@ slip is an :class:`~htn.jshop.language.errors.HtnError` at its place:
   takes; labels are unique, and ``:ordering`` names only labels, orders no
   subtask before itself and has no cycle.
 """
+
 from __future__ import annotations
 
 from htn.jshop.language.errors import HtnError
@@ -35,12 +36,16 @@ def type_ancestors(h: HDomain) -> dict:
         while stack:
             s, path = stack.pop()
             if s not in types:
-                raise HtnError.at(where.get(t, h.pos), f"type {s} (a supertype of {t}) is "
-                                  "not declared")
+                raise HtnError.at(
+                    where.get(t, h.pos), f"type {s} (a supertype of {t}) is not declared"
+                )
             if s == t and t != "object":
-                raise HtnError.at(where.get(t, h.pos), f"type {t} is its own supertype: "
-                                  f"{' - '.join(path)} (the type hierarchy must not have "
-                                  "a cycle)")
+                raise HtnError.at(
+                    where.get(t, h.pos),
+                    f"type {t} is its own supertype: "
+                    f"{' - '.join(path)} (the type hierarchy must not have "
+                    "a cycle)",
+                )
             if s not in seen and s != t:
                 seen.append(s)
                 stack.extend((u, path + (u,)) for u in types[s])
@@ -75,8 +80,9 @@ def check_method(h: HDomain, m: MethodDef) -> None:
         task = h.tasks.get(m.task.name)
         if task is None:
             kind = "an action" if m.task.name in h.actions else "not a declared task"
-            raise HtnError.at(m.task.pos, f"method {m.name} decomposes {m.task.name}, "
-                              f"which is {kind}")
+            raise HtnError.at(
+                m.task.pos, f"method {m.name} decomposes {m.task.name}, which is {kind}"
+            )
         _arity(m.task, len(task.params))
     owner = f"method {m.name}" if m.task.name != TOP else "the initial task network"
     check_network(h, m.network, owner, m.pos)
@@ -93,10 +99,11 @@ def check_network(h: HDomain, net: Network | None, owner: str, pos) -> None:
         elif st.name in h.tasks:
             _arity(st, len(h.tasks[st.name].params))
         else:
-            raise HtnError.at(st.pos, f"unknown task {st.name}: neither a task nor an "
-                              "action of the domain")
+            raise HtnError.at(
+                st.pos, f"unknown task {st.name}: neither a task nor an action of the domain"
+            )
     unique_labels(net, owner)
-    subtask_order(net, owner, pos)      # unknown labels, self-orderings, cycles
+    subtask_order(net, owner, pos)  # unknown labels, self-orderings, cycles
 
 
 def unique_labels(net: Network | None, owner: str) -> None:
@@ -105,8 +112,11 @@ def unique_labels(net: Network | None, owner: str) -> None:
     for st in net.subtasks if net is not None else ():
         if st.label is not None:
             if st.label in labels:
-                raise HtnError.at(st.pos, f"{owner}: label {st.label} is given to two "
-                                  f"subtasks (first at {labels[st.label].pos})")
+                raise HtnError.at(
+                    st.pos,
+                    f"{owner}: label {st.label} is given to two "
+                    f"subtasks (first at {labels[st.label].pos})",
+                )
             labels[st.label] = st
 
 

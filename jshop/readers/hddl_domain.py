@@ -38,6 +38,7 @@ How HDDL's semantics (Höller et al., AAAI 2020) map onto JSHOP2's:
 
 Every error names ``file:line:col``.
 """
+
 from __future__ import annotations
 
 from htn.jshop.language import syntax as S
@@ -63,6 +64,7 @@ from .hddl_order import is_total, subtask_order
 from .pullup import pulled_conditions
 
 # ------------------------------------------------------------------ domain
+
 
 class _Domain:
     def __init__(self, h: HDomain, ancestors: dict):
@@ -93,14 +95,24 @@ class _Domain:
         params = [scope.var(p.name) for p in a.params]
         f.outer.update(v.index for v in params)
         conds, types = f.conjuncts(a.pre, names)
-        types += [type_condition(v, p.types, p.pos) for v, p in zip(params, a.params)
-                  if p.types != ("object",)]
+        types += [
+            type_condition(v, p.types, p.pos)
+            for v, p in zip(params, a.params)
+            if p.types != ("object",)
+        ]
         pre = order_conjuncts(conds, types, {v.index for v in params}, f.outer)
         dels, adds, cost, conditional = _Effects(f).convert(a.effect, names)
         head = S.TaskAtom("!" + a.name, tuple(params), False, a.pos)
-        return S.Operator(head, S.Precondition(_and(pre), pos=a.pos), S.Effects(dels),
-                          S.Effects(adds), cost, nvars=scope.size, pos=a.pos,
-                          effects_in_prestate=conditional)
+        return S.Operator(
+            head,
+            S.Precondition(_and(pre), pos=a.pos),
+            S.Effects(dels),
+            S.Effects(adds),
+            cost,
+            nvars=scope.size,
+            pos=a.pos,
+            effects_in_prestate=conditional,
+        )
 
     # ------------------------------------------------------------ methods
     def task_name(self, st) -> str:
@@ -110,8 +122,11 @@ class _Domain:
 
     def method(self, m: MethodDef, pulled: list) -> S.Method:
         scope = Scope()
-        names = self.declare(scope, m.params, f"method {m.name}" if m.name != TOP_METHOD
-                             else "the initial task network")
+        names = self.declare(
+            scope,
+            m.params,
+            f"method {m.name}" if m.name != TOP_METHOD else "the initial task network",
+        )
         f = Formulas(scope, self.h.predicates)
         params = [scope.var(p.name) for p in m.params]
         f.outer.update(v.index for v in params)
@@ -119,17 +134,29 @@ class _Domain:
         conds, types = f.conjuncts(m.pre, names)
         more, more_types = f.conjuncts(m.network.constraints, names)
         conds += more + [f.expr(e, names) for e in pulled]
-        types += more_types + [type_condition(v, p.types, p.pos)
-                               for v, p in zip(params, m.params)]
+        types += more_types + [type_condition(v, p.types, p.pos) for v, p in zip(params, m.params)]
         bound = {v.index for v in variables(head, [])}
         pre = order_conjuncts(conds, types, bound, f.outer)
         subtasks, order = subtask_order(m.network, f"method {m.name}", m.pos)
-        items = [S.TaskAtom(self.task_name(st), tuple(f.term(x, names, st.pos) for x in st.args),
-                            False, st.pos) for st in subtasks]
-        branch = S.Branch(m.name, S.Precondition(_and(pre), pos=m.pos),
-                          _task_list(items, order, m.network.pos), m.pos)
-        method = S.Method(S.TaskAtom(m.task.name, head, False, m.task.pos), [branch],
-                          nvars=scope.size, index=self.method_count, pos=m.pos)
+        items = [
+            S.TaskAtom(
+                self.task_name(st), tuple(f.term(x, names, st.pos) for x in st.args), False, st.pos
+            )
+            for st in subtasks
+        ]
+        branch = S.Branch(
+            m.name,
+            S.Precondition(_and(pre), pos=m.pos),
+            _task_list(items, order, m.network.pos),
+            m.pos,
+        )
+        method = S.Method(
+            S.TaskAtom(m.task.name, head, False, m.task.pos),
+            [branch],
+            nvars=scope.size,
+            index=self.method_count,
+            pos=m.pos,
+        )
         self.method_count += 1
         return method
 
@@ -207,11 +234,13 @@ def domain_from_model(h: HDomain, pullup: bool | None = None) -> S.Domain:
         d.methods.setdefault(m.task.name, []).append(t.method(m, pulled.get(id(m), [])))
     for c in h.constants:
         if len(c.types) != 1:
-            raise HtnError.at(c.pos, f"constant {c.name} must have one type, "
-                              "not (either ...)")
+            raise HtnError.at(c.pos, f"constant {c.name} must have one type, not (either ...)")
     d.facts = [S.Atom(type_predicate(c.types[0]), (c.name,), c.pos) for c in h.constants]
-    d.implied = {type_predicate(ty): [type_predicate(a) for a in anc]
-                 for ty, anc in t.ancestors.items() if anc}
+    d.implied = {
+        type_predicate(ty): [type_predicate(a) for a in anc]
+        for ty, anc in t.ancestors.items()
+        if anc
+    }
     return d
 
 
@@ -242,15 +271,19 @@ def for_problem(domain: S.Domain, problem: S.Problem) -> S.Domain:
     """The domain to plan ``problem`` with: read again without pulled-up
     conditions when the problem's initial task network is not totally
     ordered (its tasks interleave with every method's subtasks)."""
-    if domain.hddl is None or not domain.pullup or \
-            all(inst.tasks.ordered for inst in problem.instances):
+    if (
+        domain.hddl is None
+        or not domain.pullup
+        or all(inst.tasks.ordered for inst in problem.instances)
+    ):
         return domain
     again = domain_from_model(domain.hddl, pullup=False)
-    again.sha256 = domain.sha256        # the same file
+    again.sha256 = domain.sha256  # the same file
     return again
 
 
 # ------------------------------------------------------------------ problem
+
 
 def problem_from_model(h: HProblem) -> S.Problem:
     """The syntax objects of an HDDL problem (see the module docstring)."""
@@ -270,15 +303,15 @@ def problem_from_model(h: HProblem) -> S.Problem:
     for st in subtasks:
         for x in st.args:
             if isinstance(x, Var) and x.name not in declared:
-                raise HtnError.at(st.pos, f"variable {x.name} is not a parameter of the "
-                                  "initial task network")
+                raise HtnError.at(
+                    st.pos, f"variable {x.name} is not a parameter of the initial task network"
+                )
         items.append(S.TaskAtom(st.name, st.args, False, st.pos))
     top = None
     if h.params or _has_constraints(h.network):
         # the network's :constraints are a precondition of its artificial
         # root method, like its parameters' types
-        top = MethodDef(TOP_METHOD, h.params, Subtask(None, TOP, (), h.pos), None, h.network,
-                        h.pos)
+        top = MethodDef(TOP_METHOD, h.params, Subtask(None, TOP, (), h.pos), None, h.network, h.pos)
     goal, nvars = None, 0
     if h.goal is not None:
         scope = Scope()
@@ -286,10 +319,19 @@ def problem_from_model(h: HProblem) -> S.Problem:
         goal = S.Precondition(f.expr(h.goal, {}), pos=getattr(h.goal, "pos", None))
         nvars = scope.size
     pos = h.network.pos if h.network is not None else h.pos
-    instance = S.ProblemInstance(state, _task_list(items, order, pos), h.pos, goal=goal,
-                                 goal_nvars=nvars, top=top)
-    return S.Problem(h.name, h.domain_name, [instance], file=h.file, pos=h.pos,
-                     language="hddl", spelling=h.spelling, hddl=h)
+    instance = S.ProblemInstance(
+        state, _task_list(items, order, pos), h.pos, goal=goal, goal_nvars=nvars, top=top
+    )
+    return S.Problem(
+        h.name,
+        h.domain_name,
+        [instance],
+        file=h.file,
+        pos=h.pos,
+        language="hddl",
+        spelling=h.spelling,
+        hddl=h,
+    )
 
 
 def _has_constraints(net) -> bool:
@@ -325,18 +367,27 @@ def check_problem_symbols(domain: S.Domain, problem: S.Problem) -> None:
     def atom(a: S.Atom, where: str) -> None:
         params = h.predicates.get(a.pred)
         if params is None:
-            raise HtnError.at(a.pos, f"unknown predicate {a.pred} in the {where} (the domain "
-                              "declares no such predicate)")
+            raise HtnError.at(
+                a.pos,
+                f"unknown predicate {a.pred} in the {where} (the domain "
+                "declares no such predicate)",
+            )
         if len(params) != len(a.args):
-            raise HtnError.at(a.pos, f"predicate {a.pred} takes {len(params)} argument(s), "
-                              f"given {len(a.args)} in the {where}")
+            raise HtnError.at(
+                a.pos,
+                f"predicate {a.pred} takes {len(params)} argument(s), "
+                f"given {len(a.args)} in the {where}",
+            )
         terms(a.args, a.pos, where)
 
     def terms(args, pos, where: str) -> None:
         for x in args:
             if not isinstance(x, Var) and x not in objects:
-                raise HtnError.at(pos, f"unknown object {x} in the {where} (neither an "
-                                  "object of the problem nor a constant of the domain)")
+                raise HtnError.at(
+                    pos,
+                    f"unknown object {x} in the {where} (neither an "
+                    "object of the problem nor a constant of the domain)",
+                )
 
     def formula(e) -> None:
         if isinstance(e, S.Atom):

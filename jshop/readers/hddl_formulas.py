@@ -3,6 +3,7 @@ variables numbered per element, types as type predicates, quantifiers and
 ``imply``, and the order in which a method's or action's conjuncts are tested
 so that JSHOP2's left-to-right evaluation binds variables early
 (:func:`order_conjuncts`)."""
+
 from __future__ import annotations
 
 from typing import Optional
@@ -38,6 +39,7 @@ class Scope:
 
 # ------------------------------------------------------------------ formulas
 
+
 class Formulas:
     """Converts model formulas into syntax expressions within one scope.
 
@@ -49,14 +51,15 @@ class Formulas:
 
     def __init__(self, scope: Scope, predicates: Optional[dict] = None):
         self.scope = scope
-        self.predicates = predicates      # name -> params, to check atoms (domain only)
+        self.predicates = predicates  # name -> params, to check atoms (domain only)
         self.outer: set = set()
 
     def term(self, x, names: dict, pos):
         if isinstance(x, Var):
             if x.name not in names:
-                raise HtnError.at(pos, f"variable {x.name} is not declared here "
-                                  "(not a parameter nor quantified)")
+                raise HtnError.at(
+                    pos, f"variable {x.name} is not declared here (not a parameter nor quantified)"
+                )
             return self.scope.var(names[x.name])
         return x
 
@@ -66,8 +69,10 @@ class Formulas:
             if params is None:
                 raise HtnError.at(e.pos, f"unknown predicate {e.pred}")
             if len(params) != len(e.args):
-                raise HtnError.at(e.pos, f"predicate {e.pred} takes {len(params)} "
-                                  f"argument(s), given {len(e.args)}")
+                raise HtnError.at(
+                    e.pos,
+                    f"predicate {e.pred} takes {len(params)} argument(s), given {len(e.args)}",
+                )
         return S.Atom(e.pred, tuple(self.term(a, names, e.pos) for a in e.args), e.pos)
 
     def quantify(self, params, names: dict, pos) -> tuple[list, list, dict]:
@@ -93,15 +98,15 @@ class Formulas:
         if isinstance(e, S.Not):
             return S.Not(self.expr(e.expr, names), e.pos)
         if isinstance(e, S.Equal):
-            return S.Equal(self.term(e.left, names, e.pos), self.term(e.right, names, e.pos),
-                           e.pos)
+            return S.Equal(self.term(e.left, names, e.pos), self.term(e.right, names, e.pos), e.pos)
         if isinstance(e, Exists):
             _, conds, inner = self.quantify(e.vars, names, e.pos)
             return S.And(conds + [self.expr(e.expr, inner)], e.pos)
         if isinstance(e, S.ForAll):
             vs, conds, inner = self.quantify(e.vars, names, e.pos)
-            return S.ForAll(vs, S.And(conds) if len(conds) != 1 else conds[0],
-                            self.expr(e.then, inner), e.pos)
+            return S.ForAll(
+                vs, S.And(conds) if len(conds) != 1 else conds[0], self.expr(e.then, inner), e.pos
+            )
         raise HtnError.at(getattr(e, "pos", None), "unsupported formula")  # pragma: no cover
 
     def conjuncts(self, e, names: dict) -> tuple[list, list]:
@@ -137,6 +142,7 @@ def type_condition(v: Var, types: tuple, pos) -> object:
 
 # ------------------------------------------------------------------ ordering
 
+
 def _slots(e) -> set:
     """The variable slots an expression mentions (bound or quantified)."""
     out: set = set()
@@ -169,7 +175,7 @@ def order_conjuncts(conds: list, types: list, bound: set, outer: set) -> list:
             pending.remove(best)
         elif tpending:
             best = tpending.pop(0)
-        elif pending:      # nothing binds what is left: keep it as written
+        elif pending:  # nothing binds what is left: keep it as written
             out += pending
             break
         else:

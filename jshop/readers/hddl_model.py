@@ -1,6 +1,7 @@
 """The HDDL model as read (Höller et al., AAAI 2020): tasks, methods, actions,
 their task networks, and problems, before they are turned into the planner's
 syntax objects (:mod:`htn.jshop.readers.hddl_domain`)."""
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -16,10 +17,11 @@ TOP, TOP_METHOD = "__top", "__top_method"
 @dataclass
 class Param:
     """A typed variable or object; ``types`` has several names for ``either``."""
+
     name: str
     types: tuple
     pos: Optional[S.Pos] = None
-    type_pos: Optional[S.Pos] = None    # where its type is written
+    type_pos: Optional[S.Pos] = None  # where its type is written
 
 
 @dataclass
@@ -41,9 +43,10 @@ class Subtask:
 class Network:
     """A task network: subtasks, ``<`` constraints between labels, and
     whether it was written ``:ordered-subtasks``."""
+
     subtasks: list = field(default_factory=list)
     ordered: bool = False
-    ordering: list = field(default_factory=list)     # [(before, after, pos)]
+    ordering: list = field(default_factory=list)  # [(before, after, pos)]
     constraints: object = None
     pos: Optional[S.Pos] = None
 
@@ -53,7 +56,7 @@ class MethodDef:
     name: str
     params: list
     task: Subtask
-    pre: object          # a syntax expression or None
+    pre: object  # a syntax expression or None
     network: Network
     pos: Optional[S.Pos] = None
 
@@ -63,7 +66,7 @@ class ActionDef:
     name: str
     params: list
     pre: object
-    effect: object       # a nested effect structure, see Effect*
+    effect: object  # a nested effect structure, see Effect*
     pos: Optional[S.Pos] = None
 
 
@@ -71,6 +74,7 @@ class ActionDef:
 class Exists:
     """``(exists (typed vars) formula)``; becomes a conjunction with type
     conditions when translated (its variables renamed apart)."""
+
     vars: list
     expr: object
     pos: Optional[S.Pos] = None
@@ -78,7 +82,7 @@ class Exists:
 
 @dataclass
 class EffectWhen:
-    vars: list           # [Param] of enclosing foralls
+    vars: list  # [Param] of enclosing foralls
     cond: object
     effect: object
     pos: Optional[S.Pos] = None
@@ -93,20 +97,20 @@ class EffectForall:
 
 @dataclass
 class EffectCost:
-    amount: object       # a number
+    amount: object  # a number
     pos: Optional[S.Pos] = None
 
 
 @dataclass
 class HDomain:
     name: str
-    types: dict = field(default_factory=dict)        # type -> [parent types]
-    type_pos: dict = field(default_factory=dict)     # type -> where it is first declared
-    constants: list = field(default_factory=list)    # [Param]
-    predicates: dict = field(default_factory=dict)   # name -> [Param]
-    tasks: dict = field(default_factory=dict)        # name -> TaskDef
+    types: dict = field(default_factory=dict)  # type -> [parent types]
+    type_pos: dict = field(default_factory=dict)  # type -> where it is first declared
+    constants: list = field(default_factory=list)  # [Param]
+    predicates: dict = field(default_factory=dict)  # name -> [Param]
+    tasks: dict = field(default_factory=dict)  # name -> TaskDef
     methods: list = field(default_factory=list)
-    actions: dict = field(default_factory=dict)      # name -> ActionDef
+    actions: dict = field(default_factory=dict)  # name -> ActionDef
     spelling: dict = field(default_factory=dict)
     file: str = ""
     pos: Optional[S.Pos] = None
@@ -119,7 +123,7 @@ class HProblem:
     objects: list = field(default_factory=list)
     params: list = field(default_factory=list)
     network: Optional[Network] = None
-    init: list = field(default_factory=list)         # [S.Atom]
+    init: list = field(default_factory=list)  # [S.Atom]
     goal: object = None
     spelling: dict = field(default_factory=dict)
     file: str = ""

@@ -13,6 +13,7 @@ interleave. :func:`subtask_order` gives the subtasks in a topological order
 * any other ``:ordering``: a :class:`~htn.jshop.language.syntax.PartialOrder`
   over the sorted subtasks (each one's direct predecessors).
 """
+
 from __future__ import annotations
 
 from typing import Optional
@@ -37,8 +38,10 @@ def subtask_order(net: Optional[Network], owner: str, pos) -> tuple[list, object
     labels = {}
     for s in subs:
         if s.label is None:
-            raise HtnError.at(s.pos, f"{owner}: a subtask needs a label to be ordered "
-                              "(or write :ordered-subtasks)")
+            raise HtnError.at(
+                s.pos,
+                f"{owner}: a subtask needs a label to be ordered (or write :ordered-subtasks)",
+            )
         labels[s.label] = s
     written = {label: i for i, label in enumerate(labels)}
     after: dict = {label: set() for label in labels}
@@ -58,8 +61,7 @@ def subtask_order(net: Optional[Network], owner: str, pos) -> tuple[list, object
     if total:
         return tasks, True
     index = {label: i for i, label in enumerate(order)}
-    return tasks, PartialOrder(tuple(sorted(index[p] for p in preds[label]))
-                               for label in order)
+    return tasks, PartialOrder(tuple(sorted(index[p] for p in preds[label])) for label in order)
 
 
 def _topological(labels: dict, after: dict, preds: dict, written: dict) -> tuple[list, bool]:

@@ -8,6 +8,7 @@ unbound variable prints as (``VAR<n>``).
 Reading a file (its encoding, its nesting) is :mod:`htn.jshop.readers.source`;
 choosing the reader by content is :mod:`htn.jshop.readers.load`.
 """
+
 from __future__ import annotations
 
 from functools import lru_cache
@@ -34,13 +35,24 @@ GRAMMAR = Path(__file__).with_name("jshop2.lark")
 @lru_cache(maxsize=1)
 def _lark() -> Lark:
     lark_errors.check_lark()
-    return Lark(GRAMMAR.read_text(), parser="lalr", propagate_positions=True,
-                maybe_placeholders=False, start=["start", "task_atom"], cache=True)
+    return Lark(
+        GRAMMAR.read_text(),
+        parser="lalr",
+        propagate_positions=True,
+        maybe_placeholders=False,
+        start=["start", "task_atom"],
+        cache=True,
+    )
 
 
 _TOKEN_NAMES = {
-    "LPAR": "'('", "RPAR": "')'", "NAME": "a symbol", "OPNAME": "an operator name (!name)",
-    "VAR": "a variable (?name)", "NUM": "a number", "$END": "end of file",
+    "LPAR": "'('",
+    "RPAR": "')'",
+    "NAME": "a symbol",
+    "OPNAME": "an operator name (!name)",
+    "VAR": "a variable (?name)",
+    "NUM": "a number",
+    "$END": "end of file",
 }
 
 
@@ -92,8 +104,10 @@ class Builder(Transformer_NonRecursive):
         name = str(tok).lower()
         func = self.functions.lookup(name)
         if func is None:
-            raise HtnError.at(self.tpos(tok), f"undefined function '{tok}' in call "
-                              "(give its Python file with --functions)")
+            raise HtnError.at(
+                self.tpos(tok),
+                f"undefined function '{tok}' in call (give its Python file with --functions)",
+            )
         why = arity_error(name, len(args))
         if why:
             raise HtnError.at(self.pos(meta), why)
@@ -162,8 +176,10 @@ class Builder(Transformer_NonRecursive):
             cmp_tok, expr = items[1], items[2]
             cmp = str(cmp_tok).lower()
             if cmp not in ("<", ">") and self.functions.comparator(cmp) is None:
-                raise HtnError.at(self.tpos(cmp_tok), f"undefined comparator '{cmp_tok}' "
-                                  "(give its Python file with --functions)")
+                raise HtnError.at(
+                    self.tpos(cmp_tok),
+                    f"undefined comparator '{cmp_tok}' (give its Python file with --functions)",
+                )
         else:
             cmp, expr = "<", items[1]
         return S.Precondition(expr, sort_var=var, comparator=cmp, pos=self.pos(meta))
@@ -213,8 +229,7 @@ class Builder(Transformer_NonRecursive):
         idx = next(i for i, x in enumerate(rest) if isinstance(x, S.Precondition))
         args, (pre, dele, add, *cost) = tuple(rest[:idx]), rest[idx:]
         head = S.TaskAtom(str(name).lower(), args, False, self.tpos(name))
-        op = S.Operator(head, pre, dele, add, cost[0] if cost else 1.0,
-                        pos=self.pos(meta))
+        op = S.Operator(head, pre, dele, add, cost[0] if cost else 1.0, pos=self.pos(meta))
         op.nvars = number_operator(op)
         return op
 
@@ -286,8 +301,14 @@ class Builder(Transformer_NonRecursive):
     @with_meta
     def problem(self, meta, items):
         name, dname, *instances = items
-        return S.Problem(str(name).lower(), str(dname).lower(), instances,
-                         file=self.file, pos=self.pos(meta), domain_pos=self.tpos(dname))
+        return S.Problem(
+            str(name).lower(),
+            str(dname).lower(),
+            instances,
+            file=self.file,
+            pos=self.pos(meta),
+            domain_pos=self.tpos(dname),
+        )
 
     def start(self, items):
         return items[0]
@@ -296,12 +317,14 @@ class Builder(Transformer_NonRecursive):
 # ------------------------------------------------------------ variable numbering
 # ------------------------------------------------------------ entry points
 
+
 def parse_jshop2(text: str, file: str = "<string>", functions: FunctionTable | None = None):
     """Parse a JSHOP2 domain or problem from text (nesting checked by the
     caller, :func:`htn.jshop.readers.load.parse_text`)."""
     functions = functions or FunctionTable()
-    tree = lark_errors.parse(_lark(), text, file, _TOKEN_NAMES, hints=jshop2_hints.hint,
-                             start="start")
+    tree = lark_errors.parse(
+        _lark(), text, file, _TOKEN_NAMES, hints=jshop2_hints.hint, start="start"
+    )
     try:
         return Builder(file, functions).transform(tree)
     except VisitError as e:
@@ -314,13 +337,12 @@ def parse_step(text: str, file: str = "<plan>", line: int = 1):
     """Parse one plan step such as ``(!move_base jenny home kitchen)``."""
     try:
         check_nesting(text, file)
-    except HtnError as exc:           # the step is one line of the plan file
+    except HtnError as exc:  # the step is one line of the plan file
         raise HtnError(exc.message, file, line, exc.col) from None
     try:
         tree = _lark().parse(text, start="task_atom")
     except UnexpectedInput as e:
-        raise HtnError(f"not a plan step: {text.strip()!r}", file, line,
-                       getattr(e, "column", 1))
+        raise HtnError(f"not a plan step: {text.strip()!r}", file, line, getattr(e, "column", 1))
     try:
         return Builder(file, FunctionTable()).transform(tree)
     except VisitError as e:

@@ -7,6 +7,7 @@ the token the parser stopped at and the lists open around it
 expects there: an operator (manual 3.9), a method's branches (3.10), a domain's
 list of elements (3.11), a problem's state and task list (3.12), comments (3.14).
 """
+
 from __future__ import annotations
 
 import re
@@ -24,8 +25,14 @@ def hint(text: str, file: str, e, at: int, stack: list):
         return _character(text, file, at)
     if not isinstance(e, UnexpectedToken) or not stack:
         return None
-    for rule in (_operator_name, _head_not_a_list, _primitive_in_precondition,
-                 _missing_part, _elements_not_in_a_list, _problem_lists):
+    for rule in (
+        _operator_name,
+        _head_not_a_list,
+        _primitive_in_precondition,
+        _missing_part,
+        _elements_not_in_a_list,
+        _problem_lists,
+    ):
         found = rule(text, file, e, at, stack)
         if found is not None:
             return found
@@ -35,11 +42,21 @@ def hint(text: str, file: str, e, at: int, stack: list):
 def _character(text: str, file: str, at: int):
     c = text[at]
     if c == "#" or text.startswith("//", at):
-        return at_offset(text, file, at, f"unexpected '{'//' if c == '/' else c}': comments "
-                         "start with ';' in JSHOP2 (manual 3.14)")
+        return at_offset(
+            text,
+            file,
+            at,
+            f"unexpected '{'//' if c == '/' else c}': comments "
+            "start with ';' in JSHOP2 (manual 3.14)",
+        )
     if c in "\"'":
-        return at_offset(text, file, at, f"unexpected {c!r}: JSHOP2 has no strings; a "
-                         "symbol is letters, digits, '-', '_', '?' and '!' (manual 3.1)")
+        return at_offset(
+            text,
+            file,
+            at,
+            f"unexpected {c!r}: JSHOP2 has no strings; a "
+            "symbol is letters, digits, '-', '_', '?' and '!' (manual 3.1)",
+        )
     return None
 
 
@@ -65,23 +82,44 @@ def _operator_name(text, file, e, at, stack):
     a method's head is a compound task, without '!'."""
     kind = e.token.type
     if kind == "NAME" and "OPNAME" in e.expected and "NAME" not in e.expected:
-        return at_offset(text, file, at, f"an operator's name starts with '!': write "
-                         f"(!{_tok(e)} ...) (manual 3.9)")
-    if kind == "OPNAME" and len(stack) >= 2 and stack[-2].head == ":method" \
-            and stack[-2].items == [":method", "("]:
-        return at_offset(text, file, at, f"a method's head is a compound task, named without "
-                         f"'!': '{_tok(e)}' is an operator's name (manual 3.10)")
+        return at_offset(
+            text,
+            file,
+            at,
+            f"an operator's name starts with '!': write (!{_tok(e)} ...) (manual 3.9)",
+        )
+    if (
+        kind == "OPNAME"
+        and len(stack) >= 2
+        and stack[-2].head == ":method"
+        and stack[-2].items == [":method", "("]
+    ):
+        return at_offset(
+            text,
+            file,
+            at,
+            f"a method's head is a compound task, named without "
+            f"'!': '{_tok(e)}' is an operator's name (manual 3.10)",
+        )
     return None
 
 
 def _head_not_a_list(text, file, e, at, stack):
     """``(:method go ?r ?to ...)``: the head is a list."""
     top = stack[-1]
-    if top.head in (":method", ":operator") and top.items == [top.head] \
-            and e.token.type in ("NAME", "OPNAME", "VAR"):
+    if (
+        top.head in (":method", ":operator")
+        and top.items == [top.head]
+        and e.token.type in ("NAME", "OPNAME", "VAR")
+    ):
         what = "method" if top.head == ":method" else "operator"
-        return at_offset(text, file, at, f"a{'n' if what == 'operator' else ''} {what}'s head "
-                         f"is a list: write ({top.head} ({_tok(e)} ...) ...)")
+        return at_offset(
+            text,
+            file,
+            at,
+            f"a{'n' if what == 'operator' else ''} {what}'s head "
+            f"is a list: write ({top.head} ({_tok(e)} ...) ...)",
+        )
     return None
 
 
@@ -95,12 +133,17 @@ def _primitive_in_precondition(text, file, e, at, stack):
     method, k = _in(stack, ":method")
     if e.token.type != "OPNAME" or method is None or k + 1 >= len(stack):
         return None
-    if _branch_lists(method) % 2 == 1:       # the list holding it is a precondition
+    if _branch_lists(method) % 2 == 1:  # the list holding it is a precondition
         name = _name_after(text, method, ":method")
-        return at_offset(text, file, at, f"'{_tok(e)}' is a task, but this list is read as a "
-                         f"precondition of method {name}: a branch is a precondition and then "
-                         "a task list; write () before the task list for no precondition "
-                         "(manual 3.10)")
+        return at_offset(
+            text,
+            file,
+            at,
+            f"'{_tok(e)}' is a task, but this list is read as a "
+            f"precondition of method {name}: a branch is a precondition and then "
+            "a task list; write () before the task list for no precondition "
+            "(manual 3.10)",
+        )
     return None
 
 
@@ -110,13 +153,18 @@ def _missing_part(text, file, e, at, stack):
         return None
     top = stack[-1]
     if top.head == ":operator":
-        n = len(top.items[2:])          # lists, nil or a variable (manual 3.14)
+        n = len(top.items[2:])  # lists, nil or a variable (manual 3.14)
         name = _name_after(text, top, ":operator")
         if n < 3:
             lists = "no list" if n == 0 else "only one list" if n == 1 else "only two lists"
-            return HtnError(f"operator {name} has {lists} after its head; an operator "
-                            "needs three: a precondition, a delete list and an add list "
-                            "(write () for an empty one; manual 3.9)", file, top.line, top.col)
+            return HtnError(
+                f"operator {name} has {lists} after its head; an operator "
+                "needs three: a precondition, a delete list and an add list "
+                "(write () for an empty one; manual 3.9)",
+                file,
+                top.line,
+                top.col,
+            )
     if top.head == ":method":
         name = _name_after(text, top, ":method")
         if top.items[1:2] != ["("]:
@@ -124,24 +172,42 @@ def _missing_part(text, file, e, at, stack):
         n = _branch_lists(top)
         if n % 2 == 1 or n == 0:
             what = "no branch" if n == 0 else "a precondition without its task list"
-            return HtnError(f"method {name} ends with {what}: each branch is [name] "
-                            "precondition task-list (write () for an empty one; manual 3.10)",
-                            file, top.line, top.col)
+            return HtnError(
+                f"method {name} ends with {what}: each branch is [name] "
+                "precondition task-list (write () for an empty one; manual 3.10)",
+                file,
+                top.line,
+                top.col,
+            )
     if top.head == "defproblem":
         lists = top.items.count("(")
         if lists < 2:
-            return HtnError("a problem needs an initial state and a task list: (defproblem "
-                            "NAME DOMAIN (ATOM ...) (TASK ...)) (manual 3.12)",
-                            file, top.line, top.col)
+            return HtnError(
+                "a problem needs an initial state and a task list: (defproblem "
+                "NAME DOMAIN (ATOM ...) (TASK ...)) (manual 3.12)",
+                file,
+                top.line,
+                top.col,
+            )
     return None
 
 
 def _elements_not_in_a_list(text, file, e, at, stack):
     """``(defdomain d (:operator ...) ...)``: the elements go in one list."""
-    if len(stack) >= 2 and stack[-2].head == "defdomain" and len(stack[-2].items) == 3 \
-            and stack[-1].items == [] and _tok(e).lower() in (":operator", ":method", ":-"):
-        return at_offset(text, file, at, "a domain's operators, methods and axioms go in one "
-                         "list: (defdomain NAME ((:operator ...) (:method ...))) (manual 3.11)")
+    if (
+        len(stack) >= 2
+        and stack[-2].head == "defdomain"
+        and len(stack[-2].items) == 3
+        and stack[-1].items == []
+        and _tok(e).lower() in (":operator", ":method", ":-")
+    ):
+        return at_offset(
+            text,
+            file,
+            at,
+            "a domain's operators, methods and axioms go in one "
+            "list: (defdomain NAME ((:operator ...) (:method ...))) (manual 3.11)",
+        )
     return None
 
 
@@ -152,8 +218,16 @@ def _problem_lists(text, file, e, at, stack):
         return None
     if stack[-1].items:
         return None
-    which = stack[-2].items[3:].count("(")   # lists before this one (name, domain, then lists)
-    what = "the initial state is a list of atoms" if which % 2 == 1 else \
-        "the task list is a list of tasks"
-    return at_offset(text, file, at, f"{what}: write (({_tok(e)} ...) ...), with a "
-                     "parenthesis around the whole list (manual 3.12)")
+    which = stack[-2].items[3:].count("(")  # lists before this one (name, domain, then lists)
+    what = (
+        "the initial state is a list of atoms"
+        if which % 2 == 1
+        else "the task list is a list of tasks"
+    )
+    return at_offset(
+        text,
+        file,
+        at,
+        f"{what}: write (({_tok(e)} ...) ...), with a "
+        "parenthesis around the whole list (manual 3.12)",
+    )

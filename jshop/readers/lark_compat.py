@@ -8,6 +8,7 @@ What differs for htn's readers: a callback under ``v_args(meta=True)`` gets
 ``(meta, children)`` from lark 1.x and ``(children, meta)`` from 0.12
 (:func:`with_meta` passes ``(meta, children)`` under both).
 """
+
 from __future__ import annotations
 
 import functools
@@ -19,9 +20,11 @@ from lark.tree import Meta
 def with_meta(fn):
     """``v_args(meta=True)`` that calls ``fn(self, meta, children)`` under
     every lark version."""
+
     @functools.wraps(fn)
     def call(self, first, second):
         if isinstance(first, Meta):
             return fn(self, first, second)
         return fn(self, second, first)
+
     return v_args(meta=True)(call)

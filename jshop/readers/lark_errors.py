@@ -15,6 +15,7 @@ an error is explained by the first of these that applies:
    ``(`` still open when the file ends;
 5. the parser's words: the token and what was expected instead.
 """
+
 from __future__ import annotations
 
 import re
@@ -40,11 +41,13 @@ def parse(lark, text: str, file: str, token_names: dict, hints=None, **options):
         raise explain(lark, text, file, e, token_names, hints, options) from None
 
 
-def explain(lark, text: str, file: str, e: UnexpectedInput, token_names: dict, hints=None,
-            options=None) -> HtnError:
+def explain(
+    lark, text: str, file: str, e: UnexpectedInput, token_names: dict, hints=None, options=None
+) -> HtnError:
     at = _offset(text, e)
-    found = _unknown_keyword(lark, text, file, e, at) or \
-        _paren_fix(lark, text, file, at, options or {})
+    found = _unknown_keyword(lark, text, file, e, at) or _paren_fix(
+        lark, text, file, at, options or {}
+    )
     if found is None and hints is not None:
         found = hints(text, file, e, at, parens.open_lists(text, at))
     return found or _paren_facts(text, file, e, at) or _parser_words(text, file, e, token_names)
@@ -65,6 +68,7 @@ def at_offset(text: str, file: str, offset: int, message: str) -> HtnError:
 
 
 # ------------------------------------------------------------------ keywords
+
 
 @lru_cache(maxsize=8)
 def _keywords(lark) -> dict[str, set[str]]:
@@ -96,8 +100,11 @@ def _unknown_keyword(lark, text: str, file: str, e: UnexpectedInput, at: int):
     word = m.group() if m else ""
     if word.startswith(":") and word.lower() not in known:
         best = nearest(word.lower(), fitting) or nearest(word.lower(), known)
-        more = f"; did you mean {best}?" if best else \
-            (f"; expected {', '.join(sorted(fitting))}" if fitting else "")
+        more = (
+            f"; did you mean {best}?"
+            if best
+            else (f"; expected {', '.join(sorted(fitting))}" if fitting else "")
+        )
         return at_offset(text, file, at, f"unknown keyword '{word}'{more}")
     tok = getattr(e, "token", None)
     if tok is not None and tok.type == "NAME" and "NAME" not in _expected(e):
@@ -128,7 +135,7 @@ def edit_distance(a: str, b: str) -> int:
 
 # ------------------------------------------------------------------ parentheses
 
-TRIES = 3     # fixes tried by parsing the fixed text (each is one more parse)
+TRIES = 3  # fixes tried by parsing the fixed text (each is one more parse)
 
 
 def _paren_fix(lark, text: str, file: str, at: int, options: dict):
@@ -143,45 +150,71 @@ def _paren_fix(lark, text: str, file: str, at: int, options: dict):
         o = s.opened
         if s.kind == "unclosed":
             end_line = position(text, s.at)[0]
-            return HtnError(f"this '(' is never closed; a ')' at the end of line {end_line} "
-                            "would close it", file, o.line, o.col)
-        return at_offset(text, file, s.at, f"one ')' too many: this one closes the '(' at "
-                         f"{o.line}:{o.col}, but line {s.line} below is laid out inside that list")
+            return HtnError(
+                f"this '(' is never closed; a ')' at the end of line {end_line} would close it",
+                file,
+                o.line,
+                o.col,
+            )
+        return at_offset(
+            text,
+            file,
+            s.at,
+            f"one ')' too many: this one closes the '(' at "
+            f"{o.line}:{o.col}, but line {s.line} below is laid out inside that list",
+        )
     return None
 
 
 def _paren_facts(text: str, file: str, e: UnexpectedInput, at: int):
     stray = parens.first_unmatched_close(text, at + 1)
     if stray is not None:
-        return at_offset(text, file, stray, "this ')' closes nothing: every '(' before it "
-                         "is closed already (one ')' too many)")
+        return at_offset(
+            text,
+            file,
+            stray,
+            "this ')' closes nothing: every '(' before it is closed already (one ')' too many)",
+        )
     if at >= len(text) or (isinstance(e, UnexpectedToken) and e.token.type == "$END"):
         still = parens.open_lists(text, len(text))
         if still:
             o = still[-1]
-            return HtnError("this '(' is never closed: the file ends first (a ')' is "
-                            "missing in the list it opens)", file, o.line, o.col)
+            return HtnError(
+                "this '(' is never closed: the file ends first (a ')' is "
+                "missing in the list it opens)",
+                file,
+                o.line,
+                o.col,
+            )
     return None
 
 
 # ------------------------------------------------------------------ the parser's words
+
 
 def _parser_words(text: str, file: str, e: UnexpectedInput, token_names: dict) -> HtnError:
     if isinstance(e, UnexpectedCharacters):
         return HtnError(f"unexpected character {text[e.pos_in_stream]!r}", file, e.line, e.column)
     if isinstance(e, UnexpectedToken) and e.token.type != "$END":
         tok = e.token
-        return HtnError(f"unexpected {str(tok)!r}; expected {describe(e.expected, token_names)}",
-                        file, tok.line, tok.column)
+        return HtnError(
+            f"unexpected {str(tok)!r}; expected {describe(e.expected, token_names)}",
+            file,
+            tok.line,
+            tok.column,
+        )
     if isinstance(e, (UnexpectedToken, UnexpectedEOF)):
         return _eof(text, file)
-    return HtnError(f"syntax error: {e}", file, getattr(e, "line", None),  # pragma: no cover
-                    getattr(e, "column", None))
+    return HtnError(
+        f"syntax error: {e}",
+        file,
+        getattr(e, "line", None),  # pragma: no cover
+        getattr(e, "column", None),
+    )
 
 
 def describe(expected, token_names: dict) -> str:
-    names = sorted({token_names.get(e, e.lstrip("_").lower().replace("_", "-"))
-                    for e in expected})
+    names = sorted({token_names.get(e, e.lstrip("_").lower().replace("_", "-")) for e in expected})
     if len(names) > 6:
         names = names[:6] + ["..."]
     return ", ".join(names)
@@ -189,8 +222,7 @@ def describe(expected, token_names: dict) -> str:
 
 def _eof(text: str, file: str) -> HtnError:
     lines = text.splitlines() or [""]
-    return HtnError("unexpected end of file (missing ')'?)", file, len(lines),
-                    len(lines[-1]) + 1)
+    return HtnError("unexpected end of file (missing ')'?)", file, len(lines), len(lines[-1]) + 1)
 
 
 def check_lark() -> None:
@@ -199,8 +231,11 @@ def check_lark() -> None:
     bring (and pip installs over lark 1.x's files), works as well
     (:mod:`htn.jshop.readers.lark_compat`)."""
     import lark
+
     version = getattr(lark, "__version__", "0")
     parts = [int(p) if p.isdigit() else 0 for p in version.split(".")[:2]] + [0, 0]
     if (parts[0], parts[1]) < (0, 12):
-        raise HtnError(f"the installed 'lark' module is version {version}, older than htn "
-                       "reads with: pip install --force-reinstall --no-deps 'lark>=1.1.9'")
+        raise HtnError(
+            f"the installed 'lark' module is version {version}, older than htn "
+            "reads with: pip install --force-reinstall --no-deps 'lark>=1.1.9'"
+        )

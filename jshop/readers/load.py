@@ -5,6 +5,7 @@ HDDL text (``(define (domain ...`` or ``(define (problem ...``) is read by
 JSHOP2 text (:mod:`htn.jshop.readers.hddl_domain`); the HDDL grammar is
 loaded only for HDDL input.
 """
+
 from __future__ import annotations
 
 import hashlib
@@ -28,14 +29,19 @@ def is_hddl(text: str) -> bool:
     return _HDDL_HEAD.match(text) is not None
 
 
-def parse_text(text: str, file: str = "<string>", functions: FunctionTable | None = None,
-               expect: str | None = None):
+def parse_text(
+    text: str,
+    file: str = "<string>",
+    functions: FunctionTable | None = None,
+    expect: str | None = None,
+):
     """Parse a domain or problem (``expect``, if known) from text, JSHOP2 or
     HDDL; raise :class:`HtnError` on bad input."""
     check_not_empty(text, file, expect)
     check_nesting(text, file)
     if is_hddl(text):
         from . import hddl, hddl_domain
+
         model = hddl.parse_model(text, file)
         return hddl_domain.from_model(model)
     return parse_jshop2(text, file, functions or FunctionTable())
@@ -70,8 +76,9 @@ def load_problem(path: str, functions: FunctionTable | None = None) -> S.Problem
     return p
 
 
-def load_inputs(domain_path: str, problem_path: str,
-                functions: FunctionTable | None = None) -> tuple[S.Domain, S.Problem]:
+def load_inputs(
+    domain_path: str, problem_path: str, functions: FunctionTable | None = None
+) -> tuple[S.Domain, S.Problem]:
     """Load a domain and a problem for it, paired (:func:`paired`) and
     checked together (:func:`htn.jshop.readers.checks.check_inputs`, the
     check every command runs; its warnings are not returned:
@@ -97,6 +104,7 @@ def paired(dom: S.Domain, prob: S.Problem) -> tuple[S.Domain, S.Problem]:
             for_problem,
             resolve_problem_tasks,
         )
+
         check_problem_symbols(dom, prob)
         resolve_problem_tasks(dom, prob)
         dom = for_problem(dom, prob)
@@ -104,5 +112,12 @@ def paired(dom: S.Domain, prob: S.Problem) -> tuple[S.Domain, S.Problem]:
     return dom, prob
 
 
-__all__ = ["is_hddl", "parse_text", "parse_file", "load_domain", "load_problem", "load_inputs",
-           "check_domain_name"]
+__all__ = [
+    "is_hddl",
+    "parse_text",
+    "parse_file",
+    "load_domain",
+    "load_problem",
+    "load_inputs",
+    "check_domain_name",
+]

@@ -1,6 +1,7 @@
 """Variables numbered per domain element, in the order JSHOP2's parser meets
 them (manual 5.1.1): that index is a variable's slot in a binding, and what
 an unbound variable prints as (``VAR<n>``)."""
+
 from __future__ import annotations
 
 from htn.jshop.language import syntax as S
@@ -11,6 +12,7 @@ from htn.jshop.language.walk import walk_effects, walk_pre, walk_tasks, walk_ter
 # textual order, except that (assign ?v t) reads t before adding ?v. A variable
 # that is only ever used as an atom or as a delete/add list is looked up, not
 # added; we add it so that such domains get a checkable error instead of -1.
+
 
 def index_var(scope: dict, v: Var) -> None:
     if v.name not in scope:

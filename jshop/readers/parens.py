@@ -10,6 +10,7 @@ reads the places where parentheses and layout disagree; the reader then tries
 each fix on the text (:mod:`htn.jshop.readers.lark_errors`), and names a
 parenthesis only when the fixed text parses.
 """
+
 from __future__ import annotations
 
 import re
@@ -23,10 +24,11 @@ _TOKEN = re.compile(r"[()]|;[^\n\r]*|[^\s();]+")
 class List_:
     """A list opened at ``start`` (its ``(``): where, on what line, and what
     it holds so far (``items``: '(' for a list, else the word)."""
+
     start: int
     line: int
     col: int
-    indent: int                        # column of the first token of its line
+    indent: int  # column of the first token of its line
     items: list = field(default_factory=list)
 
     @property
@@ -41,15 +43,16 @@ class Suspect:
     ``opened`` is never closed, the fix inserts a ``)`` at offset ``at``;
     ``extra``: the ``)`` at ``at`` closes ``opened`` too early, the fix
     removes it. ``line`` is the first line whose layout shows it."""
-    kind: str                          # "unclosed" | "extra"
-    at: int                            # offset to insert at, or of the ')' to remove
+
+    kind: str  # "unclosed" | "extra"
+    at: int  # offset to insert at, or of the ')' to remove
     opened: List_
     line: int
 
     def fixed(self, text: str) -> str:
         if self.kind == "unclosed":
-            return text[:self.at] + ")" + text[self.at:]
-        return text[:self.at] + text[self.at + 1:]
+            return text[: self.at] + ")" + text[self.at :]
+        return text[: self.at] + text[self.at + 1 :]
 
 
 def scan(text: str, upto: Optional[int] = None):
@@ -59,7 +62,7 @@ def scan(text: str, upto: Optional[int] = None):
     open *before* it (one list object, updated as the walk goes on)."""
     stack: list[List_] = []
     line, bol = 1, 0
-    first_col = None                   # column of the line's first token
+    first_col = None  # column of the line's first token
     end = len(text) if upto is None else upto
     for m in _TOKEN.finditer(text, 0, end):
         tok, at = m.group(), m.start()
@@ -89,7 +92,7 @@ def open_lists(text: str, upto: int) -> list[List_]:
     """The lists still open at offset ``upto``, outermost first."""
     stack: list[List_] = []
     for *_, stack in scan(text, upto):
-        pass                           # the same list, up to date once the scan ends
+        pass  # the same list, up to date once the scan ends
     return list(stack)
 
 
@@ -106,15 +109,19 @@ def layout_suspects(text: str, upto: Optional[int] = None, limit: int = 4) -> li
       opened, as lines inside it do; the fix is to remove that ``)``.
     """
     found: list[Suspect] = []
-    prev_end = 0                       # end of the previous token
-    closed: Optional[tuple] = None     # (list closed last, offset of its ')'), this line
+    prev_end = 0  # end of the previous token
+    closed: Optional[tuple] = None  # (list closed last, offset of its ')'), this line
     for tok, at, line, col, first, stack in scan(text, upto):
         if first and tok != ")":
             late = [s for s in stack if s.line < line and s.indent >= col]
             if late:
                 found.append(Suspect("unclosed", prev_end, late[-1], line))
-            elif closed is not None and closed[0].indent < col and closed[0].line < line \
-                    and (not stack or stack[-1].indent < col):
+            elif (
+                closed is not None
+                and closed[0].indent < col
+                and closed[0].line < line
+                and (not stack or stack[-1].indent < col)
+            ):
                 found.append(Suspect("extra", closed[1], closed[0], line))
             closed = None
             if len(found) >= limit:

@@ -19,6 +19,7 @@ free parameters early (the package's location in Transport's ``deliver``)
 and cuts decompositions that would fail only after a long detour. Plans are
 unchanged: only branches without a plan are cut.
 """
+
 from __future__ import annotations
 
 from htn.jshop.language import syntax as S
@@ -54,8 +55,9 @@ class _Pullup:
         return False
 
     def _arg_types(self, args, types_of: dict) -> tuple:
-        return tuple(types_of.get(x.name) if isinstance(x, Var) else self.const_types.get(x)
-                     for x in args)
+        return tuple(
+            types_of.get(x.name) if isinstance(x, Var) else self.const_types.get(x) for x in args
+        )
 
     # ------------------------------------------------------------ effects
     def _effects(self, a):
@@ -66,7 +68,7 @@ class _Pullup:
             e, ts = stack.pop()
             if isinstance(e, list):
                 stack.extend((x, ts) for x in e)
-            elif hasattr(e, "effect"):          # forall / when
+            elif hasattr(e, "effect"):  # forall / when
                 inner = dict(ts)
                 for p in getattr(e, "vars", ()):
                     inner[p.name] = p.types
@@ -80,8 +82,7 @@ class _Pullup:
         """Task name -> the actions its decompositions may contain."""
         subtasks: dict = {}
         for m in self.h.methods:
-            subtasks.setdefault(m.task.name, set()).update(
-                s.name for s in m.network.subtasks)
+            subtasks.setdefault(m.task.name, set()).update(s.name for s in m.network.subtasks)
         out = {}
         for task in subtasks:
             seen, stack, actions = set(), [task], set()
@@ -102,8 +103,12 @@ class _Pullup:
 
     def _threatens(self, changes, positive: bool, pred: str, arg_types: tuple) -> bool:
         for sign, p, types in changes:
-            if sign == positive and p == pred and len(types) == len(arg_types) and \
-                    all(self._compatible(a, b) for a, b in zip(types, arg_types)):
+            if (
+                sign == positive
+                and p == pred
+                and len(types) == len(arg_types)
+                and all(self._compatible(a, b) for a, b in zip(types, arg_types))
+            ):
                 return True
         return False
 
@@ -126,7 +131,7 @@ class _Pullup:
         if st.name in self.h.actions:
             a = self.h.actions[st.name]
             if len(a.params) != len(st.args):
-                return []          # an arity error, reported with its place later
+                return []  # an arity error, reported with its place later
             params = {p.name: i for i, p in enumerate(a.params)}
             out = []
             for positive, atom in self._literals(a.pre):
@@ -144,8 +149,10 @@ class _Pullup:
         task = self.h.tasks.get(st.name)
         if task is None or len(task.params) != len(st.args):
             return []
-        return [(positive, pred, tuple(st.args[i] if type(i) is int else i[1] for i in args), pos)
-                for positive, pred, args, pos in necessary.get(st.name, ())]
+        return [
+            (positive, pred, tuple(st.args[i] if type(i) is int else i[1] for i in args), pos)
+            for positive, pred, args, pos in necessary.get(st.name, ())
+        ]
 
     # ------------------------------------------------------------ the fixpoint
     def run(self) -> dict:

@@ -4,13 +4,14 @@ Files are UTF-8, with or without a byte-order mark. Parentheses may nest at
 most :data:`MAX_NESTING` deep: the manual sets no limit, but the term
 functions recurse over list terms, and no domain nests anywhere near that deep.
 """
+
 from __future__ import annotations
 
 import re
 
 from htn.jshop.language.errors import HtnError
 
-MAX_NESTING = 1000      # levels of parentheses
+MAX_NESTING = 1000  # levels of parentheses
 
 
 def read_source(path: str) -> str:
@@ -38,8 +39,9 @@ def decode_source(data: bytes, path: str) -> str:
         line = data.count(b"\n", 0, start) + 1
         bol = data.rfind(b"\n", 0, start) + 1
         col = len(data[bol:start].decode("utf-8-sig" if bol == 0 else "utf-8", "replace")) + 1
-        raise HtnError(f"not UTF-8 text: byte 0x{data[start]:02x} ({exc.reason})",
-                       path, line, col) from None
+        raise HtnError(
+            f"not UTF-8 text: byte 0x{data[start]:02x} ({exc.reason})", path, line, col
+        ) from None
 
 
 _PAREN_OR_COMMENT = re.compile(r"[()]|;[^\n\r]*")
@@ -64,7 +66,7 @@ def check_nesting(text: str, file: str) -> None:
 
 _EMPTY = re.compile(r"(?:\s|;[^\n\r]*)*")
 
-EXPECTED_FORM = {     # (language, what) -> the form an empty file should hold
+EXPECTED_FORM = {  # (language, what) -> the form an empty file should hold
     ("jshop2", "domain"): "(defdomain NAME (...))",
     ("jshop2", "problem"): "(defproblem NAME DOMAIN (ATOM ...) (TASK ...))",
     ("jshop2", None): "(defdomain NAME (...)) or (defproblem NAME DOMAIN (...) (...))",

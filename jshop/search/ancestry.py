@@ -11,6 +11,7 @@ same state, and cutting the second would lose every plan. Here the rule is
 applied to ancestors only: each node of a reduced task's body remembers the
 chain of loop keys above it.
 """
+
 from __future__ import annotations
 
 from htn.jshop.language import syntax as S
@@ -20,11 +21,12 @@ from .loops import LoopCheck
 
 class AncestorLoopCheck(LoopCheck):
     """The loop check on the ancestors of the task being reduced."""
+
     __slots__ = ("chains",)
 
     def __init__(self, state):
         super().__init__(state)
-        self.chains: dict = {}      # id(node) -> (key, parent's chain) of its ancestors
+        self.chains: dict = {}  # id(node) -> (key, parent's chain) of its ancestors
 
     def is_loop(self, node, key) -> bool:
         """Whether an ancestor of ``node`` was reduced with ``key`` (a key
@@ -50,10 +52,15 @@ class AncestorLoopCheck(LoopCheck):
 
 def interleaves(domain: S.Domain, instance: S.ProblemInstance) -> bool:
     """Whether any task list of the domain or the problem is not totally ordered."""
-    if not instance.tasks.ordered:      # also the body of an HDDL root task
+    if not instance.tasks.ordered:  # also the body of an HDDL root task
         return True
-    return any(not b.tasks.ordered for ms in domain.methods.values() for m in ms
-               for b in m.branches if len(b.tasks.items) > 1)
+    return any(
+        not b.tasks.ordered
+        for ms in domain.methods.values()
+        for m in ms
+        for b in m.branches
+        if len(b.tasks.items) > 1
+    )
 
 
 def loop_check_for(domain: S.Domain, instance: S.ProblemInstance, state) -> LoopCheck:

@@ -24,6 +24,7 @@ move (:func:`committed`).
 yields None each time it has used that much CPU time, so that a portfolio
 can interleave it with another search (:mod:`htn.jshop.search.portfolio`).
 """
+
 from __future__ import annotations
 
 import heapq
@@ -42,16 +43,25 @@ from .limits import MemoryGuard, MemoryLimit
 from .stats import Stats
 from .task_networks import body_items, firsts, item_at, replace
 
-WASTAR_WEIGHT = 2.0      # --search wastar: f = g + 2 h
+WASTAR_WEIGHT = 2.0  # --search wastar: f = g + 2 h
+
 
 class BestFirst:
     """GBFS (``weight=None``) or weighted A* on one problem instance."""
 
-    def __init__(self, domain: S.Domain, instance: S.ProblemInstance,
-                 heuristic: str = "rc", weight: Optional[float] = None,
-                 max_memory: Optional[int] = None, tree_paths: bool = True,
-                 label: str = "gbfs", commit: bool = True, ties: Optional[str] = None,
-                 **_ignored):
+    def __init__(
+        self,
+        domain: S.Domain,
+        instance: S.ProblemInstance,
+        heuristic: str = "rc",
+        weight: Optional[float] = None,
+        max_memory: Optional[int] = None,
+        tree_paths: bool = True,
+        label: str = "gbfs",
+        commit: bool = True,
+        ties: Optional[str] = None,
+        **_ignored,
+    ):
         self.domain, self.instance = domain, instance
         self.heuristic_name = heuristic
         self.label = label
@@ -59,13 +69,13 @@ class BestFirst:
         self.max_memory = max_memory
         self.tree_paths = tree_paths
         self.stats = Stats()
-        self.slice_s: Optional[float] = None   # CPU seconds between pauses, see plans()
+        self.slice_s: Optional[float] = None  # CPU seconds between pauses, see plans()
         self.model = None
-        self.h = None              # the heuristic, once grounded
-        self.cut = None            # the goal-chain cut (None: off), once grounded
+        self.h = None  # the heuristic, once grounded
+        self.cut = None  # the goal-chain cut (None: off), once grounded
         self.generated = 0
-        self.commit = commit       # the rule of committed() (False: every move)
-        self.ties = ties           # "fifo", "lifo", None: see interleaves()
+        self.commit = commit  # the rule of committed() (False: every move)
+        self.ties = ties  # "fifo", "lifo", None: see interleaves()
         self.lifo = False
 
     def prepare(self) -> None:
@@ -91,7 +101,7 @@ class BestFirst:
         stats.started = time.perf_counter()
         cpu = time.process_time
         pause_at = cpu() + self.slice_s if self.slice_s is not None else None
-        if self.model is None:         # grounding pauses and times out like the search
+        if self.model is None:  # grounding pauses and times out like the search
             steps = grounding_steps(self.domain, self.instance)
             while True:
                 try:
@@ -124,7 +134,7 @@ class BestFirst:
                 _f, _tie, k = heapq.heappop(heap)
                 s, net, _parent, _move, g = nodes[k]
                 if seen.get((s, net), g) < g:
-                    continue          # reached again more cheaply (weighted A*)
+                    continue  # reached again more cheaply (weighted A*)
                 if not net:
                     if model.goal is None or satisfied(model.goal, s):
                         stats.plans_found += 1
@@ -146,8 +156,9 @@ class BestFirst:
                     for gm in methods_of.get(t, ()):
                         if satisfied(gm.pre, s):
                             new = body_items(gm.body, gm.order)
-                            self._push(nodes, heap, seen, s, replace(net, path, new), k,
-                                       (path, gm), g)
+                            self._push(
+                                nodes, heap, seen, s, replace(net, path, new), k, (path, gm), g
+                            )
                 if not ticks & 63:
                     if timeout is not None and time.perf_counter() - stats.started > timeout:
                         stats.timed_out = True
@@ -193,9 +204,9 @@ class BestFirst:
             k = parent
         moves.reverse()
         model = self.model
-        inst = list(model.roots)               # instance -> task id
+        inst = list(model.roots)  # instance -> task id
         net = body_items(tuple(range(len(inst))), model.root_order)
-        how: dict = {}                         # instance -> step index or (method, children)
+        how: dict = {}  # instance -> step index or (method, children)
         steps = []
         for path, what in moves:
             i = item_at(net, path)
@@ -234,8 +245,9 @@ class BestFirst:
                     gm, sub = h
                     m = gm.method
                     node.method = m.name
-                    node.method_index = next((j for j, x in enumerate(
-                        self.domain.methods.get(m.name, ())) if x is m), 0)
+                    node.method_index = next(
+                        (j for j, x in enumerate(self.domain.methods.get(m.name, ())) if x is m), 0
+                    )
                     node.branch = m.branches[0].label
                     work.append((node, sub, path))
                 parent.children.append(node)
@@ -246,8 +258,7 @@ def free_tasks(model) -> frozenset:
     """The compound tasks whose ground methods all have a true precondition
     (static facts were compiled away in grounding): decomposing one of them
     commutes with every other move, see :func:`committed`."""
-    return frozenset(t for t, ms in model.methods_of.items()
-                     if all(gm.pre == _TRUE for gm in ms))
+    return frozenset(t for t, ms in model.methods_of.items() if all(gm.pre == _TRUE for gm in ms))
 
 
 _TRUE = (0, 0, ())
@@ -291,8 +302,10 @@ def interleaves(model) -> bool:
     Colouring pfile20 are solved either way). Total-order problems keep FIFO: there
     ties are other decompositions, and LIFO loses the plan of
     AssemblyHierarchical depth13 (2.6 s with FIFO, none in 30 s)."""
+
     def partial(items, order):
         return len(items) > 1 and order is not True
+
     if partial(model.roots, model.root_order):
         return True
     return any(partial(gm.body, gm.order) for ms in model.methods_of.values() for gm in ms)

@@ -34,13 +34,14 @@ order, and tests none of them on its own. The sets only over-approximate, and ev
 function is monotone, so no plan is lost. It is the order that makes this
 stronger than a reachability test (which RC-add already makes).
 """
+
 from __future__ import annotations
 
 from .task_networks import tasks
 
-FEW = 2          # a precondition with at most this many adders joins the chain
-MAX_CHAIN = 60   # chain facts, at most (sets are small ints)
-MAX_PAIRS = 200_000   # (task, set) values kept; beyond it the cut is off
+FEW = 2  # a precondition with at most this many adders joins the chain
+MAX_CHAIN = 60  # chain facts, at most (sets are small ints)
+MAX_PAIRS = 200_000  # (task, set) values kept; beyond it the cut is off
 
 
 class GoalChain:
@@ -71,7 +72,7 @@ class GoalChain:
             return
         self.bit_of = {b: i for i, b in enumerate(sorted(chain))}
         self.goal = self._small(goal)
-        self.acts = {}          # chain action -> (chain preconditions, chain adds)
+        self.acts = {}  # chain action -> (chain preconditions, chain adds)
         for t in acts:
             a = model.actions[t]
             adds = a.adds
@@ -80,7 +81,7 @@ class GoalChain:
             self.acts[t] = (self._small(a.pre[0]), self._small(adds))
         self.relevant, self.below = self._relevant(model)
         self.act_list = list(self.acts.values())
-        self.value: dict = {}   # (task, set) -> set or None, at the fixpoint
+        self.value: dict = {}  # (task, set) -> set or None, at the fixpoint
         self.readers: dict = {}  # (task, set) -> the pairs whose value read it
         self._work: list = []
 
@@ -116,7 +117,7 @@ class GoalChain:
         if not self.active:
             return True
         out = self._seq(net, self._small(state), None)
-        if not self.active:             # gave up during this query
+        if not self.active:  # gave up during this query
             return True
         return out is not None and out & self.goal == self.goal
 
@@ -207,7 +208,7 @@ class GoalChain:
                 r = self._method(gm, s, k)
                 if r is not None:
                     out = r if out is None else out | r
-            if out != value[k]:         # grown: what read it is worked again
+            if out != value[k]:  # grown: what read it is worked again
                 value[k] = out
                 work.extend(readers.get(k, ()))
             if len(value) > MAX_PAIRS:  # too many sets of chain facts: give up

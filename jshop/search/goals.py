@@ -15,12 +15,13 @@ method's own variables as wildcards (a fixpoint for recursive tasks). The
 summary over-approximates, so the cut is sound: no plan is lost. Only the
 goal's top-level literals are guarded.
 """
+
 from __future__ import annotations
 
 from htn.jshop.language import syntax as S
 from htn.jshop.language.terms import Var
 
-ANY = object()      # a wildcard argument in a pattern
+ANY = object()  # a wildcard argument in a pattern
 
 
 class GoalGuard:
@@ -29,11 +30,14 @@ class GoalGuard:
     def __init__(self, domain: S.Domain, goal: S.Precondition):
         self.needed, self.forbidden = set(), set()
         expr = goal.expr
-        for item in (expr.items if isinstance(expr, S.And) else [expr]):
+        for item in expr.items if isinstance(expr, S.And) else [expr]:
             if isinstance(item, S.Atom) and not any(type(a) is Var for a in item.args):
                 self.needed.add((item.pred, item.args))
-            elif isinstance(item, S.Not) and isinstance(item.expr, S.Atom) and \
-                    not any(type(a) is Var for a in item.expr.args):
+            elif (
+                isinstance(item, S.Not)
+                and isinstance(item.expr, S.Atom)
+                and not any(type(a) is Var for a in item.expr.args)
+            ):
                 self.forbidden.add((item.expr.pred, item.expr.args))
         self.adds, self.dels = _summaries(domain)
 
@@ -46,12 +50,18 @@ class GoalGuard:
         planner's path to the action (see ``Planner._first``), lets the
         nearest tasks be looked at first."""
         for pred, args, _i in change.deleted:
-            if (pred, args) in self.needed and not state.has(pred, args) and \
-                    not self._mendable(root, cursor, self.adds, pred, args):
+            if (
+                (pred, args) in self.needed
+                and not state.has(pred, args)
+                and not self._mendable(root, cursor, self.adds, pred, args)
+            ):
                 return True
         for pred, args in change.added:
-            if (pred, args) in self.forbidden and state.has(pred, args) and \
-                    not self._mendable(root, cursor, self.dels, pred, args):
+            if (
+                (pred, args) in self.forbidden
+                and state.has(pred, args)
+                and not self._mendable(root, cursor, self.dels, pred, args)
+            ):
                 return True
         return False
 
@@ -83,7 +93,7 @@ def _after(cursor: list):
     """The tasks left after the one at the end of ``cursor``, nearest first:
     in an ordered network, those of the later members of each ancestor."""
     for node, i in reversed(cursor):
-        for sibling in node.subtasks[i + 1:]:
+        for sibling in node.subtasks[i + 1 :]:
             yield from _pending_tasks(sibling)
 
 
@@ -99,7 +109,7 @@ def _pending_tasks(root):
             continue
         if node.done:
             continue
-        stack.extend(reversed(subs[node.start:]))
+        stack.extend(reversed(subs[node.start :]))
 
 
 def _summaries(domain: S.Domain) -> tuple[dict, dict]:

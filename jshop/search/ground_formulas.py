@@ -15,6 +15,7 @@ each contributing ``not Y or Z``. A residual compiles to
 top as bit masks of a state (an ``int``), the rest as trees for
 :func:`holds`.
 """
+
 from __future__ import annotations
 
 from htn.jshop.language import syntax as S
@@ -23,7 +24,7 @@ from htn.jshop.logic.caches import IdentityCache
 
 from .residual_code import compile_formula
 
-COMPILE_AFTER = 32     # groundings of a formula before it is compiled
+COMPILE_AFTER = 32  # groundings of a formula before it is compiled
 
 
 class NotGroundable(Exception):
@@ -112,8 +113,8 @@ class FormulaGrounder:
         self.static = static
         self.bits = bits
         self.relaxed = relaxed
-        self._sat = IdentityCache(global_=False)     # formula -> its satisfier
-        self._code = IdentityCache(global_=False)    # formula -> [uses, compiled or None]
+        self._sat = IdentityCache(global_=False)  # formula -> its satisfier
+        self._code = IdentityCache(global_=False)  # formula -> [uses, compiled or None]
 
     def ground(self, e, env: list):
         """The residual of ``e`` under ``env``: walked while a formula is new,

@@ -19,6 +19,7 @@ tasks and methods indices; preconditions are compiled residuals
 domain's methods (:mod:`htn.jshop.readers.pullup`) take part like written
 ones: they only cut method instances that have no plan below them.
 """
+
 from __future__ import annotations
 
 from htn.jshop.language import syntax as S
@@ -40,9 +41,9 @@ class GroundAction:
 
     def __init__(self, name, args, op, pre, dels, adds, effects, cost):
         self.name, self.args, self.op = name, args, op
-        self.pre = pre            # (pos, neg, rest)
-        self.dels, self.adds = dels, adds   # masks
-        self.effects = effects    # ((condition, dels, adds), ...) conditional
+        self.pre = pre  # (pos, neg, rest)
+        self.dels, self.adds = dels, adds  # masks
+        self.effects = effects  # ((condition, dels, adds), ...) conditional
         self.cost = cost
 
 
@@ -50,11 +51,11 @@ class GroundMethod:
     __slots__ = ("task", "method", "pre", "body", "order")
 
     def __init__(self, task, method, pre, body, order):
-        self.task = task          # the task id it decomposes
-        self.method = method      # the S.Method
+        self.task = task  # the task id it decomposes
+        self.method = method  # the S.Method
         self.pre = pre
-        self.body = body          # subtask ids, in the method's (topological) order
-        self.order = order        # True, False or a PartialOrder
+        self.body = body  # subtask ids, in the method's (topological) order
+        self.order = order  # True, False or a PartialOrder
 
 
 class GroundModel:
@@ -63,16 +64,16 @@ class GroundModel:
     state and task network, and the goal."""
 
     def __init__(self):
-        self.facts: list = []          # bit -> (pred, args)
+        self.facts: list = []  # bit -> (pred, args)
         self.bits: dict = {}
-        self.tasks: list = []          # id -> (name, args)
+        self.tasks: list = []  # id -> (name, args)
         self.task_ids: dict = {}
-        self.actions: dict = {}        # task id -> GroundAction (primitive tasks)
-        self.methods_of: dict = {}     # task id -> [GroundMethod]
+        self.actions: dict = {}  # task id -> GroundAction (primitive tasks)
+        self.methods_of: dict = {}  # task id -> [GroundMethod]
         self.init = 0
-        self.roots: tuple = ()         # initial task ids
+        self.roots: tuple = ()  # initial task ids
         self.root_order = True
-        self.goal = None               # (pos, neg, rest) or None
+        self.goal = None  # (pos, neg, rest) or None
 
     def task_id(self, name: str, args: tuple) -> int:
         key = (name, args)
@@ -142,13 +143,16 @@ class _Grounder:
             if bit is not None:
                 model.init |= 1 << bit
         roots = [model.task_id(t.name, tuple(t.args)) for t in self.roots]
-        self.ops = {name: [(op, head_unifier(op.head.args)) for op in ops]
-                    for name, ops in self.domain.operators.items()}
-        self.heads = {name: [(m, head_unifier(m.head.args)) for m in ms]
-                      for name, ms in self.methods.items()}
-        self.executable: dict = {}      # (name, args) -> GroundAction or None
+        self.ops = {
+            name: [(op, head_unifier(op.head.args)) for op in ops]
+            for name, ops in self.domain.operators.items()
+        }
+        self.heads = {
+            name: [(m, head_unifier(m.head.args)) for m in ms] for name, ms in self.methods.items()
+        }
+        self.executable: dict = {}  # (name, args) -> GroundAction or None
         self.head_bound: dict = {}
-        self.bodies = IdentityCache(global_=False)   # method -> [uses, compiled body or None]
+        self.bodies = IdentityCache(global_=False)  # method -> [uses, compiled body or None]
         todo, seen = list(roots), set(roots)
         while todo:
             yield
@@ -185,7 +189,7 @@ class _Grounder:
             env = [None] * op.nvars
             if not unify(args, env):
                 continue
-            if self._bound_by_head(op):     # the common case: no exists to enumerate
+            if self._bound_by_head(op):  # the common case: no exists to enumerate
                 witness = env
                 pre = compile_residual(self.formulas.ground(op.pre.expr, env))
             else:
@@ -263,12 +267,12 @@ class _Grounder:
                 body = tuple((x.name, subst(x.args, nb)) for x in items)
             if body not in groups:
                 if any(None in args for _, args in body):
-                    raise NotGroundable(f"method {m.name}: a subtask argument no condition "
-                                        "binds")
+                    raise NotGroundable(f"method {m.name}: a subtask argument no condition binds")
                 # an action that can never apply kills the method at once, before
                 # its compound subtasks are grounded (PANDA prunes them bottom-up)
-                if not all(self._executable(name, args) for name, args in body
-                           if name.startswith("!")):
+                if not all(
+                    self._executable(name, args) for name, args in body if name.startswith("!")
+                ):
                     groups[body] = None
                     continue
                 groups[body] = []

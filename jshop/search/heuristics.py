@@ -23,6 +23,7 @@ Both are computed with Knuth's generalisation of Dijkstra's algorithm
 (costs of tasks and facts are finalised cheapest first), which stops as
 soon as every cost the node needs is known.
 """
+
 from __future__ import annotations
 
 import heapq
@@ -31,7 +32,7 @@ from .ground_formulas import positive_bits
 from .task_networks import tasks
 
 INF = float("inf")
-CACHED_STATES = 256       # h_add passes kept, at most
+CACHED_STATES = 256  # h_add passes kept, at most
 CACHE_ENTRIES = 8_000_000  # list entries the kept passes may hold, about
 
 
@@ -130,13 +131,13 @@ class _Pass:
                     acc[i] += c
                     left[i] -= 1
                     if not left[i]:
-                        ci = acc[i] + 1           # > c: c is one of the summands
+                        ci = acc[i] + 1  # > c: c is one of the summands
                         bucket = buckets.get(ci)
                         if bucket is None:
                             buckets[ci] = bucket = []
                             push(keys, ci)
                         bucket.extend(effects[i])
-        self.acc = self.left = None     # finished: only the costs are kept
+        self.acc = self.left = None  # finished: only the costs are kept
 
 
 def _bits(mask: int) -> list:
@@ -151,12 +152,13 @@ def _bits(mask: int) -> list:
 class RelaxedComposition:
     """RC-add (see the module docstring): ``h(state, network)``, INF for a
     dead end."""
+
     name = "rc"
 
     def __init__(self, model):
         self.relaxation = r = _Relaxation(model)
         self.goal = _bits(model.goal[0]) if model.goal is not None and model.goal[0] > 0 else []
-        self._passes: dict = {}     # state -> its _Pass, for the latest states
+        self._passes: dict = {}  # state -> its _Pass, for the latest states
         # an unfinished pass holds two lists as long as the operators
         self.cached = max(8, min(CACHED_STATES, CACHE_ENTRIES // (2 * len(r.npre) + r.nodes + 1)))
 
@@ -187,6 +189,7 @@ class RelaxedComposition:
 class TaskDecompositionGraph:
     """TDG_m (see the module docstring): state-independent, ``h(state,
     network)`` is the sum of the precomputed task costs."""
+
     name = "tdg"
 
     def __init__(self, model):

@@ -21,6 +21,7 @@ a ``StackOverflowError`` or an ``OutOfMemoryError``):
   limit (``ulimit -v``) if one is set, and the memory available when the
   search started.
 """
+
 from __future__ import annotations
 
 from typing import TYPE_CHECKING, Optional
@@ -64,6 +65,7 @@ class MemoryGuard:
 
     def __init__(self, max_bytes: int | None = None):
         import resource
+
         now = process_memory()
         self.enabled = now is not None
         self.max_space = None
@@ -81,12 +83,14 @@ class MemoryGuard:
         if not self.enabled:
             return False
         space, resident = process_memory() or (0, 0)
-        return ((self.max_space is not None and space > self.max_space)
-                or (self.max_resident is not None and resident > self.max_resident))
+        return (self.max_space is not None and space > self.max_space) or (
+            self.max_resident is not None and resident > self.max_resident
+        )
 
 
 class SearchBound:
     """A bound that stopped the search, and the task being reduced deepest."""
+
     __slots__ = ("limit", "task")
 
     def __init__(self, limit: int, task: Optional[Task]):
@@ -105,21 +109,30 @@ class SearchBound:
 
 class DepthLimit(SearchBound):
     """The search stopped at ``max_depth`` nested reductions without a step."""
+
     __slots__ = ()
 
     def message(self, task) -> str:
-        what = (f"task {task} recurses past the search depth limit" if task is not None
-                else "the search reached its depth limit")
-        return (f"{what} ({self.limit:,} nested reductions without a step); "
-                "search stopped (raise it with --max-depth N)")
+        what = (
+            f"task {task} recurses past the search depth limit"
+            if task is not None
+            else "the search reached its depth limit"
+        )
+        return (
+            f"{what} ({self.limit:,} nested reductions without a step); "
+            "search stopped (raise it with --max-depth N)"
+        )
 
 
 class MemoryLimit(SearchBound):
     """Why the search stopped at its memory budget: the plan on the current
     path needs more memory than the budget, or the search never ends."""
+
     __slots__ = ()
 
     def message(self, task) -> str:
         at = f" at task {task}" if task is not None else ""
-        return (f"the search used its memory budget ({self.limit >> 20:,} MB){at}; "
-                "search stopped (raise it with --max-memory MB)")
+        return (
+            f"the search used its memory budget ({self.limit >> 20:,} MB){at}; "
+            "search stopped (raise it with --max-memory MB)"
+        )

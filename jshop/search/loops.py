@@ -30,17 +30,19 @@ States are compared by an incremental hash (:class:`~htn.jshop.logic.state.Hashe
 active from its reduction until :func:`~htn.jshop.search.planner.first_tasks` marks
 it done, and again if that mark is undone on backtracking.
 """
+
 from __future__ import annotations
 
 
 class LoopCheck:
     """The active task instances of the current search path."""
+
     __slots__ = ("state", "active", "cut")
 
     def __init__(self, state):
-        self.state = state          # a HashedState
-        self.active: dict = {}      # key -> count
-        self.cut = 0                # reductions refused
+        self.state = state  # a HashedState
+        self.active: dict = {}  # key -> count
+        self.cut = 0  # reductions refused
 
     def key(self, task) -> tuple:
         return (task.name, task.args, self.state.key)

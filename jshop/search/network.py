@@ -12,6 +12,7 @@ backtracking, and which of its tasks may be done next.
   one among them is the only option. Nodes marked
   done go on a trail, undone on backtracking (:func:`undo_marks`).
 """
+
 from __future__ import annotations
 
 from typing import Optional
@@ -24,6 +25,7 @@ from htn.jshop.logic.task_lists import task_list_maker, task_list_warming
 
 class Task:
     """A task instance in the network: a bound task atom."""
+
     __slots__ = ("name", "args", "immediate", "primitive", "src")
 
     def __init__(self, name, args, immediate, src=None):
@@ -43,6 +45,7 @@ class Node:
     ``how`` records what reduced an atomic node (for the task tree): a
     ``(method, branch_index, method_index)`` triple or the plan step's index.
     """
+
     __slots__ = ("task", "subtasks", "ordered", "how", "done", "start", "loop_key")
 
     def __init__(self, task=None, subtasks=None, ordered=True):
@@ -50,9 +53,9 @@ class Node:
         self.subtasks = subtasks
         self.ordered = ordered
         self.how = None
-        self.done = False   # cached: every task below is achieved
-        self.start = 0      # cached: members before this index are achieved
-        self.loop_key = None   # the active task instance it is, see loops.py
+        self.done = False  # cached: every task below is achieved
+        self.start = 0  # cached: members before this index are achieved
+        self.loop_key = None  # the active task instance it is, see loops.py
 
 
 def compile_tasks(tl, what: str = "task list", install=None):
@@ -68,9 +71,16 @@ def bind_tasks(tl: S.TaskList, env: list) -> Node:
     """The node of a task list bound by ``env``, built directly: the
     problem's task list is bound once, and may be long (compiling it would
     cost more than it saves)."""
-    return Node(None, [bind_tasks(x, env) if isinstance(x, S.TaskList)
-                       else Node(Task(x.name, subst(x.args, env), x.immediate, x))
-                       for x in tl.items], tl.order_flag)
+    return Node(
+        None,
+        [
+            bind_tasks(x, env)
+            if isinstance(x, S.TaskList)
+            else Node(Task(x.name, subst(x.args, env), x.immediate, x))
+            for x in tl.items
+        ],
+        tl.order_flag,
+    )
 
 
 def first_tasks(root: Node, trail: Optional[list] = None, path: Optional[list] = None) -> list:
@@ -98,8 +108,9 @@ def first_tasks(root: Node, trail: Optional[list] = None, path: Optional[list] =
     return _first_tasks(root, trail)
 
 
-def first_in_order(root: Node, trail: list, path: Optional[list] = None,
-                    at: Optional[tuple] = None) -> Optional[list]:
+def first_in_order(
+    root: Node, trail: list, path: Optional[list] = None, at: Optional[tuple] = None
+) -> Optional[list]:
     """:func:`first_tasks` while every list met is ordered (the common case,
     and all of HDDL): one walk down to the first task left; None when an
     unordered list is met (the caller then takes the general way).
@@ -161,7 +172,7 @@ def _first_tasks(root: Node, trail: Optional[list]) -> list:
             cs = child.subtasks
             if open_ is not None and not open_.isdisjoint(order[i - 1]):
                 if cs is None or (cs and not child.done):
-                    open_.add(i - 1)          # waits for a predecessor
+                    open_.add(i - 1)  # waits for a predecessor
                 continue
             if cs is None:
                 if child.task.immediate:

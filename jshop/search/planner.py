@@ -34,6 +34,7 @@ memory runs out (JSHOP2 ends such a search with a ``StackOverflowError``).
 Reaching a bound ends the search like a timeout; ``stats.bound`` then
 says which bound, and names the task that was being reduced deepest.
 """
+
 from __future__ import annotations
 
 import gc
@@ -62,26 +63,34 @@ _PLAN = object()
 class Planner:
     """Finds plans for one problem instance of a domain."""
 
-    def __init__(self, domain: S.Domain, instance: S.ProblemInstance,
-                 functions=None, record_trees: bool = False,
-                 jshop2_compat: bool = False, max_depth: int = DEFAULT_MAX_DEPTH,
-                 loop_check: Optional[bool] = None, explain=None,
-                 max_memory: Optional[int] = None, tree_paths: bool = True):
+    def __init__(
+        self,
+        domain: S.Domain,
+        instance: S.ProblemInstance,
+        functions=None,
+        record_trees: bool = False,
+        jshop2_compat: bool = False,
+        max_depth: int = DEFAULT_MAX_DEPTH,
+        loop_check: Optional[bool] = None,
+        explain=None,
+        max_memory: Optional[int] = None,
+        tree_paths: bool = True,
+    ):
         self.domain = domain
-        self.explain = explain      # an explain.Explainer collecting dead ends, or None
+        self.explain = explain  # an explain.Explainer collecting dead ends, or None
         self.instance = instance
         self.record_trees = record_trees
-        self.tree_paths = tree_paths     # node paths in recorded trees (see tree.snapshot)
+        self.tree_paths = tree_paths  # node paths in recorded trees (see tree.snapshot)
         self.max_depth = max_depth
-        self.max_memory = max_memory     # bytes, or None for the default budget
-        if loop_check is None:           # on for HDDL, off for JSHOP2 (its own semantics)
+        self.max_memory = max_memory  # bytes, or None for the default budget
+        if loop_check is None:  # on for HDDL, off for JSHOP2 (its own semantics)
             loop_check = domain.language == "hddl"
         self.state = HashedState() if loop_check else State()
         self.loops = loop_check_for(domain, instance, self.state) if loop_check else None
         implied = domain.implied
         for atom in (*domain.facts, *instance.state):
             self.state.add(atom.pred, atom.args)
-            for pred in implied.get(atom.pred, ()):    # HDDL supertypes
+            for pred in implied.get(atom.pred, ()):  # HDDL supertypes
                 self.state.add(pred, atom.args)
         self.logic = Logic(domain, self.state, functions)
         self.operators = Operators(self.state, self.logic)
@@ -91,27 +100,33 @@ class Planner:
             self._goal = (self.logic.precondition(instance.goal), instance.goal_nvars)
             self.guard = GoalGuard(domain, instance.goal) or None
         # (operator, head unifier, precondition, head substituter, constant cost or None)
-        self._ops = {name: [operator_entry(self.logic, op) for op in ops]
-                     for name, ops in domain.operators.items()}
+        self._ops = {
+            name: [operator_entry(self.logic, op) for op in ops]
+            for name, ops in domain.operators.items()
+        }
         # (method, head unifier, [(precondition, body, body is ordered)] per branch)
-        self._methods = {name: [method_entry(self.logic, m, jshop2_compat) for m in ms]
-                         for name, ms in domain.methods.items()}
+        self._methods = {
+            name: [method_entry(self.logic, m, jshop2_compat) for m in ms]
+            for name, ms in domain.methods.items()
+        }
         self.stats = Stats()
         # the problem's own variables (if any) stay unbound, like a method's
-        nvars = 1 + max((v.index for t in S.task_atoms(instance.tasks)
-                         for v in variables(t.args, [])), default=-1)
-        if instance.top is not None:     # HDDL: a root task binds the network's parameters
+        nvars = 1 + max(
+            (v.index for t in S.task_atoms(instance.tasks) for v in variables(t.args, [])),
+            default=-1,
+        )
+        if instance.top is not None:  # HDDL: a root task binds the network's parameters
             m = S.root_method(instance)
-            self._methods[m.name] = [method_entry(self.logic, m, False)]   # its own order
+            self._methods[m.name] = [method_entry(self.logic, m, False)]  # its own order
             self.root = bind_tasks(S.TaskList([m.head]), [])
         else:
             self.root = bind_tasks(instance.tasks, [None] * nvars)
         self._steps: list = []
         self._cost = 0.0
-        self._trail: list = []     # nodes marked done, see first_tasks
-        self._cursor: list = []    # where the last walk found its task, see _first
+        self._trail: list = []  # nodes marked done, see first_tasks
+        self._cursor: list = []  # where the last walk found its task, see _first
         self._cursor_ok = False
-        self.slice_s: Optional[float] = None    # CPU s between pauses: see plans()
+        self.slice_s: Optional[float] = None  # CPU s between pauses: see plans()
 
     # ------------------------------------------------------------ driver
     def plans(self, timeout: Optional[float] = None) -> Iterator[Plan]:
@@ -135,38 +150,39 @@ class Planner:
         frame = self._frame
         root = self.root
         stack = [frame(root)]
-        depths = [0]       # per frame: reductions since the last step on its path
+        depths = [0]  # per frame: reductions since the last step on its path
         push, pop, nxt = stack.append, stack.pop, next
         dpush, dpop = depths.append, depths.pop
         max_depth = self.max_depth
-        guard = None       # made at the first check: tiny searches never pay for it
+        guard = None  # made at the first check: tiny searches never pay for it
         pause_at = None if self.slice_s is None else time.process_time() + self.slice_s
         ticks = stats.expansions
         stats.expansions += 1
         try:
             while stack:
-                req = nxt(stack[-1], None)     # frames never yield None
+                req = nxt(stack[-1], None)  # frames never yield None
                 if req is None:
                     pop()
                     dpop()
                     continue
                 if req is _PLAN:
                     stats.plans_found += 1
-                    plan = Plan([Step(*s) for s in self._steps], self._cost,
-                                index=stats.plans_found - 1)
+                    plan = Plan(
+                        [Step(*s) for s in self._steps], self._cost, index=stats.plans_found - 1
+                    )
                     if self.record_trees:
                         plan.tree = snapshot(self.root, plan.steps, self.tree_paths)
                     spent += clock() - t0
                     stats.elapsed = spent
                     stats.expansions = ticks + 1
-                    t0 = None          # the consumer's time is not search time
+                    t0 = None  # the consumer's time is not search time
                     if gc_was_enabled:
                         gc.enable()
                     yield plan
                     gc.disable()
                     t0 = clock()
                     continue
-                if req is root:         # an operator was applied (or a task list ended)
+                if req is root:  # an operator was applied (or a task list ended)
                     depth = 0
                 else:
                     depth = depths[-1] + 1
@@ -178,11 +194,11 @@ class Planner:
                 ticks += 1
                 if not ticks & 255:
                     if timeout is not None and clock() - stats.started > timeout:
-                        stats.timed_out = True       # wall clock, output included
+                        stats.timed_out = True  # wall clock, output included
                         return
                     if pause_at is not None and time.process_time() >= pause_at:
                         spent += clock() - t0
-                        yield None                   # see slice_s: another search's turn
+                        yield None  # see slice_s: another search's turn
                         t0, pause_at = clock(), time.process_time() + self.slice_s
                     if not ticks & 4095:
                         if guard is None:
@@ -232,7 +248,7 @@ class Planner:
         root = self.root
         for node in options:
             task = node.task
-            tried = False        # did any operator or method apply?
+            tried = False  # did any operator or method apply?
             if task.primitive:
                 node.subtasks = []
                 steps, apply, guard = self._steps, self._apply, self.guard
@@ -242,16 +258,23 @@ class Planner:
                         continue
                     for nb in pre(env):
                         change, ok = apply(op, nb)
-                        if ok and guard is not None and guard.broken(
-                                change, state, root, self._cursor if self._cursor_ok else None):
+                        if (
+                            ok
+                            and guard is not None
+                            and guard.broken(
+                                change, state, root, self._cursor if self._cursor_ok else None
+                            )
+                        ):
                             ok = False
                         if ok:
                             self.stats.operator_applications += 1
-                            if cost is None:       # a cost term: evaluate it
+                            if cost is None:  # a cost term: evaluate it
                                 cost = subst(op.cost, nb)
                                 if type(cost) is not float:
-                                    raise PlanningError.at(op.pos, f"cost of {op.name} is "
-                                                           f"{shown_term(cost)}, not a number")
+                                    raise PlanningError.at(
+                                        op.pos,
+                                        f"cost of {op.name} is {shown_term(cost)}, not a number",
+                                    )
                             node.how = len(steps)
                             steps.append((op.name, bind_head(nb), cost))
                             self._cost += cost
@@ -272,7 +295,7 @@ class Planner:
                 key = None
                 if loops is not None:
                     key = loops.key(task)
-                    if key in loops.active and loops.is_loop(node, key):   # see loops.py
+                    if key in loops.active and loops.is_loop(node, key):  # see loops.py
                         loops.cut += 1
                         methods = ()
                 for index, (m, unify_head, branches) in enumerate(methods):
@@ -325,7 +348,7 @@ class Planner:
             return found
         if self._cursor_ok and cursor and chosen.ordered:
             parent, i = cursor[-1]
-            if parent.subtasks[i] is chosen:     # searching inside the task just reduced
+            if parent.subtasks[i] is chosen:  # searching inside the task just reduced
                 inner: list = []
                 found = first_in_order(chosen, trail, inner)
                 if found is not None:
@@ -341,17 +364,21 @@ class Planner:
 
     # ------------------------------------------------------------ operators
     @classmethod
-    def for_state(cls, domain: S.Domain, state, functions=None, goal=None,
-                  goal_nvars: int = 0) -> "Planner":
+    def for_state(
+        cls, domain: S.Domain, state, functions=None, goal=None, goal_nvars: int = 0
+    ) -> "Planner":
         """A planner with no tasks, used as the operator model of a world:
         its state is a copy of ``state`` (the atoms of an initial or an
         observed state), changed by :meth:`apply_step`. The executor's
         belief, the symbolic robot's world, plan repair's check and plan
         validation are such models; ``goal`` is an HDDL goal to test with
         :meth:`goal_holds`. No loop check: nothing is decomposed."""
-        return cls(domain, S.ProblemInstance(state, S.TaskList([]), goal=goal,
-                                             goal_nvars=goal_nvars),
-                   functions, loop_check=False)
+        return cls(
+            domain,
+            S.ProblemInstance(state, S.TaskList([]), goal=goal, goal_nvars=goal_nvars),
+            functions,
+            loop_check=False,
+        )
 
     def step_options(self, name: str, args: tuple):
         """``(operator, binding)`` for each way the ground step ``(name . args)``

@@ -20,6 +20,7 @@ none, so that answer is taken from it (or from both). When the problem
 cannot be grounded (:class:`~htn.jshop.search.ground_formulas.NotGroundable`)
 or the heuristic search stops at a bound, depth-first search goes on alone.
 """
+
 from __future__ import annotations
 
 import time
@@ -51,22 +52,47 @@ class Portfolio:
     once GBFS has grounded the problem, a weighted A* on the same model
     (and a GBFS with TDG_m where the goal-chain cut is on)."""
 
-    def __init__(self, domain: S.Domain, instance: S.ProblemInstance, functions=None,
-                 max_memory: Optional[int] = None, tree_paths: bool = True, **options):
-        self.dfs = Planner(domain, instance, functions, max_memory=max_memory,
-                           tree_paths=tree_paths, **options)
-        self.gbfs = BestFirst(domain, instance, max_memory=max_memory, tree_paths=tree_paths,
-                              label="gbfs")
-        self.wastar = BestFirst(domain, instance, weight=WASTAR_WEIGHT, max_memory=max_memory,
-                                tree_paths=tree_paths, label="wastar")
-        self.tdg = BestFirst(domain, instance, heuristic="tdg", max_memory=max_memory,
-                             tree_paths=tree_paths, label="gbfs-tdg")
+    def __init__(
+        self,
+        domain: S.Domain,
+        instance: S.ProblemInstance,
+        functions=None,
+        max_memory: Optional[int] = None,
+        tree_paths: bool = True,
+        **options,
+    ):
+        self.dfs = Planner(
+            domain, instance, functions, max_memory=max_memory, tree_paths=tree_paths, **options
+        )
+        self.gbfs = BestFirst(
+            domain, instance, max_memory=max_memory, tree_paths=tree_paths, label="gbfs"
+        )
+        self.wastar = BestFirst(
+            domain,
+            instance,
+            weight=WASTAR_WEIGHT,
+            max_memory=max_memory,
+            tree_paths=tree_paths,
+            label="wastar",
+        )
+        self.tdg = BestFirst(
+            domain,
+            instance,
+            heuristic="tdg",
+            max_memory=max_memory,
+            tree_paths=tree_paths,
+            label="gbfs-tdg",
+        )
         self.stats = Stats()
-        self.labels = {id(self.dfs): "dfs", id(self.gbfs): "gbfs", id(self.wastar): "wastar",
-                       id(self.tdg): "gbfs-tdg"}
+        self.labels = {
+            id(self.dfs): "dfs",
+            id(self.gbfs): "gbfs",
+            id(self.wastar): "wastar",
+            id(self.tdg): "gbfs-tdg",
+        }
         self.grounded = False
-        self.started = 2            # searches started: dfs, gbfs, then those on its model
-        self.ended: list = []       # the searches that ended, in order
+        self.started = 2  # searches started: dfs, gbfs, then those on its model
+        self.ended: list = []  # the searches that ended, in order
 
     def plans(self, timeout: Optional[float] = None) -> Iterator:
         searches = [self.dfs, self.gbfs]
@@ -92,19 +118,22 @@ class Portfolio:
                 except StopIteration:
                     live.remove(search)
                     self.ended.append(search)
-                    if search is not self.dfs and not search.stats.timed_out \
-                            and search.stats.bound is None:
-                        return          # searched the whole space: no other plan
+                    if (
+                        search is not self.dfs
+                        and not search.stats.timed_out
+                        and search.stats.bound is None
+                    ):
+                        return  # searched the whole space: no other plan
                     if search.stats.timed_out:
                         return
                     continue
                 except NotGroundable:
-                    live.remove(search)      # depth-first search goes on alone
+                    live.remove(search)  # depth-first search goes on alone
                     self.ended.append(search)
                     continue
                 finally:
                     self._sum()
-                if plan is None:        # its slice is over: the other one's turn
+                if plan is None:  # its slice is over: the other one's turn
                     turn += 1
                     if turn % len(live) == 0:
                         slice_s = min(2 * slice_s, LAST_SLICE)

@@ -10,6 +10,7 @@ uses old facts only was found before). Where that does not hold (derived
 predicates; a disjunction or a conditional effect reading a predicate that
 has gained facts) the action's bindings are all enumerated again.
 """
+
 from __future__ import annotations
 
 from htn.jshop.language import syntax as S
@@ -30,8 +31,7 @@ class _Program:
         pre = flat_and([relax(op.pre.expr), *free])
         self.nvars = op.nvars
         self.sat = logic.precondition(S.Precondition(pre), op.head.args)
-        self.adds = [(item.pred, item.args) for item in op.add.items
-                     if isinstance(item, S.Atom)]
+        self.adds = [(item.pred, item.args) for item in op.add.items if isinstance(item, S.Atom)]
         raw = [item for item in op.add.items if isinstance(item, S.EffectForAll)]
         self.foralls = [(logic.expr(flat_and([relax(item.cond)])), item.atoms) for item in raw]
         # the atoms a new fact can be bound to (and their unifiers); what else reads the state
@@ -39,11 +39,11 @@ class _Program:
         others = [x for x in pre.items if not isinstance(x, S.Atom)]
         self.reads = None if every else predicates([op.pre.expr, *(i.cond for i in raw)])
         self.others = predicates(others + [i.cond for i in raw])
-        self.seen = -1                  # the log's length at this action's last turn
+        self.seen = -1  # the log's length at this action's last turn
 
     def bindings(self, log: list):
         """The bindings to apply now, given the facts added so far (``log``)."""
-        new = log[self.seen:] if self.seen >= 0 else None
+        new = log[self.seen :] if self.seen >= 0 else None
         self.seen = len(log)
         if new is None or self.reads is None:
             yield from self.sat([None] * self.nvars)
@@ -86,9 +86,9 @@ def reachable(domain: S.Domain, instance: S.ProblemInstance, semi_naive: bool = 
             state.add(pred, atom.args)
     initial = [(p, a) for p, a in state.facts()]
     logic = Logic(domain, state)
-    every = bool(domain.axioms)         # a derived predicate could depend on any
+    every = bool(domain.axioms)  # a derived predicate could depend on any
     programs = [_Program(op, logic, every) for ops in domain.operators.values() for op in ops]
-    log: list = []                      # the facts added, in order
+    log: list = []  # the facts added, in order
     changed = True
     while changed:
         changed = False

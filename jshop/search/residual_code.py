@@ -13,6 +13,7 @@ compiler does not specialise (``forall``, equality, arguments that are not
 variables or constants) calls back the general walk, so the results are the
 same; ``tests/jshop/test_compiled_grounding.py`` compares the two on IPC instances.
 """
+
 from __future__ import annotations
 
 from htn.jshop.language import syntax as S
@@ -49,10 +50,8 @@ class _Source:
             return [f"x = {args} {'not in' if negated else 'in'} {self.const(static)}"]
         key = self.const(e.pred)
         if negated:
-            return [f"b = B(({key}, {args}))",
-                    "x = True if b is None else ('lit', b, False)"]
-        return [f"b = B(({key}, {args}))",
-                "x = False if b is None else ('lit', b, True)"]
+            return [f"b = B(({key}, {args}))", "x = True if b is None else ('lit', b, False)"]
+        return [f"b = B(({key}, {args}))", "x = False if b is None else ('lit', b, True)"]
 
     def function(self, e) -> str:
         """The name of a generated function of ``env`` for ``e``."""
@@ -72,9 +71,8 @@ class _Source:
             body = [f"return disj([{calls}])"]
         elif isinstance(e, S.Not):
             test = self.atom_test(e.expr, True) if isinstance(e.expr, S.Atom) else None
-            body = (test + ["return x"] if test else
-                    [f"return negate({self.function(e.expr)}(env))"])
-        else:       # Equal, ForAll and what the walk rejects
+            body = test + ["return x"] if test else [f"return negate({self.function(e.expr)}(env))"]
+        else:  # Equal, ForAll and what the walk rejects
             body = [f"return G.walk({self.const(e)}, env)"]
         self.lines.append(f"def {name}(env):")
         self.lines += ["    " + line for line in body]
@@ -85,8 +83,13 @@ class _Source:
         it to ``out`` unless it is True."""
         test = self.atom_test(e, False) if isinstance(e, S.Atom) else None
         if test is None:
-            return [f"x = {self.function(e)}(env)", "if x is False:", "    return False",
-                    "if x is not True:", "    out.append(x)"]
+            return [
+                f"x = {self.function(e)}(env)",
+                "if x is False:",
+                "    return False",
+                "if x is not True:",
+                "    out.append(x)",
+            ]
         if self.grounder.static.get(e.pred) is not None:
             return [test[0].replace("x = ", "if not (", 1) + "):", "    return False"]
         return [test[0], "if b is None:", "    return False", "out.append(('lit', b, True))"]
@@ -97,8 +100,9 @@ def compile_formula(grounder, e, helpers: dict):
     ``helpers``: the residuals' ``conj``, ``disj`` and ``negate``."""
     src = _Source(grounder, helpers)
     top = src.function(e)
-    ns = define("\n".join(src.lines) + "\n", described("ground residual", getattr(e, "pos", None)),
-                src.ns)
+    ns = define(
+        "\n".join(src.lines) + "\n", described("ground residual", getattr(e, "pos", None)), src.ns
+    )
     return ns[top]
 
 
@@ -125,6 +129,7 @@ def compile_body(items: list, where=None):
         name = f"k{len(ns)}"
         ns[name] = value
         return name
+
     parts = []
     for x in items:
         args = _slots(x.args, const)

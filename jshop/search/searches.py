@@ -15,6 +15,7 @@ command line and the library, as pyperplan keeps its searches).
 
 Kept free of heavy imports: the command line reads the names for ``--help``.
 """
+
 from __future__ import annotations
 
 from typing import TYPE_CHECKING, Callable, Iterator, Optional, Protocol
@@ -47,26 +48,39 @@ SEARCHES = {
 
 def _dfs(domain, instance, functions, **options) -> Search:
     from .planner import Planner
+
     return Planner(domain, instance, functions, **options)
 
 
 def _best_first(weighted: bool) -> Callable[..., Search]:
     def make(domain, instance, functions, **options) -> Search:
         from .best_first import WASTAR_WEIGHT, BestFirst
-        return BestFirst(domain, instance, weight=WASTAR_WEIGHT if weighted else None,
-                         label="wastar" if weighted else "gbfs", **options)
+
+        return BestFirst(
+            domain,
+            instance,
+            weight=WASTAR_WEIGHT if weighted else None,
+            label="wastar" if weighted else "gbfs",
+            **options,
+        )
+
     return make
 
 
 def _auto(domain, instance, functions, **options) -> Search:
     from .portfolio import Portfolio
+
     return Portfolio(domain, instance, functions, **options)
 
 
 # name -> a factory (domain, instance, functions, **options) -> Search; each
 # imports its search when called, so that this table stays cheap to import
-FACTORIES: dict = {"dfs": _dfs, "gbfs": _best_first(False), "wastar": _best_first(True),
-                   "auto": _auto}
+FACTORIES: dict = {
+    "dfs": _dfs,
+    "gbfs": _best_first(False),
+    "wastar": _best_first(True),
+    "auto": _auto,
+}
 
 
 def make_search(name: str, domain, instance, functions=None, **options) -> Search:
@@ -84,6 +98,8 @@ def refusal(name: str, domain, all_plans: bool):
     if all_plans:
         return f"--search {name} finds plans one at a time; --all needs --search dfs"
     if domain.language != "hddl":
-        return (f"--search {name} reads HDDL; JSHOP2 domains are planned depth-first "
-                "under the manual's semantics (--search dfs)")
+        return (
+            f"--search {name} reads HDDL; JSHOP2 domains are planned depth-first "
+            "under the manual's semantics (--search dfs)"
+        )
     return None

@@ -3,15 +3,27 @@ backtracks, time, what ended it early (``--timeout``, Ctrl-C, a bound), and
 in a portfolio which search found the plans, and how many reductions the
 loop check refused (a search that ends with none found a "no plan" it can
 stand by; with some, a plan that revisits a state may have been cut)."""
+
 from __future__ import annotations
 
 from .limits import DepthLimit, MemoryLimit
 
 
 class Stats:
-    __slots__ = ("plans_found", "expansions", "operator_applications",
-                 "backtracks", "started", "elapsed", "timed_out", "interrupted",
-                 "bound", "found_by", "loop_cuts", "goal_cuts")
+    __slots__ = (
+        "plans_found",
+        "expansions",
+        "operator_applications",
+        "backtracks",
+        "started",
+        "elapsed",
+        "timed_out",
+        "interrupted",
+        "bound",
+        "found_by",
+        "loop_cuts",
+        "goal_cuts",
+    )
 
     def __init__(self):
         self.plans_found = 0
@@ -22,10 +34,10 @@ class Stats:
         self.elapsed = 0.0
         self.timed_out = False
         self.interrupted = False
-        self.bound = None      # the SearchBound (depth or memory) that stopped the search
-        self.found_by = None   # which search of a portfolio found the plans (--search auto)
-        self.loop_cuts = 0     # reductions the loop check refused (loops.py): 0 = complete
-        self.goal_cuts = 0     # nodes the goal-chain cut dropped (goal_chain.py): sound
+        self.bound = None  # the SearchBound (depth or memory) that stopped the search
+        self.found_by = None  # which search of a portfolio found the plans (--search auto)
+        self.loop_cuts = 0  # reductions the loop check refused (loops.py): 0 = complete
+        self.goal_cuts = 0  # nodes the goal-chain cut dropped (goal_chain.py): sound
 
     def as_dict(self) -> dict:
         out = {

@@ -10,6 +10,7 @@ body keeps its :class:`~htn.jshop.language.syntax.PartialOrder`). The
 generated pieces are warming (:mod:`htn.jshop.logic.warming`): an entry is a
 list, and a compiled piece replaces the interpreted one in place.
 """
+
 from __future__ import annotations
 
 from htn.jshop.language import syntax as S
@@ -23,12 +24,21 @@ def operator_entry(logic, op: S.Operator) -> list:
     """``[operator, head unifier, precondition, head substituter, constant
     cost or None]``."""
     at = where(op.pos)
-    entry = [op, None, logic.precondition(op.pre, op.head.args, f"precondition of {op.name}"),
-             None, op.cost if type(op.cost) is float else None]
-    entry[1] = warm.head_unifier(op.head.args, lambda: f"unifier of the head of {op.name}, "
-                                 f"{at}", lambda f: entry.__setitem__(1, f))
-    entry[3] = warm.substituter(op.head.args, lambda: f"plan step of {op.name}, {at}",
-                                lambda f: entry.__setitem__(3, f))
+    entry = [
+        op,
+        None,
+        logic.precondition(op.pre, op.head.args, f"precondition of {op.name}"),
+        None,
+        op.cost if type(op.cost) is float else None,
+    ]
+    entry[1] = warm.head_unifier(
+        op.head.args,
+        lambda: f"unifier of the head of {op.name}, {at}",
+        lambda f: entry.__setitem__(1, f),
+    )
+    entry[3] = warm.substituter(
+        op.head.args, lambda: f"plan step of {op.name}, {at}", lambda f: entry.__setitem__(3, f)
+    )
     return entry
 
 
@@ -37,12 +47,21 @@ def method_entry(logic, m: S.Method, jshop2_compat: bool) -> list:
     at, pre = where(m.pos), logic.precondition
     branches = []
     for b in m.branches:
-        branch = [pre(b.pre, m.head.args, f"precondition of {m.name} branch {b.label}"),
-                  None, jshop2_compat or b.tasks.order_flag]
-        branch[1] = compile_tasks(b.tasks, f"subtasks of {m.name} branch {b.label}",
-                                  lambda f, branch=branch: branch.__setitem__(1, f))
+        branch = [
+            pre(b.pre, m.head.args, f"precondition of {m.name} branch {b.label}"),
+            None,
+            jshop2_compat or b.tasks.order_flag,
+        ]
+        branch[1] = compile_tasks(
+            b.tasks,
+            f"subtasks of {m.name} branch {b.label}",
+            lambda f, branch=branch: branch.__setitem__(1, f),
+        )
         branches.append(branch)
     entry = [m, None, branches]
-    entry[1] = warm.head_unifier(m.head.args, lambda: f"unifier of the head of {m.name}, {at}",
-                                 lambda f: entry.__setitem__(1, f))
+    entry[1] = warm.head_unifier(
+        m.head.args,
+        lambda: f"unifier of the head of {m.name}, {at}",
+        lambda f: entry.__setitem__(1, f),
+    )
     return entry

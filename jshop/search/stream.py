@@ -2,6 +2,7 @@
 time limit, their searches' statistics summed: the loop under ``htn plan``
 (:class:`htn.api.plan.PlanStream`) and the UP engine's ``solve``
 (:mod:`htn.up.search`), kept once here."""
+
 from __future__ import annotations
 
 import time
@@ -16,10 +17,18 @@ if TYPE_CHECKING:
 def new_stats() -> dict:
     """The statistics of a search over a problem's instances, before it starts
     (their keys are those of ``htn plan -f json``'s statistics line)."""
-    return {"plans_found": 0, "search_ms": 0.0, "expansions": 0, "operator_applications": 0,
-            "backtracks": 0, "timed_out": False, "interrupted": False,
-            "depth_limit_reached": False, "memory_limit_reached": False,
-            "shortest_plan": None}
+    return {
+        "plans_found": 0,
+        "search_ms": 0.0,
+        "expansions": 0,
+        "operator_applications": 0,
+        "backtracks": 0,
+        "timed_out": False,
+        "interrupted": False,
+        "depth_limit_reached": False,
+        "memory_limit_reached": False,
+        "shortest_plan": None,
+    }
 
 
 class SearchStream:
@@ -36,8 +45,15 @@ class SearchStream:
     :class:`~htn.jshop.search.limits.SearchBound`), if one did.
     """
 
-    def __init__(self, instances, make: Callable[[int, object], "Search"], *,
-                 started: float, timeout: Optional[float], limit: Optional[int]):
+    def __init__(
+        self,
+        instances,
+        make: Callable[[int, object], "Search"],
+        *,
+        started: float,
+        timeout: Optional[float],
+        limit: Optional[int],
+    ):
         self.instances, self.make = instances, make
         self.started, self.timeout, self.limit = started, timeout, limit
         self.stats = new_stats()
@@ -104,7 +120,7 @@ def _add(totals: dict, s: dict) -> None:
     for key in ("expansions", "operator_applications", "backtracks"):
         totals[key] += s[key]
     totals["search_ms"] += s["search_ms"]
-    if "found_by" in s:       # --search auto: which search found the plans
+    if "found_by" in s:  # --search auto: which search found the plans
         totals["found_by"] = s["found_by"]
     if "loop_cuts" in s:
         totals["loop_cuts"] = totals.get("loop_cuts", 0) + s["loop_cuts"]

@@ -18,6 +18,7 @@ member indices that leads to it); doing one replaces it by a method's
 body, or by nothing when it is an action (:func:`replace`). Equal networks
 are equal tuples, so ``(state, network)`` is a key for duplicate detection.
 """
+
 from __future__ import annotations
 
 from htn.jshop.language.syntax import PartialOrder
@@ -62,9 +63,9 @@ def replace(seq: tuple, path: tuple, new: tuple, k: int = 0) -> tuple:
     i = path[k]
     member = replace(members[i], path, new, k + 1)
     if member:
-        members = members[:i] + (member,) + members[i + 1:]
+        members = members[:i] + (member,) + members[i + 1 :]
     else:
-        members = members[:i] + members[i + 1:]
+        members = members[:i] + members[i + 1 :]
         low = (1 << i) - 1
         preds = tuple((m & low) | ((m >> (i + 1)) << i) for j, m in enumerate(preds) if j != i)
     if not members:

@@ -1,6 +1,7 @@
 """The README's Python API example (``examples/plan_and_run.py``) runs as a
 new user runs it: on the core install (a wheel of this checkout in a fresh
 virtualenv, no extras), from a folder outside the checkout."""
+
 from __future__ import annotations
 
 import os
@@ -16,8 +17,9 @@ EXAMPLE = ROOT / "examples" / "plan_and_run.py"
 
 
 def _sh(*args, cwd, env=None):
-    return subprocess.run([str(a) for a in args], cwd=cwd, capture_output=True, text=True,
-                          timeout=900, env=env)
+    return subprocess.run(
+        [str(a) for a in args], cwd=cwd, capture_output=True, text=True, timeout=900, env=env
+    )
 
 
 @pytest.mark.slow
@@ -40,14 +42,22 @@ def test_the_example_runs_outside_the_checkout_on_the_core_install(tmp_path, che
     assert lines[0] == "3 plans found in 47 expansions"
     # the three plans of the planning paper's Table 1: one action sequence, three grasps
     assert [line.split(" by ")[1] for line in lines[1:4]] == [
-        "top_grasp", "side_grasp", "Method5Branch0"]
+        "top_grasp",
+        "side_grasp",
+        "Method5Branch0",
+    ]
     events = {line.split()[1] for line in lines[4:-1]}
     assert {"fault", "retrying", "replanned", "verified"} <= events
     assert lines[-1] == "verified: 8 of 8 steps verified, 3 retries, 1 replans"
     # the core install: no extra was there to be used
-    check = _sh(python, "-c", "import importlib.util as u; "
-                "print([m for m in ('pybullet', 'scipy', 'distributed') if u.find_spec(m)])",
-                cwd=work, env=env)
+    check = _sh(
+        python,
+        "-c",
+        "import importlib.util as u; "
+        "print([m for m in ('pybullet', 'scipy', 'distributed') if u.find_spec(m)])",
+        cwd=work,
+        env=env,
+    )
     assert check.stdout.strip() == "[]"
 
 
@@ -55,4 +65,4 @@ def test_the_readme_shows_the_example_as_it_is():
     readme = (ROOT / "README.md").read_text()
     block = readme.split("## Python API", 1)[1].split("```python\n", 1)[1].split("```", 1)[0]
     code = EXAMPLE.read_text()
-    assert code.startswith('"""') and block == code[code.index('"""\n', 3) + 4:].lstrip("\n")
+    assert code.startswith('"""') and block == code[code.index('"""\n', 3) + 4 :].lstrip("\n")

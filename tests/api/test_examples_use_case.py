@@ -2,6 +2,7 @@
 problems listed with their descriptions, and copied to a folder with the
 checks of ``htn examples DIR`` (no file written over unless forced, never a
 FIFO or device even then); nothing printed."""
+
 from __future__ import annotations
 
 import os
@@ -32,8 +33,9 @@ def test_the_examples_are_copied_and_not_written_over_unless_forced(tmp_path, ca
     dest = tmp_path / "mine"
     copied = copy_examples(dest)
     assert len(copied) == len(bundled())
-    assert (dest / "domains" / "domestic.jshop").read_bytes() == \
-        (EXAMPLES / "domains" / "domestic.jshop").read_bytes()
+    assert (dest / "domains" / "domestic.jshop").read_bytes() == (
+        EXAMPLES / "domains" / "domestic.jshop"
+    ).read_bytes()
     (dest / "domains" / "domestic.jshop").write_text("mine")
     with pytest.raises(HtnError, match=r"file\(s\) exist already.*use --force") as err:
         copy_examples(str(dest))
@@ -60,12 +62,19 @@ def test_htn_examples_parses_calls_the_api_and_prints():
     import ast
 
     from package_graph import imports_of, package_modules
+
     modules = package_modules()
     name = "htn.cli.examples_cmd"
-    bad = [m for m in imports_of(name, modules[name], modules)
-           if not m.startswith(("htn.api", "htn.process", "htn.cli"))
-           and m != "htn.jshop.language.errors"]
+    bad = [
+        m
+        for m in imports_of(name, modules[name], modules)
+        if not m.startswith(("htn.api", "htn.process", "htn.cli"))
+        and m != "htn.jshop.language.errors"
+    ]
     assert not bad, f"{name} imports {bad}"
-    long = [f.name for f in ast.walk(ast.parse(modules[name].read_text()))
-            if isinstance(f, ast.FunctionDef) and f.end_lineno - f.lineno + 1 > 50]
+    long = [
+        f.name
+        for f in ast.walk(ast.parse(modules[name].read_text()))
+        if isinstance(f, ast.FunctionDef) and f.end_lineno - f.lineno + 1 > 50
+    ]
     assert not long, f"{name}: functions over 50 lines: {long}"

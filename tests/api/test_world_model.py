@@ -1,5 +1,6 @@
 """The world model a long-lived planner keeps (htn.api.world): facts from
 the problem, checked updates, goals planned from what is believed now."""
+
 from __future__ import annotations
 
 import pytest
@@ -23,9 +24,11 @@ def world():
 def test_it_starts_from_the_problems_state_and_answers_patterns(world):
     assert "(robot_at jenny home_base)" in world.facts()
     assert world.query("(robot_at ?who ?where)") == ["(robot_at jenny home_base)"]
-    assert world.query("(location ?l 2.2 ?y ?z)") == ["(location counter_front 2.2 1.5 0.0)",
-                                                     "(location dining_front 2.2 -1.5 0.0)"]
-    assert world.query("(robot_at ?x ?x)") == []    # the same variable, the same thing
+    assert world.query("(location ?l 2.2 ?y ?z)") == [
+        "(location counter_front 2.2 1.5 0.0)",
+        "(location dining_front 2.2 -1.5 0.0)",
+    ]
+    assert world.query("(robot_at ?x ?x)") == []  # the same variable, the same thing
 
 
 def test_a_goal_planned_from_the_model_is_the_problem_files_plan(world):
@@ -45,26 +48,32 @@ def test_facts_change_the_next_plan(world):
     assert world.query("(robot_at jenny ?w)") == ["(robot_at jenny dining_front)"]
 
 
-@pytest.mark.parametrize("tasks, message", [
-    ("((fly_to jenny moon))", "goal:1:3: unknown task 'fly_to'"),
-    ("((bring_object jenny pringles))", "goal:1:3: 'bring_object' takes 3 arguments, given 2"),
-    ("((bring_object jenny pringles guest)", "goal:1:1: this '(' is never closed"),
-    ("(bring_object jenny pringles guest)", "goal:1:2: the task list is a list of tasks"),
-    ("  ", "goal:1:1: the goal has no tasks"),
-])
+@pytest.mark.parametrize(
+    "tasks, message",
+    [
+        ("((fly_to jenny moon))", "goal:1:3: unknown task 'fly_to'"),
+        ("((bring_object jenny pringles))", "goal:1:3: 'bring_object' takes 3 arguments, given 2"),
+        ("((bring_object jenny pringles guest)", "goal:1:1: this '(' is never closed"),
+        ("(bring_object jenny pringles guest)", "goal:1:2: the task list is a list of tasks"),
+        ("  ", "goal:1:1: the goal has no tasks"),
+    ],
+)
 def test_a_bad_goal_is_a_located_error(world, tasks, message):
     with pytest.raises(HtnError) as caught:
         world.problem(tasks)
     assert str(caught.value).startswith(message)
 
 
-@pytest.mark.parametrize("fact, message", [
-    ("(flies jenny)", "facts:1:1: unknown predicate 'flies'"),
-    ("(robot_at jenny)", "facts:1:1: 'robot_at' has 2 argument(s) in the domain, given 1"),
-    ("(robot_at ?x kitchen)", "facts:1:1: atoms in the initial state must be ground"),
-    ("(robot_at jenny", "facts:1:1: this '(' is never closed"),
-    ("(free_hand jenny) x)", "facts:1:20: this ')' closes nothing"),
-])
+@pytest.mark.parametrize(
+    "fact, message",
+    [
+        ("(flies jenny)", "facts:1:1: unknown predicate 'flies'"),
+        ("(robot_at jenny)", "facts:1:1: 'robot_at' has 2 argument(s) in the domain, given 1"),
+        ("(robot_at ?x kitchen)", "facts:1:1: atoms in the initial state must be ground"),
+        ("(robot_at jenny", "facts:1:1: this '(' is never closed"),
+        ("(free_hand jenny) x)", "facts:1:20: this ')' closes nothing"),
+    ],
+)
 def test_a_bad_fact_is_a_located_error_and_changes_nothing(world, fact, message):
     before = world.facts()
     with pytest.raises(HtnError) as caught:
@@ -75,9 +84,11 @@ def test_a_bad_fact_is_a_located_error_and_changes_nothing(world, fact, message)
 
 def test_what_a_run_verified_becomes_the_model(world):
     from htn.api.run import prepare
+
     plan = next(iter(plan_goal(world, GOAL)))
-    with prepare(plan, robot="symbolic", domain=world.domain,
-                 problem=world.problem(GOAL)) as execution:
+    with prepare(
+        plan, robot="symbolic", domain=world.domain, problem=world.problem(GOAL)
+    ) as execution:
         assert sorted(execution.believed()) == sorted((a.pred, a.args) for a in world.atoms())
         execution.begin()
         assert execution.execute().summary.result == "verified"
@@ -101,13 +112,20 @@ def test_facts_reported_while_a_goal_runs_outlive_the_runs_belief():
     """What other programs report while a goal runs is applied again on top
     of what the run verified, not overwritten by it."""
     from htn.api.agent import Agent
+
     agent = Agent(DOMAIN, PROBLEM)
     seen = []
 
     def on_event(rec):
         if rec["event"] == "start" and not seen:
-            seen.append(agent.world.update(["(object_on coke kitchen_counter)"],
-                                           ["(object_on pringles kitchen_counter)"], "camera"))
+            seen.append(
+                agent.world.update(
+                    ["(object_on coke kitchen_counter)"],
+                    ["(object_on pringles kitchen_counter)"],
+                    "camera",
+                )
+            )
+
     result = agent.execute("((inform jenny hello))", on_event=on_event)
     assert result.outcome == "verified" and seen
     facts = agent.world.query("(object_on ?o ?f)")

@@ -1,5 +1,6 @@
 """The layout shows the architecture: no import circles, short modules, no
 scratch output committed."""
+
 from __future__ import annotations
 
 import ast
@@ -10,7 +11,10 @@ import pytest
 from conftest import ROOT
 from package_graph import cycles, imports_of, package_modules
 
-MAX_LINES = 400            # "a module holds one idea (a few hundred lines at most)"
+# "a module holds one idea (a few hundred lines at most)". Counted in the lines
+# `ruff format` writes: the bar was 400 in the compact style the code had before
+# the formatter (which spread it over 15% more lines: 45k to 52k), so 500 now.
+MAX_LINES = 500
 MAX_TRACKED_BYTES = 256 * 1024
 
 
@@ -34,8 +38,16 @@ def test_the_cycle_finder_finds_a_circle():
 
 def test_the_planner_imports_nothing_above_it():
     modules = package_modules()
-    above = ("htn.executor", "htn.robot", "htn.cli", "htn.transform", "htn.evaluation",
-             "htn.api", "htn.view", "htn.up")
+    above = (
+        "htn.executor",
+        "htn.robot",
+        "htn.cli",
+        "htn.transform",
+        "htn.evaluation",
+        "htn.api",
+        "htn.view",
+        "htn.up",
+    )
     for name, path in modules.items():
         if name.startswith("htn.jshop"):
             bad = [m for m in imports_of(name, path, modules) if m.startswith(above)]
@@ -43,15 +55,22 @@ def test_the_planner_imports_nothing_above_it():
 
 
 def test_every_module_is_short():
-    long = {name: n for name, path in package_modules().items()
-            if (n := len(path.read_text().splitlines())) > MAX_LINES}
+    long = {
+        name: n
+        for name, path in package_modules().items()
+        if (n := len(path.read_text().splitlines())) > MAX_LINES
+    }
     assert not long, f"modules over {MAX_LINES} lines: {long}"
 
 
 def test_no_large_file_is_tracked_outside_docs_and_goldens():
-    big = [f for f in _tracked()
-           if not f.startswith(("docs/", "tests/golden/")) and (ROOT / f).is_file()
-           and (ROOT / f).stat().st_size > MAX_TRACKED_BYTES]
+    big = [
+        f
+        for f in _tracked()
+        if not f.startswith(("docs/", "tests/golden/"))
+        and (ROOT / f).is_file()
+        and (ROOT / f).stat().st_size > MAX_TRACKED_BYTES
+    ]
     assert not big, f"tracked files over 256 kB (scratch output?): {big}"
 
 
@@ -61,21 +80,26 @@ JSHOP_LAYERS = {"language": 0, "readers": 1, "logic": 1, "plans": 2, "search": 3
 
 def test_the_planners_rooms_import_only_rooms_below_them():
     modules = package_modules()
-    rooms = {n: n.split(".")[2] for n in modules if n.count(".") >= 2 and n.startswith("htn.jshop.")}
+    rooms = {
+        n: n.split(".")[2] for n in modules if n.count(".") >= 2 and n.startswith("htn.jshop.")
+    }
     assert set(rooms.values()) == set(JSHOP_LAYERS)
     for name, room in rooms.items():
         for m in imports_of(name, modules[name], modules):
             other = rooms.get(m)
-            assert other is None or other == room or JSHOP_LAYERS[other] < JSHOP_LAYERS[room], \
+            assert other is None or other == room or JSHOP_LAYERS[other] < JSHOP_LAYERS[room], (
                 f"{name} ({room}) imports {m} ({other})"
+            )
 
 
 # docs/architecture.md's table: each room and the rooms it may import
 # (besides itself). A room is a top-level folder, or a room of htn.jshop.
 JSHOP = {f"jshop.{r}" for r in JSHOP_LAYERS}
 ROOMS = {
-    **{f"jshop.{r}": {f"jshop.{o}" for o, n in JSHOP_LAYERS.items() if n < rank}
-       for r, rank in JSHOP_LAYERS.items()},
+    **{
+        f"jshop.{r}": {f"jshop.{o}" for o, n in JSHOP_LAYERS.items() if n < rank}
+        for r, rank in JSHOP_LAYERS.items()
+    },
     "jshop": JSHOP,
     "installation": {"jshop.language"},
     "files": {"jshop.language"},
@@ -86,12 +110,32 @@ ROOMS = {
     "evaluation": {"transform", "executor", "robot", "files", *JSHOP},
     "view": {"robot", *JSHOP},
     "up": JSHOP,
-    "api": {"evaluation", "transform", "executor", "robot", "view", "up", "installation",
-            "files", *JSHOP},
+    "api": {
+        "evaluation",
+        "transform",
+        "executor",
+        "robot",
+        "view",
+        "up",
+        "installation",
+        "files",
+        *JSHOP,
+    },
     # the ROS 2 room: on the use cases; nothing imports it
-    "ros": {"api", "evaluation", "transform", "executor", "robot", "view", "up", "installation",
-            "files", "process", *JSHOP},
-    "": {"installation"},              # htn itself: the use cases by name, on first use
+    "ros": {
+        "api",
+        "evaluation",
+        "transform",
+        "executor",
+        "robot",
+        "view",
+        "up",
+        "installation",
+        "files",
+        "process",
+        *JSHOP,
+    },
+    "": {"installation"},  # htn itself: the use cases by name, on first use
     "__main__": {"cli"},
 }
 
@@ -110,7 +154,7 @@ def test_every_room_imports_only_what_the_architecture_page_allows():
     page = (ROOT / "docs" / "architecture.md").read_text()
     for name, path in modules.items():
         room = _room(name)
-        if room not in ROOMS:       # cli, and the data folders (domains, problems)
+        if room not in ROOMS:  # cli, and the data folders (domains, problems)
             assert room in ("cli", "domains", "problems"), f"{room} is not on the page"
             continue
         if room and room != "__main__":
@@ -123,8 +167,21 @@ def test_every_room_imports_only_what_the_architecture_page_allows():
 # the suite mirrors the rooms: a folder per room (and e2e/ for the corpus,
 # IPC and fuzz suites, architecture/ for these rules); a file is named after
 # its subject, not after the task or session that made it
-TEST_FOLDERS = {"jshop", "executor", "robot", "cli", "process", "api", "view", "up", "ros",
-                "transform", "evaluation", "e2e", "architecture"}
+TEST_FOLDERS = {
+    "jshop",
+    "executor",
+    "robot",
+    "cli",
+    "process",
+    "api",
+    "view",
+    "up",
+    "ros",
+    "transform",
+    "evaluation",
+    "e2e",
+    "architecture",
+}
 HISTORY_WORDS = {"hardening", "newcomer", "pictures", "issue", "round", "session", "one"}
 
 
@@ -141,7 +198,7 @@ def test_the_tests_mirror_the_rooms():
 
 # the command line parses, calls the use cases and prints
 CLI_MAY_IMPORT = ("htn.api", "htn.process", "htn.jshop.language.errors", "htn.cli")
-CLI_LONGEST = 50        # lines of a function, its docstring included
+CLI_LONGEST = 50  # lines of a function, its docstring included
 
 
 def test_the_command_line_imports_only_the_use_cases_the_process_room_and_the_error():
@@ -150,8 +207,9 @@ def test_the_command_line_imports_only_the_use_cases_the_process_room_and_the_er
         if _room(name) != "cli":
             continue
         for m in imports_of(name, path, modules):
-            assert m == "htn" or any(m == a or m.startswith(a + ".") for a in CLI_MAY_IMPORT), \
+            assert m == "htn" or any(m == a or m.startswith(a + ".") for a in CLI_MAY_IMPORT), (
                 f"{name} imports {m}"
+            )
 
 
 def test_no_function_of_the_command_line_is_longer_than_fifty_lines():

@@ -5,6 +5,7 @@ variable nothing binds is refused by all six the same way: exit 2 and the
 same located line. And ``htn evaluate`` refuses a study it cannot measure,
 finds a domain beside its problem, and names every place it looked.
 """
+
 from __future__ import annotations
 
 from coffee import COFFEE, MORNING
@@ -29,9 +30,17 @@ def test_every_command_refuses_the_unbound_add_the_same_located_way(tmp_path):
         "validate": ["validate", "coffee.jshop", "morning.jshop", "plan.txt"],
         "stats": ["stats", "coffee.jshop", "morning.jshop"],
         "transform": ["transform", "coffee.jshop", "morning.jshop"],
-        "run": ["run", "plan.txt", "--robot", "symbolic", "--domain", "coffee.jshop",
-                "--problem", "morning.jshop"],
-        "evaluate": ["evaluate", "morning.jshop", "--runs", "2"],   # its domain found beside
+        "run": [
+            "run",
+            "plan.txt",
+            "--robot",
+            "symbolic",
+            "--domain",
+            "coffee.jshop",
+            "--problem",
+            "morning.jshop",
+        ],
+        "evaluate": ["evaluate", "morning.jshop", "--runs", "2"],  # its domain found beside
     }
     first_lines = {}
     for name, args in commands.items():
@@ -53,9 +62,11 @@ def test_evaluate_refuses_a_study_it_cannot_measure(tmp_path):
     assert r.returncode == 2, (r.stdout, r.stderr)
     assert r.stdout == ""
     [line] = r.stderr.splitlines()
-    assert line.startswith("morning.jshop: htn evaluate compares a plan with its transformed "
-                           "plan, but no registered transformation (tray, container, both-hands)"
-                           " applies to its plan"), line
+    assert line.startswith(
+        "morning.jshop: htn evaluate compares a plan with its transformed "
+        "plan, but no registered transformation (tray, container, both-hands)"
+        " applies to its plan"
+    ), line
     assert "the projection robot has no action for !goto, !brew, !hand" in line
     assert "'htn.transformations'" in line and "'htn.actions'" in line
 
@@ -66,8 +77,10 @@ def test_evaluate_names_every_place_it_looked_for_the_domain(tmp_path):
     r = run_cli("evaluate", "problems/morning.jshop", cwd=tmp_path)
     assert r.returncode == 2, (r.stdout, r.stderr)
     [line] = r.stderr.splitlines()
-    assert line.startswith("problems/morning.jshop: cannot find the domain file coffee.jshop: "
-                           "looked in problems/, domains/ and "), line
+    assert line.startswith(
+        "problems/morning.jshop: cannot find the domain file coffee.jshop: "
+        "looked in problems/, domains/ and "
+    ), line
     assert line.endswith("/domains/; give it with --domain"), line
     # beside the problem is the first place looked
     (tmp_path / "problems" / "coffee.jshop").write_text(UNBOUND)

@@ -5,6 +5,7 @@ number (or inf) and bounds loading too, any exception of user code is one
 line at the user's own line, messages quote terms cut short, HDDL arity
 errors are located. (Process-level cases, a full disk, signals and the
 watchdog: test_stops_and_streams.py.)"""
+
 from __future__ import annotations
 
 import json
@@ -46,6 +47,7 @@ def made(tmp_path):
 
 # ------------------------------------------------------------------ 1. data is data
 
+
 def test_a_plan_file_never_imports_the_functions_file_it_names(made, tmp_path):
     d, p, f, plan, marker = made
     assert "; functions sha256: " in plan.read_text()
@@ -86,8 +88,10 @@ def test_a_log_never_imports_the_functions_file_it_names(made, tmp_path):
 def test_a_log_whose_domain_changed_is_refused(made, tmp_path):
     d, p, f, plan, marker = made
     log = tmp_path / "run.jsonl"
-    assert run_htn("run", plan, "--robot", "symbolic", "-q", "--functions", f,
-                   "--log", log).returncode == 0
+    assert (
+        run_htn("run", plan, "--robot", "symbolic", "-q", "--functions", f, "--log", log).returncode
+        == 0
+    )
     d.write_text(DOMAIN + "\n; edited\n")
     r = run_htn("run", "--from-log", log, "--functions", f)
     assert r.returncode == 2
@@ -96,23 +100,30 @@ def test_a_log_whose_domain_changed_is_refused(made, tmp_path):
 
 # ------------------------------------------------------------------ 4. --from-log headers
 
-@pytest.mark.parametrize("field,value,says", [
-    ("seed", "x", "expected an integer"),
-    ("seed", 1.5, "expected an integer"),
-    ("plan_index", 0, "1 or more"),
-    ("plan_index", True, "1 or more"),
-    ("faults", 3, "faults text"),
-    ("retries", {"!go": "many"}, "retry limits"),
-    ("retries", [1], "retry limits"),
-    ("plan_sha256", 7, "SHA-256"),
-    ("replan", "yes", "true or false"),
-    ("robot", None, "robot's name"),
-    ("plan", ["a"], "expected a path")])
+
+@pytest.mark.parametrize(
+    "field,value,says",
+    [
+        ("seed", "x", "expected an integer"),
+        ("seed", 1.5, "expected an integer"),
+        ("plan_index", 0, "1 or more"),
+        ("plan_index", True, "1 or more"),
+        ("faults", 3, "faults text"),
+        ("retries", {"!go": "many"}, "retry limits"),
+        ("retries", [1], "retry limits"),
+        ("plan_sha256", 7, "SHA-256"),
+        ("replan", "yes", "true or false"),
+        ("robot", None, "robot's name"),
+        ("plan", ["a"], "expected a path"),
+    ],
+)
 def test_every_header_field_is_checked(made, tmp_path, field, value, says):
     d, p, f, plan, marker = made
     log = tmp_path / "run.jsonl"
-    assert run_htn("run", plan, "--robot", "symbolic", "-q", "--functions", f,
-                   "--log", log).returncode == 0
+    assert (
+        run_htn("run", plan, "--robot", "symbolic", "-q", "--functions", f, "--log", log).returncode
+        == 0
+    )
     lines = log.read_text().splitlines()
     header = json.loads(lines[0])
     header[field] = value
@@ -124,6 +135,7 @@ def test_every_header_field_is_checked(made, tmp_path, field, value, says):
 
 
 # ------------------------------------------------------------------ 2. outputs
+
 
 def test_an_output_that_is_an_input_is_refused_and_left_alone(made, tmp_path):
     d, p, f, plan, marker = made
@@ -160,6 +172,7 @@ def test_devices_and_fifos_are_refused_and_links_written_through(made, tmp_path)
 
 # ------------------------------------------------------------------ 6. --timeout
 
+
 @pytest.mark.parametrize("value", ["0", "-1", "nan", "NaN", "soon", ""])
 def test_a_timeout_that_is_no_positive_number_is_a_usage_error(made, value):
     d, p, f, plan, marker = made
@@ -189,9 +202,18 @@ def test_the_timeout_bounds_loading_a_functions_file(made, tmp_path):
 
 # ------------------------------------------------------------------ 7. user code
 
-@pytest.mark.parametrize("raising", [
-    "raise BaseException('odd')", "raise GeneratorExit()", "raise KeyboardInterrupt()",
-    "raise SystemExit(4)", "import sys; sys.exit('bye')", "raise MemoryError()"])
+
+@pytest.mark.parametrize(
+    "raising",
+    [
+        "raise BaseException('odd')",
+        "raise GeneratorExit()",
+        "raise KeyboardInterrupt()",
+        "raise SystemExit(4)",
+        "import sys; sys.exit('bye')",
+        "raise MemoryError()",
+    ],
+)
 def test_any_exception_at_import_is_one_line_at_the_users_line(made, tmp_path, raising):
     d, p, f, plan, marker = made
     bad = tmp_path / "bad.py"
@@ -201,10 +223,14 @@ def test_any_exception_at_import_is_one_line_at_the_users_line(made, tmp_path, r
     assert r.stderr.splitlines()[0].startswith(f"{bad}:2: loading failed: "), r.stderr
 
 
-@pytest.mark.parametrize("body,says", [
-    ("raise GeneratorExit()", "raised GeneratorExit"),
-    ("raise BaseException('odd')", "raised BaseException: odd"),
-    ("raise KeyboardInterrupt()", "raised KeyboardInterrupt")])
+@pytest.mark.parametrize(
+    "body,says",
+    [
+        ("raise GeneratorExit()", "raised GeneratorExit"),
+        ("raise BaseException('odd')", "raised BaseException: odd"),
+        ("raise KeyboardInterrupt()", "raised KeyboardInterrupt"),
+    ],
+)
 def test_any_exception_of_a_function_is_one_line_at_the_users_line(made, tmp_path, body, says):
     d, p, f, plan, marker = made
     bad = tmp_path / "bad.py"
@@ -219,17 +245,22 @@ def test_any_exception_of_a_function_is_one_line_at_the_users_line(made, tmp_pat
 def test_junk_returned_by_a_function_runs_none_of_its_methods(made, tmp_path):
     d, p, f, plan, marker = made
     bad = tmp_path / "bad.py"
-    bad.write_text("class S(str):\n    def lower(self):\n        raise RuntimeError('no')\n"
-                   "    def __repr__(self):\n        raise RuntimeError('no')\n"
-                   "class N:\n    def __repr__(self):\n        while True: pass\n"
-                   "def mark(x):\n    return S('Yes')\ndef junk(x):\n    return N()\n")
+    bad.write_text(
+        "class S(str):\n    def lower(self):\n        raise RuntimeError('no')\n"
+        "    def __repr__(self):\n        raise RuntimeError('no')\n"
+        "class N:\n    def __repr__(self):\n        while True: pass\n"
+        "def mark(x):\n    return S('Yes')\ndef junk(x):\n    return N()\n"
+    )
     assert run_htn("plan", d, p, "--functions", bad).returncode == 0
     d.write_text(DOMAIN.replace("call mark", "call junk"))
     r = run_htn("plan", d, p, "--functions", bad, timeout=60)
-    assert r.returncode == 2 and "returned an object of class N, which is not a term" in r.stderr, r.stderr
+    assert r.returncode == 2 and "returned an object of class N, which is not a term" in r.stderr, (
+        r.stderr
+    )
 
 
 # ------------------------------------------------------------------ 8. bounded messages
+
 
 @pytest.mark.slow
 def test_a_huge_term_in_a_message_is_cut_and_quick(tmp_path):
@@ -267,6 +298,7 @@ def test_a_method_task_with_more_arguments_than_its_task_is_located(tmp_path):
 
 def test_transform_and_examples_refuse_what_they_must_not_write(tmp_path):
     from conftest import ROOT
+
     d = tmp_path / "kitchen.jshop"
     d.write_bytes((ROOT / "domains" / "kitchen.jshop").read_bytes())
     before = d.read_bytes()

@@ -4,6 +4,7 @@ and values past what the machine holds are the same one-line usage error
 (exit 2) on every command; and every command's whole run is bounded by
 its ``--timeout``, whatever its other options ask (``stats --repeat``,
 ``evaluate --runs``, ``transform`` of a hard problem)."""
+
 from __future__ import annotations
 
 import re
@@ -19,8 +20,20 @@ TRAY = ROOT / "problems" / "tray_three.jshop"
 HUGE = "1" + "0" * 30
 
 # values no count takes, and values no number of seconds takes
-BAD_COUNTS = ["nan", "NaN", "inf", "-inf", "1.5", "1e3", "", "ten", "0x10", "1_000", HUGE,
-              "-" + HUGE]
+BAD_COUNTS = [
+    "nan",
+    "NaN",
+    "inf",
+    "-inf",
+    "1.5",
+    "1e3",
+    "",
+    "ten",
+    "0x10",
+    "1_000",
+    HUGE,
+    "-" + HUGE,
+]
 BAD_SECONDS = ["nan", "-inf", "0", "-1", "-0.0", "", "soon", "1e3s"]
 
 
@@ -35,16 +48,26 @@ def commands(plan_file):
     """command -> (its arguments, {option: the values it refuses besides
     the shared ones})"""
     return {
-        "plan": (["plan", D, P], {"-n": ["0", "-1"], "--max-depth": ["0"],
-                                  "--max-memory": ["0", "99999999999"], "--timeout": []}),
+        "plan": (
+            ["plan", D, P],
+            {
+                "-n": ["0", "-1"],
+                "--max-depth": ["0"],
+                "--max-memory": ["0", "99999999999"],
+                "--timeout": [],
+            },
+        ),
         "stats": (["stats", D, P], {"--repeat": ["0", "1000001"], "--timeout": []}),
         "transform": (["transform", D, P], {"--timeout": []}),
         "validate": (["validate", D, P, plan_file], {"--plan-index": ["0"], "--timeout": []}),
-        "run": (["run", plan_file, "--robot", "symbolic"],
-                {"--seed": [], "--plan-index": ["0"], "--timeout": []}),
-        "evaluate": (["evaluate", TRAY],
-                     {"--runs": ["0", "1000001"], "--workers": ["0", "257"], "--seed": [],
-                      "--timeout": []}),
+        "run": (
+            ["run", plan_file, "--robot", "symbolic"],
+            {"--seed": [], "--plan-index": ["0"], "--timeout": []},
+        ),
+        "evaluate": (
+            ["evaluate", TRAY],
+            {"--runs": ["0", "1000001"], "--workers": ["0", "257"], "--seed": [], "--timeout": []},
+        ),
         "view": (["view", plan_file], {"--port": ["-1", "65536"]}),
     }
 
@@ -65,30 +88,35 @@ def test_a_bad_time_or_count_is_one_usage_error_on_every_command(plan_file, comm
         errors = [line for line in r.stderr.splitlines() if line.startswith("Error: ")]
         assert len(errors) == 1, r.stderr
         # the same two sentences, whichever command and option
-        shape = (r"Error: Invalid value for '[^']*'( / '[^']*')?: '[^']*'"
-                 r"(: give a positive number of seconds \(or inf for no limit\)"
-                 r"| is not a number of seconds \(e\.g\. 10, 0\.5 or inf\)"
-                 r"|: give a whole number from -?\d+ to \d+"
-                 r"| is not a whole number; give one from -?\d+ to \d+)$")
+        shape = (
+            r"Error: Invalid value for '[^']*'( / '[^']*')?: '[^']*'"
+            r"(: give a positive number of seconds \(or inf for no limit\)"
+            r"| is not a number of seconds \(e\.g\. 10, 0\.5 or inf\)"
+            r"|: give a whole number from -?\d+ to \d+"
+            r"| is not a whole number; give one from -?\d+ to \d+)$"
+        )
         assert re.match(shape, errors[0]), errors[0]
 
 
 def test_good_values_still_work(plan_file):
-    assert run_htn("plan", D, P, "-n", "2", "--max-depth", "1000", "--timeout", "1e400"
-                   ).returncode == 0
-    assert run_htn("run", plan_file, "--robot", "symbolic", "-q", "--seed", "-5"
-                   ).returncode == 0
+    assert (
+        run_htn("plan", D, P, "-n", "2", "--max-depth", "1000", "--timeout", "1e400").returncode
+        == 0
+    )
+    assert run_htn("run", plan_file, "--robot", "symbolic", "-q", "--seed", "-5").returncode == 0
     r = run_htn("stats", D, P, "--repeat", "2", "--json")
     assert r.returncode == 0 and '"repeats": 2' in r.stdout, r.stderr
 
 
 # ------------------------------------------------------------------ bounded time
 
+
 @pytest.mark.slow
 def test_stats_repeats_end_with_the_timeout(tmp_path):
     began = time.monotonic()
-    r = run_htn_process("stats", D, P, "--repeat", "1000000", "--timeout", "1", "--json",
-                        timeout=60)
+    r = run_htn_process(
+        "stats", D, P, "--repeat", "1000000", "--timeout", "1", "--json", timeout=60
+    )
     assert r.returncode == 0, r.stderr
     assert time.monotonic() - began < 10
     assert '"repeats": ' in r.stdout and '"repeats": 1000000' not in r.stdout
@@ -98,8 +126,9 @@ def test_stats_repeats_end_with_the_timeout(tmp_path):
 def test_evaluate_ends_with_the_timeout_and_keeps_the_runs_done(tmp_path):
     records = tmp_path / "runs.jsonl"
     began = time.monotonic()
-    r = run_htn_process("evaluate", TRAY, "--runs", "1000000", "--timeout", "6",
-                        "--records", records, timeout=120)
+    r = run_htn_process(
+        "evaluate", TRAY, "--runs", "1000000", "--timeout", "6", "--records", records, timeout=120
+    )
     assert r.returncode == 1 and "timed out after 6 s" in r.stderr, r.stderr
     assert "Traceback" not in r.stderr
     assert time.monotonic() - began < 40
@@ -119,8 +148,16 @@ def test_transform_ends_with_its_timeout_and_keeps_the_output(tmp_path):
     out = tmp_path / "out.txt"
     out.write_text("earlier\n")
     began = time.monotonic()
-    r = run_htn_process("transform", TRANSPORT / "domain.hddl", TRANSPORT / "pfile03.hddl",
-                        "--timeout", "5", "-o", out, timeout=120)
+    r = run_htn_process(
+        "transform",
+        TRANSPORT / "domain.hddl",
+        TRANSPORT / "pfile03.hddl",
+        "--timeout",
+        "5",
+        "-o",
+        out,
+        timeout=120,
+    )
     took = time.monotonic() - began
     assert r.returncode == 1 and "timed out after 5 s" in r.stderr, r.stderr
     assert took < 10, took

@@ -3,6 +3,7 @@ file, the domain, the problem and the functions file exactly once each
 (an ``open`` audit hook counts them), parses those bytes, and its log
 header's SHA-256 values are those of the bytes it read; ``htn plan -o``
 records the functions file's SHA-256 from the bytes it loaded."""
+
 from __future__ import annotations
 
 import hashlib
@@ -38,16 +39,35 @@ def test_htn_run_reads_each_file_once_and_logs_the_hashes_of_what_it_read(tmp_pa
     functions.write_text(FUNCTIONS)
     r = run_htn("plan", domain, problem, "--functions", functions, "-o", plan)
     assert r.returncode == 0, r.stderr
-    digest = {p: hashlib.sha256(p.read_bytes()).hexdigest()
-              for p in (plan, domain, problem, functions)}
+    digest = {
+        p: hashlib.sha256(p.read_bytes()).hexdigest() for p in (plan, domain, problem, functions)
+    }
     assert f"; functions sha256: {digest[functions]}" in plan.read_text()
 
     opened = tmp_path / "opened.txt"
     watched = [plan, domain, problem, functions]
-    r = subprocess.run([sys.executable, "-c", AUDIT, opened,
-                        ":".join(str(p.resolve()) for p in watched), "run", plan, "--robot",
-                        "symbolic", "-q", "--functions", functions, "--log", log],
-                       cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    r = subprocess.run(
+        [
+            sys.executable,
+            "-c",
+            AUDIT,
+            opened,
+            ":".join(str(p.resolve()) for p in watched),
+            "run",
+            plan,
+            "--robot",
+            "symbolic",
+            "-q",
+            "--functions",
+            functions,
+            "--log",
+            log,
+        ],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert r.returncode == 0, r.stderr
     counts = Counter(opened.read_text().split())
     assert counts == Counter({str(p.resolve()): 1 for p in watched}), counts
@@ -67,6 +87,7 @@ def test_a_functions_file_that_is_not_the_plans_is_refused_before_it_runs(tmp_pa
     marker = tmp_path / "ran"
     functions.write_text(f"open({str(marker)!r}, 'w').close()\n" + FUNCTIONS)
     r = run_htn("run", plan, "--robot", "symbolic", "-q", "--functions", functions)
-    assert r.returncode == 2 and "is not the functions file these plans were made with" \
-        in r.stderr, r.stderr
+    assert (
+        r.returncode == 2 and "is not the functions file these plans were made with" in r.stderr
+    ), r.stderr
     assert not marker.exists()

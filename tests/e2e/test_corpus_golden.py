@@ -9,6 +9,7 @@ Each comparison runs twice: in the default mode (the manual's ``:unordered``
 method bodies; the corpus uses ``:unordered`` only in problems, so nothing may
 change) and with ``--jshop2-compat`` (JSHOP2 1.0.3 exactly).
 """
+
 from __future__ import annotations
 
 import json
@@ -52,8 +53,15 @@ def test_matches_jshop2(example, mode, semantics):
     folder = CORPUS / example
     stats = json.loads((folder / "stats.json").read_text())
     golden, flags = MODES[mode]
-    args = ["plan", folder / stats["domain_file"], folder / stats["problem_file"],
-            "--format", "jshop", "--quiet", *flags]
+    args = [
+        "plan",
+        folder / stats["domain_file"],
+        folder / stats["problem_file"],
+        "--format",
+        "jshop",
+        "--quiet",
+        *flags,
+    ]
     if example in FUNCTION_FILES:
         args += ["--functions", FUNCTION_FILES[example]]
     if semantics == "jshop2-compat":
@@ -69,6 +77,7 @@ def test_matches_jshop2(example, mode, semantics):
 def test_first_plan_figures_match_stats():
     """The first plan's length and cost agree with each stats.json."""
     from htn.jshop import FunctionTable, Planner, load_domain, load_problem
+
     for folder in sorted(p for p in CORPUS.iterdir() if p.is_dir()):
         stats = json.loads((folder / "stats.json").read_text())
         table = FunctionTable()

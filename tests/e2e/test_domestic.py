@@ -1,4 +1,5 @@
 """The domestic robot domain: the paper's Table 1, golden plans and task trees."""
+
 from __future__ import annotations
 
 import json
@@ -31,8 +32,9 @@ def test_table1_figures_from_htn_stats():
 
 
 def test_htn_stats_for_given_problems():
-    result = run_htn("stats", DOMAIN, ROOT / "problems" / "bring_two.jshop", "--json",
-                     "--repeat", "2")
+    result = run_htn(
+        "stats", DOMAIN, ROOT / "problems" / "bring_two.jshop", "--json", "--repeat", "2"
+    )
     assert result.returncode == 0, result.stderr
     (row,) = json.loads(result.stdout)["scenarios"]
     assert row["plans"] == 6 and row["distinct_plans"] == 1 and row["min_length"] == 16
@@ -53,8 +55,9 @@ def test_htn_stats_needs_a_problem_with_a_domain():
 
 @pytest.mark.parametrize("problem", ["bring_object", "guide_robot"])
 def test_golden_plans(problem, golden):
-    result = run_htn("plan", DOMAIN, ROOT / "problems" / f"{problem}.jshop", "--all",
-                     "--format", "jshop")
+    result = run_htn(
+        "plan", DOMAIN, ROOT / "problems" / f"{problem}.jshop", "--all", "--format", "jshop"
+    )
     assert result.returncode == 0, result.stderr
     golden(f"{problem}.plans.txt", result.stdout)
 
@@ -70,8 +73,11 @@ def test_three_bring_plans_differ_only_in_decomposition():
     assert len({tuple(p.lines()) for p in plans}) == 1
     grasp = [p.tree.find("bring_object/fetch_object/grasp_object") for p in plans]
     assert [(g.method_index, g.branch) for g in grasp] == [
-        (0, "top_grasp"), (1, "side_grasp"), (2, grasp[2].branch)]
-    assert grasp[2].args == ("pringles", "kitchen_counter")   # the two-parameter method
+        (0, "top_grasp"),
+        (1, "side_grasp"),
+        (2, grasp[2].branch),
+    ]
+    assert grasp[2].args == ("pringles", "kitchen_counter")  # the two-parameter method
 
 
 def test_tree_paths_unique_and_stable():
@@ -79,7 +85,7 @@ def test_tree_paths_unique_and_stable():
     again = [[n.path for n in p.tree.walk()] for p in plans_of("bring_two")]
     assert first == again
     for paths in first:
-        paths = paths[1:]   # the root has the empty path
+        paths = paths[1:]  # the root has the empty path
         assert len(paths) == len(set(paths))
     assert "bring_object :call 2/fetch_object/grasp_object/!grasp" in first[0]
 
@@ -109,6 +115,7 @@ def test_blocks_smallproblem_every_tree_matches_its_plan():
 def test_tree_never_shows_backtracked_branches():
     """A branch that fails after reducing must not leave its steps in the tree."""
     from htn.jshop import parse_text
+
     dom = parse_text("""
     (defdomain d (
       (:operator (!a) () () ((did-a)))
@@ -127,10 +134,11 @@ def test_tree_never_shows_backtracked_branches():
 
 def test_cli_tree_dot_and_json(tmp_path):
     dot = tmp_path / "tree.dot"
-    result = run_htn("plan", DOMAIN, ROOT / "problems" / "guide_robot.jshop", "--format", "json",
-                     "--dot", dot)
+    result = run_htn(
+        "plan", DOMAIN, ROOT / "problems" / "guide_robot.jshop", "--format", "json", "--dot", dot
+    )
     assert result.returncode == 0, result.stderr
-    plan, stats = [json.loads(line) for line in result.stdout.splitlines()]   # JSON Lines
+    plan, stats = [json.loads(line) for line in result.stdout.splitlines()]  # JSON Lines
     assert plan["type"] == "plan" and stats["type"] == "stats" and stats["plans_found"] == 1
     root, top = plan["tree"]["nodes"][:2]
     assert root["parent"] is None and top["parent"] == root["id"]
@@ -138,17 +146,21 @@ def test_cli_tree_dot_and_json(tmp_path):
     text = dot.read_text()
     assert text.startswith("digraph task_tree {") and text.rstrip().endswith("}")
     assert text.count("->") == sum(1 for _ in text.splitlines() if "->" in _)
-    rich_result = run_htn("plan", DOMAIN, ROOT / "problems" / "guide_robot.jshop",
-                          "--format", "text", "--tree")
+    rich_result = run_htn(
+        "plan", DOMAIN, ROOT / "problems" / "guide_robot.jshop", "--format", "text", "--tree"
+    )
     assert ":call 2" in rich_result.stdout and "step 5" in rich_result.stdout
 
 
-@pytest.mark.parametrize("problem,length,first_step", [
-    ("bring_coke", 8, "(!say jenny task_accepted)"),
-    ("bring_two", 16, "(!say jenny task_accepted)"),
-    ("bring_to_table", 8, "(!say jenny task_accepted)"),
-    ("guide_to_sofa", 5, "(!move_base jenny home_base entrance)"),
-])
+@pytest.mark.parametrize(
+    "problem,length,first_step",
+    [
+        ("bring_coke", 8, "(!say jenny task_accepted)"),
+        ("bring_two", 16, "(!say jenny task_accepted)"),
+        ("bring_to_table", 8, "(!say jenny task_accepted)"),
+        ("guide_to_sofa", 5, "(!move_base jenny home_base entrance)"),
+    ],
+)
 def test_methods_are_reused_by_other_problems(problem, length, first_step):
     plans = plans_of(problem, trees=False)
     assert plans and all(len(p.steps) == length for p in plans)

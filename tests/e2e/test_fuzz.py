@@ -23,6 +23,7 @@ CI runs a fixed, derandomized sample of ``HTN_FUZZ_EXAMPLES`` inputs (default
 (``-s`` shows the tally of inputs and exit codes at the end; ``HTN_FUZZ_SHOW=1``
 also prints the first line of each error, to see what the mutants provoke.)
 """
+
 from __future__ import annotations
 
 import json
@@ -40,7 +41,7 @@ from hypothesis import strategies as st
 from conftest import CORPUS, FUNCTIONS, ROOT, SHARED, corpus_available, run_htn
 from fuzz_mutations import mutants
 
-sys.setrecursionlimit(max(sys.getrecursionlimit(), 20000))   # as htn's main() does
+sys.setrecursionlimit(max(sys.getrecursionlimit(), 20000))  # as htn's main() does
 EXAMPLES = int(os.environ.get("HTN_FUZZ_EXAMPLES", "500"))
 RANDOM = bool(os.environ.get("HTN_FUZZ_RANDOM"))
 IPC = SHARED / "corpus" / "ipc2020-to"
@@ -48,7 +49,7 @@ VERDICTS = SHARED / "corpus" / "ipc-verdicts" / "ipc2020-to"
 LOCATED = re.compile(r"^[^\n]+:\d+:\d+: ")
 
 FUNCTION_FILES = {"freecell": FUNCTIONS / "freecell.py", "test": FUNCTIONS / "test.py"}
-SLOW = {"blocks-problem", "rover"}        # seconds per plan: their mutants mostly time out
+SLOW = {"blocks-problem", "rover"}  # seconds per plan: their mutants mostly time out
 
 
 def _cases() -> list[tuple[Path, Path, Path | None, Path | None]]:
@@ -61,13 +62,19 @@ def _cases() -> list[tuple[Path, Path, Path | None, Path | None]]:
             stats = json.loads((folder / "stats.json").read_text())
             plans = folder / "plans-first.txt"
             if "Plan cost:" not in plans.read_text():
-                plans = None                    # JSHOP2 found none: nothing to validate
-            cases.append((folder / stats["domain_file"], folder / stats["problem_file"],
-                          FUNCTION_FILES.get(folder.name), plans))
+                plans = None  # JSHOP2 found none: nothing to validate
+            cases.append(
+                (
+                    folder / stats["domain_file"],
+                    folder / stats["problem_file"],
+                    FUNCTION_FILES.get(folder.name),
+                    plans,
+                )
+            )
     if IPC.is_dir():
         for folder in sorted(p for p in IPC.iterdir() if p.is_dir()):
             problem = sorted(folder.glob("p*.hddl"))[0]
-            plan = VERDICTS / folder.name / f"{problem.stem}.plan"     # IPC format
+            plan = VERDICTS / folder.name / f"{problem.stem}.plan"  # IPC format
             cases.append((folder / "domain.hddl", problem, None, plan if plan.is_file() else None))
     for problem in sorted((ROOT / "problems").glob("*.jshop")):
         domain = re.search(r"\(defproblem\s+\S+\s+(\S+)", problem.read_text()).group(1)
@@ -84,13 +91,20 @@ TALLY: Counter = Counter()
 def _report():
     yield
     if TALLY:
-        print(f"\nfuzz: {sum(v for k, v in TALLY.items() if k.startswith('exit'))} inputs; "
-              + ", ".join(f"{k} {v}" for k, v in sorted(TALLY.items())))
+        print(
+            f"\nfuzz: {sum(v for k, v in TALLY.items() if k.startswith('exit'))} inputs; "
+            + ", ".join(f"{k} {v}" for k, v in sorted(TALLY.items()))
+        )
 
 
 @pytest.mark.skipif(not CASES, reason="no example files")
-@settings(max_examples=EXAMPLES, deadline=None, derandomize=not RANDOM, database=None,
-          suppress_health_check=list(HealthCheck))
+@settings(
+    max_examples=EXAMPLES,
+    deadline=None,
+    derandomize=not RANDOM,
+    database=None,
+    suppress_health_check=list(HealthCheck),
+)
 @pytest.mark.slow
 @given(data=st.data())
 def test_every_mutant_gets_a_clean_answer(tmp_path_factory, data):
@@ -98,19 +112,26 @@ def test_every_mutant_gets_a_clean_answer(tmp_path_factory, data):
     which = data.draw(st.sampled_from(["domain", "problem", "both"]), label="mutate")
     folder = tmp_path_factory.mktemp("mutant")
     d, p = folder / domain.name, folder / (problem.name + ".p")
-    d.write_bytes(data.draw(mutants(domain.read_text()), label="domain")
-                  if which != "problem" else domain.read_bytes())
-    p.write_bytes(data.draw(mutants(problem.read_text()), label="problem")
-                  if which != "domain" else problem.read_bytes())
+    d.write_bytes(
+        data.draw(mutants(domain.read_text()), label="domain")
+        if which != "problem"
+        else domain.read_bytes()
+    )
+    p.write_bytes(
+        data.draw(mutants(problem.read_text()), label="problem")
+        if which != "domain"
+        else problem.read_bytes()
+    )
     extra = ["--functions", functions] if functions else []
-    command = data.draw(st.sampled_from(["plan", "plan", "plan", "validate"] if plans
-                                        else ["plan"]), label="command")
+    command = data.draw(
+        st.sampled_from(["plan", "plan", "plan", "validate"] if plans else ["plan"]),
+        label="command",
+    )
     if command == "plan":
         formats = ["jshop", "json", "text"] + (["ipc"] if domain.suffix == ".hddl" else [])
         fmt = data.draw(st.sampled_from(formats), label="format")
         how = data.draw(st.sampled_from([["-n", "1"], ["-n", "3"], ["--all"]]), label="plans")
-        argv = ["plan", d, p, "-f", fmt, *how, "--timeout", "0.5", "-o", folder / "out.txt",
-                *extra]
+        argv = ["plan", d, p, "-f", fmt, *how, "--timeout", "0.5", "-o", folder / "out.txt", *extra]
     else:
         argv = ["validate", d, p, plans, *extra]
     # run_htn fails the test (inprocess.LeakedState) if the command leaves
@@ -118,7 +139,7 @@ def test_every_mutant_gets_a_clean_answer(tmp_path_factory, data):
     # compiled code of each mutant (a new domain) as a process's end would
     r = run_htn(*argv)
     code, err = r.returncode, r.stderr
-    blocked = signal.pthread_sigmask(signal.SIG_BLOCK, ())     # and nothing is blocked now
+    blocked = signal.pthread_sigmask(signal.SIG_BLOCK, ())  # and nothing is blocked now
     assert not blocked & {signal.SIGINT, signal.SIGTERM, signal.SIGALRM}, blocked
     TALLY[f"exit {code}"] += 1
     TALLY[command] += 1

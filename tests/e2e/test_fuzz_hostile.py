@@ -24,6 +24,7 @@ time: the offline run is nice'd on a shared machine). CI runs ``HTN_FUZZ_EXAMPLE
 (default 200) derandomized inputs in this process; the offline run is
 ``benchmarks/fuzz_offline.sh`` (fresh seeds, in chunks).
 """
+
 from __future__ import annotations
 
 import builtins
@@ -53,33 +54,59 @@ DOMAIN = """(defdomain d (
 PROBLEM = "(defproblem p d () ((travel home) (travel work)))"
 GOOD = "def f(x):\n    return 1\ndef ok(v):\n    return 1\n"
 
-EXCEPTIONS = sorted(n for n, v in vars(builtins).items()
-                    if isinstance(v, type) and issubclass(v, BaseException)
-                    and n not in ("BaseExceptionGroup", "ExceptionGroup"))
-JUNK = ["object()", "float('nan')", "10 ** 400", "[[[[]]]] * 3", "type('S', (str,), "
-        "{'lower': lambda s: 1 / 0, '__repr__': lambda s: 1 / 0})('x')",
-        "type('F', (float,), {'__float__': lambda s: 1 / 0})(2.0)", "{'a': 1}", "b'x'",
-        "(lambda: 0)", "'x' * 100000", "list(range(100000))", "True", "None", "-0.0"]
-SWALLOW = ("import time\ndef f(x):\n    while True:\n        try:\n            time.sleep(0.05)\n"
-           "        except BaseException:\n            pass\ndef ok(v):\n    return 1\n")
+EXCEPTIONS = sorted(
+    n
+    for n, v in vars(builtins).items()
+    if isinstance(v, type)
+    and issubclass(v, BaseException)
+    and n not in ("BaseExceptionGroup", "ExceptionGroup")
+)
+JUNK = [
+    "object()",
+    "float('nan')",
+    "10 ** 400",
+    "[[[[]]]] * 3",
+    "type('S', (str,), {'lower': lambda s: 1 / 0, '__repr__': lambda s: 1 / 0})('x')",
+    "type('F', (float,), {'__float__': lambda s: 1 / 0})(2.0)",
+    "{'a': 1}",
+    "b'x'",
+    "(lambda: 0)",
+    "'x' * 100000",
+    "list(range(100000))",
+    "True",
+    "None",
+    "-0.0",
+]
+SWALLOW = (
+    "import time\ndef f(x):\n    while True:\n        try:\n            time.sleep(0.05)\n"
+    "        except BaseException:\n            pass\ndef ok(v):\n    return 1\n"
+)
 CLOSE_1 = "import os\nos.close(1)\n" + GOOD
-PROCESS_KINDS = {"swallow": SWALLOW, "close fd 1": CLOSE_1,
-                 "loop at import, swallowing": "while True:\n    try:\n        pass\n"
-                                               "    except BaseException:\n        pass\n"}
+PROCESS_KINDS = {
+    "swallow": SWALLOW,
+    "close fd 1": CLOSE_1,
+    "loop at import, swallowing": "while True:\n    try:\n        pass\n"
+    "    except BaseException:\n        pass\n",
+}
 
 
 @st.composite
 def functions_files(draw) -> tuple[str, str]:
     """(kind, source) of a hostile (or ordinary) functions file."""
-    kind = draw(st.sampled_from(["good", "raise at import", "raise in f", "raise in ok",
-                                 "loop at import", "junk"]))
+    kind = draw(
+        st.sampled_from(
+            ["good", "raise at import", "raise in f", "raise in ok", "loop at import", "junk"]
+        )
+    )
     if kind == "good":
         return kind, GOOD
     if kind == "loop at import":
         return kind, "while True:\n    pass\n" + GOOD
     if kind == "junk":
-        return kind, f"def f(x):\n    return {draw(st.sampled_from(JUNK))}\ndef ok(v):\n" \
-                     "    return 1\n"
+        return (
+            kind,
+            f"def f(x):\n    return {draw(st.sampled_from(JUNK))}\ndef ok(v):\n    return 1\n",
+        )
     exc = draw(st.sampled_from(EXCEPTIONS))
     raising = f"raise {exc}" if exc != "SystemExit" else "raise SystemExit(3)"
     if kind == "raise at import":
@@ -89,17 +116,51 @@ def functions_files(draw) -> tuple[str, str]:
     return f"{kind} {exc}", body
 
 
-TIMEOUTS = ["0.5", "2", "inf", "1e300", "Infinity", "nan", "0", "-1", "-inf", "1e-9", "soon",
-            "", "0x10", "1_0"]
-PATHS = ["fresh", "domain", "link to domain", "problem", "functions", "other output", "fifo",
-         "/dev/null", "folder", "-", "missing folder"]
+TIMEOUTS = [
+    "0.5",
+    "2",
+    "inf",
+    "1e300",
+    "Infinity",
+    "nan",
+    "0",
+    "-1",
+    "-inf",
+    "1e-9",
+    "soon",
+    "",
+    "0x10",
+    "1_0",
+]
+PATHS = [
+    "fresh",
+    "domain",
+    "link to domain",
+    "problem",
+    "functions",
+    "other output",
+    "fifo",
+    "/dev/null",
+    "folder",
+    "-",
+    "missing folder",
+]
 
 
 def _path(kind: str, folder, d, p, fns, other):
-    return {"fresh": folder / "out.txt", "domain": d, "problem": p, "functions": fns,
-            "link to domain": folder / "alias", "other output": other, "fifo": folder / "fifo",
-            "/dev/null": "/dev/null", "folder": folder, "-": "-",
-            "missing folder": folder / "no" / "x.txt"}[kind]
+    return {
+        "fresh": folder / "out.txt",
+        "domain": d,
+        "problem": p,
+        "functions": fns,
+        "link to domain": folder / "alias",
+        "other output": other,
+        "fifo": folder / "fifo",
+        "/dev/null": "/dev/null",
+        "folder": folder,
+        "-": "-",
+        "missing folder": folder / "no" / "x.txt",
+    }[kind]
 
 
 TALLY: Counter = Counter()
@@ -109,8 +170,10 @@ TALLY: Counter = Counter()
 def _report():
     yield
     if TALLY:
-        print(f"\nfuzz-hostile: {sum(v for k, v in TALLY.items() if k.startswith('exit'))} "
-              "inputs; " + ", ".join(f"{k} {v}" for k, v in sorted(TALLY.items())))
+        print(
+            f"\nfuzz-hostile: {sum(v for k, v in TALLY.items() if k.startswith('exit'))} "
+            "inputs; " + ", ".join(f"{k} {v}" for k, v in sorted(TALLY.items()))
+        )
 
 
 def _setup(folder, source: str):
@@ -128,8 +191,9 @@ def _children_cpu() -> float:
     return usage.ru_utime + usage.ru_stime
 
 
-def _check(r, argv, inputs: dict, limit: float | None, began: float, kind: str,
-           cpu_before: float = 0.0) -> None:
+def _check(
+    r, argv, inputs: dict, limit: float | None, began: float, kind: str, cpu_before: float = 0.0
+) -> None:
     code, err = r.returncode, r.stderr
     TALLY[f"exit {code}"] += 1
     assert code in (0, 1, 2), (argv, code, err)
@@ -137,8 +201,11 @@ def _check(r, argv, inputs: dict, limit: float | None, began: float, kind: str,
     if code == 2:
         # at a line, at a whole file (an output path, a file that cannot be
         # read), or a usage error of an option
-        assert LOCATED.match(err) or USAGE.search(err) or \
-            any(err.startswith(f"{a}: ") for a in [*argv[1:], "standard output"]), (argv, err)
+        assert (
+            LOCATED.match(err)
+            or USAGE.search(err)
+            or any(err.startswith(f"{a}: ") for a in [*argv[1:], "standard output"])
+        ), (argv, err)
     for path, data in inputs.items():
         assert path.read_bytes() == data, f"{path} changed: {argv}"
     if limit is not None:
@@ -150,8 +217,14 @@ def _check(r, argv, inputs: dict, limit: float | None, began: float, kind: str,
 
 
 @pytest.mark.slow
-@settings(max_examples=EXAMPLES, deadline=None, derandomize=not RANDOM, database=None,
-          suppress_health_check=list(HealthCheck), phases=PHASES)
+@settings(
+    max_examples=EXAMPLES,
+    deadline=None,
+    derandomize=not RANDOM,
+    database=None,
+    suppress_health_check=list(HealthCheck),
+    phases=PHASES,
+)
 @given(data=st.data())
 def test_hostile_options_and_functions_get_a_clean_answer(tmp_path_factory, data):
     folder = tmp_path_factory.mktemp("hostile")
@@ -165,11 +238,16 @@ def test_hostile_options_and_functions_get_a_clean_answer(tmp_path_factory, data
     TALLY[kind.split(" ")[0] if in_process else f"process: {kind}"] += 1
     timeout = data.draw(st.sampled_from(TIMEOUTS if in_process else ["1", "2"]), label="timeout")
     if kind.startswith("loop") and timeout not in ("0.5", "2", "1e-9", "1", "2"):
-        timeout = "0.5"     # a loop at import ends by the deadline alone
+        timeout = "0.5"  # a loop at import ends by the deadline alone
     other = folder / "other.dot"
     out = _path(data.draw(st.sampled_from(PATHS), label="-o"), folder, d, p, fns, other)
-    dot = _path(data.draw(st.sampled_from(PATHS), label="--dot"), folder, d, p, fns,
-                folder / "out.txt") if data.draw(st.booleans(), label="dot?") else None
+    dot = (
+        _path(
+            data.draw(st.sampled_from(PATHS), label="--dot"), folder, d, p, fns, folder / "out.txt"
+        )
+        if data.draw(st.booleans(), label="dot?")
+        else None
+    )
     argv = ["plan", d, p, "--functions", fns, "--timeout", timeout, "-o", out]
     argv += ["--dot", dot] if dot is not None else []
     inputs = {x: x.read_bytes() for x in (d, p, fns)}
@@ -179,21 +257,25 @@ def test_hostile_options_and_functions_get_a_clean_answer(tmp_path_factory, data
         limit = None
     else:
         r = run_htn_process(*argv, timeout=120)
-        limit = float(timeout) + 3      # the watchdog's grace, and a process's start
+        limit = float(timeout) + 3  # the watchdog's grace, and a process's start
     _check(r, argv, inputs, limit, began, kind, cpu_before)
 
 
-FIELDS = {"seed": ["x", 1.5, -1, 2 ** 70, None, [], True],
-          "plan_index": [0, -1, 2, 1.0, "1", None, True, 10 ** 12],
-          "faults": [3, [], {"slip": 1}, "effect=2", "effect=x", "nosuch=0.5", None, "e" * 10_000],
-          "retries": [[1], {"!go": -1}, {"!go": "x"}, {"!nosuch": 1}, "x", None, {"": 1}],
-          "replan": ["yes", 1, None, []],
-          "robot": [None, 3, "", "nosuch", "symbolic" * 100],
-          "plan": [None, 3, "", "/nonexistent", ["a"], "x\x00y"],
-          "plan_sha256": [7, "0" * 64, "xyz", None],
-          "domain": [None, 3, "/nonexistent"], "problem": [3, "/nonexistent"],
-          "domain_sha256": ["0" * 64, 5], "functions": ["/nonexistent", 3],
-          "functions_sha256": ["0" * 64, "g" * 64]}
+FIELDS = {
+    "seed": ["x", 1.5, -1, 2**70, None, [], True],
+    "plan_index": [0, -1, 2, 1.0, "1", None, True, 10**12],
+    "faults": [3, [], {"slip": 1}, "effect=2", "effect=x", "nosuch=0.5", None, "e" * 10_000],
+    "retries": [[1], {"!go": -1}, {"!go": "x"}, {"!nosuch": 1}, "x", None, {"": 1}],
+    "replan": ["yes", 1, None, []],
+    "robot": [None, 3, "", "nosuch", "symbolic" * 100],
+    "plan": [None, 3, "", "/nonexistent", ["a"], "x\x00y"],
+    "plan_sha256": [7, "0" * 64, "xyz", None],
+    "domain": [None, 3, "/nonexistent"],
+    "problem": [3, "/nonexistent"],
+    "domain_sha256": ["0" * 64, 5],
+    "functions": ["/nonexistent", 3],
+    "functions_sha256": ["0" * 64, "g" * 64],
+}
 
 
 @pytest.fixture(scope="module")
@@ -209,15 +291,22 @@ def logged(tmp_path_factory):
 
 
 @pytest.mark.slow
-@settings(max_examples=EXAMPLES, deadline=None, derandomize=not RANDOM, database=None,
-          suppress_health_check=list(HealthCheck), phases=PHASES)
+@settings(
+    max_examples=EXAMPLES,
+    deadline=None,
+    derandomize=not RANDOM,
+    database=None,
+    suppress_health_check=list(HealthCheck),
+    phases=PHASES,
+)
 @given(data=st.data())
 def test_edited_logs_get_a_clean_answer(logged, data):
     folder, fns, text = logged
     lines = text.splitlines()
     header = json.loads(lines[0])
-    how = data.draw(st.sampled_from(["field", "field", "field", "drop", "cut", "bytes"]),
-                    label="edit")
+    how = data.draw(
+        st.sampled_from(["field", "field", "field", "drop", "cut", "bytes"]), label="edit"
+    )
     if how == "field":
         field = data.draw(st.sampled_from(sorted(FIELDS)), label="field")
         header[field] = data.draw(st.sampled_from(FIELDS[field]), label="value")
@@ -228,7 +317,7 @@ def test_edited_logs_get_a_clean_answer(logged, data):
     else:
         at = data.draw(st.integers(0, len(lines[0])), label="at")
         edited = text[:at] if how == "cut" else text[:at] + "\udcff" + text[at:]
-    log = folder / f"edited-{data.draw(st.integers(0, 10 ** 9), label='name')}.jsonl"
+    log = folder / f"edited-{data.draw(st.integers(0, 10**9), label='name')}.jsonl"
     log.write_bytes(edited.encode("utf-8", "surrogateescape"))
     given_functions = data.draw(st.booleans(), label="--functions?")
     argv = ["run", "--from-log", log, "-q", *(["--functions", fns] if given_functions else [])]

@@ -10,6 +10,7 @@ on one core). ``benchmarks/fuzz_long.py`` runs the same generator with fresh
 seeds for as many inputs as asked, and sums the tallies this test writes to
 ``HTN_FUZZ_TALLY`` (a file, one JSON object per run of the test).
 """
+
 from __future__ import annotations
 
 import json
@@ -35,8 +36,10 @@ def _report():
     yield
     if not TALLY:
         return
-    print(f"\nfuzz-inputs: {sum(v for k, v in TALLY.items() if k.startswith('exit '))} "
-          "inputs; " + ", ".join(f"{k} {v}" for k, v in sorted(TALLY.items())))
+    print(
+        f"\nfuzz-inputs: {sum(v for k, v in TALLY.items() if k.startswith('exit '))} "
+        "inputs; " + ", ".join(f"{k} {v}" for k, v in sorted(TALLY.items()))
+    )
     if os.environ.get("HTN_FUZZ_TALLY"):
         with open(os.environ["HTN_FUZZ_TALLY"], "a", encoding="utf-8") as fh:
             fh.write(json.dumps(dict(TALLY)) + "\n")
@@ -62,23 +65,31 @@ def plan_files(tmp_path_factory):
                 base.mkdir(parents=True, exist_ok=True)
                 (base / f"d.{ext}").write_text(d)
                 (base / f"p.{ext}").write_text(p)
-                r = run_htn("plan", base / f"d.{ext}", base / f"p.{ext}", "-o", out,
-                            "--timeout", "3")
+                r = run_htn(
+                    "plan", base / f"d.{ext}", base / f"p.{ext}", "-o", out, "--timeout", "3"
+                )
                 if r.returncode != 0:
                     none.touch()
             made[name] = out if out.is_file() else None
         return made[name]
+
     return plan_of
 
 
 @pytest.mark.slow
-@settings(max_examples=EXAMPLES, deadline=None, derandomize=not RANDOM, database=None,
-          suppress_health_check=list(HealthCheck), phases=PHASES)
+@settings(
+    max_examples=EXAMPLES,
+    deadline=None,
+    derandomize=not RANDOM,
+    database=None,
+    suppress_health_check=list(HealthCheck),
+    phases=PHASES,
+)
 @given(inp=inputs())
 def test_every_input_gets_a_clean_answer(tmp_path_factory, plan_files, inp):
     plan_file = plan_files(inp.case) if inp.command in ("run", "validate") else None
     if inp.command in ("run", "validate") and plan_file is None:
-        inp.command = "plan"       # the example has no plan in time: plan it instead
+        inp.command = "plan"  # the example has no plan in time: plan it instead
     folder = tmp_path_factory.mktemp("input")
     for name, data in inp.files.items():
         (folder / name).write_bytes(data)
@@ -94,12 +105,15 @@ def test_every_input_gets_a_clean_answer(tmp_path_factory, plan_files, inp):
     TALLY[f"command {inp.command}"] += 1
     if took > 1.5 and os.environ.get("HTN_FUZZ_SLOW"):
         import shutil
+
         keep = shutil.copytree(folder, os.path.join(os.environ["HTN_FUZZ_SLOW"], folder.name))
         with open(os.path.join(keep, "argv.txt"), "w") as fh:
             fh.write(" ".join(map(str, argv)) + f"\n{took} {r.returncode}\n{r.stderr}")
     if os.environ.get("HTN_FUZZ_SHOW"):
-        print(f"{took:6.2f}s exit {r.returncode} {inp.kind:14} {inp.command:9} {inp.detail[:60]} "
-              f"{' '.join(map(str, inp.options))[:40]} | {r.stderr.strip()[-100:]!r}")
+        print(
+            f"{took:6.2f}s exit {r.returncode} {inp.kind:14} {inp.command:9} {inp.detail[:60]} "
+            f"{' '.join(map(str, inp.options))[:40]} | {r.stderr.strip()[-100:]!r}"
+        )
     problem = verdict(r.returncode, r.stderr, files)
     assert problem is None, (problem, inp.kind, inp.detail, argv, r.stderr[-1500:])
     for f, data in before.items():

@@ -14,6 +14,7 @@ virtualenv would give the base interpreter's), so that htn's dependencies
 need no download; htn itself is installed from a wheel of this checkout, and
 the guide's plugin with pip, from its folder.
 """
+
 from __future__ import annotations
 
 import os
@@ -29,8 +30,11 @@ from coffee import COFFEE, COFFEE_HDDL, MORNING, MORNING_HDDL
 from conftest import ROOT
 
 GUIDE = ROOT / "docs" / "guide.md"
-MARK = re.compile(r"<!-- (file: (?P<file>\S+)|run(: exit (?P<exit>\d+))?|output) -->\n"
-                  r"```[a-z]*\n(?P<body>.*?)```\n", re.S)
+MARK = re.compile(
+    r"<!-- (file: (?P<file>\S+)|run(: exit (?P<exit>\d+))?|output) -->\n"
+    r"```[a-z]*\n(?P<body>.*?)```\n",
+    re.S,
+)
 
 
 def guide_blocks(text: str) -> list[tuple[str, str, str]]:
@@ -68,18 +72,38 @@ def venv(tmp_path_factory, checkout_wheel) -> Path:
     base = tmp_path_factory.mktemp("venv")
     venv = base / "venv"
     assert subprocess.run([sys.executable, "-m", "venv", venv], timeout=600).returncode == 0
-    site = Path(subprocess.run([venv / "bin" / "python", "-c",
-                                "import sysconfig; print(sysconfig.get_paths()['purelib'])"],
-                               capture_output=True, text=True).stdout.strip())
+    site = Path(
+        subprocess.run(
+            [
+                venv / "bin" / "python",
+                "-c",
+                "import sysconfig; print(sysconfig.get_paths()['purelib'])",
+            ],
+            capture_output=True,
+            text=True,
+        ).stdout.strip()
+    )
     here = sysconfig.get_paths()["purelib"]
     (site / "htn-test-parent-site.pth").write_text(f"import site; site.addsitedir({here!r})\n")
     wheel = checkout_wheel
     # --ignore-installed: the parent site may hold htn of the same version (a
     # non-editable install, as CI makes), and pip would then skip the wheel and
     # leave the venv without its own htn and htn command.
-    r = subprocess.run([venv / "bin" / "python", "-m", "pip", "install", "-q", "--no-deps",
-                        "--ignore-installed", wheel],
-                       capture_output=True, text=True, timeout=600)
+    r = subprocess.run(
+        [
+            venv / "bin" / "python",
+            "-m",
+            "pip",
+            "install",
+            "-q",
+            "--no-deps",
+            "--ignore-installed",
+            wheel,
+        ],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     assert r.returncode == 0, r.stdout + r.stderr
     assert (venv / "bin" / "htn").is_file()
     return venv
@@ -100,8 +124,9 @@ def test_the_guide_runs_from_a_folder_outside_the_checkout(venv, tmp_path):
             path.parent.mkdir(parents=True, exist_ok=True)
             path.write_text(body)
         elif kind == "run":
-            r = subprocess.run(["bash", "-c", body], cwd=work, env=env, capture_output=True,
-                               text=True, timeout=900)
+            r = subprocess.run(
+                ["bash", "-c", body], cwd=work, env=env, capture_output=True, text=True, timeout=900
+            )
             printed = r.stdout + r.stderr
             assert r.returncode == int(what), f"{body}\nexit {r.returncode}:\n{printed}"
             assert "Traceback" not in printed, printed

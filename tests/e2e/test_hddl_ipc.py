@@ -6,6 +6,7 @@ naming another domain (Barman-BDI), keywords glued to parentheses
 variable (Entertainment), which the loop check must bound. Every plan is
 checked with ``htn validate``, in both formats, and with the competition's
 verifier where it is installed."""
+
 from __future__ import annotations
 
 import json
@@ -22,8 +23,11 @@ def _plan(tmp_path, oracle, domain: str, problem: str, *extra):
     plan_file = tmp_path / "plan.txt"
     result = run_htn("plan", d, p, "-f", "ipc", "-o", plan_file, "--timeout", "60", *extra)
     assert result.returncode == 0, result.stderr
-    steps = [tuple(line.strip("()").replace("!", "", 1).split())
-             for line in plan_file.read_text().splitlines() if line.startswith("(")]
+    steps = [
+        tuple(line.strip("()").replace("!", "", 1).split())
+        for line in plan_file.read_text().splitlines()
+        if line.startswith("(")
+    ]
     check_ipc_decomposition(result.stdout, d, p, steps)
     valid = run_htn("validate", d, p, plan_file)
     assert valid.returncode == 0, valid.stdout + valid.stderr
@@ -61,9 +65,13 @@ def test_infix_ordering_constraints_order_the_subtasks(tmp_path, ipc_oracle):
 
 
 def test_subtasks_without_ordering_are_taken_as_written(tmp_path, ipc_oracle):
-    domain = STEPS.replace("(:method m-all", "(:method m-unused").replace(
-        "(:task all :parameters ())", "(:task all :parameters ()) (:task none :parameters ())"
-    ).replace(":task (all)\n    :subtasks (and (c", ":task (none)\n    :subtasks (and (c")
+    domain = (
+        STEPS.replace("(:method m-all", "(:method m-unused")
+        .replace(
+            "(:task all :parameters ())", "(:task all :parameters ()) (:task none :parameters ())"
+        )
+        .replace(":task (all)\n    :subtasks (and (c", ":task (none)\n    :subtasks (and (c")
+    )
     _, steps = _plan(tmp_path, ipc_oracle, domain, STEPS_PROBLEM)
     assert steps == [("mark", "b"), ("mark", "a")]
 
@@ -119,9 +127,11 @@ CHAIN = """(define (domain chain)
 
 def _chain_problem(n: int, wires: list, tasks: str) -> str:
     nodes = " ".join(f"n{i}" for i in range(n))
-    return (f"(define (problem p) (:domain chain) (:objects {nodes} - node)\n"
-            f"  (:htn :parameters () :ordered-subtasks (and {tasks}))\n"
-            f"  (:init {' '.join(f'(wire n{a} n{b})' for a, b in wires)}))\n")
+    return (
+        f"(define (problem p) (:domain chain) (:objects {nodes} - node)\n"
+        f"  (:htn :parameters () :ordered-subtasks (and {tasks}))\n"
+        f"  (:init {' '.join(f'(wire n{a} n{b})' for a, b in wires)}))\n"
+    )
 
 
 def test_left_recursion_through_a_free_variable_plans(tmp_path, ipc_oracle):
@@ -136,8 +146,9 @@ def test_left_recursion_through_a_free_variable_is_bounded(tmp_path):
     wires = [(a, b) for a in range(6) for b in range(6) if a != b]
     (tmp_path / "d.hddl").write_text(CHAIN)
     (tmp_path / "p.hddl").write_text(_chain_problem(6, wires, "(link n0 n5) (finish)"))
-    result = run_htn("plan", tmp_path / "d.hddl", tmp_path / "p.hddl", "-f", "json",
-                     "--quiet", "--timeout", "60")
+    result = run_htn(
+        "plan", tmp_path / "d.hddl", tmp_path / "p.hddl", "-f", "json", "--quiet", "--timeout", "60"
+    )
     assert result.returncode == 1
     stats = json.loads(result.stdout.splitlines()[-1])
     assert stats["plans_found"] == 0 and not stats["timed_out"], stats

@@ -5,6 +5,7 @@ construct htn does not support would be refused with a located error); the
 total-order instances are planned and each plan is checked by ``htn
 validate`` and, where installed, by the competition's verifier. Constructs
 the samples do not exercise are checked on small files."""
+
 from __future__ import annotations
 
 import re
@@ -19,8 +20,11 @@ CORPUS = SHARED / "corpus"
 # solve within seconds (Lamps: the recursive play method comes first, so the
 # search explores sequences of moves before it ever ends a game; Snake: the
 # snake's walk to each mouse is a blind search over the grid)
-SEARCH_BOUND = {"Lamps/pfile04.pddl", "Snake/pb-4slots-seed1.snake.hddl",
-                "Snake/pb-5slots-seed1.snake.hddl"}
+SEARCH_BOUND = {
+    "Lamps/pfile04.pddl",
+    "Snake/pb-4slots-seed1.snake.hddl",
+    "Snake/pb-5slots-seed1.snake.hddl",
+}
 
 
 def _pairs(sample: str, slow: frozenset = frozenset()) -> list:
@@ -28,8 +32,9 @@ def _pairs(sample: str, slow: frozenset = frozenset()) -> list:
     those named in ``slow`` are marked so."""
     root = CORPUS / sample
     if not (root / "README.md").is_file():
-        return [pytest.param(None, None, marks=pytest.mark.skip(
-            reason=f"sample not found at {root}"))]
+        return [
+            pytest.param(None, None, marks=pytest.mark.skip(reason=f"sample not found at {root}"))
+        ]
     out = []
     for folder in sorted(p for p in root.iterdir() if p.is_dir()):
         files = sorted(p for p in folder.iterdir() if p.suffix in (".hddl", ".pddl"))
@@ -38,8 +43,14 @@ def _pairs(sample: str, slow: frozenset = frozenset()) -> list:
             stem = problem.name.rsplit(".", 1)[0]
             own = [d for d in domains if d.name == f"{stem}-domain.hddl"]
             name = f"{folder.name}/{problem.name}"
-            out.append(pytest.param((own or domains)[0], problem, id=name,
-                                    marks=[pytest.mark.slow] if name in slow else []))
+            out.append(
+                pytest.param(
+                    (own or domains)[0],
+                    problem,
+                    id=name,
+                    marks=[pytest.mark.slow] if name in slow else [],
+                )
+            )
     return out
 
 
@@ -49,6 +60,7 @@ def test_every_instance_is_read_or_refused_at_a_place(domain, problem):
     from htn.jshop.language.errors import HtnError
     from htn.jshop.readers.checks import check_domain, check_problem
     from htn.jshop.readers.load import load_inputs
+
     try:
         dom, prob = load_inputs(str(domain), str(problem))
         check_domain(dom)
@@ -95,8 +107,12 @@ def _write(tmp_path, problem: str, domain: str = DOMAIN, suffix: str = ".hddl"):
 
 
 def test_a_problem_in_a_pddl_file_is_read_by_content(tmp_path, ipc_oracle):
-    d, p = _write(tmp_path, "(define (problem p) (:domain d) (:objects a - item)\n"
-                            "  (:htn :tasks (and (t a))) (:init))\n", suffix=".pddl")
+    d, p = _write(
+        tmp_path,
+        "(define (problem p) (:domain d) (:objects a - item)\n"
+        "  (:htn :tasks (and (t a))) (:init))\n",
+        suffix=".pddl",
+    )
     result = run_htn("plan", d, p, "-f", "ipc")
     assert result.stdout == "==>\n0 mark a\nroot 1\n1 t a -> m 0\n<==\n", result.stderr
     (tmp_path / "plan.ipc").write_text(result.stdout)
@@ -104,9 +120,11 @@ def test_a_problem_in_a_pddl_file_is_read_by_content(tmp_path, ipc_oracle):
 
 
 def test_the_initial_networks_constraints_hold(tmp_path, ipc_oracle):
-    problem = ("(define (problem p) (:domain d) (:objects a b - item)\n"
-               "  (:htn :ordered-subtasks (and (t a) (mark b)) :constraints (not (= a b)))\n"
-               "  (:init))\n")
+    problem = (
+        "(define (problem p) (:domain d) (:objects a b - item)\n"
+        "  (:htn :ordered-subtasks (and (t a) (mark b)) :constraints (not (= a b)))\n"
+        "  (:init))\n"
+    )
     d, p = _write(tmp_path, problem)
     result = run_htn("plan", d, p, "-f", "ipc")
     assert result.returncode == 0, result.stderr
@@ -121,10 +139,11 @@ def test_the_initial_networks_constraints_hold(tmp_path, ipc_oracle):
 
 def test_a_constant_of_either_type_is_refused(tmp_path):
     domain = DOMAIN.replace("(:types item)", "(:types item tool)").replace(
-        "spare - item", "spare - (either item tool)")
-    d, p = _write(tmp_path, "(define (problem p) (:domain d) (:htn :tasks (t spare)))",
-                  domain)
+        "spare - item", "spare - (either item tool)"
+    )
+    d, p = _write(tmp_path, "(define (problem p) (:domain d) (:htn :tasks (t spare)))", domain)
     result = run_htn("plan", d, p)
     assert result.returncode == 2 and "Traceback" not in result.stderr
-    assert result.stderr.startswith(f"{d}:3:15: constant spare must have one type, "
-                                    "not (either ...)"), result.stderr
+    assert result.stderr.startswith(
+        f"{d}:3:15: constant spare must have one type, not (either ...)"
+    ), result.stderr

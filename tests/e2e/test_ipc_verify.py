@@ -5,6 +5,7 @@ printed and corrupted variants, with the verifier's verdicts), and, on
 small hand-made plans, one defect each, pandaPIparser is a second oracle
 where it is installed. Invalid plans exit 1 with ``plan:line:col:``
 messages; plans that cannot be read exit 2."""
+
 from __future__ import annotations
 
 import csv
@@ -18,14 +19,17 @@ from hypothesis import strategies as st
 from conftest import SHARED, run_htn
 
 VERDICTS = SHARED / "corpus" / "ipc-verdicts"
-sys.setrecursionlimit(max(sys.getrecursionlimit(), 20000))   # as htn's main() does
+sys.setrecursionlimit(max(sys.getrecursionlimit(), 20000))  # as htn's main() does
 
 
 def _verdict_rows():
     table = VERDICTS / "verdicts.tsv"
     if not table.is_file():
-        return [pytest.param(None, marks=pytest.mark.skip(
-            reason=f"verdict corpus not found at {VERDICTS}"))]
+        return [
+            pytest.param(
+                None, marks=pytest.mark.skip(reason=f"verdict corpus not found at {VERDICTS}")
+            )
+        ]
     with open(table, newline="") as fh:
         rows = [r for r in csv.DictReader(fh, delimiter="\t") if r["kept"] == "yes"]
     return [pytest.param(r, id=r["plan_file"]) for r in rows]
@@ -127,45 +131,97 @@ def test_a_plan_htn_prints_is_valid(tmp_path, ipc_oracle):
     assert result.stdout == "plan 1: valid, 1 actions, 2 decompositions\n"
 
 
-@pytest.mark.parametrize("plan,problem,goal,where,message", [
-    # a method's precondition is false where the method is applied: the
-    # problem asks to check first, while the box is still at home
-    (PLAN.replace("root 1 2", "root 2 1"), PROBLEM.replace("(< t1 t2)", "(< t2 t1)"), "",
-     "5:21", "id 2 (check box shop) -> m-check: the method's precondition does not hold "
-             "before action id 0 (line 2), nor earlier where it may be applied: "
-             "(at box shop) has no satisfier"),
-    # ... and after the last action
-    (PLAN.replace("check box shop", "check box home"),
-     PROBLEM.replace("(check box shop)", "(check box home)"), "",
-     "5:21", "the method's precondition does not hold after the last action"),
-    # the goal
-    (PLAN, PROBLEM, "(:goal (at box home))",
-     "6:1", "the goal does not hold in the final state: (at box home) is false"),
-    # a method of another task, a method that does not exist
-    (PLAN.replace("-> m-move", "-> m-check"), PROBLEM, "",
-     "4:20", "method m-check decomposes check, not move"),
-    (PLAN.replace("-> m-move", "-> m-fly"), PROBLEM, "", "4:20", "the domain has no method m-fly"),
-    # an argument that is not of its type, an action the domain does not have
-    (PLAN.replace("0 go box home shop", "0 go box home box"), PROBLEM, "",
-     "2:15", "argument 3 of go, box, is not an object of type place"),
-    (PLAN.replace("0 go box", "0 fly box"), PROBLEM, "", "2:3", "the domain has no action fly"),
-    # the root tasks are not the problem's, in its order
-    (PLAN.replace("root 1 2", "root 2 1"), PROBLEM, "",
-     "3:6", "the root tasks are not the problem's initial task network: (check box shop) is "
+@pytest.mark.parametrize(
+    "plan,problem,goal,where,message",
+    [
+        # a method's precondition is false where the method is applied: the
+        # problem asks to check first, while the box is still at home
+        (
+            PLAN.replace("root 1 2", "root 2 1"),
+            PROBLEM.replace("(< t1 t2)", "(< t2 t1)"),
+            "",
+            "5:21",
+            "id 2 (check box shop) -> m-check: the method's precondition does not hold "
+            "before action id 0 (line 2), nor earlier where it may be applied: "
+            "(at box shop) has no satisfier",
+        ),
+        # ... and after the last action
+        (
+            PLAN.replace("check box shop", "check box home"),
+            PROBLEM.replace("(check box shop)", "(check box home)"),
+            "",
+            "5:21",
+            "the method's precondition does not hold after the last action",
+        ),
+        # the goal
+        (
+            PLAN,
+            PROBLEM,
+            "(:goal (at box home))",
+            "6:1",
+            "the goal does not hold in the final state: (at box home) is false",
+        ),
+        # a method of another task, a method that does not exist
+        (
+            PLAN.replace("-> m-move", "-> m-check"),
+            PROBLEM,
+            "",
+            "4:20",
+            "method m-check decomposes check, not move",
+        ),
+        (
+            PLAN.replace("-> m-move", "-> m-fly"),
+            PROBLEM,
+            "",
+            "4:20",
+            "the domain has no method m-fly",
+        ),
+        # an argument that is not of its type, an action the domain does not have
+        (
+            PLAN.replace("0 go box home shop", "0 go box home box"),
+            PROBLEM,
+            "",
+            "2:15",
+            "argument 3 of go, box, is not an object of type place",
+        ),
+        (PLAN.replace("0 go box", "0 fly box"), PROBLEM, "", "2:3", "the domain has no action fly"),
+        # the root tasks are not the problem's, in its order
+        (
+            PLAN.replace("root 1 2", "root 2 1"),
+            PROBLEM,
+            "",
+            "3:6",
+            "the root tasks are not the problem's initial task network: (check box shop) is "
             "not a subtask of method __top_method that may come here (allowed: t1 (move box "
-            "shop))"),
-    # an id with no line; an id nothing lists
-    (PLAN.replace("-> m-move 0", "-> m-move 7"), PROBLEM, "",
-     "4:27", "subtask id 7 is not defined"),
-    (PLAN.replace("-> m-move 0", "-> m-move"), PROBLEM, "",
-     "2:1", "id 0 (go box home shop) is not reached from the root"),
-    # the method's subtask has other arguments than the listed action
-    (PLAN.replace("0 go box home shop", "0 go box shop home"), PROBLEM, "",
-     "4:27", "(go box shop home) is not a subtask of method m-move that may come here "
-             "(allowed: t1 (go ?t ?a ?p) (?p is already shop))"),
-])
-def test_a_defect_is_found_where_it_is(tmp_path, ipc_oracle, plan, problem, goal, where,
-                                       message):
+            "shop))",
+        ),
+        # an id with no line; an id nothing lists
+        (
+            PLAN.replace("-> m-move 0", "-> m-move 7"),
+            PROBLEM,
+            "",
+            "4:27",
+            "subtask id 7 is not defined",
+        ),
+        (
+            PLAN.replace("-> m-move 0", "-> m-move"),
+            PROBLEM,
+            "",
+            "2:1",
+            "id 0 (go box home shop) is not reached from the root",
+        ),
+        # the method's subtask has other arguments than the listed action
+        (
+            PLAN.replace("0 go box home shop", "0 go box shop home"),
+            PROBLEM,
+            "",
+            "4:27",
+            "(go box shop home) is not a subtask of method m-move that may come here "
+            "(allowed: t1 (go ?t ?a ?p) (?p is already shop))",
+        ),
+    ],
+)
+def test_a_defect_is_found_where_it_is(tmp_path, ipc_oracle, plan, problem, goal, where, message):
     d, p, f = _files(tmp_path, plan, problem, goal)
     result = ipc_oracle.check(d, p, f, valid=False)
     first = _first_error(result)
@@ -194,8 +250,9 @@ BOTH = """(define (problem wp) (:domain w)
 def test_lines_that_list_each_other_apart_from_the_root(tmp_path):
     # pandaPIparser accepts this plan: its check for orphans only asks that
     # every id be listed somewhere, and nothing else visits 3 and 4
-    cycle = PLAN.replace("<==\n", "3 check box shop -> m-again 4\n"
-                                   "4 check box shop -> m-again 3\n<==\n")
+    cycle = PLAN.replace(
+        "<==\n", "3 check box shop -> m-again 4\n4 check box shop -> m-again 3\n<==\n"
+    )
     d, p, f = _files(tmp_path, cycle)
     result = run_htn("validate", d, p, f)
     assert result.returncode == 1
@@ -203,12 +260,13 @@ def test_lines_that_list_each_other_apart_from_the_root(tmp_path):
         f"{f}:6:1: plan 1: id 3 (check box shop) is not reached from the root: it is a subtask "
         "of id 4 (line 7), which is not reached either",
         f"{f}:7:1: plan 1: id 4 (check box shop) is not reached from the root: it is a subtask "
-        "of id 3 (line 6), which is not reached either"]
+        "of id 3 (line 6), which is not reached either",
+    ]
 
 
 def test_unordered_subtasks_may_come_in_any_executable_order(tmp_path, ipc_oracle):
     # m-both's subtasks have no ordering: go then finish is a linearisation
-    plan = ("==>\n0 go box home shop\n1 finish box\nroot 2\n2 both box -> m-both 0 1\n<==\n")
+    plan = "==>\n0 go box home shop\n1 finish box\nroot 2\n2 both box -> m-both 0 1\n<==\n"
     d, p, f = _files(tmp_path, plan, BOTH)
     ipc_oracle.check(d, p, f)
     # listed in the other order, which the method allows as well
@@ -218,8 +276,8 @@ def test_unordered_subtasks_may_come_in_any_executable_order(tmp_path, ipc_oracl
     f.write_text("==>\n0 finish box\n1 go box home shop\nroot 2\n2 both box -> m-both 1 0\n<==\n")
     result = ipc_oracle.check(d, p, f, valid=False)
     assert _first_error(result).startswith(
-        f"{f}:2:3: plan 1: action id 0: precondition of (!finish box) does not hold"), \
-        result.stderr
+        f"{f}:2:3: plan 1: action id 0: precondition of (!finish box) does not hold"
+    ), result.stderr
 
 
 def test_an_action_in_the_initial_task_network(tmp_path, ipc_oracle):
@@ -232,8 +290,9 @@ def test_an_action_in_the_initial_task_network(tmp_path, ipc_oracle):
 
 
 def test_a_network_with_parameters_has_the_top_root(tmp_path, ipc_oracle):
-    problem = BOTH.replace("(:htn :subtasks (both box))",
-                           "(:htn :parameters (?x - thing) :subtasks (both ?x))")
+    problem = BOTH.replace(
+        "(:htn :subtasks (both box))", "(:htn :parameters (?x - thing) :subtasks (both ?x))"
+    )
     d, p, f = _files(tmp_path, "", problem)
     plan = run_htn("plan", d, p, "-f", "ipc")
     assert "root 2\n2 __top -> __top_method 3\n3 both box -> m-both 0 1\n" in plan.stdout
@@ -253,14 +312,28 @@ def test_every_plan_of_a_file_and_one_of_them(tmp_path):
     assert third.returncode == 2 and "the file holds 2 plan(s)" in third.stderr
 
 
-@pytest.mark.parametrize("plan,where,message", [
-    (PLAN.replace("<==\n", ""), "1:1", "the plan of line 1 does not end with '<=='"),
-    (PLAN.replace("0 go", "x go"), "2:1", "expected a task id (a number 0, 1, ...), found 'x'"),
-    (PLAN.replace("root 1 2\n", ""), "3:17", "a decomposition line ('->') before the 'root' line"),
-    (PLAN.replace("-> m-move 0", "m-move 0"), "4:25",
-     "a decomposition line needs '-> METHOD SUBTASK-IDS' after the task"),
-    (PLAN.replace("<==\n", "root 3\n<==\n"), "6:1", "a second 'root' line (the first is line 3)"),
-])
+@pytest.mark.parametrize(
+    "plan,where,message",
+    [
+        (PLAN.replace("<==\n", ""), "1:1", "the plan of line 1 does not end with '<=='"),
+        (PLAN.replace("0 go", "x go"), "2:1", "expected a task id (a number 0, 1, ...), found 'x'"),
+        (
+            PLAN.replace("root 1 2\n", ""),
+            "3:17",
+            "a decomposition line ('->') before the 'root' line",
+        ),
+        (
+            PLAN.replace("-> m-move 0", "m-move 0"),
+            "4:25",
+            "a decomposition line needs '-> METHOD SUBTASK-IDS' after the task",
+        ),
+        (
+            PLAN.replace("<==\n", "root 3\n<==\n"),
+            "6:1",
+            "a second 'root' line (the first is line 3)",
+        ),
+    ],
+)
 def test_an_unreadable_plan_is_exit_2(tmp_path, plan, where, message):
     d, p, f = _files(tmp_path, plan)
     result = run_htn("validate", d, p, f)
@@ -280,13 +353,21 @@ def test_an_ipc_plan_needs_an_hddl_domain(tmp_path):
     assert "an IPC plan is checked against an HDDL domain and problem" in result.stderr
 
 
-PLAN_LINES = st.lists(st.sampled_from(PLAN.splitlines()) | st.text(
-    alphabet=st.sampled_from(list("0123 ->()<=\n\tabgo")), max_size=12), max_size=8)
+PLAN_LINES = st.lists(
+    st.sampled_from(PLAN.splitlines())
+    | st.text(alphabet=st.sampled_from(list("0123 ->()<=\n\tabgo")), max_size=12),
+    max_size=8,
+)
 
 
 @pytest.mark.slow
-@settings(max_examples=150, deadline=None, derandomize=True, database=None,
-          suppress_health_check=list(HealthCheck))
+@settings(
+    max_examples=150,
+    deadline=None,
+    derandomize=True,
+    database=None,
+    suppress_health_check=list(HealthCheck),
+)
 @given(edit=st.data())
 def test_a_mutated_ipc_plan_gets_a_clean_answer(tmp_path_factory, edit):
     """Lines dropped, repeated, moved and replaced by noise: exit 0, 1 or 2,
@@ -294,7 +375,7 @@ def test_a_mutated_ipc_plan_gets_a_clean_answer(tmp_path_factory, edit):
     lines = PLAN.splitlines()
     k = edit.draw(st.integers(0, len(lines)), label="at")
     cut = edit.draw(st.integers(0, 3), label="cut")
-    lines[k:k + cut] = edit.draw(PLAN_LINES, label="new lines")
+    lines[k : k + cut] = edit.draw(PLAN_LINES, label="new lines")
     folder = tmp_path_factory.mktemp("ipc")
     d, p, f = _files(folder, "\n".join(lines) + "\n")
     r = run_htn("validate", d, p, f)

@@ -4,6 +4,7 @@ Each virtualenv is real (``python -m venv``) and gets the wheel built from
 this checkout plus its dependencies from the package index; the commands run
 from a folder outside the checkout.
 """
+
 from __future__ import annotations
 
 import json
@@ -31,9 +32,11 @@ BASIC_PROBLEM = "(defproblem problem basic ((have kiwi)) ((swap banjo kiwi)))\n"
 # one xdist worker builds the wheel (in the checkout's build/) for all of them
 pytestmark = [pytest.mark.slow, pytest.mark.xdist_group("wheel")]
 
+
 def sh(*args, cwd, env=None, timeout=600):
-    return subprocess.run([str(a) for a in args], cwd=cwd, capture_output=True, text=True,
-                          timeout=timeout, env=env)
+    return subprocess.run(
+        [str(a) for a in args], cwd=cwd, capture_output=True, text=True, timeout=timeout, env=env
+    )
 
 
 class Venv:
@@ -81,24 +84,40 @@ def elsewhere(tmp_path) -> Path:
 
 
 # the package data a command reads at run time, as the checkout holds it
-DATA = ["jshop/readers/*.lark", "domains/*.jshop", "domains/*.toml", "problems/*.jshop",
-        "transform/*.jshop", "view/static/*", "ros/interfaces/*/package.xml",
-        "ros/interfaces/*/CMakeLists.txt", "ros/interfaces/*/*/*.msg",
-        "ros/interfaces/*/*/*.srv", "ros/interfaces/*/*/*.action"]
+DATA = [
+    "jshop/readers/*.lark",
+    "domains/*.jshop",
+    "domains/*.toml",
+    "problems/*.jshop",
+    "transform/*.jshop",
+    "view/static/*",
+    "ros/interfaces/*/package.xml",
+    "ros/interfaces/*/CMakeLists.txt",
+    "ros/interfaces/*/*/*.msg",
+    "ros/interfaces/*/*/*.srv",
+    "ros/interfaces/*/*/*.action",
+]
 
 
 def test_the_wheel_holds_the_package_data_and_nothing_of_the_tests_or_benchmarks(wheel):
     import zipfile
+
     names = set(zipfile.ZipFile(wheel).namelist())
-    data = sorted(f"htn/{p.relative_to(ROOT).as_posix()}" for pattern in DATA
-                  for p in ROOT.glob(pattern) if p.is_file())
+    data = sorted(
+        f"htn/{p.relative_to(ROOT).as_posix()}"
+        for pattern in DATA
+        for p in ROOT.glob(pattern)
+        if p.is_file()
+    )
     assert len(data) >= 30 and [d for d in data if d not in names] == []
-    extra = [n for n in names if n.startswith("htn/") and not n.endswith(".py")
-             and n not in data]
+    extra = [n for n in names if n.startswith("htn/") and not n.endswith(".py") and n not in data]
     assert extra == []
     outside = ("tests/", "benchmarks/", "docs/", "examples/", ".ci/", "build/")
-    assert [n for n in names if n.startswith(outside) or n.startswith(
-        tuple(f"htn/{o}" for o in outside))] == []
+    assert [
+        n
+        for n in names
+        if n.startswith(outside) or n.startswith(tuple(f"htn/{o}" for o in outside))
+    ] == []
     assert sorted({n.split("/")[0] for n in names}) == ["htn", f"htn-{_version(wheel)}.dist-info"]
 
 
@@ -107,12 +126,17 @@ def _version(wheel: Path) -> str:
 
 
 def test_the_wheel_installs_one_import_package(core):
-    r = core.run(core.bin / "python", "-c", textwrap.dedent("""
+    r = core.run(
+        core.bin / "python",
+        "-c",
+        textwrap.dedent("""
         import json
         from importlib.metadata import distribution
         files = distribution("htn").files
         print(json.dumps(sorted({f.parts[0] for f in files if f.suffix == ".py"})))
-        """), cwd=core.path)
+        """),
+        cwd=core.path,
+    )
     assert r.returncode == 0, r.stderr
     assert json.loads(r.stdout) == ["htn"]
 
@@ -122,17 +146,31 @@ def test_the_core_install_plans_runs_and_names_missing_extras(core, elsewhere):
     r = core.run("htn", "examples", ".", cwd=elsewhere)
     assert r.returncode == 0, r.stderr
     assert (elsewhere / "domains" / "domestic.toml").is_file()
-    r = core.run("htn", "plan", "domains/domestic.jshop", "problems/bring_object.jshop",
-                 "-o", "plan.txt", cwd=elsewhere)
+    r = core.run(
+        "htn",
+        "plan",
+        "domains/domestic.jshop",
+        "problems/bring_object.jshop",
+        "-o",
+        "plan.txt",
+        cwd=elsewhere,
+    )
     assert r.returncode == 0, r.stderr
     r = core.run("htn", "run", "plan.txt", "--robot", "symbolic", cwd=elsewhere)
     assert r.returncode == 0, r.stdout + r.stderr
     assert r.stdout.splitlines()[-1].startswith("verified: 8 of 8 steps verified")
-    r = core.run("htn", "validate", "domains/domestic.jshop", "problems/bring_object.jshop",
-                 "plan.txt", cwd=elsewhere)
+    r = core.run(
+        "htn",
+        "validate",
+        "domains/domestic.jshop",
+        "problems/bring_object.jshop",
+        "plan.txt",
+        cwd=elsewhere,
+    )
     assert r.returncode == 0, r.stderr
-    r = core.run("htn", "transform", "domains/kitchen.jshop", "problems/tray_three.jshop",
-                 cwd=elsewhere)
+    r = core.run(
+        "htn", "transform", "domains/kitchen.jshop", "problems/tray_three.jshop", cwd=elsewhere
+    )
     assert r.returncode == 0, r.stderr
     r = core.run("htn", "run", "plan.txt", "--sim", cwd=elsewhere)
     assert r.returncode == 2
@@ -260,27 +298,66 @@ def test_a_plugin_adds_an_action_machine_and_a_robot(core, tmp_path, elsewhere):
     (elsewhere / "basic").write_text(BASIC_DOMAIN)
     (elsewhere / "problem").write_text(BASIC_PROBLEM)
     (elsewhere / "plan.txt").write_text(BASIC_PLAN)
-    r = core.run("htn", "run", "plan.txt", "--domain", "basic", "--problem", "problem",
-                 "--robot", "toy", "--log", "run.jsonl", cwd=elsewhere)
+    r = core.run(
+        "htn",
+        "run",
+        "plan.txt",
+        "--domain",
+        "basic",
+        "--problem",
+        "problem",
+        "--robot",
+        "toy",
+        "--log",
+        "run.jsonl",
+        cwd=elsewhere,
+    )
     assert r.returncode == 0, r.stdout + r.stderr
-    assert r.stdout.splitlines()[-1] == ("verified: 2 of 2 steps verified, 0 retries, "
-                                         "0 replans, 1.0 s simulated")
+    assert r.stdout.splitlines()[-1] == (
+        "verified: 2 of 2 steps verified, 0 retries, 0 replans, 1.0 s simulated"
+    )
     events = [json.loads(line) for line in (elsewhere / "run.jsonl").read_text().splitlines()]
     assert events[0]["event"] == "header" and events[0]["robot"] == "toy"
     details = [e["detail"] for e in events if e["event"] == "feedback"]
     assert details == ["toy hand let go of kiwi", "toy hand took banjo"]
-    r = core.run("htn", "run", "plan.txt", "--domain", "basic", "--problem", "problem",
-                 "--robot", "toy", "--faults", "effect=0.5", cwd=elsewhere)
+    r = core.run(
+        "htn",
+        "run",
+        "plan.txt",
+        "--domain",
+        "basic",
+        "--problem",
+        "problem",
+        "--robot",
+        "toy",
+        "--faults",
+        "effect=0.5",
+        cwd=elsewhere,
+    )
     assert r.returncode == 2 and "unknown fault 'effect'" in r.stderr
     # the transformation rule registered through htn.transformations
     assert core.run("htn", "examples", ".", cwd=elsewhere).returncode == 0
-    r = core.run("htn", "transform", "domains/kitchen.jshop", "problems/tray_three.jshop",
-                 "--rules", "toy-keep", cwd=elsewhere)
+    r = core.run(
+        "htn",
+        "transform",
+        "domains/kitchen.jshop",
+        "problems/tray_three.jshop",
+        "--rules",
+        "toy-keep",
+        cwd=elsewhere,
+    )
     assert r.returncode == 0, r.stderr
     assert r.stdout.startswith("no transformation applies")
-    r = core.run("htn", "transform", "domains/kitchen.jshop", "problems/tray_three.jshop",
-                 "--rules", "toy-nothing", cwd=elsewhere)
-    assert r.returncode == 2 and "toy-keep" in r.stderr     # the known rules include it
+    r = core.run(
+        "htn",
+        "transform",
+        "domains/kitchen.jshop",
+        "problems/tray_three.jshop",
+        "--rules",
+        "toy-nothing",
+        cwd=elsewhere,
+    )
+    assert r.returncode == 2 and "toy-keep" in r.stderr  # the known rules include it
 
 
 def test_robot_framework_and_htn_side_by_side(tmp_path_factory, wheel, elsewhere):
@@ -289,8 +366,15 @@ def test_robot_framework_and_htn_side_by_side(tmp_path_factory, wheel, elsewhere
     r = venv.run("robot", "--version", cwd=elsewhere)
     assert "Robot Framework" in r.stdout + r.stderr
     assert venv.run("htn", "examples", ".", cwd=elsewhere).returncode == 0
-    r = venv.run("htn", "plan", "domains/domestic.jshop", "problems/guide_robot.jshop",
-                 "-o", "plan.txt", cwd=elsewhere)
+    r = venv.run(
+        "htn",
+        "plan",
+        "domains/domestic.jshop",
+        "problems/guide_robot.jshop",
+        "-o",
+        "plan.txt",
+        cwd=elsewhere,
+    )
     assert r.returncode == 0, r.stderr
     r = venv.run("htn", "run", "plan.txt", "--sim", "-q", cwd=elsewhere)
     assert r.returncode == 0, r.stdout + r.stderr

@@ -5,6 +5,7 @@ come first here, as one did when the issue was found). A system Python
 refuses ``pip install`` outside a virtualenv (PEP 668), so the commands must
 make one, and what they install must be in it.
 """
+
 from __future__ import annotations
 
 import os
@@ -24,7 +25,7 @@ def quick_start() -> list[str]:
     """The two commands of the README's quick start."""
     text = (ROOT / "README.md").read_text()
     start = text.index("## Quick start")
-    section = text[start:text.index("\n## ", start + 1)]
+    section = text[start : text.index("\n## ", start + 1)]
     block = re.search(r"```sh\n(.*?)```", section, re.S).group(1)
     return [line for line in block.splitlines() if line.strip()]
 
@@ -33,7 +34,7 @@ def install_steps(command: str) -> str:
     """A command up to and including its ``pip install``."""
     parts = command.split(" && ")
     k = next(i for i, p in enumerate(parts) if p.startswith("pip install"))
-    return " && ".join(parts[:k + 1])
+    return " && ".join(parts[: k + 1])
 
 
 def copy_checkout(to: Path) -> None:
@@ -45,8 +46,14 @@ def copy_checkout(to: Path) -> None:
                 (to / name).parent.mkdir(parents=True, exist_ok=True)
                 shutil.copy2(ROOT / name, to / name)
     else:
-        shutil.copytree(ROOT, to, dirs_exist_ok=True, ignore=shutil.ignore_patterns(
-            ".venv", "build", "dist", "*.egg-info", "__pycache__", ".git"))
+        shutil.copytree(
+            ROOT,
+            to,
+            dirs_exist_ok=True,
+            ignore=shutil.ignore_patterns(
+                ".venv", "build", "dist", "*.egg-info", "__pycache__", ".git"
+            ),
+        )
 
 
 def test_the_quick_start_commands_are_two_and_make_a_virtualenv():
@@ -64,32 +71,56 @@ def test_the_quick_start_installs_with_the_system_python(tmp_path):
     probe = subprocess.run([SYSTEM_PYTHON, "-c", "import ensurepip, venv"], capture_output=True)
     if probe.returncode != 0:
         pytest.skip("the system python3 has no venv module (Debian: apt install python3-venv)")
-    src = tmp_path / "checkout"     # not "htn": a folder of that name would be imported
+    src = tmp_path / "checkout"  # not "htn": a folder of that name would be imported
     src.mkdir()
     copy_checkout(src)
     bin_ = tmp_path / "bin"
     bin_.mkdir()
     (bin_ / "python3").symlink_to(SYSTEM_PYTHON)
-    env = {k: v for k, v in os.environ.items()
-           if k not in ("VIRTUAL_ENV", "PYTHONPATH", "PYTHONHOME", "PYTHONUSERBASE")}
+    env = {
+        k: v
+        for k, v in os.environ.items()
+        if k not in ("VIRTUAL_ENV", "PYTHONPATH", "PYTHONHOME", "PYTHONUSERBASE")
+    }
     env["PATH"] = f"{bin_}:/usr/bin:/bin"
     for command in quick_start():
         steps = install_steps(command)
-        r = subprocess.run(["bash", "-c", steps], cwd=src, env=env, capture_output=True,
-                           text=True, timeout=3600)
+        r = subprocess.run(
+            ["bash", "-c", steps], cwd=src, env=env, capture_output=True, text=True, timeout=3600
+        )
         assert r.returncode == 0, f"{steps}\n{r.stdout[-3000:]}\n{r.stderr[-3000:]}"
     python = src / ".venv" / "bin" / "python"
     # the virtualenv is the system Python's, and holds what both commands need
-    r = subprocess.run([python, "-c", "import sys, htn, pybullet, pytest, xdist, hypothesis; "
-                        "print(sys.base_prefix); print(htn.__file__)"],
-                       cwd=tmp_path, env=env, capture_output=True, text=True, timeout=600)
+    r = subprocess.run(
+        [
+            python,
+            "-c",
+            "import sys, htn, pybullet, pytest, xdist, hypothesis; "
+            "print(sys.base_prefix); print(htn.__file__)",
+        ],
+        cwd=tmp_path,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     assert r.returncode == 0, r.stderr
     base, where = r.stdout.split()
     assert base == "/usr"
     assert where.startswith(str(src / ".venv"))
     # and the first command's planning step runs from it
-    r = subprocess.run(["bash", "-c", ". .venv/bin/activate && htn plan domains/domestic.jshop "
-                        "problems/bring_object.jshop -o plan.txt"],
-                       cwd=src, env=env, capture_output=True, text=True, timeout=600)
+    r = subprocess.run(
+        [
+            "bash",
+            "-c",
+            ". .venv/bin/activate && htn plan domains/domestic.jshop "
+            "problems/bring_object.jshop -o plan.txt",
+        ],
+        cwd=src,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     assert r.returncode == 0, r.stderr
     assert (src / "plan.txt").read_text().count("(!") == 8

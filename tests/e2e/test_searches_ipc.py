@@ -6,6 +6,7 @@ there. ``ipc2020-to`` (total order) is planned with every search in
 instance of each domain that it solves within seconds (the whole sample,
 solved in up to 30 s of CPU each: ``benchmarks/bench_ipc.py --sample ipc-po
 --search auto``)."""
+
 from __future__ import annotations
 
 import json
@@ -22,11 +23,18 @@ PARTIAL = SHARED / "corpus" / "ipc-po"
 pytestmark = pytest.mark.corpus
 # one instance of each ipc-po domain that auto solves in a few seconds
 # (Monroe-Partially-Observable takes 25 s or more)
-QUICK_PO = {"Barman-BDI-pfile04", "Colouring-pfile05",
-            "Monroe-Fully-Observable-pfile13-p-0028-set-up-shelter-1-tlt", "PCP-p-pcp12",
-            "Rover-pfile01", "Satellite-2obs-1sat-1mod", "Transport-pfile02",
-            "UM-Translog-06-A-AutoTruck", "Ultralight-Cockpit-pfile04",
-            "Woodworking-01--p01-complete"}
+QUICK_PO = {
+    "Barman-BDI-pfile04",
+    "Colouring-pfile05",
+    "Monroe-Fully-Observable-pfile13-p-0028-set-up-shelter-1-tlt",
+    "PCP-p-pcp12",
+    "Rover-pfile01",
+    "Satellite-2obs-1sat-1mod",
+    "Transport-pfile02",
+    "UM-Translog-06-A-AutoTruck",
+    "Ultralight-Cockpit-pfile04",
+    "Woodworking-01--p01-complete",
+}
 
 
 def _domain_of(problem):
@@ -52,19 +60,37 @@ def _instances(folder, only=None):
 
 def _check(tmp_path, domain, problem, search):
     plan_file = tmp_path / "plan.txt"
-    result = run_htn("plan", domain, problem, "-f", "ipc", "-o", plan_file, "-q",
-                     "--search", search, "--timeout", "600")
+    result = run_htn(
+        "plan",
+        domain,
+        problem,
+        "-f",
+        "ipc",
+        "-o",
+        plan_file,
+        "-q",
+        "--search",
+        search,
+        "--timeout",
+        "600",
+    )
     assert result.returncode == 0, result.stderr
-    steps = [tuple(line.strip("()").replace("!", "", 1).split())
-             for line in plan_file.read_text().splitlines() if line.startswith("(")]
+    steps = [
+        tuple(line.strip("()").replace("!", "", 1).split())
+        for line in plan_file.read_text().splitlines()
+        if line.startswith("(")
+    ]
     check_ipc_decomposition(result.stdout, domain, problem, steps, ordered=False)
     valid = run_htn("validate", domain, problem, plan_file)
     assert valid.returncode == 0, valid.stdout + valid.stderr
     if PANDA.is_file():
         ipc = tmp_path / "plan.ipc"
         ipc.write_text(result.stdout)
-        verdict = subprocess.run([str(PANDA), "-C", "--verify", str(domain), str(problem),
-                                  str(ipc)], capture_output=True, text=True)
+        verdict = subprocess.run(
+            [str(PANDA), "-C", "--verify", str(domain), str(problem), str(ipc)],
+            capture_output=True,
+            text=True,
+        )
         assert "Plan verification result: true" in verdict.stdout, verdict.stdout[-2000:]
 
 
@@ -92,9 +118,13 @@ def test_one_sample_instance_per_search(tmp_path, search):
 UL = PARTIAL / "Ultralight-Cockpit"
 
 
-@pytest.mark.parametrize("name,fact,anchor", [
-    ("pfile02", "(p_reachable aerodrome1)", "(p_landingSpotClear aerodrome2)"),
-    ("pfile03", "(p_landingSpotClear aerodrome2)", "(p_reachable aerodrome2)")])
+@pytest.mark.parametrize(
+    "name,fact,anchor",
+    [
+        ("pfile02", "(p_reachable aerodrome1)", "(p_landingSpotClear aerodrome2)"),
+        ("pfile03", "(p_landingSpotClear aerodrome2)", "(p_reachable aerodrome2)"),
+    ],
+)
 def test_ultralight_no_plan_is_the_answer(tmp_path, name, fact, anchor):
     """The two "no plan" answers on ipc-po are right, and one fact away from
     a plan: the only method of ``precautionary_land`` flies over a landing
@@ -110,7 +140,7 @@ def test_ultralight_no_plan_is_the_answer(tmp_path, name, fact, anchor):
     result = run_htn("plan", domain, problem, "--search", "gbfs", "-f", "json", "-q")
     stats = json.loads(result.stdout.splitlines()[-1])
     assert result.returncode == 1 and stats["plans_found"] == 0, result.stdout + result.stderr
-    assert not (stats["timed_out"] or stats["memory_limit_reached"])   # the space was exhausted
+    assert not (stats["timed_out"] or stats["memory_limit_reached"])  # the space was exhausted
     text = problem.read_text()
     assert anchor in text and fact not in text.replace(";(not " + fact, "")
     changed = tmp_path / f"{name}.hddl"

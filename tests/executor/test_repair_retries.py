@@ -5,6 +5,7 @@ default of one retry, the summary and the ``aborted`` event name ``--retries``
 when retries ran out, and repair tries a failed step again, when its limit
 allows and it still applies in the observed state, before re-planning.
 """
+
 from __future__ import annotations
 
 import contextlib
@@ -21,6 +22,7 @@ SEEDS = range(20)
 def _htn(*argv) -> tuple[int, str, str]:
     """``htn ARGV`` through the real entry point, in this process."""
     from htn.cli.main import main
+
     out, err = io.StringIO(), io.StringIO()
     code = 0
     with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
@@ -47,8 +49,22 @@ def _events(path):
 
 
 def _outcomes(plan, faults, *extra):
-    return [_htn("run", plan, "--robot", "symbolic", "--faults", faults, "--seed", seed,
-                 "--replan", "-q", *extra)[1].strip() for seed in SEEDS]
+    return [
+        _htn(
+            "run",
+            plan,
+            "--robot",
+            "symbolic",
+            "--faults",
+            faults,
+            "--seed",
+            seed,
+            "--replan",
+            "-q",
+            *extra,
+        )[1].strip()
+        for seed in SEEDS
+    ]
 
 
 def test_a_domain_without_a_toml_gets_one_retry_per_operator(plan, tmp_path):
@@ -67,10 +83,12 @@ def test_the_default_retry_saves_runs_that_replanning_alone_lost(plan):
     default = _outcomes(plan, "effect=0.3")
     lost = [s for s, line in zip(SEEDS, without) if line.startswith("aborted")]
     still = [s for s, line in zip(SEEDS, default) if line.startswith("aborted")]
-    print(f"aborted without retries: {len(lost)} of {len(SEEDS)} {lost}; "
-          f"with the default: {len(still)} {still}")
+    print(
+        f"aborted without retries: {len(lost)} of {len(SEEDS)} {lost}; "
+        f"with the default: {len(still)} {still}"
+    )
     assert len(still) < len(lost) and set(still) <= set(lost)
-    for line in (default[s] for s in still):      # the summary says what would help
+    for line in (default[s] for s in still):  # the summary says what would help
         assert line.endswith("; 1 retry used up (--retries hand=2 allows one more)"), line
     for line in (without[s] for s in lost):
         assert line.endswith("; no retries for !hand (--retries hand=1 allows one)"), line
@@ -80,15 +98,30 @@ def test_the_default_retry_saves_runs_that_replanning_alone_lost(plan):
 
 def test_the_aborted_event_names_retries_when_they_ran_out(plan, tmp_path):
     log = tmp_path / "run.jsonl"
-    seed = next(s for s in SEEDS if _htn("run", plan, "--robot", "symbolic", "--faults",
-                                         "effect=0.3", "--seed", s, "-q")[0] == 1)
-    _htn("run", plan, "--robot", "symbolic", "--faults", "effect=0.3", "--seed", seed, "-q",
-         "--log", log)
+    seed = next(
+        s
+        for s in SEEDS
+        if _htn("run", plan, "--robot", "symbolic", "--faults", "effect=0.3", "--seed", s, "-q")[0]
+        == 1
+    )
+    _htn(
+        "run",
+        plan,
+        "--robot",
+        "symbolic",
+        "--faults",
+        "effect=0.3",
+        "--seed",
+        seed,
+        "-q",
+        "--log",
+        log,
+    )
     aborted = [e for e in _events(log) if e["event"] == "aborted"]
-    assert "used up" not in aborted[0]["detail"]          # its retry is still to come
-    assert aborted[-1]["detail"].endswith("used up (--retries "
-                                          f"{aborted[-1]['action'][2:].split()[0]}=2 allows "
-                                          "one more)")
+    assert "used up" not in aborted[0]["detail"]  # its retry is still to come
+    assert aborted[-1]["detail"].endswith(
+        f"used up (--retries {aborted[-1]['action'][2:].split()[0]}=2 allows one more)"
+    )
     assert _events(log)[-1]["advice"] == aborted[-1]["detail"].split("; ")[-1]
 
 
@@ -98,21 +131,49 @@ def test_repair_tries_a_failed_step_again_before_replanning(plan, tmp_path):
     log = tmp_path / "run.jsonl"
     by_repair = 0
     for seed in SEEDS:
-        code, out, _ = _htn("run", plan, "--robot", "symbolic", "--faults", "fail=0.3",
-                            "--seed", seed, "--replan", "-q", "--log", log)
+        code, out, _ = _htn(
+            "run",
+            plan,
+            "--robot",
+            "symbolic",
+            "--faults",
+            "fail=0.3",
+            "--seed",
+            seed,
+            "--replan",
+            "-q",
+            "--log",
+            log,
+        )
         events = _events(log)
         retried = [e for e in events if e["event"] == "retrying"]
         failed = [e for e in events if e["event"] == "failed"]
         assert len(retried) <= len(failed)
         for r in retried:
-            assert r["detail"] == "retry 1 of 1, by repair: the step still applies in the " \
-                                  "observed state"
-            before = events[events.index(r) - 1]     # right after its failure
+            assert (
+                r["detail"] == "retry 1 of 1, by repair: the step still applies in the "
+                "observed state"
+            )
+            before = events[events.index(r) - 1]  # right after its failure
             assert before["event"] == "failed" and before["action"] == r["action"]
         if retried and not any(e["event"] == "replanned" for e in events):
             by_repair += code == 0
     assert by_repair >= 3
     # without retries every such failure is re-planned (or lost)
-    code, _, _ = _htn("run", plan, "--robot", "symbolic", "--faults", "fail=0.3", "--seed", 0,
-                      "--replan", "-q", "--log", log, "--retries", "goto=0,brew=0,hand=0")
+    code, _, _ = _htn(
+        "run",
+        plan,
+        "--robot",
+        "symbolic",
+        "--faults",
+        "fail=0.3",
+        "--seed",
+        0,
+        "--replan",
+        "-q",
+        "--log",
+        log,
+        "--retries",
+        "goto=0,brew=0,hand=0",
+    )
     assert not any(e["event"] == "retrying" for e in _events(log))

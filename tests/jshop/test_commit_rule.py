@@ -4,6 +4,7 @@ it finds a plan exactly where the search over every move does, on random
 partially ordered problems, and every plan it finds passes htn's
 decomposition check and, when the binary is there, the competition's
 verifier (pandaPIparser)."""
+
 from __future__ import annotations
 
 import subprocess
@@ -78,16 +79,21 @@ def problems(draw):
     """A domain and a problem: four actions on four facts, one to three
     compound tasks (task i decomposes into actions and tasks after it, so
     the space is finite), methods with and without a precondition."""
-    out = ["(define (domain rnd)", "  (:requirements :hierarchy :negative-preconditions)",
-           "  (:predicates " + " ".join(f"({f})" for f in FACTS) + ")"]
+    out = [
+        "(define (domain rnd)",
+        "  (:requirements :hierarchy :negative-preconditions)",
+        "  (:predicates " + " ".join(f"({f})" for f in FACTS) + ")",
+    ]
     ntasks = draw(st.integers(1, 3))
     out += [f"  (:task t{i} :parameters ())" for i in range(ntasks)]
     for i in range(ntasks):
         for k in range(draw(st.integers(1, 2))):
             choices = [f"a{j}" for j in range(ACTIONS)] + [f"t{j}" for j in range(i + 1, ntasks)]
             pre = _conj([_literal(draw) for _ in range(draw(st.integers(0, 1)))])
-            out.append(f"  (:method m{i}_{k} :parameters () :task (t{i}) :precondition {pre}"
-                       f" {_network(draw, choices)})")
+            out.append(
+                f"  (:method m{i}_{k} :parameters () :task (t{i}) :precondition {pre}"
+                f" {_network(draw, choices)})"
+            )
     for j in range(ACTIONS):
         pre = [_literal(draw) for _ in range(draw(st.integers(0, 2)))]
         adds = draw(st.sets(st.sampled_from(FACTS), max_size=2))
@@ -98,9 +104,13 @@ def problems(draw):
     init = draw(st.sets(st.sampled_from(FACTS)))
     goal = f"  (:goal {_literal(draw, negative=False)})" if draw(st.booleans()) else ""
     network = _network(draw, [f"t{i}" for i in range(ntasks)] + ["a0"])
-    problem = ["(define (problem r1) (:domain rnd)",
-               f"  (:htn :parameters () {network})",
-               "  (:init " + " ".join(f"({f})" for f in sorted(init)) + ")", goal, ")"]
+    problem = [
+        "(define (problem r1) (:domain rnd)",
+        f"  (:htn :parameters () {network})",
+        "  (:init " + " ".join(f"({f})" for f in sorted(init)) + ")",
+        goal,
+        ")",
+    ]
     return "\n".join(out) + "\n", "\n".join(problem) + "\n"
 
 
@@ -116,8 +126,18 @@ def _check_plan(folder: Path, domain, problem, plan, search):
     if PANDA.is_file():
         ipc = folder / "plan.ipc"
         ipc.write_text(text)
-        out = subprocess.run([str(PANDA), "-C", "--verify", str(folder / "d.hddl"),
-                              str(folder / "p.hddl"), str(ipc)], capture_output=True, text=True)
+        out = subprocess.run(
+            [
+                str(PANDA),
+                "-C",
+                "--verify",
+                str(folder / "d.hddl"),
+                str(folder / "p.hddl"),
+                str(ipc),
+            ],
+            capture_output=True,
+            text=True,
+        )
         assert "Plan verification result: true" in out.stdout, text + out.stdout[-1500:]
 
 
@@ -148,4 +168,3 @@ def test_the_rule_loses_no_plan(case):
         assert (with_rule is None) == (without is None), domain_text + problem_text
         if with_rule is not None:
             _check_plan(folder, inputs.domain, inputs.problem, with_rule, search)
-

@@ -13,6 +13,7 @@ Generated code is compiled under a name that says what it is, registered
 with ``linecache`` (tracebacks show its lines), and ``HTN_DUMP_COMPILED``
 writes it to files.
 """
+
 from __future__ import annotations
 
 import linecache
@@ -52,7 +53,7 @@ def atom(draw) -> str:
         return f"({kind} {draw(terms)})"
     if kind in ("q", "t"):
         return f"({kind} {draw(terms)} {draw(terms)})"
-    if kind == "r1":                   # r has atoms of two lengths in the state
+    if kind == "r1":  # r has atoms of two lengths in the state
         return f"(r {draw(terms)})"
     if kind == "r2":
         return f"(r {draw(terms)} {draw(terms)})"
@@ -76,9 +77,12 @@ def conjunct(draw) -> str:
 
 
 ground_atoms = (
-    [f"(p {c})" for c in "abc"] + [f"(q {x} {y})" for x in "abc" for y in "abc"]
-    + [f"(r {c})" for c in "ab"] + [f"(r {x} {y})" for x in "ab" for y in "abc"]
-    + ["(f c)", "(g (on a b))", "(g (on a))", "(g (on b b))", "(g on)", "(g (on nil a))"])
+    [f"(p {c})" for c in "abc"]
+    + [f"(q {x} {y})" for x in "abc" for y in "abc"]
+    + [f"(r {c})" for c in "ab"]
+    + [f"(r {x} {y})" for x in "ab" for y in "abc"]
+    + ["(f c)", "(g (on a b))", "(g (on a))", "(g (on b b))", "(g on)", "(g (on nil a))"]
+)
 
 
 @st.composite
@@ -123,7 +127,7 @@ def outcome(sat, env: list):
 @given(case())
 def test_compiled_conjunctions_agree_with_the_general_engine(example):
     items, head, state_atoms, bound, mask = example
-    text = (f"(defdomain d ({AXIOMS} (:operator (!o {' '.join(head)}) ({' '.join(items)}) () ())))")
+    text = f"(defdomain d ({AXIOMS} (:operator (!o {' '.join(head)}) ({' '.join(items)}) () ())))"
     domain = parse_text(text, "d.jshop", FunctionTable())
     op = domain.operators["!o"][0]
     problem = parse_text(f"(defproblem pr d ({' '.join(state_atoms)}) ())", "p.jshop")
@@ -160,7 +164,7 @@ def test_long_conjunctions_backtrack_in_the_same_order():
     items = " ".join(f"(q ?v{i} ?v{i + 1})" for i in range(n))
     domain = parse_text(f"(defdomain d ((:operator (!o) ({items}) () ())))", "d.jshop")
     state = State()
-    for x, y in [("a", "a"), ("a", "b"), ("b", "b")]:   # a...a b...b
+    for x, y in [("a", "a"), ("a", "b"), ("b", "b")]:  # a...a b...b
         state.add("q", (x, y))
     logic = Logic(domain, state, FunctionTable())
     op = domain.operators["!o"][0]
@@ -189,21 +193,24 @@ def test_generated_code_has_a_name_and_lines_in_tracebacks(tmp_path):
     functions.write_text(TRACED)
     table = FunctionTable()
     table.load_file(str(functions))
-    domain = parse_text("(defdomain d (\n  (:operator (!go ?a)\n    ((at ?a) (call look ?a))"
-                        " () ())))", str(tmp_path / "d.jshop"), table)
+    domain = parse_text(
+        "(defdomain d (\n  (:operator (!go ?a)\n    ((at ?a) (call look ?a)) () ())))",
+        str(tmp_path / "d.jshop"),
+        table,
+    )
     state = State()
     state.add("at", ("home",))
     logic = Logic(domain, state, table)
     op = domain.operators["!go"][0]
     sat = logic.precondition(op.pre, op.head.args, f"precondition of {op.name}")
     frames = table.user["look"].__globals__["FRAMES"]
-    for _ in range(warming.WARM + 1):    # the last calls run the code written for the mode
+    for _ in range(warming.WARM + 1):  # the last calls run the code written for the mode
         assert len(list(sat(["home"]))) == 1
     names = {f.filename: f for f in frames if f.filename.startswith("<htn: ")}
     mode = [n for n in names if n.startswith("<htn: precondition of !go, d.jshop:3")]
     assert mode, sorted(names)
     frame = names[mode[0]]
-    assert "x0" in frame.line                    # the generated line, from linecache
+    assert "x0" in frame.line  # the generated line, from linecache
     assert linecache.getline(frame.filename, frame.lineno).strip() == frame.line
     shown = "".join(traceback.format_list([frame]))
     assert shown.startswith('  File "<htn: precondition of !go') and frame.line in shown
@@ -212,8 +219,10 @@ def test_generated_code_has_a_name_and_lines_in_tracebacks(tmp_path):
 def test_dump_compiled_writes_each_piece(tmp_path):
     dump = tmp_path / "dump"
     d, p = tmp_path / "d.jshop", tmp_path / "p.jshop"
-    d.write_text("(defdomain d (\n  (:operator (!go ?a ?b) ((at ?a)) ((at ?a)) ((at ?b)))\n"
-                 "  (:method (travel ?to) ((at ?from)) ((!go ?from ?to)))))\n")
+    d.write_text(
+        "(defdomain d (\n  (:operator (!go ?a ?b) ((at ?a)) ((at ?a)) ((at ?b)))\n"
+        "  (:method (travel ?to) ((at ?from)) ((!go ?from ?to)))))\n"
+    )
     # often enough for the pieces to be compiled (htn.jshop.logic.warming)
     trips = " ".join(["(travel work) (travel home)"] * warming.WARM)
     p.write_text(f"(defproblem p d ((at home)) ({trips}))\n")
@@ -223,5 +232,5 @@ def test_dump_compiled_writes_each_piece(tmp_path):
     assert any(f.startswith("precondition_of_go_d.jshop_2") for f in files), files
     assert any(f.startswith("subtasks_of_travel") for f in files), files
     text = next(f for f in dump.iterdir() if f.name.startswith("precondition_of_go")).read_text()
-    compile(text, "dumped", "exec")                # each file is the Python it ran
+    compile(text, "dumped", "exec")  # each file is the Python it ran
     assert text.rstrip().splitlines()[-1].startswith("# <htn: precondition of !go, d.jshop:2")

@@ -1,4 +1,5 @@
 """One test per JSHOP2 language feature, each by planning a tiny domain."""
+
 from __future__ import annotations
 
 import pytest
@@ -6,8 +7,9 @@ import pytest
 from htn.jshop import FunctionTable, Planner, parse_text
 
 
-def plans(domain: str, problem: str, functions: FunctionTable | None = None, limit=None,
-          costs=False):
+def plans(
+    domain: str, problem: str, functions: FunctionTable | None = None, limit=None, costs=False
+):
     functions = functions or FunctionTable()
     dom = parse_text(domain, "d.jshop", functions)
     prob = parse_text(problem, "p.jshop", functions)
@@ -41,15 +43,28 @@ def test_list_terms_and_dotted_patterns_in_heads():
     assert plans(d, "(defproblem p d () ((split (a))))") == [["(!got a NIL)"]]
 
 
-@pytest.mark.parametrize("call,value", [
-    ("(call + 1 2 3)", "6.0"), ("(call - 10 2 3)", "5.0"), ("(call * 2 3 4)", "24.0"),
-    ("(call / 12 6 5)", "0.4"), ("(call ^ 2 2 3)", "64.0"),
-    ("(call < 1 2 3)", "1.0"), ("(call < 1 3 2)", "NIL"), ("(call <= 2 2 3)", "1.0"),
-    ("(call > 3 2 1)", "1.0"), ("(call >= 1 2)", "NIL"), ("(call = a a a)", "1.0"),
-    ("(call = 1 2)", "NIL"), ("(call != a b a)", "1.0"), ("(call != a a)", "NIL"),
-    ("(call member b (a b c))", "1.0"), ("(call Member z (a b))", "NIL"),
-    ("(call + 1 (call * 2 3))", "7.0"),
-])
+@pytest.mark.parametrize(
+    "call,value",
+    [
+        ("(call + 1 2 3)", "6.0"),
+        ("(call - 10 2 3)", "5.0"),
+        ("(call * 2 3 4)", "24.0"),
+        ("(call / 12 6 5)", "0.4"),
+        ("(call ^ 2 2 3)", "64.0"),
+        ("(call < 1 2 3)", "1.0"),
+        ("(call < 1 3 2)", "NIL"),
+        ("(call <= 2 2 3)", "1.0"),
+        ("(call > 3 2 1)", "1.0"),
+        ("(call >= 1 2)", "NIL"),
+        ("(call = a a a)", "1.0"),
+        ("(call = 1 2)", "NIL"),
+        ("(call != a b a)", "1.0"),
+        ("(call != a a)", "NIL"),
+        ("(call member b (a b c))", "1.0"),
+        ("(call Member z (a b))", "NIL"),
+        ("(call + 1 (call * 2 3))", "7.0"),
+    ],
+)
 def test_standard_functions(call, value):
     d = f"(defdomain d ((:operator (!v ?x) () () ()) (:method (m) ((assign ?r {call})) ((!v ?r)))))"
     assert plans(d, "(defproblem p d () ((m)))") == [[f"(!v {value})"]]
@@ -89,9 +104,11 @@ def test_sort_by_default_ascending_and_descending():
 
 def test_sort_by_user_comparator_and_user_functions(tmp_path):
     f = tmp_path / "fns.py"
-    f.write_text("def ByLength(a, b):\n    return len(a) - len(b)\n\n"
-                 "def Twice(x):\n    return [x, x]\n\n"
-                 "def Empty(x):\n    return x == []\n\n_private = 1\n")
+    f.write_text(
+        "def ByLength(a, b):\n    return len(a) - len(b)\n\n"
+        "def Twice(x):\n    return [x, x]\n\n"
+        "def Empty(x):\n    return x == []\n\n_private = 1\n"
+    )
     table = FunctionTable()
     table.load_file(str(f))
     d = """(defdomain d ((:operator (!o ?x ?y ?z) () () ())
@@ -110,7 +127,7 @@ def test_axioms_branches_and_backtracking():
     # first axiom: branch 'close' has a satisfier (b), so 'far' is not used; then the second axiom
     assert plans(d, s) == [["(!ok b)"], ["(!ok z)"]]
     s2 = "(defproblem p d ((dist a 3) (dist c 9)) ((m)))"
-    assert plans(d, s2) == [["(!ok a)"]]   # 'close' has none: the later branch is used
+    assert plans(d, s2) == [["(!ok a)"]]  # 'close' has none: the later branch is used
 
 
 def test_method_branches_are_if_then_else():
@@ -123,7 +140,7 @@ def test_method_branches_are_if_then_else():
 
 
 def test_several_methods_are_all_tried_in_order():
-    d = f"""(defdomain d ({ops('!x', '!y')}
+    d = f"""(defdomain d ({ops("!x", "!y")}
       (:method (m ?v) () ((!x ?v))) (:method (m ?v) () ((!y ?v)))))"""
     assert plans(d, "(defproblem p d () ((m 1)))") == [["(!x 1.0)"], ["(!y 1.0)"]]
 
@@ -134,7 +151,8 @@ def test_internal_operators_are_in_the_plan_and_costs_add_up():
       (:operator (!go) () () ())
       (:method (m ?x) () ((!!note ?x) (!pay ?x) (!go)))))"""
     assert plans(d, "(defproblem p d () ((m 3)))", costs=True) == [
-        (["(!!note 3.0)", "(!pay 3.0)", "(!go)"], 7.0)]
+        (["(!!note 3.0)", "(!pay 3.0)", "(!go)"], 7.0)
+    ]
 
 
 def test_forall_effects_and_state_changes():
@@ -153,7 +171,8 @@ def test_protections_block_deletion_until_cancelled():
       (:method (good) () ((!guard x) (!release x) (!leave x)))))"""
     assert plans(d, "(defproblem p d ((at x)) ((bad)))") == []
     assert plans(d, "(defproblem p d ((at x)) ((good)))") == [
-        ["(!guard x)", "(!release x)", "(!leave x)"]]
+        ["(!guard x)", "(!release x)", "(!leave x)"]
+    ]
 
 
 def test_variable_add_list_and_variable_atoms():
@@ -162,15 +181,18 @@ def test_variable_add_list_and_variable_atoms():
       (:operator (!check) ((p 1) (q 2) (not (r 3))) () ())
       (:method (m) () ((!!assert ((p 1) (q 2))) (!forget (r 3)) (!check)))))"""
     assert plans(d, "(defproblem p d ((r 3)) ((m)))") == [
-        ["(!!assert ((p 1.0) (q 2.0)))", "(!forget (r 3.0))", "(!check)"]]
+        ["(!!assert ((p 1.0) (q 2.0)))", "(!forget (r 3.0))", "(!check)"]
+    ]
 
 
 def test_unordered_task_lists_give_interleavings_in_order():
     d = f"(defdomain d ({ops('!a', '!b', '!c')}))"
     s = "(defproblem p d () ((:unordered ((!a 1) (!a 2)) (!b 3))))"
-    assert plans(d, s) == [["(!a 1.0)", "(!a 2.0)", "(!b 3.0)"],
-                           ["(!a 1.0)", "(!b 3.0)", "(!a 2.0)"],
-                           ["(!b 3.0)", "(!a 1.0)", "(!a 2.0)"]]
+    assert plans(d, s) == [
+        ["(!a 1.0)", "(!a 2.0)", "(!b 3.0)"],
+        ["(!a 1.0)", "(!b 3.0)", "(!a 2.0)"],
+        ["(!b 3.0)", "(!a 1.0)", "(!a 2.0)"],
+    ]
 
 
 def test_immediate_task_goes_first():
@@ -181,15 +203,17 @@ def test_immediate_task_goes_first():
 
 def test_nested_task_lists_and_comments():
     d = f"""(defdomain d ( ; a comment
-      {ops('!a')}
+      {ops("!a")}
       (:method (m) () (((!a 1) ((!a 2))) (!a 3)))))  ; trailing"""
     assert plans(d, "(defproblem p d () ((m)))") == [["(!a 1.0)", "(!a 2.0)", "(!a 3.0)"]]
 
 
 def test_method_top_level_unordered_interleaves_unless_jshop2_compat():
     d = f"(defdomain d ({ops('!a')} (:method (m) () (:unordered (!a 1) (!a 2)))))"
-    assert plans(d, "(defproblem p d () ((m)))") == [["(!a 1.0)", "(!a 2.0)"],
-                                                     ["(!a 2.0)", "(!a 1.0)"]]
+    assert plans(d, "(defproblem p d () ((m)))") == [
+        ["(!a 1.0)", "(!a 2.0)"],
+        ["(!a 2.0)", "(!a 1.0)"],
+    ]
     dom, prob = parse_text(d, "d.jshop"), parse_text("(defproblem p d () ((m)))", "p.jshop")
     compat = Planner(dom, prob.instances[0], jshop2_compat=True)
     assert [p.lines() for p in compat.plans()] == [["(!a 1.0)", "(!a 2.0)"]]
@@ -230,15 +254,23 @@ def test_infinite_plan_space_streams_with_a_timeout():
 def test_variables_in_the_problem_task_list_stay_unbound():
     d = "(defdomain d ((:operator (!take ?x) ((thing ?x)) () ())))"
     assert plans(d, "(defproblem p d ((thing a) (thing b)) ((!take ?what)))") == [
-        ["(!take a)"], ["(!take b)"]]
+        ["(!take a)"],
+        ["(!take b)"],
+    ]
 
 
 def test_a_long_conjunction_backtracks_in_order():
     # more conjuncts than Python allows nested loops: an explicit stack, same order
-    d = ("(defdomain d ((:operator (!o ?x ?y) () () ()) (:method (m) ((p ?x) "
-         + " ".join(f"(c{i})" for i in range(20)) + " (q ?x ?y)) ((!o ?x ?y)))))")
-    s = ("(defproblem p d ((p 1) (p 2) (q 2 a) (q 1 b) (q 2 c) "
-         + " ".join(f"(c{i})" for i in range(20)) + ") ((m)))")
+    d = (
+        "(defdomain d ((:operator (!o ?x ?y) () () ()) (:method (m) ((p ?x) "
+        + " ".join(f"(c{i})" for i in range(20))
+        + " (q ?x ?y)) ((!o ?x ?y)))))"
+    )
+    s = (
+        "(defproblem p d ((p 1) (p 2) (q 2 a) (q 1 b) (q 2 c) "
+        + " ".join(f"(c{i})" for i in range(20))
+        + ") ((m)))"
+    )
     assert plans(d, s) == [["(!o 1.0 b)"], ["(!o 2.0 a)"], ["(!o 2.0 c)"]]
 
 
@@ -249,4 +281,6 @@ def test_a_list_with_unbound_variables_passed_down_binds_nothing():
     d = """(defdomain d ((:operator (!o ?a) ((q ?a)) () ())
       (:method (m ?k1 ?k2 ?k3 ?k4) () ((!o (a ?w))))))"""
     assert plans(d, "(defproblem p d ((q (a b)) (q c)) ((m 1 2 3 4)))") == [
-        ["(!o (a b))"], ["(!o c)"]]
+        ["(!o (a b))"],
+        ["(!o c)"],
+    ]

@@ -1,6 +1,7 @@
 """The goal-chain cut of the heuristic search (:mod:`htn.jshop.search.goal_chain`):
 it cuts a network whose refinements cannot make the goal's chain true in their
 order, and never a node on a plan's path."""
+
 from __future__ import annotations
 
 import re
@@ -80,8 +81,9 @@ def test_the_cut_lets_gbfs_solve_a_plan_recognition_instance(tmp_path):
     assert search.stats.goal_cuts > 0 and search.stats.expansions < 5000
     assert search.stats.as_dict()["goal_cuts"] == search.stats.goal_cuts
     # the observed actions are in the plan, in their order
-    observed = [int(re.match(r"!p_(\d+)", s.name).group(1))
-                for s in plan.steps if s.name.startswith("!p_")]
+    observed = [
+        int(re.match(r"!p_(\d+)", s.name).group(1)) for s in plan.steps if s.name.startswith("!p_")
+    ]
     assert observed == [1, 2, 3, 4, 5, 6]
 
 
@@ -114,8 +116,9 @@ SOUND = [
 
 
 @pytest.mark.corpus
-@pytest.mark.parametrize("domain,problem", SOUND,
-                         ids=["-".join(p.split("/")[1:]).rsplit(".", 1)[0] for _, p in SOUND])
+@pytest.mark.parametrize(
+    "domain,problem", SOUND, ids=["-".join(p.split("/")[1:]).rsplit(".", 1)[0] for _, p in SOUND]
+)
 def test_no_node_of_a_plan_found_without_the_cut_is_cut(domain, problem, monkeypatch):
     if not (CORPUS / domain).is_file():
         pytest.skip(f"{CORPUS / domain} not found")
@@ -144,14 +147,19 @@ def test_no_node_of_a_plan_found_without_the_cut_is_cut(domain, problem, monkeyp
 
 
 @pytest.mark.corpus
-@pytest.mark.parametrize("domain,problem,arms", [
-    ("ipc-po/PCP/p-pcp11-domain.hddl", "ipc-po/PCP/p-pcp11.hddl", ["wastar", "gbfs-tdg"]),
-    ("ipc2020-to/Childsnack/domain.hddl", "ipc2020-to/Childsnack/p05.hddl", ["wastar"]),
-], ids=["goal-chain", "no-goal"])
+@pytest.mark.parametrize(
+    "domain,problem,arms",
+    [
+        ("ipc-po/PCP/p-pcp11-domain.hddl", "ipc-po/PCP/p-pcp11.hddl", ["wastar", "gbfs-tdg"]),
+        ("ipc2020-to/Childsnack/domain.hddl", "ipc2020-to/Childsnack/p05.hddl", ["wastar"]),
+    ],
+    ids=["goal-chain", "no-goal"],
+)
 def test_auto_adds_a_tdg_search_where_the_goal_has_a_chain(domain, problem, arms):
     if not (CORPUS / domain).is_file():
         pytest.skip(f"{CORPUS / domain} not found")
     from htn.jshop.search.portfolio import Portfolio
+
     dom, prob = load_inputs(str(CORPUS / domain), str(CORPUS / problem))
     auto = Portfolio(dom, prob.instances[0])
     auto.gbfs.prepare()

@@ -3,6 +3,7 @@
 order, by every search (``--search dfs|gbfs|wastar|auto``). Every plan is
 checked with ``htn validate`` and, when the binary is there, with the
 competition's verifier (pandaPIparser)."""
+
 from __future__ import annotations
 
 import json
@@ -86,8 +87,9 @@ def _plan(tmp_path, domain: str, problem: str, search: str) -> list:
     if PANDA.is_file():
         ipc = tmp_path / "plan.ipc"
         ipc.write_text(result.stdout)
-        verdict = subprocess.run([str(PANDA), "-C", "--verify", str(d), str(p), str(ipc)],
-                                 capture_output=True, text=True)
+        verdict = subprocess.run(
+            [str(PANDA), "-C", "--verify", str(d), str(p), str(ipc)], capture_output=True, text=True
+        )
         assert "Plan verification result: true" in verdict.stdout, result.stdout
     return [line.split()[1] for line in result.stdout.split("root")[0].splitlines()[1:]]
 
@@ -114,7 +116,7 @@ def test_tasks_of_the_initial_network_interleave(tmp_path, search):
 def test_the_order_read_from_hddl():
     model = parse_model(N_SHAPE, "d.hddl")
     subtasks, order = subtask_order(model.methods[0].network, "m", None)
-    assert [s.label for s in subtasks] == ["z", "w", "x", "y"]     # topological, as written
+    assert [s.label for s in subtasks] == ["z", "w", "x", "y"]  # topological, as written
     assert type(order) is PartialOrder and not order
     assert tuple(order) == ((), (), (1,), (0, 1))
     probe = parse_model(PROBE, "d.hddl")
@@ -139,8 +141,10 @@ def test_heuristic_search_refuses_jshop2_and_all(tmp_path):
     p.write_text(PROBE_PROBLEM)
     result = run_htn("plan", d, p, "--search", "gbfs", "--all")
     assert result.returncode == 2 and "--all needs --search dfs" in result.stderr
-    jd, jp = SHARED / "corpus" / "jshop2" / "basic" / "basic", \
-        SHARED / "corpus" / "jshop2" / "basic" / "problem"
+    jd, jp = (
+        SHARED / "corpus" / "jshop2" / "basic" / "basic",
+        SHARED / "corpus" / "jshop2" / "basic" / "problem",
+    )
     if jd.is_file():
         result = run_htn("plan", jd, jp, "--search", "auto")
         assert result.returncode == 2 and "reads HDDL" in result.stderr

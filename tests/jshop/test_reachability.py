@@ -1,6 +1,7 @@
 """The reachable facts of grounding (:mod:`htn.jshop.search.reachability`):
 the semi-naive fixpoint reaches exactly the facts of enumerating every
 binding of every action at every turn, on IPC instances of both orders."""
+
 from __future__ import annotations
 
 import pytest
@@ -15,10 +16,14 @@ INSTANCES = [  # (domain, problem) under the corpus: conditional effects, types,
     ("ipc2020-to/Childsnack/domain.hddl", "ipc2020-to/Childsnack/p05.hddl"),
     ("ipc-po/Rover/domain.hddl", "ipc-po/Rover/pfile01.hddl"),
     ("ipc-po/UM-Translog/domain.hddl", "ipc-po/UM-Translog/06-A-AutoTruck.hddl"),
-    ("ipc2020-to-hard/Multiarm-Blocksworld/domain.hddl",
-     "ipc2020-to-hard/Multiarm-Blocksworld/pfile_02_055.hddl"),
-    ("ipc2020-to-hard/Monroe-Partially-Observable/pfile14-p-0017-clear-road-tree-13-domain.hddl",
-     "ipc2020-to-hard/Monroe-Partially-Observable/pfile14-p-0017-clear-road-tree-13.hddl"),
+    (
+        "ipc2020-to-hard/Multiarm-Blocksworld/domain.hddl",
+        "ipc2020-to-hard/Multiarm-Blocksworld/pfile_02_055.hddl",
+    ),
+    (
+        "ipc2020-to-hard/Monroe-Partially-Observable/pfile14-p-0017-clear-road-tree-13-domain.hddl",
+        "ipc2020-to-hard/Monroe-Partially-Observable/pfile14-p-0017-clear-road-tree-13.hddl",
+    ),
 ]
 
 
@@ -41,4 +46,4 @@ def test_the_semi_naive_fixpoint_reaches_the_facts_of_the_naive_one(domain, prob
     instance = prob.instances[0]
     fast = _facts(dom, instance, True)
     assert fast == _facts(dom, instance, False)
-    assert len(fast) > len(instance.state)         # the actions added some
+    assert len(fast) > len(instance.state)  # the actions added some

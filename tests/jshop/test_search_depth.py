@@ -2,6 +2,7 @@
 ends at the reduction-depth bound, a search that never ends but applies
 operators at the memory budget, each with a message naming the task, exit
 code 1, in bounded memory; a long plan is bounded by neither."""
+
 from __future__ import annotations
 
 import json
@@ -46,9 +47,14 @@ def _limit_memory():
 def test_runaway_recursion_stops_at_the_default_depth_within_1_gb(tmp_path):
     domain, problem = _files(tmp_path)
     # the whole process may use at most 1 GB of address space
-    result = subprocess.run([sys.executable, "-m", "htn", "plan", str(domain), str(problem)],
-                            cwd=ROOT, capture_output=True, text=True, timeout=120,
-                            preexec_fn=_limit_memory)
+    result = subprocess.run(
+        [sys.executable, "-m", "htn", "plan", str(domain), str(problem)],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=120,
+        preexec_fn=_limit_memory,
+    )
     assert result.returncode == 1, result.stderr
     assert "Traceback" not in result.stderr and "MemoryError" not in result.stderr
     assert f"{domain}:3:24: task (loop) recurses past the search depth limit" in result.stderr
@@ -74,8 +80,9 @@ def test_max_depth_option(tmp_path):
 def test_a_plan_longer_than_the_depth_bound_is_found(tmp_path):
     (tmp_path / "tail.jshop").write_text(TAIL_DOMAIN)
     (tmp_path / "p.jshop").write_text("(defproblem p tail () ((count 300)))\n")
-    result = run_htn("plan", tmp_path / "tail.jshop", tmp_path / "p.jshop",
-                     "--max-depth", "5", "-f", "jshop")
+    result = run_htn(
+        "plan", tmp_path / "tail.jshop", tmp_path / "p.jshop", "--max-depth", "5", "-f", "jshop"
+    )
     assert result.returncode == 0, result.stderr
     assert result.stdout.count("(!a ") == 300
 
@@ -84,24 +91,38 @@ def test_a_plan_longer_than_the_depth_bound_is_found(tmp_path):
 def test_endless_plan_stops_at_the_memory_budget_within_1_gb(tmp_path):
     (tmp_path / "tail.jshop").write_text(TAIL_DOMAIN)
     (tmp_path / "p.jshop").write_text("(defproblem p tail () ((forever)))\n")
-    result = subprocess.run([sys.executable, "-m", "htn", "plan", str(tmp_path / "tail.jshop"),
-                             str(tmp_path / "p.jshop")],
-                            cwd=ROOT, capture_output=True, text=True, timeout=120,
-                            preexec_fn=_limit_memory)
+    result = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "htn",
+            "plan",
+            str(tmp_path / "tail.jshop"),
+            str(tmp_path / "p.jshop"),
+        ],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=120,
+        preexec_fn=_limit_memory,
+    )
     assert result.returncode == 1, result.stderr
     assert "Traceback" not in result.stderr and "MemoryError" not in result.stderr
-    assert ("tail.jshop:5:34: the search used its memory budget (819 MB) at task (forever)"
-            in result.stderr)
+    assert (
+        "tail.jshop:5:34: the search used its memory budget (819 MB) at task (forever)"
+        in result.stderr
+    )
     assert "--max-memory" in result.stderr
 
 
 def test_max_memory_option(tmp_path):
     (tmp_path / "tail.jshop").write_text(TAIL_DOMAIN)
     (tmp_path / "p.jshop").write_text("(defproblem p tail () ((forever)))\n")
-    result = run_htn("plan", tmp_path / "tail.jshop", tmp_path / "p.jshop",
-                     "--max-memory", "120", "-f", "json")
+    result = run_htn(
+        "plan", tmp_path / "tail.jshop", tmp_path / "p.jshop", "--max-memory", "120", "-f", "json"
+    )
     assert result.returncode == 1
     assert "memory budget (120 MB)" in result.stderr
     stats = json.loads(result.stdout.splitlines()[-1])
     assert stats["memory_limit_reached"] is True and stats["plans_found"] == 0
-    assert stats["depth_limit_reached"] is False         # the bound that stopped it, only
+    assert stats["depth_limit_reached"] is False  # the bound that stopped it, only

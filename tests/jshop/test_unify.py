@@ -1,4 +1,5 @@
 """Terms, substitution, one-way unification and JSHOP2 printing."""
+
 from __future__ import annotations
 
 import pytest
@@ -31,7 +32,7 @@ def test_constants_numbers_and_types():
     assert unify(2.0, 2.0, [])
     assert not unify(2.0, "2", [])
     env = [1.0]
-    assert not unify(V(0), "1", env)   # bound variable must equal, type included
+    assert not unify(V(0), "1", env)  # bound variable must equal, type included
 
 
 def test_lists_and_dotted_lists():
@@ -61,11 +62,22 @@ def test_call_term_in_a_pattern_is_evaluated_before_unifying():
     assert not unify(two, 3.0, [])
 
 
-@pytest.mark.parametrize("value,text", [
-    (0.0, "0.0"), (2.0, "2.0"), (-12.5, "-12.5"), (0.4, "0.4"), (123456.0, "123456.0"),
-    (1e7, "1.0E7"), (12345678.9, "1.23456789E7"), (0.0001, "1.0E-4"), (0.001, "0.001"),
-    (67.5, "67.5"), (-0.0, "-0.0"),
-])
+@pytest.mark.parametrize(
+    "value,text",
+    [
+        (0.0, "0.0"),
+        (2.0, "2.0"),
+        (-12.5, "-12.5"),
+        (0.4, "0.4"),
+        (123456.0, "123456.0"),
+        (1e7, "1.0E7"),
+        (12345678.9, "1.23456789E7"),
+        (0.0001, "1.0E-4"),
+        (0.001, "0.001"),
+        (67.5, "67.5"),
+        (-0.0, "-0.0"),
+    ],
+)
 def test_numbers_print_as_java_doubles(value, text):
     assert term_str(value) == text
 

@@ -5,6 +5,7 @@ The order in which plans come out is the manual's ``getFirst`` order: the
 first tasks of an unordered list are those of each member in turn, and an
 ``:immediate`` task among them is the only option.
 """
+
 from __future__ import annotations
 
 import pytest
@@ -32,35 +33,46 @@ DOMAIN = """
 def _plans(tmp_path, task: str, *flags) -> tuple[list[list[str]], object]:
     (tmp_path / "d.jshop").write_text(DOMAIN)
     (tmp_path / "p.jshop").write_text(f"(defproblem p interleave () (({task})))")
-    result = run_htn("plan", tmp_path / "d.jshop", tmp_path / "p.jshop", "--all",
-                     "-f", "jshop", *flags)
+    result = run_htn(
+        "plan", tmp_path / "d.jshop", tmp_path / "p.jshop", "--all", "-f", "jshop", *flags
+    )
     assert "Traceback" not in result.stderr
-    plans = [[line for line in block.splitlines() if line.startswith("(")]
-             for block in result.stdout.split("--------------------")[:-1]]
+    plans = [
+        [line for line in block.splitlines() if line.startswith("(")]
+        for block in result.stdout.split("--------------------")[:-1]
+    ]
     return plans, result
 
 
-@pytest.mark.parametrize("task,expected", [
-    ("two", [["(!a1)", "(!b)"], ["(!b)", "(!a1)"]]),
-    ("nested", [["(!a1)", "(!a2)", "(!b)"], ["(!a1)", "(!b)", "(!a2)"],
-                ["(!b)", "(!a1)", "(!a2)"]]),
-    ("immediate", [["(!b)", "(!a1)", "(!c)"], ["(!b)", "(!c)", "(!a1)"]]),
-    ("nested-immediate", [["(!a1)", "(!a2)", "(!b)"], ["(!b)", "(!a1)", "(!a2)"]]),
-    ("inner-unordered", [["(!c)", "(!a1)", "(!b)"], ["(!c)", "(!b)", "(!a1)"]]),
-])
+@pytest.mark.parametrize(
+    "task,expected",
+    [
+        ("two", [["(!a1)", "(!b)"], ["(!b)", "(!a1)"]]),
+        (
+            "nested",
+            [["(!a1)", "(!a2)", "(!b)"], ["(!a1)", "(!b)", "(!a2)"], ["(!b)", "(!a1)", "(!a2)"]],
+        ),
+        ("immediate", [["(!b)", "(!a1)", "(!c)"], ["(!b)", "(!c)", "(!a1)"]]),
+        ("nested-immediate", [["(!a1)", "(!a2)", "(!b)"], ["(!b)", "(!a1)", "(!a2)"]]),
+        ("inner-unordered", [["(!c)", "(!a1)", "(!b)"], ["(!c)", "(!b)", "(!a1)"]]),
+    ],
+)
 def test_interleavings_in_getfirst_order(tmp_path, task, expected):
     plans, result = _plans(tmp_path, task)
     assert result.returncode == 0, result.stderr
     assert plans == expected
 
 
-@pytest.mark.parametrize("task,expected", [
-    ("two", [["(!a1)", "(!b)"]]),
-    ("nested", [["(!a1)", "(!a2)", "(!b)"]]),
-    ("immediate", [["(!a1)", "(!b)", "(!c)"]]),
-    # a nested :unordered list keeps its meaning in JSHOP2 1.0.3 too
-    ("inner-unordered", [["(!c)", "(!a1)", "(!b)"], ["(!c)", "(!b)", "(!a1)"]]),
-])
+@pytest.mark.parametrize(
+    "task,expected",
+    [
+        ("two", [["(!a1)", "(!b)"]]),
+        ("nested", [["(!a1)", "(!a2)", "(!b)"]]),
+        ("immediate", [["(!a1)", "(!b)", "(!c)"]]),
+        # a nested :unordered list keeps its meaning in JSHOP2 1.0.3 too
+        ("inner-unordered", [["(!c)", "(!a1)", "(!b)"], ["(!c)", "(!b)", "(!a1)"]]),
+    ],
+)
 def test_jshop2_compat_runs_top_level_bodies_in_order(tmp_path, task, expected):
     plans, result = _plans(tmp_path, task, "--jshop2-compat")
     assert result.returncode == 0, result.stderr

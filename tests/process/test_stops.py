@@ -1,5 +1,6 @@
 """One command's stops (htn.process): owned by the command, passed down,
 nothing installed for a library that does not ask."""
+
 from __future__ import annotations
 
 import signal
@@ -36,7 +37,7 @@ def test_a_command_installs_its_handlers_while_it_runs_and_puts_back_the_callers
     with command() as stops:
         assert signal.getsignal(signal.SIGINT) not in (before[0][signal.SIGINT],)
         assert sys.unraisablehook is not before[1]
-        assert not stops.owned      # a library's command: its process is not ours to end
+        assert not stops.owned  # a library's command: its process is not ours to end
     assert _handlers() == before
 
 
@@ -45,7 +46,7 @@ def test_a_stop_a_user_function_swallows_is_raised_again_when_it_returns():
 
     def swallow():
         try:
-            stops.deliver(KeyboardInterrupt())      # as the handler does on Ctrl-C
+            stops.deliver(KeyboardInterrupt())  # as the handler does on Ctrl-C
         except KeyboardInterrupt:
             pass
         return 1
@@ -106,9 +107,9 @@ def test_a_watched_run_is_halted_not_raised_into_while_it_ticks():
     class Run:
         def halt(self, why=""):
             halted.append(why)
-            return True             # a tick is running: the halt takes effect after it
+            return True  # a tick is running: the halt takes effect after it
 
     stops = Stops()
     stops.watch(Run())
-    stops.deliver(KeyboardInterrupt("stop now"))    # no raise
+    stops.deliver(KeyboardInterrupt("stop now"))  # no raise
     assert halted == ["stop now"]

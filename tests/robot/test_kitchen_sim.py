@@ -5,6 +5,7 @@ set_table_and_clean_up plan runs verified in the simulation. Beyond that, the
 world the simulation ends in must be the one the plan predicts, and the
 monitors must notice when an action's effect did not happen.
 """
+
 from __future__ import annotations
 
 import json
@@ -43,15 +44,18 @@ def instance(problem: str):
 def transformed_plan(problem: str):
     fw = Framework()
     rules.register(fw)
-    ws = fw.apply_all_transformations(Workspace.from_problem(load_domain(DOMAIN), instance(problem)))
+    ws = fw.apply_all_transformations(
+        Workspace.from_problem(load_domain(DOMAIN), instance(problem))
+    )
     return ws
 
 
 def execute(problem: str, steps, faults: str = "", seed: int = 0):
     dom = load_domain(DOMAIN)
     inst = instance(problem)
-    robot = KitchenRobot(kitchen_world_from_state(inst.state), faults=Faults.parse(faults),
-                         seed=seed)
+    robot = KitchenRobot(
+        kitchen_world_from_state(inst.state), faults=Faults.parse(faults), seed=seed
+    )
     log = EventLog(None, clock=lambda: robot.sim_time)
     summary = TaskDispatcher(robot, dom, inst, steps, load_retries(DOMAIN), log).run()
     return summary, log.events, robot
@@ -63,21 +67,22 @@ def predicted_facts(problem: str, steps) -> set:
     checker = Planner(dom, S.ProblemInstance(instance(problem).state, S.TaskList([])))
     for s in steps:
         assert checker.apply_step(s.name, s.args), s
-    dynamic = dom.dynamic_predicates() - {"found"}   # what was seen is not observable later
+    dynamic = dom.dynamic_predicates() - {"found"}  # what was seen is not observable later
     return {(p, tuple(a)) for p, a in checker.state.facts() if p in dynamic}
 
 
 @pytest.mark.slow
 def test_transformed_set_table_and_clean_up_runs_verified_in_pybullet(tmp_path):
     plan, log = tmp_path / "t.txt", tmp_path / "run.jsonl"
-    r = run_htn("transform", DOMAIN, ROOT / "problems" / "set_table_and_clean_up.jshop",
-                "-o", plan)
+    r = run_htn("transform", DOMAIN, ROOT / "problems" / "set_table_and_clean_up.jshop", "-o", plan)
     assert r.returncode == 0, r.stderr
     text = plan.read_text()
     for step in ("(!lift-tray tray1)", "(!grasp bowl2 sink_area right)", "(!close drawer)"):
-        assert step in text   # tray, both-hands and container rewrites are in the plan
-    assert text.splitlines().count("(!open drawer)") == 1   # a step line (the ; tasks: note has it too)
-    assert text.count("(!look-for tray1 kitchen_island)") == 5   # before each load and the lift
+        assert step in text  # tray, both-hands and container rewrites are in the plan
+    assert (
+        text.splitlines().count("(!open drawer)") == 1
+    )  # a step line (the ; tasks: note has it too)
+    assert text.count("(!look-for tray1 kitchen_island)") == 5  # before each load and the lift
     r = run_htn("run", plan, "--sim", "--log", log)
     assert r.returncode == 0, r.stdout + r.stderr
     assert r.stdout.splitlines()[-1].startswith("verified: 48 of 48 steps verified")
@@ -90,8 +95,11 @@ def test_transformed_set_table_and_clean_up_runs_verified_in_pybullet(tmp_path):
 @pytest.mark.parametrize("which", ["original", "transformed"])
 def test_the_simulated_kitchen_ends_as_the_plan_predicts(which):
     ws = transformed_plan("set_table_and_clean_up")
-    steps = (next(Planner(load_domain(DOMAIN), instance("set_table_and_clean_up")).plans()).steps
-             if which == "original" else ws.plan.steps)
+    steps = (
+        next(Planner(load_domain(DOMAIN), instance("set_table_and_clean_up")).plans()).steps
+        if which == "original"
+        else ws.plan.steps
+    )
     summary, events, robot = execute("set_table_and_clean_up", steps)
     try:
         assert summary.result == "verified" and summary.retries == 0
@@ -129,10 +137,12 @@ def run_steps(robot, problem, lines):
     dom = load_domain(DOMAIN)
     steps = [Step(a.name, a.args) for a in (parse_step(line, "<test>", 1) for line in lines)]
     log = EventLog(None, clock=lambda: robot.sim_time)
-    TaskDispatcher(robot, dom, observed_instance(dom, instance(problem), robot), steps, {},
-                   log).run()
-    return [Outcome(e["event"]) for e in log.events
-            if e["event"] in ("verified", "failed", "aborted")]
+    TaskDispatcher(
+        robot, dom, observed_instance(dom, instance(problem), robot), steps, {}, log
+    ).run()
+    return [
+        Outcome(e["event"]) for e in log.events if e["event"] in ("verified", "failed", "aborted")
+    ]
 
 
 @pytest.mark.slow
@@ -140,14 +150,23 @@ def test_a_closed_drawer_hides_its_spoons_and_the_grasp_is_aborted():
     inst = instance("set_table_and_clean_up")
     robot = KitchenRobot(kitchen_world_from_state(inst.state))
     try:
-        got = run_steps(robot, "set_table_and_clean_up",
-                        ["(!navigate start sink_area)", "(!look-for spoon1 sink_area)",
-                         "(!grasp-from spoon1 drawer left)"])
+        got = run_steps(
+            robot,
+            "set_table_and_clean_up",
+            [
+                "(!navigate start sink_area)",
+                "(!look-for spoon1 sink_area)",
+                "(!grasp-from spoon1 drawer left)",
+            ],
+        )
         # seen to be in the drawer, but not graspable through its housing
         assert got == [Outcome.VERIFIED, Outcome.VERIFIED, Outcome.ABORTED]
         assert robot.check_opened("drawer", False).ok
-        got = run_steps(robot, "set_table_and_clean_up",
-                        ["(!open drawer)", "(!grasp-from spoon1 drawer left)", "(!close drawer)"])
+        got = run_steps(
+            robot,
+            "set_table_and_clean_up",
+            ["(!open drawer)", "(!grasp-from spoon1 drawer left)", "(!close drawer)"],
+        )
         assert got == [Outcome.VERIFIED] * 3
         assert robot.arms.hands == {"left": "spoon1", "right": None}
         # the other spoon moved with the drawer and back
@@ -161,16 +180,28 @@ def test_tray_needs_both_hands_and_carries_what_stands_on_it():
     inst = instance("tray_three")
     robot = KitchenRobot(kitchen_world_from_state(inst.state))
     try:
-        got = run_steps(robot, "tray_three", ["(!navigate start kitchen_island)",
-                                              "(!look-for cup kitchen_island)",
-                                              "(!grasp cup kitchen_island left)"])
+        got = run_steps(
+            robot,
+            "tray_three",
+            [
+                "(!navigate start kitchen_island)",
+                "(!look-for cup kitchen_island)",
+                "(!grasp cup kitchen_island left)",
+            ],
+        )
         assert got == [Outcome.VERIFIED] * 3
         # one hand holds the cup: lifting the tray fails, nothing moves
         assert run_steps(robot, "tray_three", ["(!lift-tray tray1)"]) == [Outcome.FAILED]
-        got = run_steps(robot, "tray_three", ["(!put-on-tray cup tray1 left)",
-                                              "(!lift-tray tray1)",
-                                              "(!navigate kitchen_island sink_area)",
-                                              "(!lower-tray tray1 sink_area)"])
+        got = run_steps(
+            robot,
+            "tray_three",
+            [
+                "(!put-on-tray cup tray1 left)",
+                "(!lift-tray tray1)",
+                "(!navigate kitchen_island sink_area)",
+                "(!lower-tray tray1 sink_area)",
+            ],
+        )
         assert got == [Outcome.VERIFIED] * 4
         assert robot.check_on_tray("cup", "tray1").ok
         assert robot.check_tray_carried("tray1", False, "sink_area").ok
@@ -183,8 +214,9 @@ def test_tray_needs_both_hands_and_carries_what_stands_on_it():
 def test_faults_are_recovered_by_retries():
     # (a slip while driving is not: see test_monitoring.py)
     steps = transformed_plan("set_table_and_clean_up").plan.steps
-    summary, events, robot = execute("set_table_and_clean_up", steps,
-                                     faults="detect=0.2,nav=0.1", seed=3)
+    summary, events, robot = execute(
+        "set_table_and_clean_up", steps, faults="detect=0.2,nav=0.1", seed=3
+    )
     try:
         assert robot.injected, "the seed injects faults"
         assert summary.result == "verified" and summary.retries >= len(robot.injected) > 0
@@ -197,8 +229,9 @@ def test_replanning_from_where_a_navigation_stopped():
     inst = instance("transport_four")
     robot = KitchenRobot(kitchen_world_from_state(inst.state), faults=Faults.parse("nav=1"))
     try:
-        assert run_steps(robot, "transport_four",
-                         ["(!navigate start kitchen_island)"]) == [Outcome.ABORTED]
+        assert run_steps(robot, "transport_four", ["(!navigate start kitchen_island)"]) == [
+            Outcome.ABORTED
+        ]
         observed = observed_instance(dom, inst, robot)
         here = [a for a in observed.state if a.pred == "area" and a.args[0] == "here"]
         assert len(here) == 1 and ("robot-at", ("here",)) in robot.observe()
@@ -217,11 +250,11 @@ def test_tables_keep_clear_of_every_drive(problem):
     areas = [(p.x, p.y) for p in w.places.values()]
     for name, f in w.furniture.items():
         pl = w.places[name]
-        heading = math.atan2(f.y - pl.y, f.x - pl.x)   # the area's pose faces its table
+        heading = math.atan2(f.y - pl.y, f.x - pl.x)  # the area's pose faces its table
         assert abs((heading - pl.theta + math.pi) % (2 * math.pi) - math.pi) < 1e-9
         rect = _table_rect(pl.x, pl.y, pl.theta)
         for i, a in enumerate(areas):
-            for b in areas[i + 1:]:
+            for b in areas[i + 1 :]:
                 assert _rect_seg_dist(rect, a, b) >= ROBOT_HALF_WIDTH
 
 
@@ -240,8 +273,9 @@ def test_areas_too_close_for_tables_are_a_clear_error(tmp_path):
     r = run_htn("run", plan, "--sim")
     assert r.returncode == 2
     first = r.stderr.splitlines()[0]
-    assert first.startswith(f"{prob}:2:4: cannot lay out the simulated kitchen: the table of "
-                            "area 'a'"), r.stderr
+    assert first.startswith(
+        f"{prob}:2:4: cannot lay out the simulated kitchen: the table of area 'a'"
+    ), r.stderr
     assert "Traceback" not in r.stderr
 
 
@@ -255,5 +289,6 @@ def test_an_object_nowhere_is_a_clear_error(tmp_path):
     plan.write_text("Plan cost: 1.0\n\n(!navigate start a)\n--------------------\n")
     r = run_htn("run", plan, "--sim", "--domain", DOMAIN, "--problem", prob)
     assert r.returncode == 2
-    assert r.stderr.splitlines()[0] == (f"{prob}:3:4: cup is at 'nowhere', which is neither "
-                                        "an area nor a container")
+    assert r.stderr.splitlines()[0] == (
+        f"{prob}:3:4: cup is at 'nowhere', which is neither an area nor a container"
+    )

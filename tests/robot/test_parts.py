@@ -1,6 +1,7 @@
 """The PyBullet robots are made of parts they hold (issue 35, item 2): no
 class of ``robot/`` mixes more than two bases into one ``self``, each part is
 an object handed what it needs, and the grasp's preamble exists once."""
+
 from __future__ import annotations
 
 import ast
@@ -27,6 +28,7 @@ def test_the_grasp_preamble_is_written_once():
 
 def _instance(problem: str):
     from htn.jshop import load_problem
+
     return load_problem(str(ROOT / "problems" / f"{problem}.jshop")).instances[0]
 
 
@@ -39,6 +41,7 @@ def test_the_domestic_robot_holds_its_parts():
     from htn.robot.physics import Physics
     from htn.robot.pybullet_sim import PyBulletRobot
     from htn.robot.world import world_from_state
+
     robot = PyBulletRobot(world_from_state(_instance("bring_object").state))
     try:
         assert isinstance(robot.physics, Physics) and isinstance(robot.base, MobileBase)
@@ -60,6 +63,7 @@ def test_the_kitchen_robot_holds_its_parts():
     from htn.robot.tray import Trays
     from htn.robot.two_arms import TwoArms
     from htn.robot.world import kitchen_world_from_state
+
     robot = KitchenRobot(kitchen_world_from_state(_instance("set_table_and_clean_up").state))
     try:
         assert isinstance(robot.arms, TwoArms) and isinstance(robot.drawers, Drawers)

@@ -4,6 +4,7 @@ sends goals to exchange_server.py, collects their feedback and results, calls
 the services, and prints what it got as one JSON object.
 
 Run as ``python exchange_client.py NAME``; every wait has a timeout."""
+
 import json
 import sys
 import time
@@ -28,9 +29,12 @@ def wait(future):
 
 def goal(tasks, options="", until=None):
     events = []
-    handle = wait(client.send_goal_async(
-        t.ExecuteTasks.Goal(tasks=tasks, options=options),
-        feedback_callback=lambda f: events.append(json.loads(f.feedback.event.record))))
+    handle = wait(
+        client.send_goal_async(
+            t.ExecuteTasks.Goal(tasks=tasks, options=options),
+            feedback_callback=lambda f: events.append(json.loads(f.feedback.event.record)),
+        )
+    )
     assert handle.accepted
     if until:
         deadline = time.monotonic() + TIMEOUT
@@ -38,16 +42,25 @@ def goal(tasks, options="", until=None):
             rclpy.spin_once(node, timeout_sec=0.1)
         wait(handle.cancel_goal_async())
     r = wait(handle.get_result_async()).result
-    return {"outcome": r.outcome, "summary": r.summary, "error": r.error, "plan": list(r.plan),
-            "tree": json.loads(r.tree) if r.tree else None, "steps": r.steps,
-            "verified": r.verified, "events": events}
+    return {
+        "outcome": r.outcome,
+        "summary": r.summary,
+        "error": r.error,
+        "plan": list(r.plan),
+        "tree": json.loads(r.tree) if r.tree else None,
+        "steps": r.steps,
+        "verified": r.verified,
+        "events": events,
+    }
 
 
 client = ActionClient(node, t.ExecuteTasks, f"/{NAME}/execute")
 assert client.wait_for_server(timeout_sec=TIMEOUT), "no action server"
-out = {"done": goal("((bring jenny pringles))"),
-       "cancelled": goal("(bring jenny pringles)", '{"until_cancelled": true}', until=3),
-       "refused": goal("bring jenny")}
+out = {
+    "done": goal("((bring jenny pringles))"),
+    "cancelled": goal("(bring jenny pringles)", '{"until_cancelled": true}', until=3),
+    "refused": goal("bring jenny"),
+}
 state = node.create_client(t.GetState, f"/{NAME}/state")
 update = node.create_client(t.UpdateFacts, f"/{NAME}/update_facts")
 assert state.wait_for_service(timeout_sec=TIMEOUT) and update.wait_for_service(timeout_sec=TIMEOUT)

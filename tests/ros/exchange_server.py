@@ -5,6 +5,7 @@ action ``/NAME/execute`` (ExecuteTasks) and the services ``/NAME/state``
 Run as ``python exchange_server.py NAME`` with htn_interfaces reachable
 through the environment (PYTHONPATH, LD_LIBRARY_PATH: what
 ``htn.ros.interfaces.activate`` returns); serves until SIGINT."""
+
 import json
 import sys
 import time
@@ -28,25 +29,41 @@ def matches(pattern, fact):
 
 
 def event(step, kind):
-    record = {"t": time.time(), "sim_t": 0.5 * step, "step": step, "action": PLAN[step % 2],
-              "event": kind, "attempt": 1}
-    return ExecuteTasks.Feedback(event=Event(
-        t=record["t"], sim_t=record["sim_t"], step=step, action=record["action"],
-        event=kind, attempt=1, detail="", record=json.dumps(record)))
+    record = {
+        "t": time.time(),
+        "sim_t": 0.5 * step,
+        "step": step,
+        "action": PLAN[step % 2],
+        "event": kind,
+        "attempt": 1,
+    }
+    return ExecuteTasks.Feedback(
+        event=Event(
+            t=record["t"],
+            sim_t=record["sim_t"],
+            step=step,
+            action=record["action"],
+            event=kind,
+            attempt=1,
+            detail="",
+            record=json.dumps(record),
+        )
+    )
 
 
 def execute(goal):
     tasks, options = goal.request.tasks, json.loads(goal.request.options or "{}")
     if not tasks.startswith("("):
         goal.succeed()
-        return ExecuteTasks.Result(outcome="refused", summary="refused",
-                                   error="<goal>:1:1: a task list starts with '('")
-    if options.get("until_cancelled"):       # events until the client has seen enough
+        return ExecuteTasks.Result(
+            outcome="refused", summary="refused", error="<goal>:1:1: a task list starts with '('"
+        )
+    if options.get("until_cancelled"):  # events until the client has seen enough
         step = 0
         while not goal.is_cancel_requested:
             goal.publish_feedback(event(step, "started"))
             step += 1
-            time.sleep(0.02)                 # the pace of a (fake) robot
+            time.sleep(0.02)  # the pace of a (fake) robot
         goal.canceled()
         return ExecuteTasks.Result(outcome="preempted", summary="preempted", steps=step)
     for step in range(len(PLAN)):
@@ -54,13 +71,18 @@ def execute(goal):
             goal.publish_feedback(event(step, kind))
     goal.succeed()
     tree = {"task": tasks, "children": [{"action": a} for a in PLAN]}
-    return ExecuteTasks.Result(outcome="verified", summary="verified: 2 of 2 steps",
-                               plan=PLAN, tree=json.dumps(tree), steps=2, verified=2)
+    return ExecuteTasks.Result(
+        outcome="verified",
+        summary="verified: 2 of 2 steps",
+        plan=PLAN,
+        tree=json.dumps(tree),
+        steps=2,
+        verified=2,
+    )
 
 
 def state(request, response):
-    response.facts = sorted(f for f in facts if not request.pattern
-                            or matches(request.pattern, f))
+    response.facts = sorted(f for f in facts if not request.pattern or matches(request.pattern, f))
     return response
 
 
@@ -76,8 +98,14 @@ from htn.ros.shutdown import end_within  # noqa: E402
 rclpy.init()
 node = rclpy.create_node("server_" + NAME)
 group = ReentrantCallbackGroup()
-ActionServer(node, ExecuteTasks, f"/{NAME}/execute", execute, callback_group=group,
-             cancel_callback=lambda goal: CancelResponse.ACCEPT)
+ActionServer(
+    node,
+    ExecuteTasks,
+    f"/{NAME}/execute",
+    execute,
+    callback_group=group,
+    cancel_callback=lambda goal: CancelResponse.ACCEPT,
+)
 node.create_service(GetState, f"/{NAME}/state", state, callback_group=group)
 node.create_service(UpdateFacts, f"/{NAME}/update_facts", update, callback_group=group)
 executor = MultiThreadedExecutor()
@@ -87,7 +115,7 @@ try:
 except (KeyboardInterrupt, ExternalShutdownException):
     pass
 finally:
-    end_within("exchange_server")     # rclpy's threads may stall the interpreter's exit
+    end_within("exchange_server")  # rclpy's threads may stall the interpreter's exit
     executor.shutdown(timeout_sec=5.0)
     node.destroy_node()
     rclpy.try_shutdown()

@@ -3,6 +3,7 @@ module's own per xdist worker (Fast DDS derives its ports from it; discovery
 on this host only), and htn's interface packages built once, or the test
 skipped with the reason where the ros extra, a compiler, cmake or the Python
 headers are missing."""
+
 from __future__ import annotations
 
 import os
@@ -20,8 +21,11 @@ def environment(module: str) -> dict[str, str]:
     """This process's environment with this worker's domain for ``module``."""
     worker = os.environ.get("PYTEST_XDIST_WORKER", "gw0")
     domain = (int(re.sub(r"\D", "", worker) or 0) + OFFSETS[module]) % 102
-    return {**os.environ, "ROS_DOMAIN_ID": str(domain),
-            "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"}
+    return {
+        **os.environ,
+        "ROS_DOMAIN_ID": str(domain),
+        "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST",
+    }
 
 
 def ready(module: str) -> dict[str, str]:
@@ -31,10 +35,12 @@ def ready(module: str) -> dict[str, str]:
         pytest.skip("the ros extra is not installed (pip install -e '.[ros]'): no rclpy")
     from htn.ros import interfaces
     from htn.ros.interfaces import InterfaceBuildError
+
     try:
         for package in interfaces.SHIPPED:
             interfaces.locate(package) or interfaces.build(
-                lambda message: print(message, file=sys.stderr), package)
+                lambda message: print(message, file=sys.stderr), package
+            )
     except InterfaceBuildError as error:
         if error.missing:
             pytest.skip(str(error))

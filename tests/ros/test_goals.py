@@ -3,6 +3,7 @@ time on an agent, each in its own thread as the node's action server runs
 them; a newer goal preempting the running one, which with ``resume`` waits
 and goes on after it, newest first; not after a newer goal that failed; a
 cancel ending only its own goal."""
+
 from __future__ import annotations
 
 import threading
@@ -65,18 +66,22 @@ class Node:
 
     def send(self, handle: Handle) -> None:
         """Serve ``handle`` in a thread of its own."""
+
         def serve():
             self.results[handle.name] = self.turns.serve(handle)
+
         thread = threading.Thread(target=serve)
         self.threads.append(thread)
         thread.start()
 
     def preempting(self, handle: Handle):
         """A hook: send ``handle``, and go on once it has preempted the goal."""
+
         def hook():
             self.agent.asked.clear()
             self.send(handle)
             assert self.agent.asked.wait(10)
+
         return hook
 
     def join(self) -> dict:
@@ -99,8 +104,10 @@ def test_a_preempted_goal_resumes_after_the_newer_one_and_both_end_verified():
     assert node.events[waiting - 1] == ("a", "summary", None)
     assert node.events[waiting + 1] == ("b", "header", None)
     assert node.events[-2:] == [("a", "verified", 8), ("a", "summary", None)]
-    assert node.agent.world.query("(has guest ?what)") == ["(has guest coke)",
-                                                           "(has guest pringles)"]
+    assert node.agent.world.query("(has guest ?what)") == [
+        "(has guest coke)",
+        "(has guest pringles)",
+    ]
 
 
 def test_goals_preempted_in_turn_resume_newest_first():
@@ -118,8 +125,9 @@ def test_goals_preempted_in_turn_resume_newest_first():
 def test_waiting_goals_end_preempted_after_a_newer_goal_that_failed():
     node = Node()
 
-    def failing():          # the robot's next action fails (a driver error)
+    def failing():  # the robot's next action fails (a driver error)
         node.agent.robot.fail_fault = 1.0
+
     node.hooks[("a", "verified", 3)] = node.preempting(Handle("b", COKE))
     node.hooks[("b", "header", None)] = failing
     node.send(Handle("a", PRINGLES))
@@ -138,6 +146,7 @@ def test_a_goal_cancelled_while_it_waits_ends_and_the_running_one_goes_on():
     def cancel_a():
         a.is_cancel_requested = True
         node.turns.cancel(a)
+
     node.hooks[("a", "verified", 3)] = node.preempting(Handle("b", COKE))
     node.hooks[("b", "verified", 2)] = cancel_a
     node.send(a)
@@ -145,7 +154,8 @@ def test_a_goal_cancelled_while_it_waits_ends_and_the_running_one_goes_on():
     assert results["b"].outcome == "verified"
     assert results["a"].outcome == "preempted"
     assert results["a"].summary.endswith(
-        "; not resumed: cancelled by the client while it waited to resume")
+        "; not resumed: cancelled by the client while it waited to resume"
+    )
 
 
 def test_without_resume_a_preempted_goal_ends_preempted():

@@ -3,6 +3,7 @@
 the mapping file (``--robot ros``), ``htn ros send``, and a plain rclpy
 NavigateToPose server written here standing in for Nav2. Skipped without
 the ros extra (and without PyBullet where the simulated robot is needed)."""
+
 from __future__ import annotations
 
 import json
@@ -41,14 +42,26 @@ class Processes:
         self.env, self.cwd, self.started = env, cwd, []
 
     def start(self, *args):
-        proc = subprocess.Popen(htn_command(*args), env=self.env, cwd=self.cwd, text=True,
-                                stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+        proc = subprocess.Popen(
+            htn_command(*args),
+            env=self.env,
+            cwd=self.cwd,
+            text=True,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+        )
         self.started.append(proc)
         return proc
 
     def run(self, *args, timeout=180):
-        return subprocess.run(htn_command(*args), env=self.env, cwd=self.cwd, text=True,
-                              capture_output=True, timeout=timeout)
+        return subprocess.run(
+            htn_command(*args),
+            env=self.env,
+            cwd=self.cwd,
+            text=True,
+            capture_output=True,
+            timeout=timeout,
+        )
 
     def stop(self, proc) -> tuple[str, str]:
         if proc.poll() is None:
@@ -100,7 +113,8 @@ def untimed(lines: str) -> list[str]:
 
 
 def test_the_papers_system_as_ros_nodes_runs_as_htn_run_with_faults_retried_and_repaired(
-        ros, sim, procs, tmp_path):
+    ros, sim, procs, tmp_path
+):
     """robot --sim and the node (its robot the ros one, from the mapping file
     beside the domain), with a slip retried and a moved object repaired:
     the same steps, outcomes and faults as htn run --sim with the same seed."""
@@ -117,12 +131,14 @@ def test_the_papers_system_as_ros_nodes_runs_as_htn_run_with_faults_retried_and_
     assert untimed(done.stdout) == untimed(alone.stdout)
     printed = done.stdout
     assert " fault " in printed and " retrying " in printed and " replanned " in printed
-    assert printed.splitlines()[-1].startswith("verified: 10 of 10 steps verified, 4 retries, "
-                                               "1 replans")
+    assert printed.splitlines()[-1].startswith(
+        "verified: 10 of 10 steps verified, 4 retries, 1 replans"
+    )
     assert refused.returncode == 2 and "Traceback" not in refused.stderr
     assert refused.stderr.strip().endswith(
-        "goal:1:3: unknown task 'fly_to': the domain has no method for it")
-    assert served.poll() is None          # the node lives on
+        "goal:1:3: unknown task 'fly_to': the domain has no method for it"
+    )
+    assert served.poll() is None  # the node lives on
 
 
 POSES = textwrap.dedent('''
@@ -148,20 +164,29 @@ POSES = textwrap.dedent('''
 
 
 def test_a_cancel_ends_preempted_the_robot_holds_and_the_same_goal_goes_on_from_there(
-        ros, sim, procs, tmp_path):
+    ros, sim, procs, tmp_path
+):
     from test_node import CLIENT, GOAL  # a plain rclpy client: cancels once step 2 runs
+
     robot(procs, "--speed", "4")
     node(procs, "--log-dir", tmp_path)
-    client = subprocess.run([sys.executable, "-c", CLIENT], input=f"cancel {GOAL}\n", env=ros,
-                            capture_output=True, text=True, timeout=120)
+    client = subprocess.run(
+        [sys.executable, "-c", CLIENT],
+        input=f"cancel {GOAL}\n",
+        env=ros,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert client.returncode == 0, client.stderr[-3000:]
     cancelled = json.loads(client.stdout)
     assert cancelled["outcome"] == "preempted" and cancelled["status"] == 5, cancelled
     assert cancelled["summary"].startswith("preempted: 1 of 8 steps verified"), cancelled
     # the robot holds: its pose does not change, and its clock stopped
     # within 0.5 s (simulated) of the halt the log records
-    listen = subprocess.run([sys.executable, "-c", POSES, "1.0"], env=ros, capture_output=True,
-                            text=True, timeout=60)
+    listen = subprocess.run(
+        [sys.executable, "-c", POSES, "1.0"], env=ros, capture_output=True, text=True, timeout=60
+    )
     poses = [json.loads(line) for line in listen.stdout.splitlines()]
     assert len(poses) >= 5, listen.stderr
     assert max(abs(p[2] - poses[0][2]) + abs(p[3] - poses[0][3]) for p in poses) < 1e-6
@@ -178,7 +203,8 @@ def test_a_cancel_ends_preempted_the_robot_holds_and_the_same_goal_goes_on_from_
 
 
 def test_a_killed_robot_node_fails_the_goal_with_the_reason_and_a_new_one_serves_the_next(
-        ros, sim, procs, tmp_path):
+    ros, sim, procs, tmp_path
+):
     sim_robot = robot(procs, "--speed", "2")
     node(procs, "--log-dir", tmp_path)
     sent = procs.start("ros", "send", "--from-problem", PROBLEM)
@@ -186,8 +212,9 @@ def test_a_killed_robot_node_fails_the_goal_with_the_reason_and_a_new_one_serves
 
     def started(n: int) -> bool:
         return log.is_file() and log.read_text().count('"event": "start"') >= n
+
     wait_until(lambda: started(3), "the third action started", sent, timeout=60)
-    sim_robot.kill()                     # SIGKILL: no goodbye on the graph
+    sim_robot.kill()  # SIGKILL: no goodbye on the graph
     killed = time.monotonic()
     out, err = sent.communicate(timeout=30)
     ended = time.monotonic() - killed
@@ -195,7 +222,7 @@ def test_a_killed_robot_node_fails_the_goal_with_the_reason_and_a_new_one_serves
     assert ended < 5.0, f"the goal ended {ended:.1f} s after the robot was killed"
     assert re.search(r"failed .*the action server /robot/skill/\w+ went away", out), out
     assert out.splitlines()[-1].startswith("failed: 2 of 8 steps verified")
-    robot(procs, "--speed", "0")         # the robot is back (a fresh world)
+    robot(procs, "--speed", "0")  # the robot is back (a fresh world)
     again = send(procs, "--from-problem", PROBLEM)
     assert again.returncode == 0, again.stderr + again.stdout
     assert again.stdout.splitlines()[-1].startswith("verified: 8 of 8 steps verified")
@@ -270,13 +297,19 @@ def test_robot_ros_sends_the_mapped_poses_to_a_plain_navigate_to_pose_server(ros
     (tmp_path / "home.ros.toml").write_text(MAPPING)
     text = PROBLEM.read_text().replace(
         "((bring_object jenny pringles guest))",
-        "((!move_base jenny home_base counter_front) (!move_base jenny counter_front sofa_front))")
+        "((!move_base jenny home_base counter_front) (!move_base jenny counter_front sofa_front))",
+    )
     problem = tmp_path / "drive.jshop"
     problem.write_text(text)
     plan = tmp_path / "plan.txt"
     assert procs.run("plan", domain, problem, "-o", plan).returncode == 0
-    nav2 = subprocess.Popen([sys.executable, "-c", NAV2], env=ros, text=True,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    nav2 = subprocess.Popen(
+        [sys.executable, "-c", NAV2],
+        env=ros,
+        text=True,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+    )
     procs.started.append(nav2)
     assert nav2.stdout.readline() == "ready\n", nav2.stderr.read()
     ran = procs.run("run", plan, "--robot", "ros")
@@ -284,8 +317,10 @@ def test_robot_ros_sends_the_mapped_poses_to_a_plain_navigate_to_pose_server(ros
     assert ran.returncode == 0, ran.stderr + ran.stdout + err
     goals = [json.loads(line) for line in out.splitlines()]
     # (location counter_front 2.2 1.5 0), (location sofa_front -2.0 1.5 90)
-    assert goals == [{"frame": "map", "x": 2.2, "y": 1.5, "yaw": 0.0},
-                     {"frame": "map", "x": -2.0, "y": 1.5, "yaw": pytest.approx(90.0)}]
+    assert goals == [
+        {"frame": "map", "x": 2.2, "y": 1.5, "yaw": 0.0},
+        {"frame": "map", "x": -2.0, "y": 1.5, "yaw": pytest.approx(90.0)},
+    ]
     assert ran.stdout.splitlines()[-1].startswith("verified: 2 of 2 steps verified")
     # the monitor: base_at answered by its service, no_collision by the topic
     assert "seen by the stand-in; /robot/bumper data = False" in ran.stdout, ran.stdout
@@ -297,6 +332,7 @@ def test_the_nodes_view_shows_each_goal_and_tells_an_open_page_of_the_next(ros, 
     --log-dir makes its folder."""
     pytest.importorskip("uvicorn", reason="the view extra is not installed")
     from websockets.sync.client import connect
+
     logs = tmp_path / "runs" / "today"
     served = node(procs, "--robot", "symbolic", "--view", "--log-dir", logs)
     line, end = "", time.monotonic() + 60
@@ -318,6 +354,7 @@ def test_the_nodes_view_shows_each_goal_and_tells_an_open_page_of_the_next(ros, 
             elif message["type"] == "events":
                 got += message["events"]
         return got
+
     first = send(procs, "((inform jenny hello))")
     assert first.returncode == 0, first.stderr + first.stdout
     with connect(url, open_timeout=10, max_size=None) as ws:

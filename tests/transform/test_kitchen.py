@@ -1,4 +1,5 @@
 """The kitchen pick-and-place domain (groundwork for plan transformations)."""
+
 from __future__ import annotations
 
 import pytest
@@ -16,8 +17,10 @@ def first_plan(problem: str):
     return next(Planner(dom, prob.instances[0], record_trees=True).plans())
 
 
-@pytest.mark.parametrize("problem,transports,length", [
-    ("transport_four", 4, 20), ("tray_three", 3, 15), ("set_table_and_clean_up", 8, 43)])
+@pytest.mark.parametrize(
+    "problem,transports,length",
+    [("transport_four", 4, 20), ("tray_three", 3, 15), ("set_table_and_clean_up", 8, 43)],
+)
 def test_transports_decompose_into_searching_fetching_delivering(problem, transports, length):
     plan = first_plan(problem)
     assert len(plan.steps) == length

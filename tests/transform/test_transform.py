@@ -1,5 +1,6 @@
 """Plan transformations: applicability rules (JSHOP2 axioms), the framework API,
 the three rules, and rollback of rewrites that break a plan or cost more."""
+
 from __future__ import annotations
 
 import json
@@ -21,8 +22,9 @@ PROBLEMS = ROOT / "problems"
 def workspace(problem: str, text: str | None = None) -> Workspace:
     dom = load_domain(DOMAIN)
     if text is not None:
-        path = ROOT / "problems" / "transport_four.jshop"   # for a position only
+        path = ROOT / "problems" / "transport_four.jshop"  # for a position only
         from htn.jshop.readers.load import parse_text
+
         prob = parse_text(text, str(path))
     else:
         prob = load_problem(str(PROBLEMS / f"{problem}.jshop"))
@@ -52,7 +54,7 @@ def test_both_hands_rule_applies_to_same_areas_only():
     fw = framework()
     pairs = fw.query(workspace("transport_four"), "(both-hands ?first ?second)")
     assert {"first": "transporting :call 1", "second": "transporting :call 2"} in pairs
-    assert len(pairs) == 6          # every ordered pair of the four transports
+    assert len(pairs) == 6  # every ordered pair of the four transports
     assert fw.query(workspace("", TWO_TARGETS), "(both-hands ?first ?second)") == []
 
 
@@ -68,24 +70,27 @@ def test_tray_needs_more_than_two_transports():
     ws = workspace("tray_three")
     fw = framework()
     assert len(fw.query(ws, "(tray-transport ?t ?tray ?from ?to)")) == 3
-    two = workspace("", """(defproblem p kitchen
+    two = workspace(
+        "",
+        """(defproblem p kitchen
       ((area kitchen_island 0.0 0.0) (area sink_area 1.2 0.6) (area start 0.6 -0.8)
        (at bowl kitchen_island) (at cup kitchen_island) (tray tray1 kitchen_island)
        (robot-at start) (free left) (free right))
-      ((transporting bowl kitchen_island sink_area) (transporting cup kitchen_island sink_area)))""")
+      ((transporting bowl kitchen_island sink_area) (transporting cup kitchen_island sink_area)))""",
+    )
     fw.disable_transformation("both-hands")
     fw.apply_all_transformations(two)
-    assert two.log == []            # the rule matched two transports; the tray was not used
+    assert two.log == []  # the rule matched two transports; the tray was not used
 
 
 @pytest.mark.slow
 def test_priorities_and_enable_disable():
     fw = framework()
     assert [t.name for t in fw.transformations] == ["tray", "container", "both-hands"]
-    with pytest.raises(HtnError, match="cycle"):     # tray > container > both-hands > tray
+    with pytest.raises(HtnError, match="cycle"):  # tray > container > both-hands > tray
         fw.prioritize_transformation("both-hands", "tray")
     assert [t.name for t in fw.transformations] == ["tray", "container", "both-hands"]
-    fw.prioritize_transformation("both-hands", "container")   # replaces the reverse priority
+    fw.prioritize_transformation("both-hands", "container")  # replaces the reverse priority
     assert [t.name for t in fw.transformations] == ["tray", "both-hands", "container"]
     fw2 = framework()
     fw2.disable_transformation("both-hands")
@@ -110,7 +115,7 @@ def test_transport_four_gets_both_hands_twice_and_stays_valid():
     for s in ws.plan.steps:
         holding += s.name.startswith("!grasp") - (s.name == "!place")
         max_holding = max(max_holding, holding)
-    assert max_holding == 2          # both arms are used at once
+    assert max_holding == 2  # both arms are used at once
 
 
 @pytest.mark.slow
@@ -143,8 +148,7 @@ def test_a_rewrite_that_breaks_the_plan_is_rolled_back():
         ws.units = [new if u is unit else u for u in ws.units]
         return f"deliver {obj} first", [path]
 
-    fw.register_transformation(deliver_before_fetch,
-                               "(transport ?t ?o ?f ?d ?k)", "broken")
+    fw.register_transformation(deliver_before_fetch, "(transport ?t ?o ?f ?d ?k)", "broken")
     ws = workspace("transport_four")
     original = ws.plan.lines()
     fw.apply_all_transformations(ws)
@@ -178,8 +182,7 @@ def test_a_costlier_rewrite_is_rolled_back():
 @pytest.mark.slow
 def test_htn_transform_cli(tmp_path):
     out = tmp_path / "plan.txt"
-    r = run_htn("transform", DOMAIN, PROBLEMS / "set_table_and_clean_up.jshop", "--json",
-                "-o", out)
+    r = run_htn("transform", DOMAIN, PROBLEMS / "set_table_and_clean_up.jshop", "--json", "-o", out)
     assert r.returncode == 0, r.stderr
     doc = json.loads(r.stdout)
     assert doc["applied"] == ["tray", "container", "both-hands"]
@@ -192,28 +195,33 @@ def test_htn_transform_cli(tmp_path):
 
 # ------------------------------------------------------------------ projection and evaluate
 
+
 def test_projection_is_deterministic_and_monitored():
     from htn.executor.config import load_retries
     from htn.robot.projection import FailureRates
     from htn.transform.projection import project
+
     ws = workspace("transport_four")
     retries = load_retries(DOMAIN)
-    runs = [project(ws.domain, ws.instance, ws.plan.steps, seed, retries=retries)
-            for seed in range(40)]
+    runs = [
+        project(ws.domain, ws.instance, ws.plan.steps, seed, retries=retries) for seed in range(40)
+    ]
     again = project(ws.domain, ws.instance, ws.plan.steps, 7, retries=retries)
-    assert again == runs[7]                                          # same seed, same run
+    assert again == runs[7]  # same seed, same run
     assert all(r["result"] == "verified" for r in runs)
     clean = project(ws.domain, ws.instance, ws.plan.steps, 1, FailureRates.none(), retries)
     assert clean["failures"] == 0 and clean["actions"] == len(ws.plan.steps)
     # a failure leaves the effect absent: without retries, the run stops aborted
-    broken = project(ws.domain, ws.instance, ws.plan.steps, 1,
-                     FailureRates(grasp=1.0, grasp_busy=1.0), {})
+    broken = project(
+        ws.domain, ws.instance, ws.plan.steps, 1, FailureRates(grasp=1.0, grasp_busy=1.0), {}
+    )
     assert broken["result"] == "aborted"
 
 
 @pytest.mark.slow
 def test_evaluate_reproduces_the_papers_findings():
     from htn.api.evaluate import evaluate
+
     four = evaluate(PROBLEMS / "transport_four.jshop", domain=DOMAIN, runs=120, seed=0).metrics
     assert -40 < four["navigation"]["change_pct"] < -20 and four["navigation"]["p_value"] < 1e-3
     assert abs(four["manipulation"]["change_pct"]) < 10
@@ -226,16 +234,18 @@ def test_evaluate_reproduces_the_papers_findings():
 def test_task_tree_annotated_by_a_projected_run():
     from htn.executor.config import load_retries
     from htn.transform.projection import projected_tree
+
     ws = workspace("transport_four")
     framework().apply_all_transformations(ws)
     tree = ws.annotated_tree()
     first = tree.children[0]
     assert first.code_replacement and first.code_replacement[0].startswith("(searching milk")
-    tree, run = projected_tree(ws.domain, ws.instance, ws.plan, seed=3,
-                               retries=load_retries(DOMAIN))
+    tree, run = projected_tree(
+        ws.domain, ws.instance, ws.plan, seed=3, retries=load_retries(DOMAIN)
+    )
     assert run["result"] == "verified"
     assert all(n.outcome == "verified" for n in tree.walk() if n is not tree)
-    d = tree.to_dict()["nodes"][1]         # the root's first child
+    d = tree.to_dict()["nodes"][1]  # the root's first child
     assert d["outcome"] == "verified" and "code_replacement" in d and "path" in d
 
 
@@ -249,19 +259,24 @@ def test_an_area_without_numeric_coordinates_is_an_error_at_its_atom(tmp_path):
     problem = tmp_path / "p.jshop"
     problem.write_text(text.replace("(area sink_area 3.5 -0.5)", "(area sink_area and -0.5)"))
     plan = tmp_path / "plan.txt"
-    runs = [["transform", kitchen, problem], ["evaluate", problem, "--domain", kitchen,
-                                              "--runs", "2"]]
+    runs = [
+        ["transform", kitchen, problem],
+        ["evaluate", problem, "--domain", kitchen, "--runs", "2"],
+    ]
     if run_htn("plan", kitchen, problem, "-o", plan).returncode == 0:
         runs.append(["run", plan, "--robot", "projection"])
     for argv in runs:
         r = run_htn(*argv)
         assert r.returncode == 2 and "Traceback" not in r.stderr, (argv, r.stderr)
-        assert r.stderr.startswith(f"{problem}:6:35: area: expected a number, got and"), \
-            (argv, r.stderr)
+        assert r.stderr.startswith(f"{problem}:6:35: area: expected a number, got and"), (
+            argv,
+            r.stderr,
+        )
 
 
 def test_the_projection_refuses_an_area_atom_with_too_few_arguments():
     from htn.robot.projection import world_from_atoms
+
     atom = S.Atom("area", ("sink_area", 3.5), S.Pos("p.jshop", 6, 3))
     with pytest.raises(HtnError) as err:
         world_from_atoms([atom])

@@ -1,4 +1,5 @@
 """htn as a unified-planning engine: registration, solving, statuses, options."""
+
 from __future__ import annotations
 
 import io
@@ -55,12 +56,17 @@ def htn_valid(problem, plan):
 
 # ---------------------------------------------------------------- registration
 
+
 def test_import_htn_and_the_command_line_do_not_load_unified_planning():
     code = "import htn, sys; print('unified_planning' in sys.modules, 'htn.up' in sys.modules)"
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
     assert r.stdout.split() == ["False", "False"], r.stderr
-    r = subprocess.run([sys.executable, "-X", "importtime", "-m", "htn", "--help"],
-                       capture_output=True, text=True, cwd=ROOT)
+    r = subprocess.run(
+        [sys.executable, "-X", "importtime", "-m", "htn", "--help"],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+    )
     assert r.returncode == 0 and "Usage" in r.stdout
     assert "unified_planning" not in r.stderr
 
@@ -78,28 +84,35 @@ def test_importing_htn_up_registers_the_engine_once():
 
 
 def test_an_up_ini_file_registers_the_engine_without_an_import(tmp_path):
-    (tmp_path / "up.ini").write_text("[engine htn]\nmodule_name: htn.up.engine\n"
-                                     "class_name: HtnEngine\n")
-    code = ("from unified_planning.shortcuts import OneshotPlanner, get_environment\n"
-            "get_environment().credits_stream = None\n"
-            "print(get_environment().factory.preference_list.count('htn'), "
-            "OneshotPlanner(name='htn').name)\n")
+    (tmp_path / "up.ini").write_text(
+        "[engine htn]\nmodule_name: htn.up.engine\nclass_name: HtnEngine\n"
+    )
+    code = (
+        "from unified_planning.shortcuts import OneshotPlanner, get_environment\n"
+        "get_environment().credits_stream = None\n"
+        "print(get_environment().factory.preference_list.count('htn'), "
+        "OneshotPlanner(name='htn').name)\n"
+    )
     env = {**os.environ, "HOME": str(tmp_path)}
-    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                       cwd=tmp_path, env=env)
+    r = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, cwd=tmp_path, env=env
+    )
     assert r.returncode == 0, r.stderr
     assert r.stdout.split() == ["1", "htn"]
 
 
 # ---------------------------------------------------------------- UP's test cases
 
+
 @pytest.mark.parametrize("search", ["dfs", "gbfs", "wastar", "auto"])
 @pytest.mark.parametrize("name", SUPPORTED)
-def test_every_supported_test_case_gets_a_valid_hierarchical_plan(name, search, tmp_path,
-                                                                  monkeypatch):
+def test_every_supported_test_case_gets_a_valid_hierarchical_plan(
+    name, search, tmp_path, monkeypatch
+):
     """In every search of ``params={"search": ...}`` (``htn plan --search``)."""
     import tempfile
-    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))    # aries-val's log file, not /tmp's
+
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))  # aries-val's log file, not /tmp's
     problem = cases()[name].problem
     result = solve(problem, search=search)
     assert result.status == Status.SOLVED_SATISFICING, result.log_messages
@@ -148,7 +161,7 @@ def test_unsupported_kinds_are_refused_with_ups_error(name):
 
 def test_a_partial_order_is_refused_until_the_planner_has_one():
     problem = cases()["test:htn-go"].problem.clone()
-    problem.task_network.constraints.clear()       # the two subtasks are then unordered
+    problem.task_network.constraints.clear()  # the two subtasks are then unordered
     assert "TASK_ORDER_PARTIAL" in problem.kind.features
     with OneshotPlanner(name="htn") as planner:
         planner.skip_checks = True
@@ -168,6 +181,7 @@ def test_classical_problems_are_refused():
 
 
 # ---------------------------------------------------------------- statuses and options
+
 
 def chain(n_tasks: int, solvable: bool = True, recursive: bool = False):
     """Tasks t0..t(n-1) in order, each done by action a or b (2^n orders);
@@ -246,13 +260,16 @@ def test_the_output_stream_gets_the_progress():
     assert lines[0].startswith("htn: plan 1: 6 actions") and "SOLVED_SATISFICING" in lines[-1]
 
 
-@pytest.mark.parametrize("params, message", [
-    ({"depth": 3}, "no option 'depth'"),
-    ({"max_depth": 0}, "positive integer"),
-    ({"optimize": "yes"}, "must be a bool"),
-    ({"plan_kind": "partial"}, "plan_kind must be one of"),
-    ({"search": "bfs"}, "search must be one of dfs, gbfs, wastar, auto"),
-])
+@pytest.mark.parametrize(
+    "params, message",
+    [
+        ({"depth": 3}, "no option 'depth'"),
+        ({"max_depth": 0}, "positive integer"),
+        ({"optimize": "yes"}, "must be a bool"),
+        ({"plan_kind": "partial"}, "plan_kind must be one of"),
+        ({"search": "bfs"}, "search must be one of dfs, gbfs, wastar, auto"),
+    ],
+)
 def test_bad_options_are_one_line_usage_errors(params, message):
     with pytest.raises(UPUsageError, match=message):
         OneshotPlanner(name="htn", params=params)

@@ -1,4 +1,5 @@
 """The in-memory conversion of UP problems and the hierarchical plan validator."""
+
 from __future__ import annotations
 
 import pytest
@@ -49,6 +50,7 @@ def up_valid(problem, plan) -> bool:
 
 # ---------------------------------------------------------------- features
 
+
 def delivery():
     """A robot with an object fluent (its place), a package carried by a
     conditional effect, a forall effect, exists/forall/implies conditions
@@ -57,7 +59,7 @@ def delivery():
     Place, Thing = UserType("Place"), UserType("Thing")
     here, there, far = (pb.add_object(n, Place) for n in ("here", "there", "far"))
     box, ball = pb.add_object("box", Thing), pb.add_object("ball", Thing)
-    robot_at = pb.add_fluent("robot_at", Place)                   # an object fluent
+    robot_at = pb.add_fluent("robot_at", Place)  # an object fluent
     thing_at = pb.add_fluent("thing_at", BoolType(), t=Thing, p=Place, default_initial_value=False)
     held = pb.add_fluent("held", BoolType(), t=Thing, default_initial_value=False)
     link = pb.add_fluent("link", BoolType(), a=Place, b=Place, default_initial_value=False)
@@ -69,13 +71,13 @@ def delivery():
         pb.set_initial_value(link(a, b), True)
     move = InstantaneousAction("move", to=Place)
     t = Variable("t", Thing)
-    move.add_precondition(link(robot_at, move.to))                 # a fluent as an argument
+    move.add_precondition(link(robot_at, move.to))  # a fluent as an argument
     move.add_effect(robot_at, move.to)
-    move.add_effect(thing_at(t, move.to), True, held(t), forall=[t])   # carried along
+    move.add_effect(thing_at(t, move.to), True, held(t), forall=[t])  # carried along
     move.add_effect(seen(move.to), True)
     grab = InstantaneousAction("grab", x=Thing)
     grab.add_precondition(thing_at(grab.x, robot_at))
-    grab.add_precondition(Forall(Not(held(t)), t))                 # one thing at a time
+    grab.add_precondition(Forall(Not(held(t)), t))  # one thing at a time
     grab.add_effect(held(grab.x), True)
     drop = InstantaneousAction("drop", x=Thing)
     p = Variable("p", Place)
@@ -106,9 +108,12 @@ def test_object_fluents_conditional_and_forall_effects_and_quantifiers_plan_as_u
     plan = result.plan
     assert [str(a) for a in plan.action_plan.actions] == ["grab(box)", "move(there)", "drop(box)"]
     (mi,) = plan.decomposition.subtasks.values()
-    assert mi.method.name == "m_deliver" and [str(x) for x in mi.parameters] == \
-        ["box", "here", "there"]      # src, bound by the precondition only
-    assert up_valid(problem, plan)    # UP's own semantics accept the actions
+    assert mi.method.name == "m_deliver" and [str(x) for x in mi.parameters] == [
+        "box",
+        "here",
+        "there",
+    ]  # src, bound by the precondition only
+    assert up_valid(problem, plan)  # UP's own semantics accept the actions
     assert validate(problem, plan).status.name == "VALID"
 
 
@@ -120,13 +125,15 @@ def test_a_goal_the_decomposition_misses_is_unsolvable():
 
 
 @pytest.mark.skipif(not IPC.is_dir(), reason=f"IPC 2020 sample not found at {IPC}")
-@pytest.mark.parametrize("domain", ["Blocksworld-GTOHP", "Childsnack", "Depots", "Rover-GTOHP",
-                                    "Towers", "Transport"])
+@pytest.mark.parametrize(
+    "domain", ["Blocksworld-GTOHP", "Childsnack", "Depots", "Rover-GTOHP", "Towers", "Transport"]
+)
 def test_an_ipc_problem_read_by_up_plans_as_htn_plans_the_hddl_files(domain):
     from unified_planning.io import PDDLReader
 
     from htn.jshop.readers.load import load_inputs
     from htn.jshop.search.planner import Planner
+
     dfile = IPC / domain / "domain.hddl"
     pfile = sorted(p for p in (IPC / domain).glob("*.hddl") if p.name != "domain.hddl")[0]
     problem = PDDLReader().parse_problem(str(dfile), str(pfile))
@@ -135,9 +142,10 @@ def test_an_ipc_problem_read_by_up_plans_as_htn_plans_the_hddl_files(domain):
     assert result.status == Status.SOLVED_SATISFICING
     dom, prob = load_inputs(str(dfile), str(pfile))
     direct = next(Planner(dom, prob.instances[0]).plans(60))
-    assert [str(a).replace("(", " ").replace(",", "").rstrip(")")
-            for a in result.plan.action_plan.actions] == \
-        [" ".join([s.name[1:], *s.args]) for s in direct.steps]
+    assert [
+        str(a).replace("(", " ").replace(",", "").rstrip(")")
+        for a in result.plan.action_plan.actions
+    ] == [" ".join([s.name[1:], *s.args]) for s in direct.steps]
     assert up_valid(problem, result.plan)
     assert validate(problem, result.plan).status.name == "VALID"
 
@@ -161,8 +169,8 @@ def test_the_heuristic_search_solves_through_up_what_depth_first_cannot():
     where depth-first search in the written order is stuck (a few seconds
     against no plan in 30 s, ``benchmarks/bench_ipc.py``)."""
     from unified_planning.io import PDDLReader
-    problem = PDDLReader().parse_problem(str(HARD / "domain.hddl"),
-                                         str(HARD / "pfile_02_055.hddl"))
+
+    problem = PDDLReader().parse_problem(str(HARD / "domain.hddl"), str(HARD / "pfile_02_055.hddl"))
     with OneshotPlanner(name="htn", params={"search": "dfs"}) as planner:
         assert planner.solve(problem, timeout=3).status == Status.TIMEOUT
     with OneshotPlanner(name="htn", params={"search": "gbfs"}) as planner:
@@ -173,6 +181,7 @@ def test_the_heuristic_search_solves_through_up_what_depth_first_cannot():
 
 
 # ---------------------------------------------------------------- the validator
+
 
 def htn_go():
     problem = cases()["test:htn-go"].problem
@@ -208,8 +217,9 @@ def test_a_method_whose_precondition_fails_is_invalid():
     go1, go2 = plan.decomposition.subtasks.values()
     noop = problem.method("go-noop")
     l3 = get_environment().expression_manager.ObjectExp(problem.object("l3"))
-    wrong = Decomposition({"go_l4": MethodInstance(noop, (l3,), Decomposition({})),
-                           "go_final": go2})
+    wrong = Decomposition(
+        {"go_l4": MethodInstance(noop, (l3,), Decomposition({})), "go_final": go2}
+    )
     res = validate(problem, HierarchicalPlan(plan.action_plan, wrong))
     assert res.status.name == "INVALID"
     msg = res.log_messages[0].message
@@ -220,17 +230,27 @@ def test_a_missing_subtask_and_bad_network_variables_are_invalid():
     problem, plan = htn_go()
     go1, go2 = plan.decomposition.subtasks.values()
     res = validate(problem, HierarchicalPlan(plan.action_plan, Decomposition({"go_l4": go1})))
-    assert res.status.name == "INVALID" and "lacks subtask(s) go_final" in res.log_messages[0].message
+    assert (
+        res.status.name == "INVALID" and "lacks subtask(s) go_final" in res.log_messages[0].message
+    )
     # go_final ends at l3: the executable plan breaks final_loc in {l1, l2}
     em = get_environment().expression_manager
     l3, l4 = (em.ObjectExp(problem.object(n)) for n in ("l3", "l4"))
     actions = list(plan.action_plan.actions)[:3]
     back = ActionInstance(actions[0].action, (l4, l3))
-    to_l3 = MethodInstance(problem.method("go-recursive"), (l4, l3, l3), Decomposition({
-        "move": back, "go-rec": MethodInstance(problem.method("go-noop"), (l3,),
-                                               Decomposition({}))}))
-    bad = HierarchicalPlan(SequentialPlan(actions + [back]),
-                           Decomposition({"go_l4": go1, "go_final": to_l3}))
+    to_l3 = MethodInstance(
+        problem.method("go-recursive"),
+        (l4, l3, l3),
+        Decomposition(
+            {
+                "move": back,
+                "go-rec": MethodInstance(problem.method("go-noop"), (l3,), Decomposition({})),
+            }
+        ),
+    )
+    bad = HierarchicalPlan(
+        SequentialPlan(actions + [back]), Decomposition({"go_l4": go1, "go_final": to_l3})
+    )
     assert up_valid(problem, bad)
     res = validate(problem, bad)
     assert res.status.name == "INVALID"
@@ -265,6 +285,8 @@ def test_subtasks_run_in_their_order_not_in_the_order_they_were_added():
         plan = planner.solve(pb).plan
     assert [a.action.name for a in plan.action_plan.actions] == ["first", "second"]
     (mi,) = plan.decomposition.subtasks.values()
-    assert {k: v.action.name for k, v in mi.decomposition.subtasks.items()} == \
-        {"s1": "first", "s2": "second"}
+    assert {k: v.action.name for k, v in mi.decomposition.subtasks.items()} == {
+        "s1": "first",
+        "s2": "second",
+    }
     assert validate(pb, plan).status.name == "VALID"

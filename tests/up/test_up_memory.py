@@ -6,6 +6,7 @@ solved (``clear_caches``), and what the caches keep is bounded.
 in one process; from the 10th to the 50th, traced memory (``tracemalloc``,
 after ``gc.collect()``) may grow by at most 0.25 MB more than UP's own
 parsing of the same 50 problems grows it in another process."""
+
 from __future__ import annotations
 
 import subprocess
@@ -82,12 +83,19 @@ def test_memory_stays_flat_over_fifty_domains(tmp_path):
         (tmp_path / f"p{i}.hddl").write_text(PROBLEM.replace("{i}", str(i)))
 
     def growth(mode: str) -> int:
-        r = subprocess.run([sys.executable, "-c", SCRIPT, str(tmp_path), mode], cwd=ROOT,
-                           capture_output=True, text=True, timeout=600)
+        r = subprocess.run(
+            [sys.executable, "-c", SCRIPT, str(tmp_path), mode],
+            cwd=ROOT,
+            capture_output=True,
+            text=True,
+            timeout=600,
+        )
         assert r.returncode == 0, r.stderr[-2000:]
         return int(r.stdout.split()[-1])
 
     parsing, solving = growth("parse"), growth("solve")
-    extra = (solving - parsing) / 2 ** 20
-    assert extra <= 0.25, f"the engine grew memory by {solving / 2**20:.2f} MB, UP's parsing " \
-                          f"by {parsing / 2**20:.2f} MB"
+    extra = (solving - parsing) / 2**20
+    assert extra <= 0.25, (
+        f"the engine grew memory by {solving / 2**20:.2f} MB, UP's parsing "
+        f"by {parsing / 2**20:.2f} MB"
+    )

@@ -2,6 +2,7 @@
 documentation runs it) on htn, registered through an ``up.ini`` file as UP
 documents for engines outside its list: every hierarchical case whose kind
 htn declares passes (oneshot and validation), the others are skipped."""
+
 from __future__ import annotations
 
 import os
@@ -19,12 +20,28 @@ from test_up_cases import REFUSED, SUPPORTED, report_script  # noqa: E402
 @pytest.fixture(scope="module")
 def report(tmp_path_factory) -> tuple[int, str]:
     home = tmp_path_factory.mktemp("home")
-    (home / "up.ini").write_text("[engine htn]\nmodule_name: htn.up.engine\n"
-                                 "class_name: HtnEngine\n")
+    (home / "up.ini").write_text(
+        "[engine htn]\nmodule_name: htn.up.engine\nclass_name: HtnEngine\n"
+    )
     env = {**os.environ, "HOME": str(home)}
-    r = subprocess.run([sys.executable, report_script(), "htn", "-p", "builtin.hierarchical",
-                        "unified_planning.test", "-m", "oneshot", "validation"],
-                       capture_output=True, text=True, env=env, cwd=home, timeout=900)
+    r = subprocess.run(
+        [
+            sys.executable,
+            report_script(),
+            "htn",
+            "-p",
+            "builtin.hierarchical",
+            "unified_planning.test",
+            "-m",
+            "oneshot",
+            "validation",
+        ],
+        capture_output=True,
+        text=True,
+        env=env,
+        cwd=home,
+        timeout=900,
+    )
     return r.returncode, re.sub(r"\x1b\[[0-9;]*m", "", r.stdout + r.stderr)
 
 

@@ -2,6 +2,7 @@
 events, ``node`` on every action event), reading logs for ``htn view``, the
 token, and the hand-over from the robot's thread that never waits for a page.
 The page itself is tested in a real browser: tests/view/test_view_browser.py."""
+
 from __future__ import annotations
 
 import json
@@ -24,8 +25,9 @@ from htn.view.model import page_records, read_log
 
 from conftest import ROOT, run_htn, start_htn, wait_until
 
-needs_view = pytest.mark.skipif(bool(missing_modules("view")),
-                                reason="needs the view extra: pip install 'htn[view]'")
+needs_view = pytest.mark.skipif(
+    bool(missing_modules("view")), reason="needs the view extra: pip install 'htn[view]'"
+)
 KITCHEN = ROOT / "domains" / "kitchen.jshop"
 SET_TABLE = ROOT / "problems" / "set_table_and_clean_up.jshop"
 
@@ -37,8 +39,9 @@ def kitchen_run(faults="effect=0.2", seed=2, replan=True, path=None):
     plan = next(Planner(dom, inst, record_trees=True).plans())
     robot = make_robot("symbolic", RobotRequest(dom, inst, faults, seed))
     log = EventLog(path, clock=lambda: robot.sim_time)
-    summary = TaskDispatcher(robot, dom, inst, plan.steps, {}, log, replan=replan,
-                             tree=plan.tree).run()
+    summary = TaskDispatcher(
+        robot, dom, inst, plan.steps, {}, log, replan=replan, tree=plan.tree
+    ).run()
     log.close()
     return plan, log.events, summary
 
@@ -47,8 +50,19 @@ def logged_run(tmp_path):
     """The log of a real ``htn run`` (symbolic kitchen robot, faults, repairs)."""
     plan, log = tmp_path / "plan.txt", tmp_path / "run.jsonl"
     assert run_htn("plan", KITCHEN, SET_TABLE, "-o", plan).returncode == 0
-    r = run_htn("run", plan, "--robot", "symbolic", "--faults", "effect=0.2", "--seed", 2,
-                "--replan", "--log", log)
+    r = run_htn(
+        "run",
+        plan,
+        "--robot",
+        "symbolic",
+        "--faults",
+        "effect=0.2",
+        "--seed",
+        2,
+        "--replan",
+        "--log",
+        log,
+    )
     assert r.returncode == 0, r.stderr
     return log
 
@@ -61,8 +75,9 @@ def test_the_log_holds_the_task_tree_and_every_graft():
     # the first: the plan's task tree, node for node, depth first
     first = trees[0]["nodes"]
     walked = list(plan.tree.walk())
-    assert [n["task"] for n in first] == [t.task if t.step is None else str(plan.steps[t.step])
-                                          for t in walked]
+    assert [n["task"] for n in first] == [
+        t.task if t.step is None else str(plan.steps[t.step]) for t in walked
+    ]
     assert [n["id"] for n in first] == list(range(len(walked)))
     assert first[0]["parent"] is None and all(n["parent"] < n["id"] for n in first[1:])
     steps = {n["id"]: n["step"] for n in first if "step" in n}
@@ -70,9 +85,9 @@ def test_the_log_holds_the_task_tree_and_every_graft():
     known = {n["id"]: n for n in first}
     for k, ev in enumerate(events):
         if ev["event"] == "tree" and ev is not trees[0]:
-            assert events[k - 1]["event"] == "replanned"      # right after its repair
+            assert events[k - 1]["event"] == "replanned"  # right after its repair
             ids = [n["id"] for n in ev["nodes"]]
-            assert ids == list(range(len(known), len(known) + len(ids)))   # fresh numbers
+            assert ids == list(range(len(known), len(known) + len(ids)))  # fresh numbers
             assert ev["replaces"] and set(ev["replaces"]) <= set(known)
             assert ev["parent"] in known
             assert all(known[r]["parent"] == ev["parent"] for r in ev["replaces"])
@@ -109,8 +124,17 @@ def _write(path, records, tail="\n"):
 
 def test_a_log_is_read_whole_or_refused_at_its_line(tmp_path):
     _, events, _ = kitchen_run()
-    header = {"t": 0.0, "sim_t": 0.0, "step": None, "action": None, "event": "header",
-              "attempt": None, "detail": "", "plan": "/x/plan.txt", "robot": "symbolic"}
+    header = {
+        "t": 0.0,
+        "sim_t": 0.0,
+        "step": None,
+        "action": None,
+        "event": "header",
+        "attempt": None,
+        "detail": "",
+        "plan": "/x/plan.txt",
+        "robot": "symbolic",
+    }
     good = tmp_path / "run.jsonl"
     _write(good, [header, *events])
     records, warning = read_log(str(good))
@@ -134,21 +158,30 @@ def test_a_log_is_read_whole_or_refused_at_its_line(tmp_path):
 
 def test_a_log_without_tree_events_is_shown_by_step():
     _, events, _ = kitchen_run(faults="", replan=False)
-    header = {"t": 0.0, "sim_t": 0.0, "step": None, "action": None, "event": "header",
-              "attempt": None, "detail": ""}
-    old = [header] + [{k: v for k, v in e.items() if k != "node"}
-                      for e in events if e["event"] != "tree"]
+    header = {
+        "t": 0.0,
+        "sim_t": 0.0,
+        "step": None,
+        "action": None,
+        "event": "header",
+        "attempt": None,
+        "detail": "",
+    }
+    old = [header] + [
+        {k: v for k, v in e.items() if k != "node"} for e in events if e["event"] != "tree"
+    ]
     shown = page_records(old)
     assert shown[1]["event"] == "tree" and shown[1]["synthetic"]
     nodes = {n["id"]: n for n in shown[1]["nodes"]}
-    assert shown[:1] + shown[2:] != old                  # the events now name their nodes
+    assert shown[:1] + shown[2:] != old  # the events now name their nodes
     for rec in shown[2:]:
         if rec["step"] is not None:
             assert nodes[rec["node"]]["step"] == rec["step"]
-    assert page_records(events) is events                # a log with its tree: as it is
+    assert page_records(events) is events  # a log with its tree: as it is
 
 
 # ------------------------------------------------------------------ the server
+
 
 def _get(url):
     try:
@@ -162,6 +195,7 @@ def _get(url):
 def test_htn_view_serves_only_requests_with_the_token(tmp_path):
     from websockets.exceptions import InvalidStatus
     from websockets.sync.client import connect
+
     log = logged_run(tmp_path)
     lines = log.read_text().splitlines()
     proc = start_htn("view", log)
@@ -175,15 +209,21 @@ def test_htn_view_serves_only_requests_with_the_token(tmp_path):
         assert status == 200 and f"static/app.js?token={token}" in text
         assert "default-src 'self'" in headers["Content-Security-Policy"]
         assert _get(f"{base}/static/app.js?token={token}")[0] == 200
-        for bad in (f"{base}/", f"{base}/?token=x{token}", f"{base}/static/app.js",
-                    f"{base}/static/tree.js?token=", f"{base}/ws"):
+        for bad in (
+            f"{base}/",
+            f"{base}/?token=x{token}",
+            f"{base}/static/app.js",
+            f"{base}/static/tree.js?token=",
+            f"{base}/ws",
+        ):
             status, text, _ = _get(bad)
             assert status == 403 and "token" in text, bad
         with pytest.raises(InvalidStatus) as refused:
             connect(f"ws://127.0.0.1:{port}/ws?token=wrong", open_timeout=10)
         assert refused.value.response.status_code == 403
-        with connect(f"ws://127.0.0.1:{port}/ws?token={token}", open_timeout=10,
-                     max_size=None) as ws:
+        with connect(
+            f"ws://127.0.0.1:{port}/ws?token={token}", open_timeout=10, max_size=None
+        ) as ws:
             hello = json.loads(ws.recv(timeout=10))
             assert hello["type"] == "hello" and hello["mode"] == "log"
             got = []
@@ -208,16 +248,18 @@ def test_a_page_that_does_not_read_never_blocks_the_robot_and_loses_no_event():
 
     from htn.view.hub import Hub
     from htn.view.server import ViewServer
+
     hub = Hub("live")
     server = ViewServer(hub).start()
     hub.begin([], "a run", camera=True, wall_start=None)
     port, token = server.port, server.token
     try:
-        with connect(f"ws://127.0.0.1:{port}/ws?token={token}", open_timeout=10,
-                     max_size=None) as ws:
-            json.loads(ws.recv(timeout=10))                # hello
+        with connect(
+            f"ws://127.0.0.1:{port}/ws?token={token}", open_timeout=10, max_size=None
+        ) as ws:
+            json.loads(ws.recv(timeout=10))  # hello
             wait_until(lambda: hub.pages == 1, "the page counted")
-            frame = bytes(range(256)) * 400                # 100 kB: the socket fills fast
+            frame = bytes(range(256)) * 400  # 100 kB: the socket fills fast
             done = threading.Event()
 
             def robot():
@@ -226,11 +268,14 @@ def test_a_page_that_does_not_read_never_blocks_the_robot_and_loses_no_event():
                     if k % 150 == 0:
                         hub.set_frame(frame + k.to_bytes(4, "big"), k / 100)
                 done.set()
+
             threading.Thread(target=robot, daemon=True).start()
             # the page reads nothing meanwhile: megabytes wait in the socket, yet
             assert done.wait(30), "publishing blocked on a page that does not read"
             events, frames = [], []
-            while len(events) < 30000 or not frames or frames[-1][-4:] != (29850).to_bytes(4, "big"):
+            while (
+                len(events) < 30000 or not frames or frames[-1][-4:] != (29850).to_bytes(4, "big")
+            ):
                 message = ws.recv(timeout=20)
                 if isinstance(message, bytes):
                     frames.append(message)
@@ -240,7 +285,7 @@ def test_a_page_that_does_not_read_never_blocks_the_robot_and_loses_no_event():
                     assert message["from"] == len(events)
                     events += message["events"]
         assert [e["k"] for e in events] == list(range(30000))
-        assert 1 <= len(frames) < 200          # 200 frames were set: most were dropped
+        assert 1 <= len(frames) < 200  # 200 frames were set: most were dropped
     finally:
         server.close()
 
@@ -272,6 +317,7 @@ def test_view_input_errors_are_one_line(tmp_path):
 def test_only_a_loopback_address_is_served_without_a_warning(capsys):
     from htn.cli.view_cmd import _announce
     from htn.view.server import is_loopback
+
     assert all(map(is_loopback, ("127.0.0.1", "127.0.0.2", "::1", "localhost")))
     assert not any(map(is_loopback, ("0.0.0.0", "::", "192.168.1.5", "example.org")))
     _announce("http://127.0.0.1:1/?token=t", "127.0.0.1")

@@ -10,6 +10,7 @@ tests can tell that statuses changed as the run went, not only how they ended.
 ``HTN_VIEW_SCREENSHOT=docs/view-kitchen.png`` makes the kitchen test save its
 screenshot there (the README's picture).
 """
+
 from __future__ import annotations
 
 import importlib.util
@@ -32,19 +33,33 @@ from conftest import CORPUS, ROOT, needs_corpus, run_htn, start_htn
 
 CHROMIUM, DRIVER = shutil.which("chromium"), shutil.which("chromedriver")
 SELENIUM = importlib.util.find_spec("selenium") is not None
-MISSING = [what for what, ok in (
-    ("Debian's chromium (apt-get install chromium)", CHROMIUM),
-    ("Debian's chromium-driver (apt-get install chromium-driver)", DRIVER),
-    ("selenium (pip install selenium)", SELENIUM),
-    ("the view extra (pip install 'htn[view]')", not missing_modules("view"))) if not ok]
+MISSING = [
+    what
+    for what, ok in (
+        ("Debian's chromium (apt-get install chromium)", CHROMIUM),
+        ("Debian's chromium-driver (apt-get install chromium-driver)", DRIVER),
+        ("selenium (pip install selenium)", SELENIUM),
+        ("the view extra (pip install 'htn[view]')", not missing_modules("view")),
+    )
+    if not ok
+]
 # a real browser per test: in the full suite, not in the fast subset
-pytestmark = [pytest.mark.slow,
-              pytest.mark.skipif(bool(MISSING),
-                                 reason="the browser tests need " + ", ".join(MISSING))]
+pytestmark = [
+    pytest.mark.slow,
+    pytest.mark.skipif(bool(MISSING), reason="the browser tests need " + ", ".join(MISSING)),
+]
 
-CHROMIUM_FLAGS = ("--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
-                  "--no-first-run", "--disable-background-networking",
-                  "--disable-component-update", "--disable-sync", "--window-size=1400,900")
+CHROMIUM_FLAGS = (
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+    "--window-size=1400,900",
+)
 BLOCKS = CORPUS / "blocks-smallproblem"
 BLOCKS_BIG = CORPUS / "blocks-problem"
 DOMESTIC, KITCHEN = ROOT / "domains" / "domestic.jshop", ROOT / "domains" / "kitchen.jshop"
@@ -94,15 +109,22 @@ RECORDER = """
 """
 
 # the status a node's row must show after each kind of event (None: no change)
-STATUS_AFTER = {"start": "running", "finished": "finished", "verified": "verified",
-                "aborted": "aborted", "failed": "failed", "retrying": "retrying",
-                "interrupted": "interrupted"}
+STATUS_AFTER = {
+    "start": "running",
+    "finished": "finished",
+    "verified": "verified",
+    "aborted": "aborted",
+    "failed": "failed",
+    "retrying": "retrying",
+    "interrupted": "interrupted",
+}
 
 
 @pytest.fixture(scope="module")
 def browser():
     from selenium import webdriver
     from selenium.webdriver.chrome.service import Service
+
     options = webdriver.ChromeOptions()
     options.binary_location = CHROMIUM
     for flag in CHROMIUM_FLAGS:
@@ -194,13 +216,16 @@ def wait_for(driver, script, what, timeout=180.0):
 
 
 def page_nodes(driver):
-    return {n["id"]: n for n in driver.execute_script("""
+    return {
+        n["id"]: n
+        for n in driver.execute_script("""
         return [...document.querySelectorAll('#tree .node')].map((r, i) => ({
           id: Number(r.dataset.node), index: i, task: r.querySelector('.task').textContent,
           status: r.dataset.status, kind: r.dataset.kind, depth: Number(r.dataset.depth),
           replaced: r.hasAttribute('data-replaced'),
           grafted: r.hasAttribute('data-grafted'), faults: Number(r.dataset.faults),
-          badges: [...r.querySelectorAll('.badge')].map(b => b.textContent)}));""")}
+          badges: [...r.querySelectorAll('.badge')].map(b => b.textContent)}));""")
+    }
 
 
 def page_events(driver):
@@ -213,30 +238,35 @@ def page_events(driver):
 def check_page(driver, records):
     """What the page shows once the run's last event is in: every node,
     statuses as the log ends, repairs, every event, faults on their nodes."""
-    wait_for(driver, f"return document.querySelectorAll('#timeline .ev').length >= {len(records)}",
-             f"all {len(records)} events")
-    driver.find_element("id", "expand-all").click()      # nothing out of reach
+    wait_for(
+        driver,
+        f"return document.querySelectorAll('#timeline .ev').length >= {len(records)}",
+        f"all {len(records)} events",
+    )
+    driver.find_element("id", "expand-all").click()  # nothing out of reach
     nodes = page_nodes(driver)
     logged = tree_nodes(records)
     assert len(nodes) == len(logged)
-    for n in logged:                                    # every node of the tree appears
+    for n in logged:  # every node of the tree appears
         assert nodes[n["id"]]["task"] == n["task"], n
     shown = {i: n["status"] for i, n in nodes.items() if n["kind"] == "action"}
-    assert shown == expected_statuses(records)          # statuses end as the log says
+    assert shown == expected_statuses(records)  # statuses end as the log says
     for graft in (r for r in records if r["event"] == "tree" and r["replaces"]):
         new = [n for n in graft["nodes"]]
-        for old in graft["replaces"]:                   # the repaired subtree, shown replaced
-            assert nodes[old]["replaced"] and any(b.startswith("replaced") for b in nodes[old]["badges"])
-        assert all(nodes[n["id"]]["grafted"] for n in new)      # and the new one present
+        for old in graft["replaces"]:  # the repaired subtree, shown replaced
+            assert nodes[old]["replaced"] and any(
+                b.startswith("replaced") for b in nodes[old]["badges"]
+            )
+        assert all(nodes[n["id"]]["grafted"] for n in new)  # and the new one present
         tops = [nodes[n["id"]] for n in new if n["parent"] == graft["parent"]]
         last_old = max(nodes[o]["index"] for o in graft["replaces"])
-        assert min(t["index"] for t in tops) > last_old   # right after what it replaces
+        assert min(t["index"] for t in tops) > last_old  # right after what it replaces
         assert {t["depth"] for t in tops} == {nodes[o]["depth"] for o in graft["replaces"]}
-    rows = page_events(driver)                          # the timeline lists every event
+    rows = page_events(driver)  # the timeline lists every event
     assert [r["seq"] for r in rows] == list(range(len(records)))
     assert [r["kind"] for r in rows] == [r["event"] for r in records]
     faults = [r for r in records if r["event"] == "fault"]
-    for f in faults:                                    # a fault is marked on its node
+    for f in faults:  # a fault is marked on its node
         node = nodes[f["node"]]
         assert node["faults"] >= 1 and any(f["kind"] in b for b in node["badges"]), node
     return nodes, rows
@@ -275,8 +305,10 @@ LIVE_MS = 1000
 
 
 def report_latency(record_property, name, median, worst, n):
-    print(f"\n{name}: {n} events reached the page {median:.0f} ms (median), "
-          f"{worst:.0f} ms (max) after they happened")
+    print(
+        f"\n{name}: {n} events reached the page {median:.0f} ms (median), "
+        f"{worst:.0f} ms (max) after they happened"
+    )
     record_property(f"{name}_latency_median_ms", round(median, 1))
     record_property(f"{name}_latency_max_ms", round(worst, 1))
 
@@ -286,8 +318,21 @@ def test_a_symbolic_run_with_repairs_live_in_the_browser(browser, tmp_path, reco
     plan = plan_file(tmp_path, BLOCKS / "blocks", BLOCKS / "smallproblem")
     log = tmp_path / "run.jsonl"
     # seed 2: a fault the default retry (1 per operator) does not absorb, so a repair
-    run = Served("run", plan, "--robot", "symbolic", "--faults", "effect=0.3", "--replan",
-                 "--seed", 2, "--view", "--view-wait", "--log", log)
+    run = Served(
+        "run",
+        plan,
+        "--robot",
+        "symbolic",
+        "--faults",
+        "effect=0.3",
+        "--replan",
+        "--seed",
+        2,
+        "--view",
+        "--view-wait",
+        "--log",
+        log,
+    )
     browser.get(run.url)
     wait_for(browser, "return document.getElementById('result').dataset.result", "the result")
     records = read_log(log)
@@ -305,18 +350,21 @@ def test_a_symbolic_run_with_repairs_live_in_the_browser(browser, tmp_path, reco
 def test_a_pybullet_run_with_slips_live_in_the_browser(browser, tmp_path, record_property):
     plan = plan_file(tmp_path, DOMESTIC, ROOT / "problems" / "bring_object.jshop")
     log = tmp_path / "run.jsonl"
-    run = Served("run", plan, "--sim", "--faults", "slip=0.3", "--view", "--view-wait",
-                 "--log", log)
+    run = Served(
+        "run", plan, "--sim", "--faults", "slip=0.3", "--view", "--view-wait", "--log", log
+    )
     browser.get(run.url)
-    samples = []           # while the run goes: verified actions, running rows visible
+    samples = []  # while the run goes: verified actions, running rows visible
     while not browser.execute_script("return document.getElementById('result').dataset.result"):
-        samples.append(browser.execute_script("""
+        samples.append(
+            browser.execute_script("""
             const rows = [...document.querySelectorAll('#tree .node[data-kind=action]')];
             const phase = document.getElementById('a-phase').dataset.phase;
             return [rows.filter(r => r.dataset.status === 'verified').length,
                     !["execute", "monitor"].includes(phase) ||
                       rows.some(r => ["running", "finished"].includes(r.dataset.status)),
-                    Number(document.getElementById('camera').dataset.frames)];"""))
+                    Number(document.getElementById('camera').dataset.frames)];""")
+        )
         assert len(samples) < 4000, "the run did not end"
         time.sleep(0.1)
     records = read_log(log)
@@ -325,13 +373,15 @@ def test_a_pybullet_run_with_slips_live_in_the_browser(browser, tmp_path, record
     median, worst, n = check_live(browser, records, rows)
     report_latency(record_property, "pybullet", median, worst, n)
     assert median <= LIVE_MS, (median, worst)
-    assert len({v for v, _, _ in samples}) >= 2      # the page changed while the run went
+    assert len({v for v, _, _ in samples}) >= 2  # the page changed while the run went
     assert all(visible for _, visible, _ in samples)  # the running action always in view
     frames = int(browser.find_element("id", "camera").get_attribute("data-frames"))
     seconds = records[-1]["t"] - next(r["t"] for r in records if r["event"] == "start")
     print(f"camera: {frames} frames in {seconds:.1f} s of run")
     record_property("camera_frames", frames)
-    assert frames >= 2 and browser.find_element("id", "camera").get_attribute("src").startswith("blob:")
+    assert frames >= 2 and browser.find_element("id", "camera").get_attribute("src").startswith(
+        "blob:"
+    )
     code, out, err = run.stop(after="the run is over")
     assert code == (0 if records[-1]["result"] == "verified" else 1), err
     assert "Traceback" not in err
@@ -341,8 +391,19 @@ def test_a_pybullet_run_with_slips_live_in_the_browser(browser, tmp_path, record
 def test_htn_view_scrubs_back_to_an_event_and_shows_the_tree_as_it_was(browser, tmp_path):
     plan = plan_file(tmp_path, BLOCKS / "blocks", BLOCKS / "smallproblem")
     log = tmp_path / "run.jsonl"
-    r = run_htn("run", plan, "--robot", "symbolic", "--faults", "effect=0.3", "--replan",
-                "--seed", 2, "--log", log)
+    r = run_htn(
+        "run",
+        plan,
+        "--robot",
+        "symbolic",
+        "--faults",
+        "effect=0.3",
+        "--replan",
+        "--seed",
+        2,
+        "--log",
+        log,
+    )
     assert r.returncode == 0, r.stderr
     records = read_log(log)
     view = Served("view", log)
@@ -351,17 +412,21 @@ def test_htn_view_scrubs_back_to_an_event_and_shows_the_tree_as_it_was(browser, 
     click = lambda button: browser.find_element("id", button).click()  # noqa: E731
 
     def at(k):
-        wait_for(browser, f"return document.getElementById('sc-pos').textContent"
-                          f".startsWith('event {k} of {len(records) - 1}')", f"event {k}")
+        wait_for(
+            browser,
+            f"return document.getElementById('sc-pos').textContent"
+            f".startsWith('event {k} of {len(records) - 1}')",
+            f"event {k}",
+        )
         click("expand-all")
         shown = {i: n["status"] for i, n in page_nodes(browser).items() if n["kind"] == "action"}
-        assert shown == expected_statuses(records[:k + 1]), k
+        assert shown == expected_statuses(records[: k + 1]), k
         current = browser.find_elements("css selector", "#timeline .ev.current")
         assert [int(c.get_attribute("data-seq")) for c in current] == [k]
         return page_nodes(browser)
 
     repair = next(k for k, r in enumerate(records) if r["event"] == "replanned")
-    k = repair - 1                                       # the abort, before the repair
+    k = repair - 1  # the abort, before the repair
     back = len(records) - 1 - k
     for _ in range(back):
         click("sc-back")
@@ -371,11 +436,11 @@ def test_htn_view_scrubs_back_to_an_event_and_shows_the_tree_as_it_was(browser, 
     future = browser.find_elements("css selector", "#timeline .ev.future")
     assert len(future) == back
     click("sc-forward")
-    click("sc-forward")                                  # the replanned event, then its tree
+    click("sc-forward")  # the replanned event, then its tree
     nodes = at(k + 2)
     assert any(n["grafted"] for n in nodes.values()) and any(n["replaced"] for n in nodes.values())
     click("sc-first")
-    assert at(0) == {}                                   # the header: no tree yet
+    assert at(0) == {}  # the header: no tree yet
     click("sc-forward")
     assert {n["status"] for n in at(1).values() if n["kind"] == "action"} == {"pending"}
     click("sc-fault")
@@ -383,7 +448,7 @@ def test_htn_view_scrubs_back_to_an_event_and_shows_the_tree_as_it_was(browser, 
     nodes = at(fault)
     assert nodes[records[fault]["node"]]["faults"] == 1
     browser.find_element("css selector", "#sc-speed option[value='128']").click()
-    click("sc-play")                                     # plays to the end, and stops
+    click("sc-play")  # plays to the end, and stops
     at(len(records) - 1)
     assert browser.find_element("id", "sc-play").text == "▶"
     code, _, err = view.stop()
@@ -391,8 +456,9 @@ def test_htn_view_scrubs_back_to_an_event_and_shows_the_tree_as_it_was(browser, 
 
 
 @needs_corpus
-def test_a_tree_of_thousands_of_nodes_renders_within_two_seconds(browser, tmp_path,
-                                                                  record_property):
+def test_a_tree_of_thousands_of_nodes_renders_within_two_seconds(
+    browser, tmp_path, record_property
+):
     plan = plan_file(tmp_path, BLOCKS_BIG / "blocks", BLOCKS_BIG / "problem")
     log = tmp_path / "run.jsonl"
     r = run_htn("run", plan, "--robot", "symbolic", "-q", "--log", log)
@@ -401,28 +467,37 @@ def test_a_tree_of_thousands_of_nodes_renders_within_two_seconds(browser, tmp_pa
     size = len(tree_nodes(records))
     assert size >= 1000
     view = Served("view", log)
-    browser.get(view.url)          # once to start the page's renderer, then timed afresh
-    wait_for(browser, f"return window.__treeSizes.some(([n, t, p]) => n >= {size} && p)", "the tree")
+    browser.get(view.url)  # once to start the page's renderer, then timed afresh
+    wait_for(
+        browser, f"return window.__treeSizes.some(([n, t, p]) => n >= {size} && p)", "the tree"
+    )
     browser.get(view.url)
-    painted = wait_for(browser, f"""return (window.__treeSizes.find(
-        ([n, t, p]) => n >= {size} && p) || [])[1]""", "the whole tree", timeout=60)
-    print(f"\na tree of {size} nodes ({len(records)} events) painted {painted:.0f} ms "
-          f"after the page was opened (in a browser already running)")
+    painted = wait_for(
+        browser,
+        f"""return (window.__treeSizes.find(
+        ([n, t, p]) => n >= {size} && p) || [])[1]""",
+        "the whole tree",
+        timeout=60,
+    )
+    print(
+        f"\na tree of {size} nodes ({len(records)} events) painted {painted:.0f} ms "
+        f"after the page was opened (in a browser already running)"
+    )
     record_property("big_tree_nodes", size)
     record_property("big_tree_painted_ms", round(painted))
-    assert painted <= 5 * 2000          # see LIVE_MS: 2 s is the target, measured quiet
+    assert painted <= 5 * 2000  # see LIVE_MS: 2 s is the target, measured quiet
     nodes = page_nodes(browser)
     last = next(r["node"] for r in reversed(records) if r.get("node") is not None)
-    assert last in nodes                                 # the running path is open
-    assert len(nodes) < size                             # and much of the rest is not
+    assert last in nodes  # the running path is open
+    assert len(nodes) < size  # and much of the rest is not
     # collapse and expand subtrees
     browser.find_element("id", "expand-all").click()
     nodes = page_nodes(browser)
     assert len(nodes) == size
     order = sorted(nodes.values(), key=lambda n: n["index"])
     for top in (n for n in order if n["depth"] == 1 and n["kind"] == "task"):
-        end = next((n["index"] for n in order[top["index"] + 1:] if n["depth"] <= 1), len(order))
-        subtree = {n["id"] for n in order[top["index"] + 1:end]}
+        end = next((n["index"] for n in order[top["index"] + 1 :] if n["depth"] <= 1), len(order))
+        subtree = {n["id"] for n in order[top["index"] + 1 : end]}
         toggle = f"document.querySelector('.node[data-node=\"{top['id']}\"] .tg').click()"
         browser.execute_script(toggle)
         assert not subtree & set(page_nodes(browser)), top
@@ -436,16 +511,32 @@ def test_a_kitchen_run_in_the_browser_with_its_camera(browser, tmp_path):
     half (seed 3: the cup slips out of the gripper twice, and is grasped again)."""
     plan = plan_file(tmp_path, KITCHEN, ROOT / "problems" / "tray_three.jshop")
     log = tmp_path / "run.jsonl"
-    run = Served("run", plan, "--sim", "--faults", "slip=0.3", "--seed", 3, "--replan",
-                 "--view", "--view-wait", "--log", log)
+    run = Served(
+        "run",
+        plan,
+        "--sim",
+        "--faults",
+        "slip=0.3",
+        "--seed",
+        3,
+        "--replan",
+        "--view",
+        "--view-wait",
+        "--log",
+        log,
+    )
     browser.get(run.url)
     shot = os.environ.get("HTN_VIEW_SCREENSHOT") or str(tmp_path / "kitchen.png")
-    wait_for(browser, """const rows = [...document.querySelectorAll('#tree .node[data-kind=action]')];
+    wait_for(
+        browser,
+        """const rows = [...document.querySelectorAll('#tree .node[data-kind=action]')];
         return rows.filter(r => r.dataset.status === 'verified').length * 2 >= rows.length
                && Number(document.getElementById('camera').dataset.frames) >= 2
                && document.querySelector('#tree .badge.fault')
-               && rows.some(r => r.dataset.status === 'running')""", "half of the run, a fault")
-    time.sleep(0.3)                                      # the latest frame drawn
+               && rows.some(r => r.dataset.status === 'running')""",
+        "half of the run, a fault",
+    )
+    time.sleep(0.3)  # the latest frame drawn
     browser.save_screenshot(shot)
     assert os.path.getsize(shot) > 50_000
     wait_for(browser, "return document.getElementById('result').dataset.result", "the result")

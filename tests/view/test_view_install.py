@@ -1,6 +1,7 @@
 """The browser view as a new user installs it: a wheel in a fresh virtualenv,
 first without the view extra (the commands say which extra they need), then
 with it (the page and every asset it names come from the installed package)."""
+
 from __future__ import annotations
 
 import os
@@ -19,15 +20,23 @@ STATIC = ROOT / "view" / "static"
 
 
 def sh(*args, cwd, env=None, **popen):
-    return subprocess.run([str(a) for a in args], cwd=cwd, capture_output=True, text=True,
-                          timeout=900, env=env, **popen)
+    return subprocess.run(
+        [str(a) for a in args],
+        cwd=cwd,
+        capture_output=True,
+        text=True,
+        timeout=900,
+        env=env,
+        **popen,
+    )
 
 
 def test_no_asset_of_the_page_comes_from_elsewhere():
     for path in STATIC.iterdir():
         text = path.read_text(encoding="utf-8")
-        assert not re.search(r"(https?:)?//[\w.-]+\.[a-z]{2,}/", text.replace(
-            "http://www.w3.org/2000/svg", "")), path     # the SVG namespace is no address
+        assert not re.search(
+            r"(https?:)?//[\w.-]+\.[a-z]{2,}/", text.replace("http://www.w3.org/2000/svg", "")
+        ), path  # the SVG namespace is no address
 
 
 @pytest.mark.slow
@@ -37,8 +46,10 @@ def test_the_view_extra_installs_the_page(tmp_path, checkout_wheel):
     assert sh(sys.executable, "-m", "venv", venv, cwd=tmp_path).returncode == 0
     env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "VIRTUAL_ENV")}
     env["PATH"] = f"{venv / 'bin'}{os.pathsep}{env.get('PATH', '')}"
-    pip = lambda *a: sh(venv / "bin" / "python", "-m", "pip", "install", "-q", *a,  # noqa: E731
-                        cwd=tmp_path, env=env)
+
+    def pip(*a):
+        return sh(venv / "bin" / "python", "-m", "pip", "install", "-q", *a, cwd=tmp_path, env=env)
+
     assert pip(wheel).returncode == 0
     work = tmp_path / "work"
     work.mkdir()
@@ -56,15 +67,26 @@ def test_the_view_extra_installs_the_page(tmp_path, checkout_wheel):
     assert r.stderr == "htn view needs the view extra: pip install 'htn[view]'\n"
     r = pip(f"{wheel}[view]")
     assert r.returncode == 0, r.stderr
-    proc = subprocess.Popen(["htn", "view", "run.jsonl"], cwd=work, env=env, text=True,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    proc = subprocess.Popen(
+        ["htn", "view", "run.jsonl"],
+        cwd=work,
+        env=env,
+        text=True,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+    )
     try:
         url = re.fullmatch(r"view: (\S+)\n", proc.stderr.readline()).group(1)
         with urllib.request.urlopen(url, timeout=30) as response:
             page = response.read().decode()
         assets = re.findall(r'(?:src|href)="(static/[^"]+)"', page)
         assert {Path(a.split("?")[0]).name for a in assets} >= {
-            "app.js", "tree.js", "timeline.js", "style.css", "favicon.svg"}
+            "app.js",
+            "tree.js",
+            "timeline.js",
+            "style.css",
+            "favicon.svg",
+        }
         base = url.split("?")[0]
         for asset in assets:
             with urllib.request.urlopen(base + asset.replace("&amp;", "&"), timeout=30) as response:
