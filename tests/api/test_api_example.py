@@ -1,4 +1,4 @@
-"""The README's Python API example (``examples/plan_and_run.py``) runs as a
+"""The Python API page's example (``examples/plan_and_run.py``) runs as a
 new user runs it: on the core install (a wheel of this checkout in a fresh
 virtualenv, no extras), from a folder outside the checkout."""
 
@@ -61,8 +61,18 @@ def test_the_example_runs_outside_the_checkout_on_the_core_install(tmp_path, che
     assert check.stdout.strip() == "[]"
 
 
-def test_the_readme_shows_the_example_as_it_is():
-    readme = (ROOT / "README.md").read_text()
-    block = readme.split("## Python API", 1)[1].split("```python\n", 1)[1].split("```", 1)[0]
+def test_the_api_page_shows_the_example_as_it_is():
+    page = (ROOT / "docs" / "api.md").read_text()
+    block = page.split("# Python API", 1)[1].split("```python\n", 1)[1].split("```", 1)[0]
     code = EXAMPLE.read_text()
     assert code.startswith('"""') and block == code[code.index('"""\n', 3) + 4 :].lstrip("\n")
+
+
+def test_the_readme_shows_the_example_the_getting_started_page_runs():
+    """The README's short example is the one tests/e2e/test_guide.py runs from
+    the getting-started page, character for character."""
+    readme = (ROOT / "README.md").read_text()
+    block = readme.split("## From Python", 1)[1].split("```python\n", 1)[1].split("```", 1)[0]
+    page = (ROOT / "docs" / "getting-started.md").read_text()
+    ran = page.split("<!-- file: first.py -->\n```python\n", 1)[1].split("```", 1)[0]
+    assert block == ran and len(block.splitlines()) <= 10

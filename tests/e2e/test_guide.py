@@ -1,4 +1,4 @@
-"""docs/guide.md, run as a newcomer would: its commands, in order, from a folder
+"""docs/guide.md and docs/getting-started.md, run as a newcomer would: its commands, in order, from a folder
 outside the checkout, in a fresh virtualenv (issue 19).
 
 The guide marks what is run. ``<!-- file: PATH -->`` before a fenced block:
@@ -30,6 +30,7 @@ from coffee import COFFEE, COFFEE_HDDL, MORNING, MORNING_HDDL
 from conftest import ROOT
 
 GUIDE = ROOT / "docs" / "guide.md"
+GETTING_STARTED = ROOT / "docs" / "getting-started.md"
 MARK = re.compile(
     r"<!-- (file: (?P<file>\S+)|run(: exit (?P<exit>\d+))?|output) -->\n"
     r"```[a-z]*\n(?P<body>.*?)```\n",
@@ -109,16 +110,14 @@ def venv(tmp_path_factory, checkout_wheel) -> Path:
     return venv
 
 
-@pytest.mark.slow
-def test_the_guide_runs_from_a_folder_outside_the_checkout(venv, tmp_path):
-    work = tmp_path / "work"
-    work.mkdir()
+def run_page(page: Path, venv: Path, work: Path) -> None:
+    """A page's marked blocks, in order, in WORK with VENV's htn on PATH."""
     assert ROOT not in work.parents
     env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "VIRTUAL_ENV")}
     env["PATH"] = f"{venv / 'bin'}{os.pathsep}{env.get('PATH', '')}"
     env["VIRTUAL_ENV"] = str(venv)
     printed = ""
-    for kind, what, body in guide_blocks(GUIDE.read_text()):
+    for kind, what, body in guide_blocks(page.read_text()):
         if kind == "file":
             path = work / what
             path.parent.mkdir(parents=True, exist_ok=True)
@@ -133,4 +132,28 @@ def test_the_guide_runs_from_a_folder_outside_the_checkout(venv, tmp_path):
         else:
             for line in filter(None, (x.strip() for x in body.splitlines())):
                 assert line in printed, f"{line!r} not in:\n{printed}"
+
+
+@pytest.mark.slow
+def test_the_guide_runs_from_a_folder_outside_the_checkout(venv, tmp_path):
+    work = tmp_path / "work"
+    work.mkdir()
+    run_page(GUIDE, venv, work)
     assert (work / "plan.txt").is_file() and (work / "run.jsonl").is_file()
+
+
+def test_the_getting_started_page_marks_every_command_it_shows():
+    text = GETTING_STARTED.read_text()
+    blocks = guide_blocks(text)
+    runs = [b for b in blocks if b[0] == "run"]
+    assert len(runs) >= 6 and text.count("```sh\n") == len(runs)
+    assert [p for k, p, _ in blocks if k == "file"] == ["first.py"]
+
+
+@pytest.mark.slow
+def test_the_getting_started_page_runs_from_a_folder_outside_the_checkout(venv, tmp_path):
+    work = tmp_path / "work"
+    work.mkdir()
+    run_page(GETTING_STARTED, venv, work)
+    assert (work / "plan.txt").is_file() and (work / "run.jsonl").is_file()
+    assert (work / "domains" / "domestic.jshop").is_file()
