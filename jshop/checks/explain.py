@@ -230,7 +230,10 @@ class Explainer:
         ] + ["  " + line for line in self.deepest.lines(limit=12)]
 
     def to_dict(self, full: bool = False) -> dict:
-        d = {"dead_ends": self.count, "deepest": self.deepest.to_dict() if self.deepest else None}
+        d: dict = {
+            "dead_ends": self.count,
+            "deepest": self.deepest.to_dict() if self.deepest else None,
+        }
         if full:
             d["all"] = [x.to_dict() for x in self.all]
         return d

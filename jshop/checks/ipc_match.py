@@ -31,7 +31,7 @@ from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import HtnError
 from htn.jshop.language.terms import Var, term_str, variables
 from htn.jshop.readers.hddl_formulas import Formulas, Scope, order_conjuncts, type_condition
-from htn.jshop.readers.hddl_model import TOP, TOP_METHOD
+from htn.jshop.readers.hddl_model import TOP, TOP_METHOD, HDomain
 
 
 @dataclass
@@ -239,7 +239,7 @@ def _show_sub(name: str, terms: tuple, label) -> str:
 class Shapes:
     """The shapes of a domain's methods, made when first asked."""
 
-    model: object
+    model: HDomain
     cache: dict = field(default_factory=dict)
 
     def get(self, task: str, name: str):

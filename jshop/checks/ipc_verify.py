@@ -76,7 +76,7 @@ class _Check:
         self.top_shape = top_shape(problem.hddl, self.h.predicates)
         self.findings: list = []
         self.lines: dict = {}
-        self.top = None  # the decomposition line of the root (maybe made up)
+        self.top: IpcLine | None = None  # the decomposition line of the root (maybe made up)
         self.planner = self._planner()
         self.shape_of: dict = {}  # id -> Shape
         self.choices: dict = {}  # id -> [Match]
@@ -218,7 +218,9 @@ class _Check:
 
     # ------------------------------------------------------------ 3. methods
     def methods(self) -> None:
-        for d in (*self.plan.decompositions, *([self.top] if self.top.id < 0 else [])):
+        top = self.top
+        assert top is not None  # set by ids()
+        for d in (*self.plan.decompositions, *([top] if top.id < 0 else [])):
             if d.name == TOP:
                 sh, why = (
                     self.top_shape,
@@ -229,6 +231,7 @@ class _Check:
                     ),
                 )
             else:
+                assert d.method is not None  # a decomposition line names its method
                 sh, why = self.shapes.get(d.name, d.method)
             if why:
                 self.add(d.line, d.method_col, why)
@@ -248,6 +251,7 @@ class _Check:
             self.choices[d.id] = found
 
     def _decomposition(self, ident: int) -> IpcLine:
+        assert self.top is not None  # set by ids()
         return self.top if ident == self.top.id else self.lines[ident]
 
     # ------------------------------------------------------------ 4. order
@@ -255,7 +259,8 @@ class _Check:
         span = self._spans()
         for ident, found in self.choices.items():
             d, sh = self._decomposition(ident), self.shape_of[ident]
-            kept, first_bad = [], None
+            kept: list = []
+            first_bad: tuple | None = None
             for match in found:
                 child = {i: d.children[k] for k, i in enumerate(match.order)}
                 bad = next(
@@ -268,6 +273,7 @@ class _Check:
             if kept:
                 self.choices[ident] = kept
                 continue
+            assert first_bad is not None  # found is not empty: every match kept or bad
             (i, j), child = first_bad
             a = self.plan.actions[span[child[i]][1]]
             b = self.plan.actions[span[child[j]][0]]
@@ -283,6 +289,8 @@ class _Check:
     def _spans(self) -> dict:
         """id -> (first, last) position of the actions below it, () if none;
         bottom-up over the tree (steps 1-3 made it one), without recursion."""
+        assert self.top is not None  # set by ids()
+        span: dict[int, tuple[int, ...]]  # (first, last) or ()
         span = {a.id: (k, k) for k, a in enumerate(self.plan.actions)}
         stack = [(self.top.id, False)]
         while stack:
@@ -302,7 +310,7 @@ class _Check:
     def execution(self) -> None:
         ambiguous = [i for i, ms in self.choices.items() if len(ms) > 1]
         fixed = {i: ms[0] for i, ms in self.choices.items()}
-        first = None
+        first: list | None = None
         options = [self.choices[i] for i in ambiguous]
         for combo in itertools.islice(itertools.product(*options), MAX_COMBINATIONS):
             chosen = {**fixed, **dict(zip(ambiguous, combo))}
@@ -312,6 +320,7 @@ class _Check:
             if not findings:
                 return
             first = first or findings
+        assert first is not None  # product() gives at least one combination
         self.findings += first
 
 

@@ -51,6 +51,7 @@ def recover_tree(
     want = [str(s) for s in steps]
     plans = Planner(domain, instance, functions, record_trees=True).plans(timeout=timeout)
     for k, plan in enumerate(plans):
+        assert plan is not None  # no slices of CPU time are asked for
         if plan.lines() == want:
             return plan.tree
         if k + 1 >= max_plans:
@@ -98,6 +99,7 @@ def check_runnable(
             )
     verdict = validate_plan(domain, instance, Plan(plan.steps, None), functions)
     if not verdict.valid:
+        assert verdict.failed_step is not None  # set in every invalid verdict
         where = verdict.line or None
         raise HtnError(
             f"step {verdict.failed_step + 1} cannot run: {verdict.reason}",

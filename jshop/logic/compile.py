@@ -44,7 +44,7 @@ def _shown(args: tuple) -> str:
     return "(" + " ".join(source_str(a) for a in args) + ")"
 
 
-def binder(args: tuple, what: str = None) -> Callable[[list], tuple]:
+def binder(args: tuple, what: str | None = None) -> Callable[[list], tuple]:
     """Cached :func:`make_binder` (keyed by the domain's own tuple object);
     ``what`` names the generated code (see :mod:`~htn.jshop.logic.codegen`)."""
     return _BINDERS.make(args, lambda: make_binder(args, what))
@@ -53,7 +53,7 @@ def binder(args: tuple, what: str = None) -> Callable[[list], tuple]:
 _SUBSTITUTERS = cache()
 
 
-def substituter(args: tuple, what: str = None) -> Callable[[list], tuple]:
+def substituter(args: tuple, what: str | None = None) -> Callable[[list], tuple]:
     """``env -> subst(args, env)`` (the binder's tuple without its key), for
     the places that only build a term: effects, task atoms, plan steps. A
     tuple of symbols, numbers and variables needs no groundness test."""
@@ -85,7 +85,7 @@ def substituter(args: tuple, what: str = None) -> Callable[[list], tuple]:
     return fn
 
 
-def head_unifier(head: tuple, what: str = None) -> Callable[[tuple, list], bool]:
+def head_unifier(head: tuple, what: str | None = None) -> Callable[[tuple, list], bool]:
     """Cached :func:`make_head_unifier`."""
     return _UNIFIERS.make(head, lambda: make_head_unifier(head, what))
 
@@ -93,7 +93,7 @@ def head_unifier(head: tuple, what: str = None) -> Callable[[tuple, list], bool]
 GENERIC = 1 << 30  # a scan key meaning "use the generic scanner"
 
 
-def make_binder(args: tuple, what: str = None) -> Callable[[list], tuple]:
+def make_binder(args: tuple, what: str | None = None) -> Callable[[list], tuple]:
     """A function ``env -> (key, bound_args)`` equivalent to ``subst``.
 
     ``key`` is None when the result is ground (the caller can then look the
@@ -110,7 +110,7 @@ def make_binder(args: tuple, what: str = None) -> Callable[[list], tuple]:
     tests = []  # groundness test of each non-constant element
     keys = []  # key contribution of each non-constant element
     lines = []
-    seen = set()
+    seen: set = set()
     for i, a in enumerate(args):
         ta = type(a)
         if ta is Var:
@@ -266,7 +266,7 @@ class _NoFastPath(Exception):
     pass
 
 
-def make_scanner(args: tuple, key: int, what: str = None) -> Callable:
+def make_scanner(args: tuple, key: int, what: str | None = None) -> Callable:
     """A generator ``(atoms, bound, env) -> envs`` matching ``args`` whose
     unbound variables are those of ``key`` (see :func:`make_binder`) against a
     live list of atoms, in order; equivalent to unifying element by element."""
@@ -309,7 +309,7 @@ _TERMS = cache()
 _CONJUNCTIONS: dict = {}
 
 
-def term_binder(term, what: str = None) -> Callable[[list], tuple]:
+def term_binder(term, what: str | None = None) -> Callable[[list], tuple]:
     """Cached binder of a single term (keyed by the term object itself)."""
     return _TERMS.make(term, lambda: make_binder((term,), what))
 
@@ -360,12 +360,12 @@ def _stacked_conjunction(sats: list) -> Callable:
     return conj
 
 
-def scanner(args: tuple, key: int, what: str = None) -> Callable:
+def scanner(args: tuple, key: int, what: str | None = None) -> Callable:
     """Cached :func:`make_scanner`."""
     return _SCANNERS.make(args, lambda: make_scanner(args, key, what), (id(args), key))
 
 
-def make_head_unifier(head: tuple, what: str = None) -> Callable[[tuple, list], bool]:
+def make_head_unifier(head: tuple, what: str | None = None) -> Callable[[tuple, list], bool]:
     """A function ``(task_args, env) -> bool`` equivalent to unifying each
     head term with the task's term (a variable in the task binds nothing)."""
     n = len(head)

@@ -96,7 +96,7 @@ class Logic:
         unifier and binder warming: compiled ones replace them in place)."""
         args = ax.head.args
         head = source_atom(ax.head.pred, args)
-        seg = [
+        seg: list = [
             ax,
             None,
             None,
@@ -119,7 +119,9 @@ class Logic:
         return seg
 
     # ------------------------------------------------------------ preconditions
-    def precondition(self, pre: S.Precondition, head: tuple = None, what: str = None) -> Sat:
+    def precondition(
+        self, pre: S.Precondition, head: tuple | None = None, what: str | None = None
+    ) -> Sat:
         """``head``: the arguments of the method's, operator's or axiom's head,
         whose variables are the only ones bound when the precondition is
         asked (the binding is fresh), so only they decide its binding mode.

@@ -199,7 +199,7 @@ class CodeWriter:
             self.depth += 1
             return
         conds = [f"len(t) == {len(args)}"] if self.sized[k] else []
-        binds = []
+        binds: list = []
         first: dict = {}  # variable -> where it is first met in ``t``
         for i, a in enumerate(args):
             if type(a) is tuple and a and not term_vars(a, set()) <= self.known:

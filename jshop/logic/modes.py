@@ -53,7 +53,9 @@ _LITERALS = cache()  # id(conjunction) -> (conjunctions, _Literals, variables)
 _NONE = object()
 
 
-def compile_conjunction(logic, e: S.And, entry: frozenset = None, what: str = None) -> Callable:
+def compile_conjunction(
+    logic, e: S.And, entry: frozenset | None = None, what: str | None = None
+) -> Callable:
     """``sat(env)`` for the conjunction ``e`` (see the module docstring).
     ``entry``: the only variables that can be bound when it is asked (a
     precondition's head variables), or None for any. ``what`` names the

@@ -56,7 +56,7 @@ class Operators:
     def _compile(self, eff: S.Effects, op: S.Operator):
         if eff.var is not None:
             return eff.var
-        out = []
+        out: list = []
         for item in eff.items:
             if isinstance(item, S.EffectForAll):
                 out.append(

@@ -196,8 +196,8 @@ def predicate_arities(domain: S.Domain, problem: S.Problem | None = None) -> dic
             _expr_atoms(b.pre.expr, atoms)
     for ax in (x for axs in domain.axioms.values() for x in axs):
         atoms.append(ax.head)
-        for b in ax.branches:
-            _expr_atoms(b.pre.expr, atoms)
+        for ab in ax.branches:
+            _expr_atoms(ab.pre.expr, atoms)
     for inst in problem.instances if problem is not None else ():
         atoms.extend(inst.state)
     out: dict[str, set] = {}

@@ -94,7 +94,8 @@ class Builder(Transformer_NonRecursive):
         return ("type", tuple(str(t) for t in items), self.tpos(items[0]))
 
     def _typed(self, items) -> list:
-        out, pending = [], []
+        out: list = []
+        pending: list = []
         for x in items:
             if isinstance(x, tuple):
                 out += [Param(n, x[1], p, x[2]) for n, p in pending]

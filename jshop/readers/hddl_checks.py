@@ -32,7 +32,8 @@ def type_ancestors(h: HDomain) -> dict:
     where = getattr(h, "type_pos", {})
     out = {}
     for t in types:
-        seen, stack = [], [(s, (t, s)) for s in types[t]]
+        seen: list = []
+        stack: list[tuple[str, tuple[str, ...]]] = [(s, (t, s)) for s in types[t]]
         while stack:
             s, path = stack.pop()
             if s not in types:

@@ -168,7 +168,9 @@ class _Effects:
         self.f = formulas
 
     def convert(self, effect, names: dict):
-        self.dels, self.adds, self.cost = [], [], 1.0
+        self.dels: list = []
+        self.adds: list = []
+        self.cost: object = 1.0  # a number or a term
         self.conditional = False
         self.groups: dict = {}
         self._walk(effect, names, [], [])
@@ -311,6 +313,7 @@ def problem_from_model(h: HProblem) -> S.Problem:
     if h.params or _has_constraints(h.network):
         # the network's :constraints are a precondition of its artificial
         # root method, like its parameters' types
+        assert h.network is not None  # parameters come with the :htn network
         top = MethodDef(TOP_METHOD, h.params, Subtask(None, TOP, (), h.pos), None, h.network, h.pos)
     goal, nvars = None, 0
     if h.goal is not None:

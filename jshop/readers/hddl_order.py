@@ -68,7 +68,7 @@ def _topological(labels: dict, after: dict, preds: dict, written: dict) -> tuple
     """Kahn's algorithm, ready subtasks taken in written order; the order is
     total when exactly one subtask is ready at every step."""
     count = {label: len(preds[label]) for label in labels}
-    ready = sorted((label for label in labels if count[label] == 0), key=written.get)
+    ready = sorted((label for label in labels if count[label] == 0), key=written.__getitem__)
     order, total = [], True
     while ready:
         if len(ready) > 1:
@@ -79,7 +79,7 @@ def _topological(labels: dict, after: dict, preds: dict, written: dict) -> tuple
             count[b] -= 1
             if count[b] == 0:
                 ready.append(b)
-        ready.sort(key=written.get)
+        ready.sort(key=written.__getitem__)
     return order, total
 
 

@@ -22,6 +22,7 @@ import re
 from functools import lru_cache
 
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
+from lark.lexer import Token
 
 from htn.jshop.language.errors import HtnError
 
@@ -57,9 +58,16 @@ def _offset(text: str, e: UnexpectedInput) -> int:
     """Where the error is: the offending character or token (end of file: its length)."""
     if isinstance(e, UnexpectedCharacters):
         return e.pos_in_stream
-    if isinstance(e, UnexpectedToken) and e.token.type != "$END" and e.token.start_pos is not None:
-        return e.token.start_pos
+    if isinstance(e, UnexpectedToken) and _token(e).type != "$END":
+        start = _token(e).start_pos
+        if start is not None:
+            return start
     return len(text)
+
+
+def _token(e: UnexpectedToken) -> Token:
+    """The token the parser could not take."""
+    return e.token  # type: ignore[attr-defined]  # lark sets it in an untyped __init__, undeclared
 
 
 def at_offset(text: str, file: str, offset: int, message: str) -> HtnError:
@@ -175,7 +183,7 @@ def _paren_facts(text: str, file: str, e: UnexpectedInput, at: int):
             stray,
             "this ')' closes nothing: every '(' before it is closed already (one ')' too many)",
         )
-    if at >= len(text) or (isinstance(e, UnexpectedToken) and e.token.type == "$END"):
+    if at >= len(text) or (isinstance(e, UnexpectedToken) and _token(e).type == "$END"):
         still = parens.open_lists(text, len(text))
         if still:
             o = still[-1]
@@ -195,8 +203,8 @@ def _paren_facts(text: str, file: str, e: UnexpectedInput, at: int):
 def _parser_words(text: str, file: str, e: UnexpectedInput, token_names: dict) -> HtnError:
     if isinstance(e, UnexpectedCharacters):
         return HtnError(f"unexpected character {text[e.pos_in_stream]!r}", file, e.line, e.column)
-    if isinstance(e, UnexpectedToken) and e.token.type != "$END":
-        tok = e.token
+    if isinstance(e, UnexpectedToken) and _token(e).type != "$END":
+        tok = _token(e)
         return HtnError(
             f"unexpected {str(tok)!r}; expected {describe(e.expected, token_names)}",
             file,

@@ -190,7 +190,7 @@ class _Pullup:
         """Task -> literals over its parameter positions that all its methods test."""
         per_task: dict = {}
         for m in self.methods:
-            head = {}
+            head: dict = {}
             for i, x in enumerate(m.task.args):
                 if isinstance(x, Var):
                     head.setdefault(x.name, i)

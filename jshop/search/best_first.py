@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import heapq
 import time
-from typing import Iterator, Optional
+from typing import TYPE_CHECKING, Generator, Optional
 
 from htn.jshop.language import syntax as S
 from htn.jshop.plans.plan import Plan, Step
@@ -42,6 +42,10 @@ from .heuristics import HEURISTICS, INF
 from .limits import MemoryGuard, MemoryLimit
 from .stats import Stats
 from .task_networks import body_items, firsts, item_at, replace
+
+if TYPE_CHECKING:
+    from .grounding import GroundModel
+    from .heuristics import Heuristic
 
 WASTAR_WEIGHT = 2.0  # --search wastar: f = g + 2 h
 
@@ -70,9 +74,9 @@ class BestFirst:
         self.tree_paths = tree_paths
         self.stats = Stats()
         self.slice_s: Optional[float] = None  # CPU seconds between pauses, see plans()
-        self.model = None
-        self.h = None  # the heuristic, once grounded
-        self.cut = None  # the goal-chain cut (None: off), once grounded
+        self.model: Optional[GroundModel] = None
+        self.h: Optional[Heuristic] = None  # the heuristic, once grounded
+        self.cut: Optional[GoalChain] = None  # the goal-chain cut (None: off), once grounded
         self.generated = 0
         self.commit = commit  # the rule of committed() (False: every move)
         self.ties = ties  # "fifo", "lifo", None: see interleaves()
@@ -84,7 +88,9 @@ class BestFirst:
         if self.model is None:
             self._prepared(ground(self.domain, self.instance))
 
-    def _prepared(self, model, h=None, cut=None) -> None:
+    def _prepared(
+        self, model: GroundModel, h: Optional[Heuristic] = None, cut: Optional[GoalChain] = None
+    ) -> None:
         """Take a grounded model (and the heuristic and goal-chain cut
         another search built on it, to share their caches)."""
         self.model = model
@@ -94,7 +100,7 @@ class BestFirst:
         self.lifo = interleaves(model) if self.ties is None else self.ties == "lifo"
 
     # ------------------------------------------------------------ search
-    def plans(self, timeout: Optional[float] = None) -> Iterator[Optional[Plan]]:
+    def plans(self, timeout: Optional[float] = None) -> Generator[Optional[Plan], None, None]:
         """Plans as they are found (see the module docstring); ``timeout``
         is wall-clock time since the start, like the depth-first search's."""
         stats = self.stats
@@ -111,11 +117,13 @@ class BestFirst:
                     break
                 if pause_at is not None and cpu() >= pause_at:
                     yield None
+                    assert self.slice_s is not None  # the portfolio sets it before each turn
                     pause_at = cpu() + self.slice_s
                 if timeout is not None and time.perf_counter() - stats.started > timeout:
                     stats.timed_out = True
                     return
         model, h, w = self.model, self.h, self.weight
+        assert model is not None and h is not None  # set by _prepared
         actions, methods_of = model.actions, model.methods_of
         net0 = body_items(model.roots, model.root_order)
         cut, free = self.cut, self.free
@@ -166,6 +174,7 @@ class BestFirst:
                     if pause_at is not None and cpu() >= pause_at:
                         stats.elapsed = time.perf_counter() - stats.started
                         yield None
+                        assert self.slice_s is not None  # the portfolio sets it before each turn
                         pause_at = cpu() + self.slice_s
                     if not ticks & 1023:
                         guard = guard or MemoryGuard(self.max_memory)
@@ -186,6 +195,7 @@ class BestFirst:
         if self.cut is not None and not self.cut.ok(s, net):
             self.stats.goal_cuts += 1
             return
+        assert self.h is not None  # set by _prepared before the search
         hv = self.h(s, net)
         if hv == INF:
             return
@@ -204,10 +214,11 @@ class BestFirst:
             k = parent
         moves.reverse()
         model = self.model
+        assert model is not None  # a plan is found after grounding
         inst = list(model.roots)  # instance -> task id
         net = body_items(tuple(range(len(inst))), model.root_order)
         how: dict = {}  # instance -> step index or (method, children)
-        steps = []
+        steps: list[Step] = []
         for path, what in moves:
             i = item_at(net, path)
             if hasattr(what, "op"):
@@ -224,6 +235,7 @@ class BestFirst:
         return plan
 
     def _tree(self, inst: list, how: dict, nroots: int) -> TaskTree:
+        assert self.model is not None  # a plan is found after grounding
         tasks = self.model.tasks
         root = TaskTree(name="", path="")
         work = [(root, tuple(range(nroots)), "")]

@@ -174,7 +174,7 @@ class FormulaGrounder:
 _HELPERS = {"conj": conj, "disj": disj, "negate": negate}
 
 
-def compile_residual(r) -> tuple:
+def compile_residual(r) -> tuple | None:
     """``(positive mask, negative mask, rest)``, or None when ``r`` is False."""
     if r is False:
         return None

@@ -22,6 +22,8 @@ ones: they only cut method instances that have no plan below them.
 
 from __future__ import annotations
 
+from typing import Optional, cast
+
 from htn.jshop.language import syntax as S
 from htn.jshop.language.terms import subst, variables
 from htn.jshop.logic.caches import IdentityCache
@@ -72,8 +74,8 @@ class GroundModel:
         self.methods_of: dict = {}  # task id -> [GroundMethod]
         self.init = 0
         self.roots: tuple = ()  # initial task ids
-        self.root_order = True
-        self.goal = None  # (pos, neg, rest) or None
+        self.root_order: object = True  # True, False or a PartialOrder
+        self.goal: tuple | None = None  # (pos, neg, rest) or None
 
     def task_id(self, name: str, args: tuple) -> int:
         key = (name, args)
@@ -186,9 +188,10 @@ class _Grounder:
 
     def _action(self, name: str, args: tuple):
         for op, unify in self.ops.get(name, ()):
-            env = [None] * op.nvars
+            env: list = [None] * op.nvars
             if not unify(args, env):
                 continue
+            witness: Optional[list]
             if self._bound_by_head(op):  # the common case: no exists to enumerate
                 witness = env
                 pre = compile_residual(self.formulas.ground(op.pre.expr, env))
@@ -244,9 +247,9 @@ class _Grounder:
         if not unify(args, env):
             return
         branch = m.branches[0]
-        items = branch.tasks.items
-        if any(isinstance(x, S.TaskList) for x in items):
+        if any(isinstance(x, S.TaskList) for x in branch.tasks.items):
             raise NotGroundable(f"method {m.name}: a nested task list")
+        items = cast("list[S.TaskAtom]", branch.tasks.items)  # no nested list: checked above
         groups: dict = {}
         code = self._body_code(m)
         for nb in self.formulas.satisfiers(branch.pre.expr, env):

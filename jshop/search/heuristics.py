@@ -27,6 +27,7 @@ soon as every cost the node needs is known.
 from __future__ import annotations
 
 import heapq
+from collections.abc import Callable
 
 from .ground_formulas import positive_bits
 from .task_networks import tasks
@@ -98,8 +99,8 @@ class _Pass:
     def __init__(self, r: _Relaxation, sources: list):
         self.r = r
         self.cost: list = [None] * r.nodes
-        self.acc = [0] * len(r.npre)
-        self.left = r.npre[:]
+        self.acc: list[int] | None = [0] * len(r.npre)
+        self.left: list[int] | None = r.npre[:]
         buckets: dict = {0: list(sources)}
         if r.free:
             buckets[1] = [e for i in r.free for e in r.effects[i]]
@@ -114,6 +115,7 @@ class _Pass:
         """Settle buckets until every node of ``nodes`` has a cost (all of
         them with ``()``) or nothing is left to settle."""
         cost, acc, left, buckets, keys = self.cost, self.acc, self.left, self.buckets, self.keys
+        assert acc is not None and left is not None  # a finished pass is not settled again
         consumers, effects = self.r.consumers, self.r.effects
         push, pop = heapq.heappush, heapq.heappop
         pending = nodes
@@ -202,4 +204,10 @@ class TaskDecompositionGraph:
         return sum(cost[t] for t in tasks(net))
 
 
-HEURISTICS = {"rc": RelaxedComposition, "tdg": TaskDecompositionGraph}
+# h(state, network): the estimate, INF for a dead end
+Heuristic = Callable[[int, tuple], float]
+
+HEURISTICS: dict[str, Callable[..., Heuristic]] = {
+    "rc": RelaxedComposition,
+    "tdg": TaskDecompositionGraph,
+}

@@ -161,7 +161,7 @@ def _first_tasks(root: Node, trail: Optional[list]) -> list:
     stack: list = []
     node, i, n0 = root, root.start, 0
     order = node.ordered
-    open_ = set() if type(order) is PartialOrder else None
+    open_: set | None = set() if type(order) is PartialOrder else None
     while True:
         subs = node.subtasks
         n = len(subs)

@@ -39,7 +39,7 @@ from __future__ import annotations
 
 import gc
 import time
-from typing import Iterator, Optional
+from typing import Generator, Optional
 
 from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import PlanningError
@@ -95,7 +95,8 @@ class Planner:
         self.logic = Logic(domain, self.state, functions)
         self.operators = Operators(self.state, self.logic)
         self._apply = self.operators.apply
-        self._goal = self.guard = None
+        self._goal: Optional[tuple] = None  # (precondition, its number of variables)
+        self.guard: Optional[GoalGuard] = None
         if instance.goal is not None:
             self._goal = (self.logic.precondition(instance.goal), instance.goal_nvars)
             self.guard = GoalGuard(domain, instance.goal) or None
@@ -129,7 +130,7 @@ class Planner:
         self.slice_s: Optional[float] = None  # CPU s between pauses: see plans()
 
     # ------------------------------------------------------------ driver
-    def plans(self, timeout: Optional[float] = None) -> Iterator[Plan]:
+    def plans(self, timeout: Optional[float] = None) -> Generator[Optional[Plan], None, None]:
         """Stream plans in JSHOP2's order until exhausted or ``timeout``.
 
         ``stats.elapsed`` counts search time only, not the time the consumer
@@ -145,6 +146,7 @@ class Planner:
         # consumer runs.
         gc_was_enabled = gc.isenabled()
         gc.disable()
+        t0: Optional[float]
         t0 = stats.started = clock()
         spent = 0.0
         frame = self._frame
@@ -199,6 +201,7 @@ class Planner:
                     if pause_at is not None and time.process_time() >= pause_at:
                         spent += clock() - t0
                         yield None  # see slice_s: another search's turn
+                        assert self.slice_s is not None  # the portfolio sets it before each turn
                         t0, pause_at = clock(), time.process_time() + self.slice_s
                     if not ticks & 4095:
                         if guard is None:
@@ -309,6 +312,7 @@ class Planner:
                             node.ordered = ordered
                             node.how = (m, k, index)
                             if key is not None and node.subtasks:
+                                assert loops is not None  # key: the loop check is on
                                 loops.enter(node, key)
                             tried = True
                             yield node
@@ -316,6 +320,7 @@ class Planner:
                             if len(trail) > mark:
                                 undo_marks(trail, mark, loops)
                             if node.loop_key is not None:
+                                assert loops is not None  # entered above: the loop check is on
                                 loops.leave(node)
                             found = True
                             node.subtasks = None
@@ -359,6 +364,7 @@ class Planner:
 
     def goal_holds(self) -> bool:
         """Whether the problem's goal (HDDL) holds in the current state."""
+        assert self._goal is not None  # asked only of a problem with a goal
         sat, nvars = self._goal
         return next(iter(sat([None] * nvars)), None) is not None
 

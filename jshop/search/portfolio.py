@@ -24,7 +24,7 @@ or the heuristic search stops at a bound, depth-first search goes on alone.
 from __future__ import annotations
 
 import time
-from typing import Iterator, Optional
+from typing import TYPE_CHECKING, Generator, Optional, Union
 
 from htn.jshop.language import syntax as S
 
@@ -32,6 +32,9 @@ from .best_first import WASTAR_WEIGHT, BestFirst
 from .ground_formulas import NotGroundable
 from .planner import Planner
 from .stats import Stats
+
+if TYPE_CHECKING:
+    from htn.jshop.plans.plan import Plan
 
 FIRST_SLICE, LAST_SLICE = 0.5, 4.0
 # CPU slices per depth-first slice: gbfs, and weighted A* once gbfs has
@@ -94,8 +97,9 @@ class Portfolio:
         self.started = 2  # searches started: dfs, gbfs, then those on its model
         self.ended: list = []  # the searches that ended, in order
 
-    def plans(self, timeout: Optional[float] = None) -> Iterator:
-        searches = [self.dfs, self.gbfs]
+    def plans(self, timeout: Optional[float] = None) -> Generator[Plan, None, None]:
+        searches: list[Union[Planner, BestFirst]] = [self.dfs, self.gbfs]
+        streams: dict[int, Optional[Generator[Optional[Plan], None, None]]]
         streams = {id(s): None for s in searches}
         live = list(searches)
         slice_s = FIRST_SLICE
@@ -153,6 +157,7 @@ class Portfolio:
         model (and its heuristic's costs and goal-chain cut, shared)."""
         self.grounded = True
         g = self.gbfs
+        assert g.model is not None  # grounded: its heuristic is built
         self.wastar._prepared(g.model, g.h, g.cut)
         more = [self.wastar]
         if g.cut is not None:

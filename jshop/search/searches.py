@@ -18,7 +18,7 @@ Kept free of heavy imports: the command line reads the names for ``--help``.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Callable, Iterator, Optional, Protocol
+from typing import TYPE_CHECKING, Callable, Generator, Optional, Protocol
 
 if TYPE_CHECKING:
     from htn.jshop.plans.plan import Plan
@@ -35,7 +35,8 @@ class Search(Protocol):
 
     stats: "Stats"
 
-    def plans(self, timeout: Optional[float] = None) -> Iterator["Plan"]: ...
+    # None only between slices of CPU time, where ``slice_s`` is set (the portfolio's turns)
+    def plans(self, timeout: Optional[float] = None) -> Generator[Optional["Plan"], None, None]: ...
 
 
 SEARCHES = {

@@ -58,7 +58,7 @@ def method_entry(logic, m: S.Method, jshop2_compat: bool) -> list:
             lambda f, branch=branch: branch.__setitem__(1, f),
         )
         branches.append(branch)
-    entry = [m, None, branches]
+    entry: list = [m, None, branches]
     entry[1] = warm.head_unifier(
         m.head.args,
         lambda: f"unifier of the head of {m.name}, {at}",

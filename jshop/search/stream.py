@@ -6,7 +6,7 @@ time limit, their searches' statistics summed: the loop under ``htn plan``
 from __future__ import annotations
 
 import time
-from typing import TYPE_CHECKING, Callable, Iterator, Optional
+from typing import TYPE_CHECKING, Callable, Generator, Iterator, Optional
 
 if TYPE_CHECKING:
     from htn.jshop.plans.plan import Plan
@@ -76,7 +76,7 @@ class SearchStream:
     def __exit__(self, *exc) -> None:
         self.close()
 
-    def _search(self) -> Iterator["Plan"]:
+    def _search(self) -> Generator["Plan", None, None]:
         stats = self.stats
         try:
             for k, inst in enumerate(self.instances):
@@ -90,7 +90,8 @@ class SearchStream:
                 found = planner.plans(remaining)
                 try:
                     for p in found:
-                        p.instance = k
+                        assert p is not None  # slice_s is not set: the search never pauses
+                        setattr(p, "instance", k)  # the Plan's instance index, read with getattr
                         stats["plans_found"] += 1
                         if stats["shortest_plan"] is None or len(p.steps) < stats["shortest_plan"]:
                             stats["shortest_plan"] = len(p.steps)
