@@ -4,7 +4,21 @@ from what user code raises."""
 
 from __future__ import annotations
 
-from typing import Optional
+from typing import TYPE_CHECKING, Optional
+
+if TYPE_CHECKING:
+    from typing import Protocol
+
+    class Place(Protocol):
+        """A place in the input: a :class:`htn.jshop.language.syntax.Pos`
+        (not imported: the syntax imports this module)."""
+
+        @property
+        def file(self) -> str: ...
+        @property
+        def line(self) -> int: ...
+        @property
+        def col(self) -> int: ...
 
 
 class HtnError(Exception):
@@ -14,13 +28,17 @@ class HtnError(Exception):
     offending source line when it is known) and exits with code 2.
     """
 
+    # set on the instance only, for an error raised in a user function
+    # (functions.user_error; terms.at_call reads it with getattr)
+    in_user_code: bool
+
     def __init__(
         self,
         message: str,
         file: Optional[str] = None,
         line: Optional[int] = None,
         col: Optional[int] = None,
-    ):
+    ) -> None:
         super().__init__(message)
         self.message = message
         self.file = file
@@ -28,7 +46,7 @@ class HtnError(Exception):
         self.col = col
 
     @classmethod
-    def at(cls, pos, message: str) -> "HtnError":
+    def at(cls, pos: Optional[Place], message: str) -> "HtnError":
         if pos is None:
             return cls(message)
         return cls(message, pos.file, pos.line, pos.col)

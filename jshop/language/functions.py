@@ -31,10 +31,16 @@ import math
 import operator
 import os
 import types
-from typing import Any, Callable, Optional
+from collections.abc import Callable, Container
+from typing import TYPE_CHECKING, Any, Optional, Union
 
 from .errors import HtnError, is_stop
 from .terms import NIL, Dotted, shown_term
+
+if TYPE_CHECKING:
+    # what a call term runs: its ground arguments to a term
+    _Function = Callable[[tuple[Any, ...]], Any]
+    _Truth = Union[float, tuple[Any, ...]]  # TRUE or NIL
 
 TRUE = 1.0
 
@@ -45,22 +51,22 @@ def _num(x: Any, fn: str) -> float:
     return x
 
 
-def _plus(args):
+def _plus(args: tuple[Any, ...]) -> float:
     s = 0.0
     for a in args:
         s += a if type(a) is float else _num(a, "+")
     return s
 
 
-def _mult(args):
+def _mult(args: tuple[Any, ...]) -> float:
     s = 1.0
     for a in args:
         s *= _num(a, "*")
     return s
 
 
-def _fold(op, name):
-    def f(args):
+def _fold(op: Callable[[float, float], float], name: str) -> _Function:
+    def f(args: tuple[Any, ...]) -> float:
         if len(args) == 2:  # the common case
             a, b = args
             if type(a) is float and type(b) is float:
@@ -73,7 +79,7 @@ def _fold(op, name):
     return f
 
 
-def _div(a, b):
+def _div(a: float, b: float) -> float:
     if b == 0.0:
         # Java double division: x/0 is +-Infinity, 0/0 is NaN
         if a == 0.0 or a != a:
@@ -82,15 +88,15 @@ def _div(a, b):
     return a / b
 
 
-def _pow(a, b):
+def _pow(a: float, b: float) -> float:
     try:
         return math.pow(a, b)
     except (OverflowError, ValueError):
         return math.nan if a < 0 else math.inf
 
 
-def _chain(test, name):
-    def f(args):
+def _chain(test: Callable[[float, float], object], name: str) -> _Function:
+    def f(args: tuple[Any, ...]) -> _Truth:
         if len(args) == 2:  # the common case, without zip and slicing
             a, b = args
             if type(a) is not float or type(b) is not float:
@@ -104,21 +110,21 @@ def _chain(test, name):
     return f
 
 
-def _equal(args):
+def _equal(args: tuple[Any, ...]) -> _Truth:
     for a, b in zip(args, args[1:]):
         if not (a == b and type(a) is type(b)):
             return NIL
     return TRUE
 
 
-def _not_equal(args):
+def _not_equal(args: tuple[Any, ...]) -> _Truth:
     for a, b in zip(args, args[1:]):
         if a == b and type(a) is type(b):
             return NIL
     return TRUE
 
 
-def _member(args):
+def _member(args: tuple[Any, ...]) -> _Truth:
     if len(args) < 2 or type(args[1]) is not tuple:
         raise HtnError("call member: the second argument must be a list")
     x = args[0]
@@ -128,7 +134,7 @@ def _member(args):
     return NIL
 
 
-STDLIB: dict[str, Callable] = {
+STDLIB: dict[str, _Function] = {
     "+": _plus,
     "-": _fold(operator.sub, "-"),
     "*": _mult,
@@ -145,7 +151,12 @@ STDLIB: dict[str, Callable] = {
 
 # How many arguments a standard function needs, where any number will not do:
 # (min, max or None). JSHOP2 leaves these unchecked until run time.
-STDLIB_ARITY = {"-": (1, None), "/": (1, None), "^": (1, None), "member": (2, 2)}
+STDLIB_ARITY: dict[str, tuple[int, Optional[int]]] = {
+    "-": (1, None),
+    "/": (1, None),
+    "^": (1, None),
+    "member": (2, 2),
+}
 
 
 def arity_error(name: str, given: int) -> str | None:
@@ -251,10 +262,10 @@ class Guard:
 PLAIN = Guard()
 
 
-def _user_frame(exc: BaseException, files) -> tuple:
+def _user_frame(exc: BaseException, files: Container[str]) -> tuple[Optional[str], Optional[int]]:
     """(file, line) of the innermost frame of ``exc``'s traceback in one
     of ``files`` (the user's own code), or (None, None)."""
-    place = (None, None)
+    place: tuple[Optional[str], Optional[int]] = (None, None)
     tb = exc.__traceback__
     while tb is not None:
         name = tb.tb_frame.f_code.co_filename
@@ -272,7 +283,7 @@ def _message(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {_clip(text, 160)}" if text else type(exc).__name__
 
 
-def user_error(what: str, exc: BaseException, files=()) -> HtnError:
+def user_error(what: str, exc: BaseException, files: Container[str] = ()) -> HtnError:
     """``exc`` (raised by user code) as one line at the user's file:line."""
     if isinstance(exc, SystemExit):
         text = f"{what} called sys.exit({_shown(exc.code)})"
@@ -286,7 +297,7 @@ def user_error(what: str, exc: BaseException, files=()) -> HtnError:
     return err
 
 
-def run_user_code(what: str, fn: Callable, *args, guard: Guard = PLAIN) -> Any:
+def run_user_code(what: str, fn: Callable[..., Any], *args: Any, guard: Guard = PLAIN) -> Any:
     """``fn(*args)``; anything it raises but htn's own stops becomes an
     :class:`HtnError` naming ``what`` ran, at the user's line that raised
     (else the caller adds the place of the call). A stop the function
@@ -312,10 +323,10 @@ def run_user_code(what: str, fn: Callable, *args, guard: Guard = PLAIN) -> Any:
     return result
 
 
-def wrap_user_function(name: str, fn: Callable, table: "FunctionTable") -> Callable:
+def wrap_user_function(name: str, fn: Callable[..., Any], table: "FunctionTable") -> _Function:
     what = f"function {name}"
 
-    def call(args):
+    def call(args: tuple[Any, ...]) -> Any:
         result = run_user_code(
             what,
             fn,
@@ -333,11 +344,11 @@ def wrap_user_function(name: str, fn: Callable, table: "FunctionTable") -> Calla
     return call
 
 
-def compare(name: str, fn: Callable, a: Any, b: Any, guard: Guard = PLAIN) -> int:
+def compare(name: str, fn: Callable[..., Any], a: Any, b: Any, guard: Guard = PLAIN) -> int:
     """A user comparator's verdict on two terms: negative, zero or positive
     (manual appendix B); anything but a number is an error."""
     r = run_user_code(f"comparator {name}", fn, to_python(a), to_python(b), guard=guard)
-    n = None
+    n: Optional[float] = None
     if not isinstance(r, bool) and isinstance(r, (int, float)):
         # the built-in value, without calling a subclass's methods
         n = int.__index__(r) if isinstance(r, int) else float.__float__(r)
@@ -351,17 +362,17 @@ def compare(name: str, fn: Callable, a: Any, b: Any, guard: Guard = PLAIN) -> in
 class FunctionTable:
     """Maps call names (case-insensitive) to callables on term tuples."""
 
-    def __init__(self, guard: Guard = PLAIN):
+    def __init__(self, guard: Guard = PLAIN) -> None:
         self.guard = guard  # how user code runs (a command's stops)
-        self.calls: dict[str, Callable] = dict(STDLIB)
-        self.user: dict[str, Callable] = {}
+        self.calls: dict[str, _Function] = dict(STDLIB)
+        self.user: dict[str, Callable[..., Any]] = {}
         self.source: str | None = None
         self.sha256: str | None = None  # of the bytes of the file loaded
 
-    def lookup(self, name: str) -> Callable | None:
+    def lookup(self, name: str) -> _Function | None:
         return self.calls.get(name.lower())
 
-    def comparator(self, name: str) -> Callable | None:
+    def comparator(self, name: str) -> Callable[..., Any] | None:
         return self.user.get(name.lower())
 
     def load_file(self, path: str, check: Callable[[str], None] | None = None) -> None:

@@ -6,10 +6,11 @@ any later error or warning can name ``file:line:col``.
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import dataclass, field
-from typing import Any, Optional
+from typing import Any, Optional, Union
 
-from .terms import Var
+from .terms import CallTerm, Var
 
 
 @dataclass(frozen=True)
@@ -30,7 +31,7 @@ class Atom:
     """A logical atom ``(p t1 .. tn)`` (3.3); ``args`` is a tuple of terms."""
 
     pred: str
-    args: tuple
+    args: tuple[Any, ...]
     pos: Optional[Pos] = None
 
 
@@ -44,13 +45,13 @@ class VarAtom:
 
 @dataclass
 class And:
-    items: list
+    items: list[Any]
     pos: Optional[Pos] = None
 
 
 @dataclass
 class Or:
-    items: list
+    items: list[Any]
     pos: Optional[Pos] = None
 
 
@@ -64,7 +65,7 @@ class Not:
 class ForAll:
     """``(forall V Y Z)``: every satisfier of Y must satisfy Z (3.4.5)."""
 
-    vars: list
+    vars: list[Var]
     cond: Any
     then: Any
     pos: Optional[Pos] = None
@@ -91,7 +92,7 @@ class Assign:
 class CallExpr:
     """A call expression: true unless the call returns NIL (3.4.7)."""
 
-    call: Any  # a CallTerm
+    call: CallTerm
     pos: Optional[Pos] = None
 
 
@@ -119,9 +120,9 @@ class Protection:
 class EffectForAll:
     """``(forall V Y (a1 .. an))`` in a delete or add list (3.9)."""
 
-    vars: list
+    vars: list[Var]
     cond: Any
-    atoms: list
+    atoms: list[Any]  # Atom or VarAtom
     pos: Optional[Pos] = None
 
 
@@ -129,7 +130,7 @@ class EffectForAll:
 class Effects:
     """A delete or add list: a list of elements, or one variable (3.14)."""
 
-    items: list = field(default_factory=list)
+    items: list[Any] = field(default_factory=list)
     var: Optional[Var] = None
 
 
@@ -139,7 +140,7 @@ class Effects:
 @dataclass
 class TaskAtom:
     name: str
-    args: tuple
+    args: tuple[Any, ...]
     immediate: bool = False
     pos: Optional[Pos] = None
 
@@ -148,7 +149,7 @@ class TaskAtom:
         return self.name.startswith("!")
 
 
-class PartialOrder(tuple):
+class PartialOrder(tuple[tuple[int, ...], ...]):
     """A partial order on the members of a task list (HDDL ``:ordering``):
     entry ``i`` is the tuple of the indices of the members that must be
     finished before member ``i`` may start (its direct predecessors, each
@@ -175,19 +176,19 @@ class TaskList:
     ``order``, set by the HDDL reader only, is the partial order of an
     unordered list's members (None: no two members are ordered)."""
 
-    items: list
+    items: list[Union[TaskAtom, TaskList]]
     ordered: bool = True
     pos: Optional[Pos] = None
     order: Optional[PartialOrder] = None
 
     @property
-    def order_flag(self):
+    def order_flag(self) -> Union[bool, PartialOrder]:
         """What the search keeps for this list: True (in order), False
         (interleaved) or its :class:`PartialOrder`."""
         return self.order if self.order is not None else self.ordered
 
 
-def task_atoms(tl):
+def task_atoms(tl: Union[TaskList, TaskAtom]) -> Iterator[TaskAtom]:
     """The task atoms of a task list (or a single atom), nested lists included."""
     if isinstance(tl, TaskAtom):
         yield tl
@@ -234,7 +235,7 @@ class Branch:
 @dataclass
 class Method:
     head: TaskAtom
-    branches: list
+    branches: list[Branch]
     nvars: int = 0
     index: int = 0
     pos: Optional[Pos] = None
@@ -254,7 +255,7 @@ class AxiomBranch:
 @dataclass
 class Axiom:
     head: Atom
-    branches: list
+    branches: list[AxiomBranch]
     nvars: int = 0
     pos: Optional[Pos] = None
 
@@ -262,23 +263,23 @@ class Axiom:
 @dataclass
 class Domain:
     name: str
-    operators: dict = field(default_factory=dict)  # name -> [Operator]
-    methods: dict = field(default_factory=dict)  # name -> [Method]
-    axioms: dict = field(default_factory=dict)  # pred -> [Axiom]
+    operators: dict[str, list[Operator]] = field(default_factory=dict)  # name -> [Operator]
+    methods: dict[str, list[Method]] = field(default_factory=dict)  # name -> [Method]
+    axioms: dict[str, list[Axiom]] = field(default_factory=dict)  # pred -> [Axiom]
     file: str = ""
     pos: Optional[Pos] = None
     language: str = "jshop2"  # or "hddl": the file it was read from
     # HDDL typing (empty for JSHOP2): ground atoms true in every problem (the
     # domain's constants and their types), and for a type predicate the
     # predicates of its supertypes ((truck t) also means (vehicle t)).
-    facts: list = field(default_factory=list)  # [Atom]
-    implied: dict = field(default_factory=dict)  # pred -> [pred]
-    spelling: dict = field(default_factory=dict)  # lower-case name -> as written
+    facts: list[Atom] = field(default_factory=list)
+    implied: dict[str, list[str]] = field(default_factory=dict)  # pred -> [pred]
+    spelling: dict[str, str] = field(default_factory=dict)  # lower-case name -> as written
     hddl: Any = None  # the HDDL model it was read from
     pullup: bool = False  # HDDL: methods test pulled-up conditions
     sha256: str = ""  # of the bytes it was parsed from
 
-    def elements(self):
+    def elements(self) -> Iterator[Union[Operator, Method, Axiom]]:
         for ops in self.operators.values():
             yield from ops
         for ms in self.methods.values():
@@ -315,7 +316,7 @@ class ProblemInstance:
     """One state/task-list pair of a ``defproblem`` (3.12); an HDDL problem
     also has a goal, which a plan's final state must satisfy."""
 
-    state: list  # [Atom], ground
+    state: list[Atom]  # ground
     tasks: TaskList
     pos: Optional[Pos] = None
     goal: Optional[Precondition] = None
@@ -326,19 +327,19 @@ class ProblemInstance:
     # ... and that method in the domain's terms (a Method, pulled-up
     # conditions included), built once the domain is known
     # (htn.jshop.readers.load.paired): what the searches and checks use
-    root: Any = None
+    root: Optional[Method] = None
 
 
 @dataclass
 class Problem:
     name: str
     domain_name: str
-    instances: list
+    instances: list[ProblemInstance]
     file: str = ""
     pos: Optional[Pos] = None
     domain_pos: Optional[Pos] = None  # where the domain's name is written
     language: str = "jshop2"
-    spelling: dict = field(default_factory=dict)  # lower-case name -> as written
+    spelling: dict[str, str] = field(default_factory=dict)  # lower-case name -> as written
     hddl: Any = None  # the HDDL model it was read from
     sha256: str = ""  # of the bytes it was parsed from
 

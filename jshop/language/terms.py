@@ -24,11 +24,15 @@ the wrong binding there and fails.
 
 from __future__ import annotations
 
-from typing import Any, Callable, Sequence
+from collections.abc import Callable, Sequence
+from typing import TYPE_CHECKING, Any, Optional
 
 from .errors import HtnError, PlanningError
 
-NIL: tuple = ()
+if TYPE_CHECKING:
+    from .errors import Place
+
+NIL: tuple[Any, ...] = ()
 
 
 class Var:
@@ -36,7 +40,7 @@ class Var:
 
     __slots__ = ("name", "index")
 
-    def __init__(self, name: str, index: int = -1):
+    def __init__(self, name: str, index: int = -1) -> None:
         self.name = name
         self.index = index
 
@@ -49,10 +53,10 @@ class Dotted:
 
     __slots__ = ("items", "tail", "_hash")
 
-    def __init__(self, items: tuple, tail: Any):
+    def __init__(self, items: tuple[Any, ...], tail: Any) -> None:
         self.items = items
         self.tail = tail
-        self._hash = None
+        self._hash: Optional[int] = None
 
     def __eq__(self, other: object) -> bool:
         return type(other) is Dotted and self.items == other.items and self.tail == other.tail
@@ -68,7 +72,7 @@ class Dotted:
         return f"Dotted({self.items!r}, {self.tail!r})"
 
 
-def make_list(items: Sequence, tail: Any = NIL) -> Any:
+def make_list(items: Sequence[Any], tail: Any = NIL) -> Any:
     """Build the list term ``(items . tail)``, normalising nested tails."""
     items = tuple(items)
     if type(tail) is tuple:
@@ -85,7 +89,13 @@ class CallTerm:
 
     __slots__ = ("name", "func", "args", "pos")
 
-    def __init__(self, name: str, func: Callable, args: tuple, pos=None):
+    def __init__(
+        self,
+        name: str,
+        func: Callable[[tuple[Any, ...]], Any],
+        args: tuple[Any, ...],
+        pos: Optional[Place] = None,
+    ) -> None:
         self.name = name
         self.func = func
         self.args = args
@@ -121,7 +131,7 @@ def is_ground(t: Any) -> bool:
     return False  # Var or an unevaluated CallTerm
 
 
-def subst(t: Any, env: list) -> Any:
+def subst(t: Any, env: list[Any]) -> Any:
     """Apply a binding to a term, evaluating call terms that became ground."""
     tt = type(t)
     if tt is str or tt is float:
@@ -144,7 +154,7 @@ def subst(t: Any, env: list) -> Any:
     return t
 
 
-def unify(p: Any, t: Any, env: list) -> bool:
+def unify(p: Any, t: Any, env: list[Any]) -> bool:
     """Extend ``env`` (in place) so that pattern ``p`` matches term ``t``.
 
     Mirrors JSHOP2's ``Term.findUnifier``: a variable in ``t`` matches
@@ -190,9 +200,11 @@ def unify(p: Any, t: Any, env: list) -> bool:
     return False
 
 
-def _unify_dotted(p: Dotted, t: Any, env: list) -> bool:
+def _unify_dotted(p: Dotted, t: Any, env: list[Any]) -> bool:
     """Unify cons by cons, as JSHOP2's ``List.findUnifierList`` does."""
     pi, pt = p.items, p.tail
+    ti: tuple[Any, ...]
+    tt_: Any
     if type(t) is tuple:
         ti, tt_ = t, NIL
     else:
@@ -260,7 +272,8 @@ def term_str(t: Any) -> str:
     """Print a term exactly as JSHOP2's ``toString`` does."""
     tt = type(t)
     if tt is str:
-        return t
+        symbol: str = t
+        return symbol
     if tt is float:
         return java_double(t)
     if tt is tuple:
@@ -284,7 +297,7 @@ def shown_term(t: Any, limit: int = SHOWN_TERM) -> str:
     """``term_str(t)`` for a message: cut to about ``limit`` characters
     (``...`` where the rest is left out), in time that grows with ``limit``,
     not with the term (a list of millions of elements is quoted at once)."""
-    out: list = []
+    out: list[str] = []
     size = 0
     stack = [t]
     while stack and size <= limit:
@@ -337,14 +350,14 @@ def shown_term(t: Any, limit: int = SHOWN_TERM) -> str:
 class _Text:
     __slots__ = ("text",)
 
-    def __init__(self, text: str):
+    def __init__(self, text: str) -> None:
         self.text = text
 
 
 _CLOSE, _SPACE, _MORE = _Text(")"), _Text(" "), _Text(" ...")
 
 
-def atom_str(name: str, args: Sequence) -> str:
+def atom_str(name: str, args: Sequence[Any]) -> str:
     """Print a predicate or task instance: ``(name a1 .. an)``."""
     if not args:
         return f"({name})"
@@ -355,7 +368,8 @@ def source_str(t: Any) -> str:
     """Print a term as JSHOP2 source text (variables by name)."""
     tt = type(t)
     if tt is Var:
-        return t.name
+        name: str = t.name
+        return name
     if tt is tuple:
         return "(" + " ".join(source_str(x) for x in t) + ")" if t else "nil"
     if tt is Dotted:
@@ -365,12 +379,12 @@ def source_str(t: Any) -> str:
     return term_str(t)
 
 
-def source_atom(name: str, args: Sequence) -> str:
+def source_atom(name: str, args: Sequence[Any]) -> str:
     """Print a predicate or task as JSHOP2 source text: ``(name ?x a)``."""
     return "(" + " ".join([name, *[source_str(a) for a in args]]) + ")"
 
 
-def variables(t: Any, out: list) -> list:
+def variables(t: Any, out: list[Var]) -> list[Var]:
     """Append the variable occurrences of ``t`` to ``out`` in textual order."""
     tt = type(t)
     if tt is Var:
@@ -388,7 +402,7 @@ def variables(t: Any, out: list) -> list:
     return out
 
 
-def atom_from_term(t, pos) -> tuple[str, tuple]:
+def atom_from_term(t: Any, pos: Optional[Place]) -> tuple[str, tuple[Any, ...]]:
     """A list term ``(p a1 .. an)`` used as an atom (manual 3.14)."""
     if type(t) is tuple and t and type(t[0]) is str:
         return t[0], t[1:]

@@ -5,16 +5,25 @@ checks, the compiled conjunctions and the HDDL builder collect variables."""
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING, Any, Union
+
 from . import syntax as S
 from .terms import variables
 
+if TYPE_CHECKING:
+    from collections.abc import Callable
 
-def walk_term(t, cb) -> None:
+    from .terms import Var
+
+    _Visit = Callable[[Var], object]  # called for every variable met
+
+
+def walk_term(t: Any, cb: _Visit) -> None:
     for v in variables(t, []):
         cb(v)
 
 
-def walk_expr(e, cb) -> None:
+def walk_expr(e: Any, cb: _Visit) -> None:
     if isinstance(e, S.Atom):
         walk_term(e.args, cb)
     elif isinstance(e, S.VarAtom):
@@ -38,13 +47,13 @@ def walk_expr(e, cb) -> None:
         walk_term((e.left, e.right), cb)
 
 
-def walk_pre(p: S.Precondition, cb) -> None:
+def walk_pre(p: S.Precondition, cb: _Visit) -> None:
     if p.sort_var is not None:
         cb(p.sort_var)
     walk_expr(p.expr, cb)
 
 
-def walk_tasks(tl, cb) -> None:
+def walk_tasks(tl: Union[S.TaskList, S.TaskAtom], cb: _Visit) -> None:
     if isinstance(tl, S.TaskAtom):
         walk_term(tl.args, cb)
     else:
@@ -52,7 +61,7 @@ def walk_tasks(tl, cb) -> None:
             walk_tasks(x, cb)
 
 
-def walk_effects(eff: S.Effects, cb) -> None:
+def walk_effects(eff: S.Effects, cb: _Visit) -> None:
     if eff.var is not None:
         cb(eff.var)
     for x in eff.items:

@@ -26,27 +26,33 @@ means for such a plan to be valid is :mod:`htn.jshop.checks.ipc_verify`'s.
 from __future__ import annotations
 
 import re
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
-from typing import Optional
+from typing import TYPE_CHECKING, Any, Optional
 
 from htn.jshop.language.errors import HtnError
 from htn.jshop.language.terms import term_str
 
+if TYPE_CHECKING:
+    from .plan import Plan
 
-def ipc_text(plan, spelling: dict) -> str:
+
+def ipc_text(plan: Plan, spelling: Mapping[str, str]) -> str:
     """The plan (with its ``tree``) as IPC 2020 text, ``==>`` to ``<==``."""
 
     def spell(name: str) -> str:
         name = name.lstrip("!")
         return spelling.get(name, name)
 
-    def line(name: str, args) -> str:
+    def line(name: str, args: Iterable[Any]) -> str:
         return " ".join([spell(name), *(spell(term_str(a)) for a in args)])
 
     out = ["==>"]
     out += [f"{i} {line(s.name, s.args)}" for i, s in enumerate(plan.steps)]
     tree = plan.tree
-    ids: dict = {}
+    if tree is None:
+        raise ValueError("an IPC plan needs the plan's task tree (plan with record_trees)")
+    ids: dict[int, int] = {}
     next_id = len(plan.steps)
     nodes = [n for n in tree.walk() if n is not tree]
     for node in nodes:
@@ -78,14 +84,14 @@ class IpcLine:
 
     id: int
     name: str
-    args: tuple
+    args: tuple[str, ...]
     line: int
     col: int  # column of the id
-    cols: tuple  # columns of the name and the arguments
+    cols: tuple[int, ...]  # columns of the name and the arguments
     method: Optional[str] = None
     method_col: int = 0
-    children: tuple = ()
-    child_cols: tuple = ()
+    children: tuple[int, ...] = ()
+    child_cols: tuple[int, ...] = ()
 
     @property
     def text(self) -> str:
@@ -96,11 +102,11 @@ class IpcLine:
 class IpcPlan:
     """One ``==>`` ... ``<==`` block of a plan file."""
 
-    actions: list = field(default_factory=list)  # [IpcLine], in execution order
-    root: tuple = ()
-    root_cols: tuple = ()
+    actions: list[IpcLine] = field(default_factory=list)  # in execution order
+    root: tuple[int, ...] = ()
+    root_cols: tuple[int, ...] = ()
     root_line: int = 0
-    decompositions: list = field(default_factory=list)  # [IpcLine]
+    decompositions: list[IpcLine] = field(default_factory=list)
     line: int = 0  # the line of its ``==>``
     end_line: int = 0  # the line of its ``<==``
     index: int = 0
@@ -114,12 +120,12 @@ def is_ipc_text(text: str) -> bool:
     return any(line.strip() == "==>" for line in text.splitlines())
 
 
-def read_ipc_plans(text: str, file: str) -> list:
+def read_ipc_plans(text: str, file: str) -> list[IpcPlan]:
     """The ``==>`` ... ``<==`` blocks of a plan file (text before, between and
     after them is ignored, as the competition's verifier ignores a planner's
     log). Raises :class:`HtnError` (``file:line:col``) for a block that
     cannot be read."""
-    plans: list = []
+    plans: list[IpcPlan] = []
     current: Optional[IpcPlan] = None
     section = ""
     for n, raw in enumerate(text.splitlines(), 1):
@@ -200,7 +206,7 @@ def _ident(token: str, col: int, file: str, line: int) -> int:
     return int(token)
 
 
-def _line(ident: int, col: int, tokens: list, line: int) -> IpcLine:
+def _line(ident: int, col: int, tokens: list[tuple[str, int]], line: int) -> IpcLine:
     return IpcLine(
         ident,
         tokens[0][0].lower(),

@@ -3,9 +3,12 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Optional
+from typing import TYPE_CHECKING, Any, Optional
 
 from htn.jshop.language.terms import atom_str, java_double
+
+if TYPE_CHECKING:
+    from .tree import TaskTree
 
 SEPARATOR = "--------------------"
 
@@ -15,7 +18,7 @@ class Step:
     """One operator instance in a plan; ``internal`` for ``!!`` operators."""
 
     name: str
-    args: tuple
+    args: tuple[Any, ...]
     cost: float = 1.0
     line: int = 0  # line in a plan file it was read from (0: not read)
 
@@ -29,9 +32,9 @@ class Step:
 
 @dataclass
 class Plan:
-    steps: list
+    steps: list[Step]
     cost: float
-    tree: Optional[Any] = None  # a jshop.tree.TaskTree, when recorded
+    tree: Optional[TaskTree] = None  # when recorded
     index: int = 0  # 0-based position in the planner's stream
     line: int = 0  # line of its 'Plan cost:' in a plan file it was read from
 

@@ -61,8 +61,9 @@ from __future__ import annotations
 
 import hashlib
 import os
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Optional
+from typing import TYPE_CHECKING, Optional
 
 from htn.jshop.language.errors import HtnError
 from htn.jshop.readers.jshop2 import parse_step
@@ -71,6 +72,9 @@ from htn.jshop.readers.source import decode_source
 from .plan import Plan, Step
 from .tree import TaskTree
 from .tree_text import TREE_HEAD, TREE_NODE, read_tree, tree_text
+
+if TYPE_CHECKING:
+    from htn.jshop.language.syntax import Method
 
 NAMED = ("domain", "problem", "functions")
 
@@ -109,12 +113,15 @@ def plan_text(plan: Plan) -> str:
 @dataclass
 class PlanFile:
     path: str
-    plans: list = field(default_factory=list)
-    named: dict = field(default_factory=dict)  # "domain" -> [(candidate path, line)]
-    notes: dict = field(default_factory=dict)  # other "; key: value" lines -> (value, line)
-    lines: list = field(default_factory=list)  # the file's text, line by line
+    plans: list[Plan] = field(default_factory=list)
+    # "domain" -> [(candidate path, line)]
+    named: dict[str, list[tuple[str, int]]] = field(default_factory=dict)
+    # other "; key: value" lines -> (value, line)
+    notes: dict[str, tuple[str, int]] = field(default_factory=dict)
+    lines: list[str] = field(default_factory=list)  # the file's text, line by line
     sha256: str = ""  # of the file's bytes, as read
-    trees: list = field(default_factory=list)  # per plan: its tree's [(line, text)] or None
+    # per plan: its tree's [(line, text)] or None
+    trees: list[Optional[list[tuple[int, str]]]] = field(default_factory=list)
 
     def file(self, kind: str) -> Optional[str]:
         """The ``kind`` ("domain", "problem", "functions") file the header
@@ -135,7 +142,7 @@ class PlanFile:
             1,
         )
 
-    def named_functions(self) -> Optional[tuple]:
+    def named_functions(self) -> Optional[tuple[str, int, Optional[str]]]:
         """(path as written, line, SHA-256 or None) of the functions file the
         plans were made with, if the header names one. It is never loaded
         because of that (see :func:`htn.api.run_inputs.checked_functions`)."""
@@ -154,7 +161,9 @@ class PlanFile:
     def problem(self) -> Optional[str]:
         return self.file("problem")
 
-    def tree(self, index: int, methods: Optional[dict] = None) -> Optional[TaskTree]:
+    def tree(
+        self, index: int, methods: Optional[Mapping[str, Sequence[Method]]] = None
+    ) -> Optional[TaskTree]:
         """The task tree written before plan ``index`` (0-based), or None if
         the file holds none for it. ``methods`` (task name -> the domain's
         methods for it) also checks that each method and branch exists and
@@ -179,10 +188,10 @@ def read_plan_file(path: str) -> PlanFile:
     lines = decode_source(data, path).splitlines()  # UTF-8, BOM or not; bad bytes at line:col
     base = os.path.dirname(os.path.abspath(path))
     pf = PlanFile(path, lines=lines, sha256=hashlib.sha256(data).hexdigest())
-    steps: list = []
-    cost = None
+    steps: list[Step] = []
+    cost: Optional[float] = None
     cost_line = 0
-    tree: Optional[list] = None  # the task tree lines before the next plan
+    tree: Optional[list[tuple[int, str]]] = None  # the task tree lines before the next plan
     in_tree = False
     for n, line in enumerate(lines, 1):
         text = line.strip()
@@ -196,6 +205,7 @@ def read_plan_file(path: str) -> PlanFile:
                 tree, in_tree = [(n, text)], True
                 continue
             if in_tree and TREE_NODE.match(text):
+                assert tree is not None  # in_tree: a tree began
                 tree.append((n, text))
                 continue
             in_tree = False

@@ -15,8 +15,9 @@ the search backtracked over.
 from __future__ import annotations
 
 from collections import Counter
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Iterator, Optional
+from typing import Any, Optional
 
 from htn.jshop.language.terms import atom_str, term_str
 
@@ -26,15 +27,15 @@ class TaskTree:
     """One node of a task tree; the root is the problem's task list."""
 
     name: str
-    args: tuple = ()
+    args: tuple[Any, ...] = ()
     path: str = ""
     method: Optional[str] = None  # method head name that decomposed it
     method_index: Optional[int] = None  # which of the methods for that task (0-based)
     branch: Optional[str] = None  # that method's branch label
     step: Optional[int] = None  # index in the plan, for primitive tasks
-    children: list = field(default_factory=list)
+    children: list[TaskTree] = field(default_factory=list)
     outcome: Optional[str] = None  # after an execution or projection (annotate())
-    code_replacement: Optional[list] = None  # what a transformation put in its place
+    code_replacement: Optional[list[str]] = None  # what a transformation put in its place
 
     @property
     def primitive(self) -> bool:
@@ -67,8 +68,8 @@ class TaskTree:
         has ``id`` (its index in the list) and ``parent`` (the parent's id;
         None for the root, whose task is ``(root)``), so a node's children are
         the nodes naming it as parent, in list order."""
-        nodes: list = []
-        stack: list = [(self, None)]
+        nodes: list[dict[str, Any]] = []
+        stack: list[tuple[TaskTree, Optional[int]]] = [(self, None)]
         while stack:
             node, parent = stack.pop()
             args = [term_str(a) for a in node.args]
@@ -105,6 +106,7 @@ class TaskTree:
             if n.step is not None:
                 how = f"step {n.step + 1}"
             elif n.method is not None:
+                assert n.method_index is not None  # set with the method
                 how = f"method {n.method}#{n.method_index + 1} branch {n.branch}"
             else:
                 how = "not decomposed"
@@ -130,7 +132,7 @@ class TaskTree:
         return "\n".join(out) + "\n"
 
 
-def annotate(tree: TaskTree, step_outcomes: dict) -> TaskTree:
+def annotate(tree: TaskTree, step_outcomes: Mapping[int, str]) -> TaskTree:
     """Set each node's outcome from an execution: a leaf gets its step's final
     outcome (``verified``, ``aborted``, ``failed``, or ``not run``); a task is
     ``verified`` when all its children are, else the first other outcome."""
@@ -150,21 +152,22 @@ def _dot_escape(s: str) -> str:
     return s.replace("\\", "\\\\").replace('"', '\\"').replace("\\\\n", "\\n")
 
 
-def snapshot(root, steps, paths: bool = True) -> TaskTree:
+def snapshot(root: Any, steps: Sequence[Any], paths: bool = True) -> TaskTree:
     """Build the tree of the current task network (a planner ``Node``).
 
     Without ``paths`` every node's path is left empty: a path spells all its
     ancestors, so a tail recursion thousands deep (Towers) makes the paths
     quadratic in the plan's length, and the IPC output does not need them."""
+    # root is Any: a Node of htn.jshop.search.network, a room above this one
     tree = TaskTree(name="", path="")
     tree.children = _children(root, "", paths)
     return tree
 
 
-def _flatten(node) -> list:
+def _flatten(node: Any) -> list[Any]:
     """The task nodes of a task list, nested lists flattened in order."""
     out = []
-    stack = [iter(node.subtasks or ())]
+    stack: list[Iterator[Any]] = [iter(node.subtasks or ())]
     while stack:
         for child in stack[-1]:
             if child.task is not None:
@@ -177,19 +180,19 @@ def _flatten(node) -> list:
     return out
 
 
-def _children(node, prefix: str, paths: bool = True) -> list:
+def _children(node: Any, prefix: str, paths: bool = True) -> list[TaskTree]:
     """The subtrees below a network node, built without recursion."""
-    out: list = []
-    work = [(node, prefix, out)]
+    out: list[TaskTree] = []
+    work: list[tuple[Any, str, list[TaskTree]]] = [(node, prefix, out)]
     while work:
         parent, path, sink = work.pop()
         kids = _flatten(parent)
         counts = Counter(k.task.name for k in kids) if paths else None
-        seen: Counter = Counter()
+        seen: Counter[str] = Counter()
         for k in kids:
             name = k.task.name
             kpath = ""
-            if paths:
+            if counts is not None:  # paths
                 seen[name] += 1
                 label = name if counts[name] == 1 else f"{name} :call {seen[name]}"
                 kpath = f"{path}/{label}" if path else label

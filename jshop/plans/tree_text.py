@@ -11,13 +11,21 @@ from __future__ import annotations
 
 import re
 from collections import Counter
-from typing import Optional
+from collections.abc import Iterable, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Optional
 
 from htn.jshop.language.errors import HtnError
 from htn.jshop.language.terms import Var, term_str
 from htn.jshop.readers.jshop2 import parse_step
 
 from .tree import TaskTree
+
+if TYPE_CHECKING:
+    from htn.jshop.language.syntax import Method
+
+    from .plan import Step
+
+    _Methods = Mapping[str, Sequence[Method]]  # task name -> the domain's methods
 
 TREE_HEAD = re.compile(r";\s*task tree:\s*(\S*)\s*nodes?\s*$")
 """The line that begins a tree: ``; task tree: N nodes``."""
@@ -27,7 +35,7 @@ TREE_NODE = re.compile(r";\s*\d")
 
 def tree_text(tree: TaskTree) -> str:
     """The comment lines of a task tree (see the module docstring)."""
-    out = []
+    out: list[str] = []
     stack = [(c, 1) for c in reversed(tree.children)]
     while stack:
         node, depth = stack.pop()
@@ -35,6 +43,7 @@ def tree_text(tree: TaskTree) -> str:
             out.append(f"; {depth} step {node.step + 1}\n")
             continue
         if node.method is not None:
+            assert node.method_index is not None  # set with the method
             how = f"method {node.method_index + 1} {node.branch}"
         else:
             how = "unreduced"
@@ -43,7 +52,12 @@ def tree_text(tree: TaskTree) -> str:
     return f"; task tree: {len(out)} nodes\n" + "".join(out)
 
 
-def read_tree(lines: list, path: str, steps: list, methods: Optional[dict] = None) -> TaskTree:
+def read_tree(
+    lines: list[tuple[int, str]],
+    path: str,
+    steps: Sequence[Step],
+    methods: Optional[_Methods] = None,
+) -> TaskTree:
     """The tree of ``lines`` (``(line number, text)``: the header, then the
     nodes), whose leaves index ``steps``; ``methods`` (task name -> methods)
     also checks the decompositions against the domain."""
@@ -54,16 +68,18 @@ class _TreeReader:
     """Reads the lines of one task tree (see the module docstring) into a
     :class:`TaskTree` whose leaves index ``steps``."""
 
-    def __init__(self, path: str, steps: list, methods: Optional[dict]):
+    def __init__(self, path: str, steps: Sequence[Step], methods: Optional[_Methods]) -> None:
         self.path, self.steps, self.methods = path, steps, methods
 
     def error(self, message: str, n: int, text: str = "", token: str = "") -> HtnError:
         col = text.find(token) + 1 if token and token in text else 1
         return HtnError(f"task tree: {message}", self.path, n, col)
 
-    def read(self, lines: list) -> TaskTree:
+    def read(self, lines: list[tuple[int, str]]) -> TaskTree:
         (head_line, head), nodes = lines[0], lines[1:]
-        count = TREE_HEAD.match(head).group(1)
+        match = TREE_HEAD.match(head)
+        assert match is not None  # the lines begin with the header
+        count = match.group(1)
         if not count.isdigit():
             raise self.error(f"{count!r} is not a number of nodes", head_line, head, count)
         if int(count) != len(nodes):
@@ -71,7 +87,9 @@ class _TreeReader:
                 f"the header says {count} nodes, {len(nodes)} follow", head_line, head, count
             )
         root = TaskTree(name="", path="")
-        stack = [(0, root)]  # (depth, node) from the root down to the last node
+        stack: list[tuple[int, TaskTree]] = [
+            (0, root)
+        ]  # (depth, node) from the root down to the last node
         next_step = 0
         for n, text in nodes:
             depth_text, _, rest = text.lstrip("; ").partition(" ")
@@ -153,7 +171,10 @@ class _TreeReader:
             self.check_method(node, n, text, how)
         return node
 
-    def check_method(self, node: TaskTree, n: int, text: str, how: list) -> None:
+    def check_method(self, node: TaskTree, n: int, text: str, how: list[str]) -> None:
+        # set by task_node, which calls this with the domain's methods only
+        assert self.methods is not None and node.method_index is not None
+        assert node.branch is not None
         methods = self.methods.get(node.name, [])
         if not methods:
             raise self.error(f"the domain has no method for {node.name}", n, text, node.name)
@@ -185,13 +206,13 @@ class _TreeReader:
             )
 
 
-def _atom_text(name: str, args) -> str:
+def _atom_text(name: str, args: Iterable[Any]) -> str:
     """A task as a tree line writes it: as JSHOP2 prints it, but a variable
     as ``?NAME?INDEX``, so that it reads back as the same variable."""
     return "(" + " ".join([name, *map(_term_text, args)]) + ")"
 
 
-def _term_text(t) -> str:
+def _term_text(t: Any) -> str:
     if type(t) is Var:
         return f"{t.name}?{t.index}"
     if type(t) is tuple and t:
@@ -202,7 +223,7 @@ def _term_text(t) -> str:
 _INDEXED = re.compile(r"(.*)\?(\d+)$")
 
 
-def _with_indices(t):
+def _with_indices(t: Any) -> Any:
     """The variables of a term read from a tree line with their slots back."""
     if type(t) is Var:
         m = _INDEXED.match(t.name)
@@ -231,7 +252,7 @@ def _set_paths(root: TaskTree) -> None:
     while work:
         node = work.pop()
         counts = Counter(c.name for c in node.children)
-        seen: Counter = Counter()
+        seen: Counter[str] = Counter()
         for child in node.children:
             seen[child.name] += 1
             label = (
