@@ -27,16 +27,24 @@ Display lives elsewhere (``htn.cli.tree_view``).
 from __future__ import annotations
 
 import inspect
+from collections.abc import Callable, Generator
 from dataclasses import dataclass, field
-from typing import Any, Optional, Protocol
+from typing import TYPE_CHECKING, Any, Optional, Protocol, cast
 
 import py_trees
+from py_trees.behaviour import Behaviour
 from py_trees.common import OneShotPolicy, ParallelPolicy, Status
 
 from htn.jshop.language.errors import HtnError
-from htn.robot.interface import SkillResult
+from htn.robot.interface import Check, Robot, SkillResult
 
 from .outcome import Outcome
+
+if TYPE_CHECKING:
+    from htn.jshop.plans.plan import Step
+    from htn.jshop.plans.tree import TaskTree
+
+    from .machines.base import ActionMachine, HoldMonitor
 
 
 class Executor(Protocol):
@@ -44,9 +52,9 @@ class Executor(Protocol):
     the event log, and the reports the paper's state machines send it. They
     report through these methods and never write its fields."""
 
-    robot: Any
+    robot: Robot
 
-    def emit(self, ctx: "ActionContext", event: str, detail: str = "", **extra) -> None: ...
+    def emit(self, ctx: "ActionContext", event: str, detail: str = "", **extra: Any) -> None: ...
 
     def begun(self, ctx: "ActionContext", first: bool) -> None:
         """``ctx``'s action runs now (``first``: its first attempt)."""
@@ -56,27 +64,27 @@ class Executor(Protocol):
 
     def report(self, ctx: "ActionContext", ok: bool) -> None: ...
 
-    def apply_internal(self, step) -> bool: ...
+    def apply_internal(self, step: Step) -> bool: ...
 
 
 @dataclass
 class ActionContext:
     """One plan step being executed: what its behaviours share."""
 
-    step: Any  # the plan Step
-    machine: Any  # its ActionMachine (None for internal steps)
+    step: Step  # the plan Step
+    machine: Optional[ActionMachine]  # its ActionMachine (None for internal steps)
     limit: int  # retries allowed after an aborted attempt
-    node: Any = None  # its task-tree node (path), if known
+    node: Optional[TaskTree] = None  # its task-tree node (path), if known
     attempt: int = 0
     outcome: Optional[Outcome] = None
     preempted: bool = False
     done: bool = False  # verified: never run again
     number: Optional[int] = None  # its 1-based step, once verified
     detail: str = ""
-    holds: list = field(default_factory=list)
+    holds: list[str] = field(default_factory=list)
     text: str = ""  # the step as the plan shows it
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         self.text = str(self.step)
 
 
@@ -87,12 +95,15 @@ class ActionBehaviour(py_trees.behaviour.Behaviour):
         super().__init__(name)
         self.ctx, self.executor = ctx, executor
 
-    def emit(self, event: str, detail: str = "", **extra) -> None:
+    def emit(self, event: str, detail: str = "", **extra: Any) -> None:
         self.executor.emit(self.ctx, event, detail, **extra)
 
 
 class Execute(ActionBehaviour):
     """Execute the action: start the robot skill, tick it to its end."""
+
+    ticking: Optional[Generator[None, None, SkillResult]]  # the skill in progress
+    result: Optional[SkillResult]  # the skill's result, once it has ended
 
     def initialise(self) -> None:
         ctx = self.ctx
@@ -101,16 +112,17 @@ class Execute(ActionBehaviour):
         self.executor.begun(ctx, ctx.attempt == 1)
         self.emit("start")
         self.ticking, self.result = None, None
+        assert ctx.machine is not None  # a step without a machine is Unavailable
         try:
             started = ctx.machine.execute(self.executor.robot, *ctx.step.args)
         except TypeError as exc:  # wrong number of parameters in the plan step
             started = SkillResult(False, f"bad parameters: {exc}")
         except HtnError as exc:
             started = SkillResult(False, exc.message)
-        if inspect.isgenerator(started):
-            self.ticking = started
+        if inspect.isgenerator(started):  # a skill's generator (htn.robot.interface.Ticking)
+            self.ticking = cast("Generator[None, None, SkillResult]", started)
         else:
-            self.result = started
+            self.result = cast(SkillResult, started)
 
     def update(self) -> Status:
         if self.ticking is not None:
@@ -123,6 +135,7 @@ class Execute(ActionBehaviour):
             except HtnError as exc:
                 self.ticking, self.result = None, SkillResult(False, exc.message)
         result = self.result
+        assert result is not None  # set by initialise, or when the skill ended
         if result.ok:
             self.emit("feedback", result.detail)
             self.emit(Outcome.FINISHED.value, result.detail)
@@ -142,7 +155,9 @@ class Hold(ActionBehaviour):
     """A hold-monitor: RUNNING while its condition holds, FAILURE (the
     action aborted, preempted) the first tick it does not."""
 
-    def __init__(self, name: str, ctx: ActionContext, executor, check):
+    def __init__(
+        self, name: str, ctx: ActionContext, executor: Executor, check: Callable[[], Check]
+    ):
         super().__init__(name, ctx, executor)
         self.check = check
 
@@ -162,6 +177,7 @@ class Monitor(ActionBehaviour):
 
     def update(self) -> Status:
         ctx = self.ctx
+        assert ctx.machine is not None  # a step without a machine is Unavailable
         seen = ctx.machine.monitor(self.executor.robot, *ctx.step.args)
         ctx.outcome = Outcome.VERIFIED if seen.ok else Outcome.ABORTED
         detail = (
@@ -193,7 +209,7 @@ class RetryAborted(py_trees.decorators.Retry):
     counts too); a failed attempt (internal error) or a preempted one is
     final here (repair may retry it, see the task dispatcher)."""
 
-    def __init__(self, child, ctx: ActionContext, executor):
+    def __init__(self, child: Behaviour, ctx: ActionContext, executor: Executor):
         super().__init__(f"retry <= {ctx.limit}", child, ctx.limit + 1)
         self.ctx, self.executor = ctx, executor
 
@@ -214,7 +230,7 @@ class Report(py_trees.decorators.OneShot):
     Once verified, the action is done: py_trees' one-shot, which a repaired
     tree ticks again, returns success without running it again."""
 
-    def __init__(self, child, ctx: ActionContext, executor):
+    def __init__(self, child: Behaviour, ctx: ActionContext, executor: Executor):
         super().__init__(ctx.text, child, OneShotPolicy.ON_SUCCESSFUL_COMPLETION)
         self.ctx, self.executor = ctx, executor
 
@@ -260,16 +276,19 @@ class Unavailable(ActionBehaviour):
         return Status.FAILURE
 
 
-def action_subtree(ctx: ActionContext, executor, holds: list) -> py_trees.behaviour.Behaviour:
+def action_subtree(
+    ctx: ActionContext, executor: Executor, holds: list[HoldMonitor]
+) -> py_trees.behaviour.Behaviour:
     """The behaviour tree of one plan step (see the module docstring). On a
     robot whose skills are instantaneous there is nothing to watch while they
     run: execute stands alone, without the parallel and hold-monitors."""
+    top: Behaviour
     if ctx.step.internal:
         top = ApplyInternal(ctx.text, ctx, executor)
     elif ctx.machine is None:
         top = Unavailable(ctx.text, ctx, executor)
     else:
-        execute = Execute("execute", ctx, executor)
+        execute: Behaviour = Execute("execute", ctx, executor)
         if holds:
             ctx.holds = [label for label, _ in holds]
             execute = py_trees.composites.Parallel(
@@ -281,5 +300,5 @@ def action_subtree(ctx: ActionContext, executor, holds: list) -> py_trees.behavi
             "attempt", memory=True, children=[execute, Monitor("monitor", ctx, executor)]
         )
         top = Report(RetryAborted(attempt, ctx, executor), ctx, executor)
-    top.htn_action = ctx
+    setattr(top, "htn_action", ctx)  # an attribute of our own on py_trees' behaviour
     return top

@@ -18,17 +18,22 @@ looks alike), labels the ``:`` itself.
 
 from __future__ import annotations
 
-from typing import Optional
+from typing import TYPE_CHECKING, Optional
+
+if TYPE_CHECKING:
+    from py_trees.behaviour import Behaviour
+
+    from .behaviours import ActionContext
 
 GLYPHS = {"Ⓜ": "with memory", "⚡": "synchronised"}  # py_trees' unicode prefixes
 
 
-def behaviour_tree_dot(root) -> str:
+def behaviour_tree_dot(root: Behaviour) -> str:
     """The DOT text of the behaviour tree under ``root``."""
     import py_trees
 
     names = {b: b.name for b in root.iterate()}
-    labels = {}
+    labels: dict[str, str] = {}
     taken: dict[str, int] = {}
     for b in names:
         label = _label(b)
@@ -46,11 +51,12 @@ def behaviour_tree_dot(root) -> str:
     for node in graph.get_nodes():
         name = node.get_name().strip('"')
         if name in labels:
-            node.set_label(_with_words(node.get_label() or "", name, labels[name]))
+            # pydot's set_label / get_label, which it makes at run time
+            node.set("label", _with_words(node.get("label") or "", name, labels[name]))
     return graph.to_string()
 
 
-def _label(b) -> str:
+def _label(b: Behaviour) -> str:
     """What a behaviour is: its role and step, or its task's node path."""
     ctx = _action_of(b)
     if ctx is None or getattr(b, "htn_action", None) is ctx:
@@ -58,11 +64,11 @@ def _label(b) -> str:
     return f"{b.name}\n{ctx.text}"
 
 
-def _action_of(b) -> Optional[object]:
+def _action_of(b: Behaviour) -> Optional[ActionContext]:
     """The action context of the action subtree ``b`` belongs to, if any."""
-    node = b
+    node: Optional[Behaviour] = b
     while node is not None:
-        ctx = getattr(node, "htn_action", None)
+        ctx: Optional[ActionContext] = getattr(node, "htn_action", None)
         if ctx is not None:
             return ctx
         node = node.parent

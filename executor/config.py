@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import os
 import tomllib
+from collections.abc import Iterable
 from typing import Optional
 
 from htn.jshop.language.errors import HtnError
@@ -24,7 +25,7 @@ def config_path(domain_path: str) -> str:
 DEFAULT_RETRIES = 1  # per operator, for a domain without a .toml
 
 
-def load_retries(domain_path: Optional[str], operators=()) -> dict[str, int]:
+def load_retries(domain_path: Optional[str], operators: Iterable[str] = ()) -> dict[str, int]:
     """Retry limits by operator name ('!grasp'). Without a file beside the
     domain (or without a domain file: a domain built in memory):
     :data:`DEFAULT_RETRIES` for each of ``operators`` (names; the internal
@@ -46,7 +47,7 @@ def load_retries(domain_path: Optional[str], operators=()) -> dict[str, int]:
     return out
 
 
-def parse_overrides(items) -> dict[str, int]:
+def parse_overrides(items: Iterable[str]) -> dict[str, int]:
     """``grasp=3`` or ``!grasp=3`` pairs from ``--retries``."""
     out = {}
     for item in items:

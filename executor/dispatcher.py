@@ -28,10 +28,11 @@ one). Each fault the robot injects becomes a ``fault`` event as it happens.
 from __future__ import annotations
 
 import threading
-from dataclasses import dataclass
-from typing import Optional
+from collections.abc import Callable, Iterable, Sequence
+from typing import TYPE_CHECKING, Any, Optional
 
 import py_trees
+from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
 from htn.jshop.language import syntax as S
@@ -39,12 +40,19 @@ from htn.jshop.search.planner import Planner
 
 from .behaviours import ActionContext, action_subtree, out_of_retries, retries_left
 from .log import EventLog
-from .machines import all_of, machine_for
+from .machines import HoldMonitor, all_of, machine_for
 from .machines.base import carry_predicate
 from .outcome import Outcome
 from .repair import find_repair, graft, observed_instance, retry_applies
-from .task_bt import actions, build, flat_tree
+from .summary import RunSummary as RunSummary  # re-exported: the run's summary
+from .task_bt import action_of, actions, build, flat_tree, task_node
 from .tree_events import NodeNumbers, tree_detail, tree_nodes
+
+if TYPE_CHECKING:
+    from htn.jshop.language.functions import FunctionTable
+    from htn.jshop.plans.plan import Step
+    from htn.jshop.plans.tree import TaskTree
+    from htn.robot.interface import Check, Robot
 
 STOPPED_BY_USER = "stopped by the user"  # why a run halted, unless told otherwise
 INTERRUPTED, PREEMPTED = "interrupted", "preempted"  # what a halted run's summary says
@@ -53,41 +61,6 @@ INTERRUPTED, PREEMPTED = "interrupted", "preempted"  # what a halted run's summa
 class Halted(KeyboardInterrupt):
     """Raised when the next action would start after a halt: the run ends
     as after an interrupt between two ticks (its message is the halt's reason)."""
-
-
-@dataclass
-class RunSummary:
-    result: str  # verified | failed | aborted | interrupted | preempted
-    steps: int  # steps of the plan (as repaired), executed or not
-    verified: int
-    retries: int
-    replans: int
-    sim_time: float
-    failed_step: Optional[str] = None  # the action that ended the run
-    failed_at: Optional[int] = None  # its 1-based step
-    executed: int = 0  # steps started (each once, however many attempts)
-    advice: Optional[str] = None  # what might have saved it (retries used up)
-    reason: Optional[str] = None  # why it was halted (interrupted, preempted)
-
-    def as_dict(self) -> dict:
-        d = dict(self.__dict__)
-        if d["reason"] is None:  # only a halted run's summary says why
-            del d["reason"]
-        return d
-
-    def line(self) -> str:
-        """``aborted: 3 of 8 steps verified, ...; aborted at step 4: (!grasp ...)``,
-        and the advice, if any."""
-        line = (
-            f"{self.result}: {self.verified} of {self.steps} steps verified, "
-            f"{self.retries} retries, {self.replans} replans, "
-            f"{self.sim_time:.1f} s simulated"
-        )
-        if self.failed_step:
-            line += f"; {self.result} at step {self.failed_at}: {self.failed_step}"
-        if self.advice:
-            line += f"; {self.advice}"
-        return line
 
 
 class TaskDispatcher:
@@ -99,16 +72,16 @@ class TaskDispatcher:
 
     def __init__(
         self,
-        robot,
+        robot: Robot,
         domain: S.Domain,
         instance: S.ProblemInstance,
-        steps: list,
+        steps: Iterable[Step],
         retries: dict[str, int],
         log: EventLog,
         replan: bool = False,
-        functions=None,
+        functions: Optional[FunctionTable] = None,
         max_replans: int = 10,
-        tree=None,
+        tree: Optional[TaskTree] = None,
     ):
         self.robot = robot
         self.domain = domain
@@ -127,25 +100,26 @@ class TaskDispatcher:
         self._faults_seen = 0
         self._halt: Optional[str] = None
         self._halt_as = INTERRUPTED  # what the summary of a halted run says
-        self._halt_later: Optional[tuple] = None  # (why, as): halt when the next action begins
+        self._halt_later: Optional[tuple[str, str]] = None  # (why, as): at the next action
         self._lock = threading.Lock()  # running and the belief, as another thread sees them
         self._in_tick = False
-        self.summary_extra: dict = {}  # more fields for the summary event
-        self._carrying: tuple = (None, [])  # (action, attempt) -> what it carries
+        self.summary_extra: dict[str, Any] = {}  # more fields for the summary event
+        # (action, attempt) -> what it carries
+        self._carrying: tuple[Optional[tuple[int, int]], list[str]] = (None, [])
         self.carry = carry_predicate(domain.name)  # the domain's word for carrying
         self.carry_checks = self.carry is not None and "still_held" in robot.check_names()
         steps = list(steps)
         tree = tree if tree is not None else flat_tree(steps)
         self.root = build(tree, steps, self._action)
         self.nodes = NodeNumbers()  # the task-tree nodes as the log numbers them
-        self.tick_listeners: list = []  # called between two ticks (e.g. a camera view)
-        self._log_tree([tree], None, lambda n: n.step + 1)
+        self.tick_listeners: list[Callable[[], object]] = []  # between ticks (a camera view)
+        self._log_tree([tree], None, _plan_step)
 
     # ------------------------------------------------------------ building
-    def _action(self, step, node):
+    def _action(self, step: Step, node: TaskTree) -> Behaviour:
         machine = None if step.internal else machine_for(step.name, self.domain.name, self.robot)
         ctx = ActionContext(step, machine, self.limits.get(step.name, 0), node)
-        holds = []
+        holds: list[HoldMonitor] = []
         if machine is not None and not self.robot.instantaneous:
             holds = machine.holds(self.robot, *step.args)
             if self.carry_checks:
@@ -159,7 +133,9 @@ class TaskDispatcher:
     def number(self, ctx: ActionContext) -> int:
         return ctx.number or len(self.done) + 1
 
-    def emit(self, ctx: Optional[ActionContext], event: str, detail: str = "", **extra) -> None:
+    def emit(
+        self, ctx: Optional[ActionContext], event: str, detail: str = "", **extra: Any
+    ) -> None:
         self._flush_faults()
         if ctx is not None:
             extra = {"node": self.nodes.of(ctx.node), **extra}
@@ -172,7 +148,13 @@ class TaskDispatcher:
             **extra,
         )
 
-    def _log_tree(self, tops, parent, step_of, replaces=()) -> None:
+    def _log_tree(
+        self,
+        tops: Iterable[TaskTree],
+        parent: Optional[int],
+        step_of: Callable[[TaskTree], Optional[int]],
+        replaces: Sequence[Optional[int]] = (),
+    ) -> None:
         """A ``tree`` event with the nodes of the subtrees ``tops``, each
         under ``parent`` (see :mod:`htn.executor.tree_events`)."""
         ctxs = {id(a.node): a for a in actions(self.root)}
@@ -229,7 +211,8 @@ class TaskDispatcher:
         run): each is logged ``verified`` with ``detail`` (and
         ``adopted``), applied to the belief state and never run here."""
         for top in [b for b in self.root.iterate() if hasattr(b, "htn_action")][:count]:
-            ctx = top.htn_action
+            ctx = action_of(top)
+            assert ctx is not None
             ctx.attempt, ctx.outcome = 1, Outcome.VERIFIED
             self.started += 1
             self.report(ctx, True)
@@ -237,7 +220,7 @@ class TaskDispatcher:
                 top.final_status = Status.SUCCESS  # it bounces: success, not run
             self.emit(ctx, Outcome.VERIFIED.value, detail, adopted=True)
 
-    def running_action(self) -> Optional[tuple]:
+    def running_action(self) -> Optional[tuple[ActionContext, list[tuple[str, tuple[Any, ...]]]]]:
         """``(its context, the belief state's facts as it began)`` of the
         action running now, or None (between actions, an internal step, an
         action that has ended, a halted run): what another thread needs to
@@ -255,7 +238,7 @@ class TaskDispatcher:
                 return None
             return ctx, list(self.belief.state.facts())
 
-    def apply_internal(self, step) -> bool:
+    def apply_internal(self, step: Step) -> bool:
         with self._lock:
             ok = self.belief.apply_step(step.name, tuple(step.args))
         if ok:
@@ -268,14 +251,14 @@ class TaskDispatcher:
         held = [args[-1] for pred, args in self.belief.state.facts() if pred == self.carry]
         if not held:
             return []
-        released = set()
+        released: set[str] = set()
         for op, env in self.belief.step_options(ctx.step.name, tuple(ctx.step.args)):
             deleted, _ = self.belief.effects(op, env)
             released |= {args[-1] for pred, args in deleted if pred == self.carry}
             break
         return [o for o in held if o not in released]
 
-    def _carried_in_gripper(self, ctx: ActionContext):
+    def _carried_in_gripper(self, ctx: ActionContext) -> Check:
         from htn.robot.interface import Check
 
         if self._carrying[0] != (id(ctx), ctx.attempt):  # the belief is fixed while it runs
@@ -303,7 +286,9 @@ class TaskDispatcher:
             )
 
     # ------------------------------------------------------------ the tick loop
-    def halt(self, why: str = "", outcome: str = INTERRUPTED, after=None) -> bool:
+    def halt(
+        self, why: str = "", outcome: str = INTERRUPTED, after: Optional[ActionContext] = None
+    ) -> bool:
         """Stop the tree before its next tick (safe from a signal handler or
         another thread); ``why`` is logged with the ``interrupted`` event
         and in the summary, whose result is ``outcome`` (``interrupted``;
@@ -349,6 +334,7 @@ class TaskDispatcher:
                     return self._summary(Outcome.VERIFIED.value)
                 if status == Status.FAILURE:
                     ctx = self.failed
+                    assert ctx is not None  # the action that failed reported it
                     if self.replan and self.replans < self.max_replans and self._repair(ctx):
                         continue
                     self.robot.hold()
@@ -357,6 +343,7 @@ class TaskDispatcher:
                         if ctx.outcome is not Outcome.ABORTED or ctx.preempted or retries_left(ctx)
                         else out_of_retries(ctx)
                     )
+                    assert ctx.outcome is not None  # failed or aborted
                     return self._summary(ctx.outcome.value, ctx, advice)
         except Halted:  # the next action would have begun after a halt
             return self.interrupted()
@@ -459,8 +446,9 @@ class TaskDispatcher:
         self.replans += 1
         self.tree_known = True
         paths = repair.paths
-        replaced = [self.nodes.of(_task_node(b)) for b in repair.replaced]
+        replaced = [self.nodes.of(task_node(b)) for b in repair.replaced]
         holder = self.root if repair.target is self.root else repair.target.parent
+        assert holder is not None  # a task's sequence
         added = graft(repair, self.root, self._action)
         self.belief = Planner.for_state(self.domain, observed.state, self.functions)
         self.failed = None
@@ -478,14 +466,14 @@ class TaskDispatcher:
         pending = [a for a in actions(self.root) if not a.done]
         number = {id(a.node): len(self.done) + 1 + k for k, a in enumerate(pending)}
         self._log_tree(
-            [_task_node(b) for b in added],
-            self.nodes.of(holder.htn_task),
+            [task_node(b) for b in added],
+            self.nodes.of(task_node(holder)),
             lambda n: number.get(id(n)),
             replaced,
         )
         return True
 
 
-def _task_node(behaviour):
-    """The task-tree node of a task's sequence or of an action subtree."""
-    return behaviour.htn_task if hasattr(behaviour, "htn_task") else behaviour.htn_action.node
+def _plan_step(node: TaskTree) -> Optional[int]:
+    """The 1-based step of an operator node of the plan's tree (its leaves index the steps)."""
+    return None if node.step is None else node.step + 1

@@ -15,11 +15,13 @@ import json
 import os
 import threading
 import time
-from typing import Optional
+from collections.abc import Callable
+from typing import Any, Optional
 
 from htn.jshop.language.errors import WriteError
 
-from .log_header import read_header, run_header  # noqa: F401  (the log's header, re-exported)
+from .log_header import read_header as read_header  # the log's header, re-exported
+from .log_header import run_header as run_header
 
 
 class LineFile:
@@ -66,6 +68,7 @@ class LineFile:
 
     def _cut(self) -> None:
         """Back to the last whole line (what follows it is half a line)."""
+        assert self.fd is not None  # write_line's, under the lock: the file is open
         try:
             os.ftruncate(self.fd, self.size)
             os.lseek(self.fd, self.size, os.SEEK_SET)
@@ -93,13 +96,18 @@ class EventLog:
     does not fit (the run then ends with its summary, if the disk allows).
     """
 
-    def __init__(self, path: Optional[str] = None, clock=None, option: Optional[str] = "--log"):
+    def __init__(
+        self,
+        path: Optional[str] = None,
+        clock: Optional[Callable[[], float]] = None,
+        option: Optional[str] = "--log",
+    ):
         self._file: Optional[LineFile] = LineFile(path, option) if path else None
         self.path = path
         self.clock = clock or (lambda: 0.0)
         self.start = time.perf_counter()
-        self.listeners: list = []
-        self.events: list[dict] = []
+        self.listeners: list[Callable[[dict[str, Any]], object]] = []
+        self.events: list[dict[str, Any]] = []
         self.ended = False
 
     @property
@@ -114,9 +122,9 @@ class EventLog:
         attempt: Optional[int] = None,
         detail: str = "",
         sim_t: Optional[float] = None,
-        **extra,
-    ) -> dict:
-        record = {
+        **extra: Any,
+    ) -> dict[str, Any]:
+        record: dict[str, Any] = {
             "t": round(time.perf_counter() - self.start, 4),
             "sim_t": round(self.clock() if sim_t is None else sim_t, 4),
             "step": step,
@@ -156,7 +164,7 @@ SHOWN = (
 )
 
 
-def event_line(rec: dict) -> Optional[str]:
+def event_line(rec: dict[str, Any]) -> Optional[str]:
     """``' 3 verified    (!goto robby dock kitchen)  [try 1, t=2.0s] DETAIL'``
     for an event of the run's log worth a line, else None (starts, ticks,
     feedback: the live tree shows those)."""

@@ -15,7 +15,8 @@ from __future__ import annotations
 import hashlib
 import json
 import os
-from typing import Optional
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any, Optional
 
 from htn.jshop.language.errors import HtnError
 
@@ -34,20 +35,20 @@ def file_sha256(path: Optional[str]) -> Optional[str]:
 
 
 def run_header(
-    plan_file,
-    plan_sha256,
-    plan_index,
-    domain,
-    problem,
-    functions,
-    robot,
-    seed,
-    faults,
-    retries,
-    replan,
-    argv,
-    digests: dict,
-) -> dict:
+    plan_file: Optional[str],
+    plan_sha256: Optional[str],
+    plan_index: int,
+    domain: Optional[str],
+    problem: Optional[str],
+    functions: Optional[str],
+    robot: str,
+    seed: int,
+    faults: Optional[str],
+    retries: Mapping[str, int],
+    replan: bool,
+    argv: Optional[Sequence[str]],
+    digests: Mapping[str, Optional[str]],
+) -> dict[str, Any]:
     """What a log's header records: enough to run the same thing again
     (``argv``: the command line as given, None for a program's call), with
     the SHA-256 of the plan file, domain, problem and functions file: of the
@@ -58,13 +59,15 @@ def run_header(
 
     from htn.installation import version as htn_version
 
-    def installed(name):
+    def installed(name: str) -> Optional[str]:
         try:
             return version(name)
         except PackageNotFoundError:
             return None
 
-    absolute = lambda p: os.path.abspath(p) if p else None  # noqa: E731
+    def absolute(p: Optional[str]) -> Optional[str]:
+        return os.path.abspath(p) if p else None
+
     return {
         "htn": htn_version(),
         "argv": None if argv is None else list(argv),
@@ -102,12 +105,12 @@ MAX_SEED = 2**63
 MAX_TEXT = 100_000  # characters of a path or a faults text
 
 
-def _shown(value) -> str:
+def _shown(value: object) -> str:
     text = json.dumps(value)
     return text if len(text) <= 60 else text[:57] + "..."
 
 
-def read_header(path: str) -> dict:
+def read_header(path: str) -> dict[str, Any]:
     """The header event of a log written by ``htn run --log``, each field
     checked (type and range; ``plan_index`` is 1-based)."""
     if not os.path.isfile(path):
@@ -131,8 +134,11 @@ def read_header(path: str) -> dict:
     return rec
 
 
-def _text(optional: bool):
-    def check(v):
+FieldCheck = Callable[[Any], Optional[str]]  # a field's value -> what is wrong with it, or None
+
+
+def _text(optional: bool) -> FieldCheck:
+    def check(v: Any) -> Optional[str]:
         if v is None and optional:
             return None
         if not isinstance(v, str) or not v or len(v) > MAX_TEXT or "\0" in v:
@@ -142,7 +148,7 @@ def _text(optional: bool):
     return check
 
 
-def _digest(v):
+def _digest(v: Any) -> Optional[str]:
     if v is None:
         return None
     if not isinstance(v, str) or len(v) != 64 or any(c not in "0123456789abcdef" for c in v):
@@ -150,25 +156,25 @@ def _digest(v):
     return None
 
 
-def _plan_index(v):
+def _plan_index(v: Any) -> Optional[str]:
     if type(v) is not int or not 1 <= v <= 10**9:
         return "expected a plan number, 1 or more (the first plan is 1)"
     return None
 
 
-def _seed(v):
+def _seed(v: Any) -> Optional[str]:
     if type(v) is not int or not -MAX_SEED <= v < MAX_SEED:
         return "expected an integer"
     return None
 
 
-def _robot(v):
+def _robot(v: Any) -> Optional[str]:
     if not isinstance(v, str) or not v or len(v) > 200:
         return "expected a robot's name"
     return None
 
 
-def _faults(v):
+def _faults(v: Any) -> Optional[str]:
     if v is None:
         return None
     if not isinstance(v, str) or len(v) > MAX_TEXT:
@@ -176,7 +182,7 @@ def _faults(v):
     return None
 
 
-def _retries(v):
+def _retries(v: Any) -> Optional[str]:
     if v is None:
         return None
     if not isinstance(v, dict) or not all(
@@ -186,11 +192,11 @@ def _retries(v):
     return None
 
 
-def _replan(v):
+def _replan(v: Any) -> Optional[str]:
     return None if type(v) is bool else "expected true or false"
 
 
-CHECKS = {
+CHECKS: dict[str, FieldCheck] = {
     "plan": _text(True),
     "plan_sha256": _digest,
     "plan_index": _plan_index,
@@ -235,7 +241,7 @@ def check_plan_digest(plan_file: str, recorded: Optional[str], actual: str, log_
         )
 
 
-def check_unchanged(rec: dict, kind: str, log_path: str) -> None:
+def check_unchanged(rec: Mapping[str, Any], kind: str, log_path: str) -> None:
     """The ``kind`` file ("domain", "problem") the header names is there and,
     when the header has its SHA-256, unchanged since the run."""
     path, recorded = rec.get(kind), rec.get(f"{kind}_sha256")

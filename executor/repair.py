@@ -19,13 +19,36 @@ task has a plan, there is no repair and the robot holds its pose.
 
 from __future__ import annotations
 
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
-from typing import Optional
+from typing import TYPE_CHECKING, Optional
+
+from py_trees.behaviour import Behaviour
+from py_trees.composites import Composite
 
 from htn.jshop.language import syntax as S
 from htn.jshop.search.planner import Planner
 
-from .task_bt import ROOT_NAME, actions, build, enclosing_tasks, label_among, rebase, task_atom
+from .task_bt import (
+    ROOT_NAME,
+    MakeAction,
+    action_of,
+    actions,
+    build,
+    enclosing_tasks,
+    label_among,
+    rebase,
+    task_atom,
+    task_node,
+    task_of,
+)
+
+if TYPE_CHECKING:
+    from htn.jshop.language.functions import FunctionTable
+    from htn.jshop.plans.plan import Plan, Step
+    from htn.robot.interface import Robot
+
+    from .behaviours import ActionContext
 
 PLAN_TIMEOUT = 10.0  # seconds of search per candidate task
 
@@ -36,22 +59,22 @@ class Repair:
     behaviours it replaces."""
 
     path: str  # the node path of the (first) task re-planned
-    tasks: list
-    plan: object
-    target: object  # the sequence repaired (the root for the root)
-    replaced: list = field(default_factory=list)
+    tasks: list[str]
+    plan: Plan
+    target: Behaviour  # the sequence repaired (the root for the root)
+    replaced: list[Behaviour] = field(default_factory=list)
 
     @property
     def paths(self) -> list[str]:
         """Node paths of every task replaced."""
-        return [
-            getattr(b, "htn_task", None).path if hasattr(b, "htn_task") else b.htn_action.node.path
-            for b in self.replaced
-        ]
+        return [task_node(b).path for b in self.replaced]
 
 
 def observed_instance(
-    domain: S.Domain, instance: S.ProblemInstance, robot, tasks=None
+    domain: S.Domain,
+    instance: S.ProblemInstance,
+    robot: Robot,
+    tasks: Optional[S.TaskList] = None,
 ) -> S.ProblemInstance:
     """The current state as the robot observes it: static facts of the
     problem plus the observed facts of the domain's dynamic predicates."""
@@ -61,25 +84,31 @@ def observed_instance(
     return S.ProblemInstance(atoms, tasks if tasks is not None else instance.tasks, instance.pos)
 
 
-def _done(behaviour) -> bool:
+def _done(behaviour: Behaviour) -> bool:
     return all(a.done for a in actions(behaviour))
 
 
-def _task_of(behaviour) -> S.TaskAtom:
-    if hasattr(behaviour, "htn_task"):
-        return task_atom(behaviour.htn_task)
-    step = behaviour.htn_action.step
+def _task_of(behaviour: Behaviour) -> S.TaskAtom:
+    node = task_of(behaviour)
+    if node is not None:
+        return task_atom(node)
+    ctx = action_of(behaviour)
+    assert ctx is not None, behaviour.name  # a task's sequence, or an action subtree
+    step = ctx.step
     return S.TaskAtom(step.name, tuple(step.args))
 
 
-def candidates(shot, root, tree_known: bool, problem_tasks: S.TaskList):
+def candidates(
+    shot: Behaviour, root: Behaviour, tree_known: bool, problem_tasks: S.TaskList
+) -> Iterator[tuple[Behaviour, list[Behaviour], S.TaskList]]:
     """(sequence, behaviours it replaces, task list to plan), nearest first:
     each enclosing task alone, then together with the tasks after it in its
     parent (so that what those were planned for need not hold any more),
     then the parent."""
     for seq in enclosing_tasks(shot):
         if seq is not root:
-            yield seq, [seq], S.TaskList([task_atom(seq.htn_task)])
+            yield seq, [seq], S.TaskList([_task_of(seq)])
+            assert seq.parent is not None  # below the root
             siblings = seq.parent.children
             later = siblings[siblings.index(seq) :]
             if len(later) > 1:
@@ -89,7 +118,7 @@ def candidates(shot, root, tree_known: bool, problem_tasks: S.TaskList):
         yield seq, pending, pending_tasks(root, tree_known, problem_tasks)
 
 
-def pending_tasks(root, tree_known: bool, problem_tasks: S.TaskList) -> S.TaskList:
+def pending_tasks(root: Behaviour, tree_known: bool, problem_tasks: S.TaskList) -> S.TaskList:
     """The top-level tasks of the behaviour tree ``root`` not yet done (one
     partially executed is not done), as a task list to plan again; without
     the plan's task tree, the problem's tasks."""
@@ -99,10 +128,16 @@ def pending_tasks(root, tree_known: bool, problem_tasks: S.TaskList) -> S.TaskLi
 
 
 def find_repair(
-    shot, root, tree_known: bool, domain, observed: S.ProblemInstance, problem_tasks, functions=None
+    shot: Behaviour,
+    root: Behaviour,
+    tree_known: bool,
+    domain: S.Domain,
+    observed: S.ProblemInstance,
+    problem_tasks: S.TaskList,
+    functions: Optional[FunctionTable] = None,
 ) -> tuple[Optional[Repair], list[str]]:
     """The repair for the failed action subtree ``shot``, and the node paths tried."""
-    tried = []
+    tried: list[str] = []
     for seq, replaced, tasks in candidates(shot, root, tree_known, problem_tasks):
         path = seq.name if seq is not root else ROOT_NAME
         tried.append(
@@ -125,7 +160,13 @@ def find_repair(
     return None, tried
 
 
-def retry_applies(ctx, root, domain, observed: S.ProblemInstance, functions=None) -> bool:
+def retry_applies(
+    ctx: ActionContext,
+    root: Behaviour,
+    domain: S.Domain,
+    observed: S.ProblemInstance,
+    functions: Optional[FunctionTable] = None,
+) -> bool:
     """Does the failed step ``ctx`` apply again in the observed state, and the
     steps still to come after it? Then trying it again is the smallest repair:
     nothing is re-planned."""
@@ -133,40 +174,47 @@ def retry_applies(ctx, root, domain, observed: S.ProblemInstance, functions=None
     return _applies(domain, observed, functions, [ctx.step, *rest])
 
 
-def _atoms(tasks: S.TaskList) -> list:
+def _atoms(tasks: S.TaskList) -> list[str]:
     from htn.jshop.language.terms import atom_str
 
     return [atom_str(t.name, t.args) for t in S.task_atoms(tasks)]
 
 
-def _applies(domain, observed: S.ProblemInstance, functions, steps) -> bool:
+def _applies(
+    domain: S.Domain,
+    observed: S.ProblemInstance,
+    functions: Optional[FunctionTable],
+    steps: Iterable[Step],
+) -> bool:
     """Do ``steps`` apply in sequence from the observed state?"""
     checker = Planner.for_state(domain, observed.state, functions)
     return all(checker.apply_step(s.name, tuple(s.args)) for s in steps)
 
 
-def graft(repair: Repair, root, make_action) -> list:
+def graft(repair: Repair, root: Behaviour, make_action: MakeAction) -> list[Behaviour]:
     """Put the repair's new subtrees into the behaviour tree; returns them."""
     plan, seq = repair.plan, repair.target
+    tree = plan.tree
+    assert tree is not None  # planned with record_trees
     if seq is not root:
         parent = seq.parent
+        assert isinstance(parent, Composite)  # a task's sequence
         at = parent.children.index(repair.replaced[0])
         added = []
-        for old, node in zip(repair.replaced, plan.tree.children):
-            rebase(
-                node, old.htn_task.path if hasattr(old, "htn_task") else old.htn_action.node.path
-            )
+        for old, node in zip(repair.replaced, tree.children):
+            rebase(node, task_node(old).path)
             parent.remove_child(old)
             added.append(build(node, plan.steps, make_action))
         for k, new in enumerate(added):
             parent.insert_child(new, at + k)
         return added
+    assert isinstance(root, Composite)  # the plan's sequence
     for b in repair.replaced:
         root.remove_child(b)
     taken = {c.name for c in root.children}
-    names = [n.name for n in plan.tree.children]
+    names = [n.name for n in tree.children]
     added = []
-    for node in plan.tree.children:
+    for node in tree.children:
         label = label_among(node.name, taken, names.count(node.name))
         taken.add(label)
         rebase(node, label)

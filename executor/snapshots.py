@@ -11,17 +11,18 @@ simulated time, the monitor's detail).
 from __future__ import annotations
 
 import os
-from typing import Callable
+from collections.abc import Callable
+from typing import Any
 
-from htn.robot.interface import Caption
+from htn.robot.interface import Caption, Robot
 
 OUTCOMES = ("verified", "failed", "aborted")
 
 
-def snapshot_listener(robot, folder: str) -> Callable[[dict], None]:
+def snapshot_listener(robot: Robot, folder: str) -> Callable[[dict[str, Any]], None]:
     """An event-log listener that saves a labelled snapshot per attempt outcome."""
 
-    def on_event(rec: dict) -> None:
+    def on_event(rec: dict[str, Any]) -> None:
         if rec["event"] in OUTCOMES and rec["step"] is not None:
             attempt = rec["attempt"] or 1
             name = f"step{rec['step']:02d}_try{attempt}_{rec['event']}.png"

@@ -17,18 +17,27 @@ stays shallow.
 
 from __future__ import annotations
 
-from typing import Callable, Optional
+from collections.abc import Callable, Sequence
+from typing import TYPE_CHECKING, Optional
 
 import py_trees
+from py_trees.behaviour import Behaviour
 
 from htn.jshop.language import syntax as S
 from htn.jshop.plans.tree import TaskTree
+
+if TYPE_CHECKING:
+    from htn.jshop.plans.plan import Step
+
+    from .behaviours import ActionContext
+
+MakeAction = Callable[["Step", TaskTree], Behaviour]  # a step and its node -> its subtree
 
 MAX_DEPTH = 48
 ROOT_NAME = "plan"
 
 
-def flat_tree(steps) -> TaskTree:
+def flat_tree(steps: Sequence[Step]) -> TaskTree:
     """A task tree that knows only the plan's steps."""
     root = TaskTree(name="", path="")
     root.children = [
@@ -42,12 +51,14 @@ def task_atom(node: TaskTree) -> S.TaskAtom:
     return S.TaskAtom(node.name, tuple(node.args))
 
 
-def build(node: TaskTree, steps, make_action: Callable, depth: int = 0):
+def build(
+    node: TaskTree, steps: Sequence[Step], make_action: MakeAction, depth: int = 0
+) -> Behaviour:
     """The behaviour tree of ``node`` (a task-tree node; leaves index ``steps``)."""
     if node.step is not None:
         return make_action(steps[node.step], node)
     top = _sequence(node)
-    work = [(node, top, depth)]
+    work: list[tuple[TaskTree, py_trees.composites.Sequence, int]] = [(node, top, depth)]
     while work:  # iterative: task trees can be deep
         task, seq, d = work.pop()
         children = task.children if d < MAX_DEPTH else task.leaves()
@@ -63,18 +74,40 @@ def build(node: TaskTree, steps, make_action: Callable, depth: int = 0):
 
 def _sequence(node: TaskTree) -> py_trees.composites.Sequence:
     seq = py_trees.composites.Sequence(node.path or ROOT_NAME, memory=True)
-    seq.htn_task = node
+    setattr(seq, "htn_task", node)  # an attribute of our own on py_trees' behaviour
     return seq
 
 
-def actions(root) -> list:
+def task_of(behaviour: Behaviour) -> Optional[TaskTree]:
+    """The task-tree node a task's sequence carries (``htn_task``), else None."""
+    node: Optional[TaskTree] = getattr(behaviour, "htn_task", None)
+    return node
+
+
+def action_of(behaviour: Behaviour) -> Optional[ActionContext]:
+    """The context the top of an action subtree carries (``htn_action``), else None."""
+    ctx: Optional[ActionContext] = getattr(behaviour, "htn_action", None)
+    return ctx
+
+
+def task_node(behaviour: Behaviour) -> TaskTree:
+    """The task-tree node of a task's sequence or of an action subtree."""
+    node = task_of(behaviour)
+    if node is not None:
+        return node
+    ctx = action_of(behaviour)
+    assert ctx is not None and ctx.node is not None, behaviour.name
+    return ctx.node
+
+
+def actions(root: Behaviour) -> list[ActionContext]:
     """The action contexts of a behaviour tree, in plan order."""
-    return [b.htn_action for b in root.iterate() if hasattr(b, "htn_action")]
+    return [ctx for b in root.iterate() if (ctx := action_of(b)) is not None]
 
 
-def enclosing_tasks(behaviour) -> list:
+def enclosing_tasks(behaviour: Behaviour) -> list[Behaviour]:
     """The sequences above an action subtree, nearest first, the root last."""
-    out = []
+    out: list[Behaviour] = []
     node = behaviour.parent
     while node is not None:
         if hasattr(node, "htn_task"):
@@ -83,7 +116,7 @@ def enclosing_tasks(behaviour) -> list:
     return out
 
 
-def rebase(tree: TaskTree, new_root_path: Optional[str]) -> None:
+def rebase(tree: TaskTree, new_root_path: str) -> None:
     """Give the nodes of a freshly planned one-task tree the path of the task
     they replace: its top node gets ``new_root_path``, the rest follow."""
     old = tree.path
@@ -91,7 +124,7 @@ def rebase(tree: TaskTree, new_root_path: Optional[str]) -> None:
         n.path = new_root_path + n.path[len(old) :]
 
 
-def label_among(name: str, taken: set, count: int) -> str:
+def label_among(name: str, taken: set[str], count: int) -> str:
     """A node-path label for a new sibling named ``name``, unique among ``taken``."""
     if count == 1 and name not in taken:
         return name

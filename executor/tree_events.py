@@ -25,31 +25,41 @@ ancestors, which would make a deep tree's event quadratic in its depth.
 
 from __future__ import annotations
 
-from typing import Callable, Optional
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any, Optional
+
+if TYPE_CHECKING:
+    from htn.jshop.plans.tree import TaskTree
+
+    from .behaviours import ActionContext
 
 
 class NodeNumbers:
     """Numbers for the task-tree nodes of one run, in the order they are logged."""
 
-    def __init__(self):
+    def __init__(self) -> None:
         self._ids: dict[int, tuple[int, object]] = {}  # id(node) -> (number, node: kept alive)
 
     def __len__(self) -> int:
         return len(self._ids)
 
-    def of(self, node) -> Optional[int]:
+    def of(self, node: object) -> Optional[int]:
         got = self._ids.get(id(node))
         return None if got is None else got[0]
 
-    def add(self, node) -> int:
+    def add(self, node: object) -> int:
         number = len(self._ids)
         self._ids[id(node)] = (number, node)
         return number
 
 
 def tree_nodes(
-    top, numbers: NodeNumbers, parent: Optional[int], step_of: Callable, action_of: Callable
-) -> list[dict]:
+    top: TaskTree,
+    numbers: NodeNumbers,
+    parent: Optional[int],
+    step_of: Callable[[TaskTree], Optional[int]],
+    action_of: Callable[[TaskTree], Optional[ActionContext]],
+) -> list[dict[str, Any]]:
     """The nodes of the task tree ``top`` (depth first), numbered from
     ``len(numbers)`` on; ``top``'s parent is the node numbered ``parent``.
     ``step_of(node)`` is an operator node's 1-based step (or None),
@@ -57,12 +67,12 @@ def tree_nodes(
     task is the step as the plan runs it (a task-tree node keeps the
     arguments as they were when its task was decomposed, where a variable may
     have been bound only later), with the action's hold-monitors."""
-    out: list[dict] = []
-    stack: list = [(top, parent)]
+    out: list[dict[str, Any]] = []
+    stack: list[tuple[TaskTree, Optional[int]]] = [(top, parent)]
     while stack:
         node, up = stack.pop()
         number = numbers.add(node)
-        d: dict = {
+        d: dict[str, Any] = {
             "id": number,
             "parent": up,
             "task": node.task,
@@ -83,7 +93,7 @@ def tree_nodes(
     return out
 
 
-def tree_detail(nodes: list[dict], replaced: int = 0) -> str:
+def tree_detail(nodes: list[dict[str, Any]], replaced: int = 0) -> str:
     actions = sum(1 for n in nodes if "step" in n)
     what = f"{len(nodes)} nodes, {actions} actions"
     return (

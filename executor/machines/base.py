@@ -28,10 +28,11 @@ bundled domains are in :mod:`htn.executor.machines.domestic` and
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from importlib import import_module
-from typing import Callable, Optional
+from typing import Any, Optional, TypeVar
 
-from htn.robot.interface import Check, Robot, SkillResult
+from htn.robot.interface import Check, Robot, SkillResult, SkillRun
 
 HoldMonitor = tuple[str, Callable[[], Check]]  # (what must hold, how to check it)
 
@@ -47,26 +48,28 @@ class ActionMachine:
 
     name = ""
 
-    def execute(self, robot: Robot, *args):  # pragma: no cover - abstract
+    def execute(self, robot: Robot, *args: Any) -> SkillRun:  # pragma: no cover - abstract
         raise NotImplementedError
 
-    def monitor(self, robot: Robot, *args) -> Check:  # pragma: no cover - abstract
+    def monitor(self, robot: Robot, *args: Any) -> Check:  # pragma: no cover - abstract
         raise NotImplementedError
 
-    def holds(self, robot: Robot, *args) -> list[HoldMonitor]:
+    def holds(self, robot: Robot, *args: Any) -> list[HoldMonitor]:
         """Hold-monitors of this action: what must stay true while it executes."""
         return []
 
 
-REGISTRY: dict[tuple, type] = {}  # (domain or None, operator) -> machine class
+# (domain or None, operator) -> machine class
+REGISTRY: dict[tuple[Optional[str], str], type[ActionMachine]] = {}
+M = TypeVar("M", bound=type[ActionMachine])  # a machine class, as the decorator returns it
 
 
-def action(operator: str, domain: Optional[str] = None):
+def action(operator: str, domain: Optional[str] = None) -> Callable[[M], M]:
     """Class decorator: register an :class:`ActionMachine` for an operator name,
     for every domain or (``domain=``) for one domain whose operator of the same
     name means something else."""
 
-    def register(cls):
+    def register(cls: M) -> M:
         cls.name = operator
         REGISTRY[(domain, operator)] = cls
         return cls
@@ -142,10 +145,10 @@ class OperatorModelAction(ActionMachine):
     def __init__(self, operator: str):
         self.name = operator
 
-    def execute(self, robot, *args):
+    def execute(self, robot: Robot, *args: Any) -> SkillRun:
         return robot.act("operator", self.name, args)
 
-    def monitor(self, robot, *args):
+    def monitor(self, robot: Robot, *args: Any) -> Check:
         return robot.check("operator_effects", self.name, args)
 
 
