@@ -37,12 +37,25 @@ from __future__ import annotations
 
 import json
 import threading
+from collections.abc import Iterable
 from dataclasses import dataclass, field, replace
-from typing import Callable, Optional
+from typing import TYPE_CHECKING, Any, Callable, Optional, Union
 
 from htn.jshop.language.errors import HtnError
+from htn.jshop.language.functions import Guard
 
 from .world import WorldModel, plan_goal
+
+if TYPE_CHECKING:
+    from htn.executor.behaviours import ActionContext
+    from htn.jshop.language import syntax as S
+    from htn.jshop.plans.plan import Plan
+    from htn.robot.interface import Robot
+
+    from .inputs import DomainInput, FunctionsInput, ProblemInput, StrPath
+    from .run import Execution, RunResult
+    from .run_inputs import RetriesInput
+    from .world import Fact
 
 PREEMPTED = "preempted by a newer goal or a cancel"
 
@@ -54,11 +67,11 @@ class GoalResult:
     outcome: str  # verified | failed | aborted | preempted | refused
     summary: str = ""  # the line htn run prints
     error: str = ""  # the located error, when refused
-    plan: list = field(default_factory=list)  # the steps, as executed
+    plan: list[str] = field(default_factory=list)  # the steps, as executed
     tree: str = ""  # the plan's task tree, JSON
     steps: int = 0
     verified: int = 0
-    log: list = field(default_factory=list)  # every event, as logged
+    log: list[dict[str, Any]] = field(default_factory=list)  # every event, as logged
     remaining: str = ""  # preempted: the top-level tasks not completed, a task list
     tasks: str = ""  # the goal's task list, as given
     retries: int = 0
@@ -70,7 +83,7 @@ class GoalResult:
         return self.outcome == "verified"
 
     @property
-    def done(self) -> list:
+    def done(self) -> list[str]:
         """The steps verified (the first ``verified`` of ``plan``)."""
         return self.plan[: self.verified]
 
@@ -81,10 +94,10 @@ class _Handover:
     action goes on, and the goal's run takes it as verified."""
 
     tasks: str
-    plan: object
-    problem: object
-    execution: object  # the run it goes on from
-    ctx: object  # the action that goes on
+    plan: Plan
+    problem: S.Problem
+    execution: Execution  # the run it goes on from
+    ctx: ActionContext  # the action that goes on
 
     def went_on(self) -> bool:
         """Was that action the last one its run verified?"""
@@ -102,49 +115,52 @@ class Agent:
 
     def __init__(
         self,
-        domain,
-        problem=None,
+        domain: DomainInput,
+        problem: Optional[ProblemInput] = None,
         *,
-        robot="symbolic",
-        functions=None,
+        robot: Union[str, Robot] = "symbolic",
+        functions: FunctionsInput = None,
         faults: str = "",
         seed: int = 0,
-        retries=None,
+        retries: RetriesInput = None,
         replan: bool = False,
-        stops=None,
-    ):
+        stops: Optional[Guard] = None,
+    ) -> None:
         self.world = WorldModel(domain, problem, functions, stops)
         self.retries, self.replan, self.stops = retries, replan, stops
         self.robot_name = robot if isinstance(robot, str) else type(robot).__name__
-        self.robot = self._robot(robot, faults, seed) if isinstance(robot, str) else robot
+        self.robot: Robot = self._robot(robot, faults, seed) if isinstance(robot, str) else robot
         self._busy = False  # a goal is being planned or run
-        self._running = None  # the Execution of the goal being run
+        self._running: Optional[Execution] = None  # the Execution of the goal being run
         self._preempted: Optional[str] = None
         self._handover: Optional[_Handover] = None
         self._lock = threading.Lock()
         _warm_up()
 
-    def _robot(self, name: str, faults: str, seed: int):
+    def _robot(self, name: str, faults: str, seed: int) -> Robot:
         from htn.robot.backends import RobotRequest, make_robot
 
         from .extras import require_robot_extra
 
         require_robot_extra(name, f"the {name} robot")
         problem = self.world.problem("()", "world")  # the world as believed, no tasks
-        return make_robot(
+        robot: Robot = make_robot(
             name,
             RobotRequest(
                 self.world.domain, problem.instances[0], faults, seed, False, self.world.functions
             ),
         )
+        return robot
 
     # ------------------------------------------------------------ goals
-    def plan(self, tasks: str, source: str = "goal"):
+    def plan(self, tasks: str, source: str = "goal") -> Optional[Plan]:
         """The first plan of ``tasks`` from the current world model, or None
         if there is none (an :class:`HtnError` for a bad goal)."""
         return self._first_plan(tasks, source)[0]
 
-    def _first_plan(self, tasks: str, source: str, facts=None) -> tuple:
+    def _first_plan(
+        self, tasks: str, source: str, facts: Optional[Iterable[Fact]] = None
+    ) -> tuple[Optional[Plan], S.Problem]:
         """(the first plan or None, the goal's problem it was planned in):
         the goal read once, so the run checks the plan in the very state it
         was made from, whatever facts arrive meanwhile. ``facts``: plan from
@@ -171,8 +187,8 @@ class Agent:
         tasks: str,
         *,
         source: str = "goal",
-        log=None,
-        on_event: Optional[Callable[[dict], None]] = None,
+        log: Optional[StrPath] = None,
+        on_event: Optional[Callable[[dict[str, Any]], None]] = None,
     ) -> GoalResult:
         """Plan ``tasks`` from the world model and run the plan on the robot;
         ``on_event`` gets every event as it is logged (and ``log``, a path,
@@ -183,7 +199,11 @@ class Agent:
         return self._run(tasks, source, log, on_event)
 
     def resume(
-        self, result: GoalResult, *, log=None, on_event: Optional[Callable[[dict], None]] = None
+        self,
+        result: GoalResult,
+        *,
+        log: Optional[StrPath] = None,
+        on_event: Optional[Callable[[dict[str, Any]], None]] = None,
     ) -> GoalResult:
         """Go on with the preempted goal ``result``: plan its remaining
         tasks (:attr:`GoalResult.remaining`) from the world model and run
@@ -198,7 +218,12 @@ class Agent:
         return self._run(result.remaining, "goal", log, on_event, result)
 
     def _run(
-        self, tasks: str, source: str, log, on_event, before: Optional[GoalResult] = None
+        self,
+        tasks: str,
+        source: str,
+        log: Optional[StrPath],
+        on_event: Optional[Callable[[dict[str, Any]], None]],
+        before: Optional[GoalResult] = None,
     ) -> GoalResult:
         from .run import prepare
 
@@ -206,7 +231,9 @@ class Agent:
             self._busy, self._preempted = True, None
             handover, self._handover = self._handover, None
         try:
-            adopted, since = None, self.world.mark()  # facts reported from now on outlive the run
+            adopted: Optional[str] = None
+            since = self.world.mark()  # facts reported from now on outlive the run
+            plan: Optional[Plan]
             try:
                 if (
                     before is None
@@ -313,7 +340,7 @@ class Agent:
         with self._lock:
             run = self._running
         now = run.running_action() if run is not None else None
-        if now is None:
+        if run is None or now is None:
             return None
         ctx, facts = now
         try:
@@ -339,7 +366,12 @@ class Agent:
         )
 
     def _result(
-        self, plan, result, tasks: str, remaining: str, before: Optional[GoalResult]
+        self,
+        plan: Plan,
+        result: RunResult,
+        tasks: str,
+        remaining: str,
+        before: Optional[GoalResult],
     ) -> GoalResult:
         s = result.summary
         tree = json.dumps(plan.tree.to_dict()) if plan.tree is not None else ""

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass, field, fields, replace
-from typing import Optional
+from typing import TYPE_CHECKING, Any, Optional
 
 from htn.evaluation.cluster import ClusterError
 from htn.evaluation.statistics import METRIC_NAMES, applied_rules, format_change, format_p
@@ -29,6 +29,13 @@ from htn.jshop.readers.load import load_problem
 
 from .extras import require_extra, require_robot_extra
 from .inputs import domain_for, read_inputs
+
+if TYPE_CHECKING:
+    from htn.evaluation.runs import Study
+    from htn.evaluation.statistics import Comparison
+    from htn.jshop.language import syntax as S
+
+    from .inputs import StrPath
 
 __all__ = [
     "evaluate",
@@ -46,7 +53,7 @@ class Progress:
     """What an evaluation tells as it goes: pass one to :func:`evaluate` and
     override the methods you want; each does nothing here."""
 
-    def started(self, workers: int, notes: list) -> None:
+    def started(self, workers: int, notes: list[str]) -> None:
         """The runner is ready (before planning): its ``workers`` and the
         cluster's one-line ``notes`` (e.g. package versions that differ)."""
 
@@ -54,7 +61,7 @@ class Progress:
         """A few words as each phase before the runs begins (reading,
         planning, each rule, the runs)."""
 
-    def batch(self, records: list, runs: float) -> None:
+    def batch(self, records: list[dict[str, Any]], runs: float) -> None:
         """A batch's new ``records`` (one per run of a plan) and the number
         of runs of every plan they complete (a fraction when a batch holds
         some of a run's plans)."""
@@ -86,7 +93,7 @@ class EvaluateOptions:
     records: Optional[str] = None
     plot: Optional[str] = None
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         for name in ("records", "plot"):  # paths as str (a Path is welcome)
             value = getattr(self, name)
             if value is not None:
@@ -101,12 +108,12 @@ class Evaluation:
     ``notes``."""
 
     problem: str
-    comparison: object
-    metrics: dict
-    plots: list = field(default_factory=list)
-    notes: list = field(default_factory=list)
+    comparison: Comparison
+    metrics: dict[str, Any]
+    plots: list[str] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
 
-    def document(self) -> dict:
+    def document(self) -> dict[str, Any]:
         """The ``htn evaluate --json`` object."""
         c = self.comparison
         return {
@@ -166,7 +173,7 @@ def check_evaluation(problem: str, domain: Optional[str], options: EvaluateOptio
         check_output_file(o.records, "--records", inputs, [(o.plot, "--plot")] if o.plot else ())
 
 
-def check_study(study, log: list, problem: str) -> None:
+def check_study(study: Study, log: list[tuple[str, str, str]], problem: str) -> None:
     """A study gives a comparison only if a transformation applied to the
     plan (``log``: the framework's entries; none when no rule's
     applicability rule found a task) and the robot can execute every step of
@@ -183,7 +190,7 @@ def check_study(study, log: list, problem: str) -> None:
             "ones rewrite top-level (transporting ...) tasks, as in the kitchen domain; "
             "add rules for another domain: entry points 'htn.transformations')"
         )
-    missing: dict = {}
+    missing: dict[str, None] = {}
     for steps in study.plans.values():
         for s in steps:
             if not s.internal and machine_for(s.name, study.domain.name) is None:
@@ -205,12 +212,12 @@ _OPTIONS = tuple(f.name for f in fields(EvaluateOptions))
 
 
 def evaluate(
-    problem,
+    problem: StrPath,
     options: Optional[EvaluateOptions] = None,
     *,
-    domain=None,
+    domain: Optional[StrPath] = None,
     progress: Optional[Progress] = None,
-    **settings,
+    **settings: Any,
 ) -> Evaluation:
     """Plan ``problem`` (a path), transform the plan with every registered
     rule, execute both ``runs`` times and compare navigation, manipulation,
@@ -254,7 +261,9 @@ def evaluate(
     return Evaluation(problem, comp, comp.metrics(), plots, notes)
 
 
-def _study(problem: str, domain, prob, options: EvaluateOptions, progress: Progress):
+def _study(
+    problem: str, domain: S.Domain, prob: S.Problem, options: EvaluateOptions, progress: Progress
+) -> tuple[Comparison, list[str]]:
     """Open the runner, plan and transform, run both plans: the comparison
     and the cluster's notes. ``--records`` streams the runs as they finish
     and is put in run order once all are in."""
@@ -269,7 +278,7 @@ def _study(problem: str, domain, prob, options: EvaluateOptions, progress: Progr
                 make_output_folder(o.plot, "--plot")
             notes = list(runner.notes)
             progress.started(runner.workers, notes)
-            log: list = []
+            log: list[tuple[str, str, str]] = []
             start_workers_early(runner, o.robot, o.runs)
             study, applied = prepare_study(
                 domain, prob, o.robot, o.faults, log=log, on_phase=progress.phase
@@ -284,7 +293,7 @@ def _study(problem: str, domain, prob, options: EvaluateOptions, progress: Progr
             stream = RecordsFile(o.records) if o.records else None
             progress.phase(f"{o.runs} runs of each plan on the {o.robot} robot")
 
-            def batch(new: list) -> None:
+            def batch(new: list[dict[str, Any]]) -> None:
                 if stream:
                     stream.write(new)
                 progress.batch(new, len(new) / len(study.plans))

@@ -16,9 +16,13 @@ from __future__ import annotations
 import re
 import shutil
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from htn.installation import EXAMPLES
 from htn.jshop.language.errors import HtnError
+
+if TYPE_CHECKING:
+    from .inputs import StrPath
 
 __all__ = ["EXAMPLES", "FOLDERS", "bundled", "summary", "list_examples", "copy_examples"]
 
@@ -57,7 +61,7 @@ def list_examples() -> list[tuple[str, str, str]]:
     return [(f.parent.name, f.name, summary(f)) for f in bundled() if f.suffix == ".jshop"]
 
 
-def copy_examples(dest, force: bool = False) -> list[Path]:
+def copy_examples(dest: StrPath, force: bool = False) -> list[Path]:
     """Copy the bundled examples into ``dest/domains`` and ``dest/problems``
     (made as needed); the files written.
 

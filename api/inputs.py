@@ -18,30 +18,37 @@ from __future__ import annotations
 import os
 import re
 from dataclasses import dataclass, field
-from typing import Optional
+from typing import Optional, TypeGuard, Union, cast
 
 from htn.installation import EXAMPLES
 from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import HtnError
-from htn.jshop.language.functions import FunctionTable
+from htn.jshop.language.functions import FunctionTable, Guard
 from htn.jshop.readers.checks import check_inputs
 from htn.jshop.readers.load import load_domain, load_problem, paired
 
+# what the use cases take: a path, or the object read from one
+StrPath = Union[str, os.PathLike[str]]
+DomainInput = Union[StrPath, S.Domain]
+ProblemInput = Union[StrPath, S.Problem]
+FunctionsInput = Union[StrPath, FunctionTable, None]
 
-def is_path(x) -> bool:
+
+def is_path(x: object) -> TypeGuard[StrPath]:
     return isinstance(x, (str, os.PathLike))
 
 
-def path_of(x) -> Optional[str]:
+def path_of(x: object) -> Optional[str]:
     """The file ``x`` is, or was read from (None for one made in memory)."""
     if x is None:
         return None
     if is_path(x):
         return os.fspath(x)
-    return getattr(x, "file", None) or None
+    file: Optional[str] = getattr(x, "file", None)
+    return file or None
 
 
-def function_table(functions, stops=None) -> FunctionTable:
+def function_table(functions: FunctionsInput, stops: Optional[Guard] = None) -> FunctionTable:
     """A function table: ``functions`` itself, the functions of a Python file,
     or an empty table for None. ``stops``: the command's
     :class:`htn.process.Stops`, under which the user code runs (a table
@@ -63,17 +70,21 @@ class Inputs:
 
     domain: S.Domain
     problem: S.Problem
-    warnings: list = field(default_factory=list)
+    warnings: list[str] = field(default_factory=list)
 
 
-def domain_and_problem(domain, problem, table: FunctionTable) -> tuple[S.Domain, S.Problem]:
+def domain_and_problem(
+    domain: Optional[DomainInput], problem: Optional[ProblemInput], table: FunctionTable
+) -> tuple[S.Domain, S.Problem]:
     """The domain and the problem, read if given as paths and checked (see
     :func:`read_inputs`)."""
     inputs = read_inputs(domain, problem, table)
     return inputs.domain, inputs.problem
 
 
-def read_inputs(domain, problem, table: FunctionTable) -> Inputs:
+def read_inputs(
+    domain: Optional[DomainInput], problem: Optional[ProblemInput], table: FunctionTable
+) -> Inputs:
     """The domain and the problem, read if given as paths, and checked: they
     belong together (a problem names its domain: manual 3.12) and pass the
     static check every command runs (an :class:`HtnError` at
@@ -92,7 +103,7 @@ def read_inputs(domain, problem, table: FunctionTable) -> Inputs:
     return Inputs(dom, prob, [str(w) for w in check_inputs(dom, prob)])
 
 
-def domain_for(problem) -> str:
+def domain_for(problem: ProblemInput) -> str:
     """The domain file of a problem (a path or a Problem read from one), by
     the name the problem gives its domain: ``NAME.jshop`` (``NAME.hddl`` or
     ``domain.hddl`` for an HDDL problem), or else a file of the language's
@@ -102,13 +113,14 @@ def domain_for(problem) -> str:
     input error that names every place looked in."""
     if is_path(problem):
         problem = load_problem(os.fspath(problem))
+    problem = cast(S.Problem, problem)  # read if it was a path
     name = problem.domain_name
     files = [f"{name}.hddl", "domain.hddl"] if problem.language == "hddl" else [f"{name}.jshop"]
     # the places as the user wrote the problem's path (a message shows the
     # path they gave), each looked in once
     here = os.path.dirname(problem.file or "")
     places = [here, os.path.join(here, "..", "domains"), "domains", str(EXAMPLES / "domains")]
-    looked: list = []
+    looked: list[str] = []
     for base in places:
         base = os.path.normpath(base)
         if any(os.path.abspath(base) == os.path.abspath(b) for b in looked):
@@ -118,9 +130,9 @@ def domain_for(problem) -> str:
             path = os.path.normpath(os.path.join(base, file))
             if os.path.isfile(path):
                 return path
-        path = _defining(base, name, problem.language)
-        if path is not None:
-            return path
+        found = _defining(base, name, problem.language)
+        if found is not None:
+            return found
     shown = [os.path.join(p, "") for p in looked]
     raise HtnError(
         f"cannot find the domain file {' or '.join(files)}: looked in "
@@ -132,7 +144,7 @@ def domain_for(problem) -> str:
 HEAD = 65536  # bytes of a file read to see which domain it defines
 
 
-def _defining(folder: str, name: str, language: str):
+def _defining(folder: str, name: str, language: str) -> Optional[str]:
     """The first file (by name) in ``folder`` with the language's extension
     whose text defines the domain ``name``, or None."""
     ext = ".hddl" if language == "hddl" else ".jshop"

@@ -11,9 +11,11 @@ planner follows the JSHOP2 manual, sections 4 and 5 (:mod:`htn.jshop.search.plan
 from __future__ import annotations
 
 import time
-from typing import Iterator, Optional
+from typing import TYPE_CHECKING, Any, Iterator, Optional
 
+from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import HtnError
+from htn.jshop.language.functions import FunctionTable, Guard
 from htn.jshop.language.terms import java_double
 from htn.jshop.plans.plan import Plan
 from htn.jshop.readers.checks import compat_warning
@@ -22,6 +24,12 @@ from htn.jshop.search.searches import SEARCHES, make_search, refusal
 from htn.jshop.search.stream import SearchStream
 
 from .inputs import function_table, path_of, read_inputs
+
+if TYPE_CHECKING:
+    from htn.jshop.checks.explain import Explainer
+    from htn.jshop.search.searches import Search
+
+    from .inputs import DomainInput, FunctionsInput, ProblemInput
 
 # what the command line shows of plans and searches (it imports only htn.api)
 __all__ = [
@@ -36,12 +44,12 @@ __all__ = [
 
 
 def plan(
-    domain,
-    problem,
+    domain: DomainInput,
+    problem: ProblemInput,
     *,
     plans: Optional[int] = 1,
     timeout: Optional[float] = None,
-    functions=None,
+    functions: FunctionsInput = None,
     jshop2_compat: bool = False,
     max_depth: int = DEFAULT_MAX_DEPTH,
     max_memory: Optional[int] = None,
@@ -50,7 +58,7 @@ def plan(
     trees: bool = True,
     tree_paths: bool = True,
     search: str = "dfs",
-    stops=None,
+    stops: Optional[Guard] = None,
 ) -> "PlanStream":
     """The plans of ``problem`` in ``domain`` (paths or loaded objects, see
     :mod:`htn.api.inputs`), as a stream in JSHOP2's order.
@@ -82,7 +90,7 @@ def plan(
         raise UnsupportedSearch(why)
     if jshop2_compat:
         warnings += [str(w) for w in filter(None, [compat_warning(dom)])]
-    options = dict(
+    options: dict[str, Any] = dict(
         jshop2_compat=jshop2_compat,
         max_depth=max_depth,
         max_memory=max_memory << 20 if max_memory else None,
@@ -104,7 +112,7 @@ def plan(
     )
 
 
-def ipc_text(plan: Plan, spelling: Optional[dict] = None) -> str:
+def ipc_text(plan: Plan, spelling: Optional[dict[str, str]] = None) -> str:
     """``plan`` in the IPC 2020 HTN plan format (actions and decompositions);
     ``spelling``: names as the input wrote them."""
     from htn.jshop.plans.ipc import ipc_text as text
@@ -133,20 +141,20 @@ class PlanStream:
 
     def __init__(
         self,
-        domain,
-        problem,
-        functions,
-        warnings,
-        options,
-        started,
-        timeout,
-        limit,
-        explain,
-        explain_all,
-        trees,
-        tree_paths,
-        search="dfs",
-    ):
+        domain: S.Domain,
+        problem: S.Problem,
+        functions: FunctionTable,
+        warnings: list[str],
+        options: dict[str, Any],
+        started: float,
+        timeout: Optional[float],
+        limit: Optional[int],
+        explain: bool,
+        explain_all: bool,
+        trees: bool,
+        tree_paths: bool,
+        search: str = "dfs",
+    ) -> None:
         self.domain, self.problem, self.functions = domain, problem, functions
         self.warnings: list[str] = warnings
         self.options = options
@@ -154,7 +162,9 @@ class PlanStream:
         self.explain_all = explain_all
         self.record = explain
         self.trees, self.tree_paths = trees, tree_paths
-        self.explanations: list = []  # one Explainer per instance searched (explain=True)
+        self.explanations: list[
+            Explainer
+        ] = []  # one Explainer per instance searched (explain=True)
         self.search = search  # its name (see plan())
         self._plans = SearchStream(
             problem.instances, self._make, started=started, timeout=timeout, limit=limit
@@ -187,10 +197,10 @@ class PlanStream:
     def __enter__(self) -> "PlanStream":
         return self
 
-    def __exit__(self, *exc) -> None:
+    def __exit__(self, *exc: object) -> None:
         self.close()
 
-    def _make(self, k: int, instance):
+    def _make(self, k: int, instance: object) -> Search:
         explainer = None
         if self.record:
             from htn.jshop.checks.explain import Explainer
@@ -208,7 +218,7 @@ class PlanStream:
             **self.options,
         )
 
-    def explain(self) -> list:
+    def explain(self) -> list[Explainer]:
         """Why the search found what it found: one
         :class:`~htn.jshop.checks.explain.Explainer` per problem instance, its
         dead ends with the precondition literal that failed and its

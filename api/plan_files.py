@@ -11,28 +11,38 @@ its files and streams hold.
 
 from __future__ import annotations
 
-from typing import Optional
+from collections.abc import Iterable
+from typing import TYPE_CHECKING, Any, Optional
 
 from htn.files import AtomicFile
 from htn.jshop.plans.planfile import header, plan_text
+
+if TYPE_CHECKING:
+    from htn.jshop.plans.plan import Plan
+    from htn.jshop.plans.tree import TaskTree
+
+    from .plan import PlanStream
 
 
 class PlanFiles:
     """``output`` (a plan file) and ``dot`` (task trees), either may be None;
     ``inputs``: the command's input files, which they may not overwrite."""
 
-    def __init__(self, output: Optional[str], dot: Optional[str], inputs=()):
+    def __init__(
+        self, output: Optional[str], dot: Optional[str], inputs: Iterable[Optional[str]] = ()
+    ):
         self.output_path, self.dot_path = output, dot
         self.plans = 0
         self.shortest: Optional[int] = None
-        self.out = self.dot = None
-        inputs = tuple(inputs)
+        self.out: Optional[AtomicFile] = None
+        self.dot: Optional[_DotFile] = None
+        read = tuple(inputs)
         try:
             if output:
-                self.out = AtomicFile(output, "-o", inputs, [(dot, "--dot")] if dot else ())
+                self.out = AtomicFile(output, "-o", read, [(dot, "--dot")] if dot else ())
             if dot:
                 self.dot = _DotFile(
-                    AtomicFile(dot, "--dot", inputs, [(output, "-o")] if output else ())
+                    AtomicFile(dot, "--dot", read, [(output, "-o")] if output else ())
                 )
         except BaseException:
             self.close()
@@ -41,16 +51,16 @@ class PlanFiles:
     def __enter__(self) -> "PlanFiles":
         return self
 
-    def __exit__(self, *exc) -> None:
+    def __exit__(self, *exc: object) -> None:
         self.close()
 
-    def begin(self, stream) -> None:
+    def begin(self, stream: PlanStream) -> None:
         """The plan file's header: the files the plans of ``stream`` (a
         :class:`htn.api.plan.PlanStream`) are made from."""
         if self.out:
             self.out.write(
                 header(
-                    self.output_path,
+                    self.out.path,
                     stream.domain_file,
                     stream.problem_file,
                     stream.functions.source,
@@ -58,7 +68,7 @@ class PlanFiles:
                 )
             )
 
-    def add(self, plan) -> None:
+    def add(self, plan: Plan) -> None:
         """Write ``plan`` to the files (flushed: it outlives the process)."""
         if self.out:
             self.out.write(plan_text(plan))
@@ -66,13 +76,13 @@ class PlanFiles:
         if self.dot and plan.tree is not None:
             self.dot.add(plan.tree)
 
-    def count(self, plan) -> None:
+    def count(self, plan: Plan) -> None:
         """``plan`` is wholly written, to the files and the output stream."""
         self.plans += 1
         if self.shortest is None or len(plan.steps) < self.shortest:
             self.shortest = len(plan.steps)
 
-    def totals(self, stats: dict) -> dict:
+    def totals(self, stats: dict[str, Any]) -> dict[str, Any]:
         """``stats`` (a stream's) with the plans found as written."""
         return {**stats, "plans_found": self.plans, "shortest_plan": self.shortest}
 
@@ -102,12 +112,13 @@ class _DotFile:
         self.count = 0
         self.first: Optional[str] = None
 
-    def add(self, tree) -> None:
+    def add(self, tree: TaskTree) -> None:
         self.count += 1
         if self.count == 1:
             self.first = tree.to_dot()
             return
         if self.count == 2:
+            assert self.first is not None  # held back by the first add
             self._write(1, self.first)
             self.first = None
         self._write(self.count, tree.to_dot())

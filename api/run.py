@@ -19,13 +19,16 @@ says ``interrupted``; a program that halts it for another goal
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass, field
-from typing import Callable, Optional
+from types import TracebackType
+from typing import TYPE_CHECKING, Any, Callable, Optional, Union
 
 from htn.executor.dispatcher import RunSummary, TaskDispatcher
 from htn.executor.log import EventLog, event_line, run_header
 from htn.executor.machines import machine_for
 from htn.jshop.language.errors import HtnError
+from htn.jshop.language.functions import Guard
 from htn.robot.backends import RobotRequest, make_robot
 from htn.robot.interface import Robot
 
@@ -34,9 +37,18 @@ from .inputs import path_of
 from .run_inputs import LoggedRun, RunInputs, read_run_log, run_inputs
 from .run_outputs import RunOutputs
 
+if TYPE_CHECKING:
+    from htn.executor.behaviours import ActionContext
+    from htn.jshop.plans.plan import Step
+
+    from .inputs import DomainInput, FunctionsInput, ProblemInput, StrPath
+    from .run_inputs import PlanInput, RetriesInput
+
 __all__ = ["run", "prepare", "Execution", "RunResult", "read_run_log", "LoggedRun", "event_line"]
 
-Listener = Callable[[dict], None]
+Listener = Callable[[dict[str, Any]], None]
+# a fact the run believes: (pred, args)
+Fact = tuple[str, tuple[Any, ...]]
 
 
 @dataclass
@@ -46,9 +58,9 @@ class RunResult:
     as executed (repairs included), and the notes of :attr:`Execution.notes`."""
 
     summary: RunSummary
-    events: list = field(default_factory=list)
-    plan: list = field(default_factory=list)
-    notes: list = field(default_factory=list)
+    events: list[dict[str, Any]] = field(default_factory=list)
+    plan: list[str] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
 
     @property
     def result(self) -> str:
@@ -61,22 +73,22 @@ class RunResult:
 
 
 def run(
-    plan,
+    plan: PlanInput,
     *,
-    robot,
-    domain=None,
-    problem=None,
-    functions=None,
+    robot: Union[str, Robot],
+    domain: Optional[DomainInput] = None,
+    problem: Optional[ProblemInput] = None,
+    functions: FunctionsInput = None,
     plan_index: int = 1,
     faults: str = "",
     seed: int = 0,
-    retries=None,
+    retries: RetriesInput = None,
     replan: bool = False,
-    log=None,
+    log: Optional[StrPath] = None,
     on_event: Optional[Listener] = None,
     gui: bool = False,
-    argv: Optional[list] = None,
-    stops=None,
+    argv: Optional[list[str]] = None,
+    stops: Optional[Guard] = None,
 ) -> RunResult:
     """Execute ``plan`` on ``robot`` and return how it ended.
 
@@ -135,24 +147,24 @@ def robots() -> list[str]:
 
 
 def prepare(
-    plan,
+    plan: PlanInput,
     *,
-    robot,
-    domain=None,
-    problem=None,
-    functions=None,
+    robot: Union[str, Robot],
+    domain: Optional[DomainInput] = None,
+    problem: Optional[ProblemInput] = None,
+    functions: FunctionsInput = None,
     plan_index: int = 1,
     faults: str = "",
     seed: int = 0,
-    retries=None,
+    retries: RetriesInput = None,
     replan: bool = False,
-    log=None,
+    log: Optional[StrPath] = None,
     on_event: Optional[Listener] = None,
     gui: bool = False,
-    stops=None,
-    bt_dot=None,
-    snapshots=None,
-    read=(),
+    stops: Optional[Guard] = None,
+    bt_dot: Optional[StrPath] = None,
+    snapshots: Optional[StrPath] = None,
+    read: Iterable[Optional[str]] = (),
 ) -> "Execution":
     """Everything :func:`run` does before the log begins: read and check the
     inputs (every step ground and applicable in turn, the retry limits, the
@@ -167,7 +179,9 @@ def prepare(
     ``read``: other files the caller read for this run (a log it repeats),
     which no output may overwrite."""
     outputs = RunOutputs(
-        None if log is None else str(log), bt_dot and str(bt_dot), snapshots and str(snapshots)
+        None if log is None else str(log),
+        str(bt_dot) if bt_dot else None,
+        str(snapshots) if snapshots else None,
     )
     log = outputs.log
     outputs.check(
@@ -192,19 +206,20 @@ def prepare(
     else:
         raise HtnError(f"robot: give a robot's name or a Robot object, not {type(robot).__name__}")
     inputs = run_inputs(plan, domain, problem, functions, plan_index, retries, stops)
+    bot: Robot
     if isinstance(robot, str):
         name = robot
-        robot = make_robot(
+        bot = make_robot(
             name,
             RobotRequest(inputs.domain, inputs.instance, faults or "", seed, gui, inputs.functions),
         )
         owned = True
     else:
-        name, owned = type(robot).__name__, False
-    execution = Execution(inputs, robot, name, owned, faults or "", seed, replan, outputs, on_event)
+        bot, name, owned = robot, type(robot).__name__, False
+    execution = Execution(inputs, bot, name, owned, faults or "", seed, replan, outputs, on_event)
     try:
         execution.check_machines()
-        outputs.prepare_snapshots(robot, name)
+        outputs.prepare_snapshots(bot, name)
     except BaseException:
         execution.close()
         raise
@@ -219,7 +234,7 @@ class Execution:
     def __init__(
         self,
         inputs: RunInputs,
-        robot,
+        robot: Robot,
         robot_name: str,
         owned: bool,
         faults: str,
@@ -227,7 +242,7 @@ class Execution:
         replan: bool,
         outputs: RunOutputs,
         on_event: Optional[Listener],
-    ):
+    ) -> None:
         self.inputs = inputs
         self.robot = robot
         self.robot_name = robot_name
@@ -235,12 +250,12 @@ class Execution:
         self.faults, self.seed, self.replan = faults, seed, replan
         self.outputs = outputs
         self.log_path = outputs.log
-        self.listeners: list = [on_event] if on_event else []
+        self.listeners: list[Listener] = [on_event] if on_event else []
         self.log: Optional[EventLog] = None
         self.dispatcher: Optional[TaskDispatcher] = None
-        self._halt: Optional[tuple] = None  # (why, outcome), before it begins
-        self._adopted: Optional[tuple] = None  # (count, detail), see adopt()
-        self._extra: dict = {}  # see annotate()
+        self._halt: Optional[tuple[str, str]] = None  # (why, outcome), before it begins
+        self._adopted: Optional[tuple[int, str]] = None  # (count, detail), see adopt()
+        self._extra: dict[str, Any] = {}  # see annotate()
         self._closed = False
 
     @property
@@ -250,7 +265,7 @@ class Execution:
         return self.inputs.notes
 
     @property
-    def steps(self) -> list:
+    def steps(self) -> list[Step]:
         return self.inputs.plan.steps
 
     def check_machines(self) -> None:
@@ -275,7 +290,7 @@ class Execution:
         else:
             self.listeners.append(listener)
 
-    def begin(self, argv: Optional[list] = None) -> TaskDispatcher:
+    def begin(self, argv: Optional[list[str]] = None) -> TaskDispatcher:
         """Open the log, write its header (``argv``: the command line it
         records) and build the task dispatcher on the plan's tree."""
         i = self.inputs
@@ -333,14 +348,15 @@ class Execution:
     def execute(self) -> RunResult:
         """Tick the behaviour tree until the plan is verified, an action fails
         or is aborted (and cannot be repaired), or the run is halted."""
-        if self.dispatcher is None:
-            self.begin()
-        summary = self.dispatcher.run()
+        dispatcher = self.dispatcher if self.dispatcher is not None else self.begin()
+        summary = dispatcher.run()
         if summary.replans:  # the tree was repaired: its DOT again
-            self.outputs.write_dot(self.dispatcher.root)
+            self.outputs.write_dot(dispatcher.root)
         return self._result(summary)
 
-    def halt(self, why: str = "", outcome: str = "interrupted", after=None) -> bool:
+    def halt(
+        self, why: str = "", outcome: str = "interrupted", after: Optional[ActionContext] = None
+    ) -> bool:
         """Stop the run before its next tick (safe from a signal handler or
         another thread); ``why`` is logged with the ``interrupted`` event
         and the summary, whose result is ``outcome``: ``interrupted`` (a
@@ -356,13 +372,13 @@ class Execution:
         self._halt = (why or "stopped by the user", outcome)
         return False
 
-    def running_action(self) -> Optional[tuple]:
+    def running_action(self) -> Optional[tuple[ActionContext, list[Fact]]]:
         """``(context, facts)`` of the action running now (its context, with
         ``text``, the step; the facts the run believed as it began, ``(pred,
         args)`` pairs), or None; safe from any thread."""
         return None if self.dispatcher is None else self.dispatcher.running_action()
 
-    def last_verified(self):
+    def last_verified(self) -> Optional[ActionContext]:
         """The context of the step verified last, or None."""
         done = self.dispatcher.done if self.dispatcher is not None else []
         return done[-1] if done else None
@@ -374,7 +390,7 @@ class Execution:
         starts after them; the plan is checked from the state before them."""
         self._adopted = (count, detail)
 
-    def annotate(self, **fields) -> None:
+    def annotate(self, **fields: Any) -> None:
         """Before :meth:`begin`: more fields for the log's ``summary`` event."""
         self._extra.update(fields)
 
@@ -396,12 +412,14 @@ class Execution:
     def interrupted(self, why: str = "") -> RunResult:
         """End the run as interrupted now (outside :meth:`execute`): the robot
         holds its pose, the log gets the ``interrupted`` event and the summary."""
+        assert self.dispatcher is not None, "the run has not begun"
         return self._result(self.dispatcher.interrupted(why))
 
     def _result(self, summary: RunSummary) -> RunResult:
+        assert self.log is not None and self.dispatcher is not None  # begun
         return RunResult(summary, self.log.events, self.dispatcher.plan_lines(), self.notes)
 
-    def believed(self) -> list[tuple]:
+    def believed(self) -> list[Fact]:
         """The facts the run believes now, ``(pred, args)`` pairs: the
         initial state with every verified step's effects (and, after a
         repair, what was observed); the problem's state before it begins."""
@@ -443,7 +461,12 @@ class Execution:
     def __enter__(self) -> "Execution":
         return self
 
-    def __exit__(self, kind, exc, tb) -> None:
+    def __exit__(
+        self,
+        kind: Optional[type[BaseException]],
+        exc: Optional[BaseException],
+        tb: Optional[TracebackType],
+    ) -> None:
         if exc is not None:
             self.fail(exc)
         self.close()

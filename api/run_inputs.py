@@ -11,8 +11,9 @@ header and the plan file it names (:func:`read_run_log`), once each.
 from __future__ import annotations
 
 import os
+from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import Optional
+from typing import TYPE_CHECKING, Any, Optional, Union
 
 from htn.executor.config import load_retries, parse_overrides
 from htn.executor.log_header import (
@@ -25,32 +26,49 @@ from htn.jshop.checks.recover import RECOVER_PLANS, RECOVER_TIMEOUT, check_runna
 from htn.jshop.checks.validate import check_steps
 from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import HtnError
-from htn.jshop.language.functions import FunctionTable
+from htn.jshop.language.functions import FunctionTable, Guard
 from htn.jshop.plans.plan import Plan
 from htn.jshop.plans.planfile import PlanFile, read_plan_file
 
-from .inputs import domain_and_problem, function_table, is_path, path_of
+from .inputs import (
+    DomainInput,
+    FunctionsInput,
+    ProblemInput,
+    StrPath,
+    domain_and_problem,
+    function_table,
+    is_path,
+    path_of,
+)
+
+if TYPE_CHECKING:
+    from htn.jshop.plans.tree import TaskTree
+
+# a plan to run: a plan file's path, a plan file read, or a plan object
+PlanInput = Union[StrPath, PlanFile, Plan]
+# retry limits: {"grasp": 3}, "grasp=3,place=1", or several such texts
+RetriesInput = Union[dict[str, int], str, Iterable[str], None]
 
 
 @dataclass
 class RunInputs:
     """A plan ready to run: everything read and checked."""
 
-    domain: object  # S.Domain
-    problem: object  # S.Problem
-    instance: object  # the S.ProblemInstance whose state is the world
+    domain: S.Domain
+    problem: S.Problem
+    instance: S.ProblemInstance  # the instance whose state is the world
     plan: Plan
-    functions: object  # FunctionTable
-    limits: dict  # retry limits by operator ('!grasp': 2)
-    tree: object  # the TaskTree to execute, or None (one sequence)
+    functions: FunctionTable
+    limits: dict[str, int]  # retry limits by operator ('!grasp': 2)
+    tree: Optional[TaskTree]  # the task tree to execute, or None (one sequence)
     plan_file: Optional[str]  # where the plan was read from (None: a plan object)
     plan_sha256: Optional[str]
     plan_index: int
-    files: dict  # "domain", "problem", "functions" -> path or None
-    notes: list  # one line each, e.g. how the tree was found
+    files: dict[str, Optional[str]]  # "domain", "problem", "functions" -> path or None
+    notes: list[str]  # one line each, e.g. how the tree was found
 
 
-def load_plan(plan) -> tuple[Optional[PlanFile], Optional[Plan]]:
+def load_plan(plan: PlanInput) -> tuple[Optional[PlanFile], Optional[Plan]]:
     """A plan file (read from a path, or as given) or a plan object."""
     if is_path(plan):
         return read_plan_file(os.fspath(plan)), None
@@ -64,11 +82,18 @@ def load_plan(plan) -> tuple[Optional[PlanFile], Optional[Plan]]:
 
 
 def run_inputs(
-    plan, domain=None, problem=None, functions=None, plan_index: int = 1, retries=None, stops=None
+    plan: PlanInput,
+    domain: Optional[DomainInput] = None,
+    problem: Optional[ProblemInput] = None,
+    functions: FunctionsInput = None,
+    plan_index: int = 1,
+    retries: RetriesInput = None,
+    stops: Optional[Guard] = None,
 ) -> RunInputs:
     """Read and check everything a run of ``plan`` needs (see :func:`htn.api.run.run`)."""
     pf, given = load_plan(plan)
     where = pf.path if pf else None
+    chosen: Plan
     if pf is not None:
         domain = domain or pf.domain
         problem = problem or pf.problem
@@ -87,6 +112,7 @@ def run_inputs(
     else:
         if domain is None or problem is None:
             raise HtnError("a plan object runs with a domain and a problem: give both")
+        assert given is not None  # load_plan gives a plan file or a plan
         chosen = given
     table = function_table(functions, stops)
     dom, prob = domain_and_problem(domain, problem, table)
@@ -101,7 +127,8 @@ def run_inputs(
         raise HtnError(f"--retries: the domain {dom.name} has no operator {', '.join(unknown)}")
     limits.update(overrides)
     check_runnable(dom, instance, chosen, where, table, pf.lines if pf else ())
-    notes: list = []
+    notes: list[str] = []
+    tree: Optional[TaskTree]
     if pf is not None:
         tree = pf.tree(plan_index - 1, methods_of(dom, instance))
         source = f"{where}: plan {plan_index}"
@@ -141,7 +168,7 @@ def run_inputs(
     )
 
 
-def _overrides(retries) -> dict:
+def _overrides(retries: RetriesInput) -> dict[str, int]:
     """Retry limits given as a mapping (``{"grasp": 3}``) or as ``--retries``
     texts (``["grasp=3,place=1"]``), by operator name (``!grasp``)."""
     if retries is None:
@@ -153,7 +180,7 @@ def _overrides(retries) -> dict:
     return parse_overrides(list(retries))
 
 
-def methods_of(domain, instance) -> dict:
+def methods_of(domain: S.Domain, instance: S.ProblemInstance) -> dict[str, list[S.Method]]:
     """The methods a task tree of ``instance`` may use: the domain's, and for
     an HDDL problem with parameters the artificial root task's."""
     if getattr(instance, "top", None) is None:
@@ -163,8 +190,13 @@ def methods_of(domain, instance) -> dict:
 
 
 def checked_functions(
-    named, given, where: str, line: Optional[int] = None, option: str = "--functions", stops=None
-):
+    named: Optional[tuple[str, int, Optional[str]]],
+    given: FunctionsInput,
+    where: Optional[str],
+    line: Optional[int] = None,
+    option: str = "--functions",
+    stops: Optional[Guard] = None,
+) -> FunctionsInput:
     """The functions to run with: ``given`` (a path or a loaded table, from
     the user), checked against ``named`` ((path, line, SHA-256 or None): the
     file a plan file or a log says its plans were made with). A data file
@@ -209,14 +241,14 @@ class LoggedRun:
     plan_index: int
     domain: Optional[str]
     problem: Optional[str]
-    functions: Optional[str]
+    functions: FunctionsInput  # a path, or the file loaded once checked (its SHA-256)
     robot: str
     seed: int
     faults: str
-    retries: dict
+    retries: dict[str, int]
     replan: bool
 
-    def options(self) -> dict:
+    def options(self) -> dict[str, Any]:
         """The keyword arguments of :func:`htn.api.run.run` for the same run."""
         return dict(
             plan=self.plan,
@@ -232,23 +264,25 @@ class LoggedRun:
         )
 
 
-def read_run_log(path, functions=None, stops=None) -> LoggedRun:
+def read_run_log(
+    path: StrPath, functions: FunctionsInput = None, stops: Optional[Guard] = None
+) -> LoggedRun:
     """The run a log records (its first event, the header): the plan file it
     ran, its domain and problem must be there and unchanged (their SHA-256),
     else an input error at the log's first line. ``functions``: the user's
     functions file, required if the run had one (the log's is never loaded
     because the log names it) and checked to be that file."""
-    path = os.fspath(path)
-    rec = read_header(path)
-    check_plan_present(rec["plan"], path)
+    log = os.fspath(path)
+    rec = read_header(log)
+    check_plan_present(rec["plan"], log)
     pf = read_plan_file(rec["plan"])
-    check_plan_digest(rec["plan"], rec.get("plan_sha256"), pf.sha256, path)
+    check_plan_digest(rec["plan"], rec.get("plan_sha256"), pf.sha256, log)
     for kind in ("domain", "problem"):
-        check_unchanged(rec, kind, path)
+        check_unchanged(rec, kind, log)
     named = (rec["functions"], 1, rec.get("functions_sha256")) if rec.get("functions") else None
-    functions = checked_functions(named, functions, path, 1, stops=stops)
+    functions = checked_functions(named, functions, log, 1, stops=stops)
     return LoggedRun(
-        path,
+        log,
         pf,
         rec["plan_index"],
         rec["domain"],

@@ -10,12 +10,16 @@ is built and has a camera, so a run refused earlier leaves no trace.
 
 from __future__ import annotations
 
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
-from typing import Optional
+from typing import TYPE_CHECKING, Any, Optional
 
 from htn.files import atomic_write, check_output_file, check_output_folder, make_output_folder
 from htn.jshop.language.errors import HtnError
 from htn.robot.interface import Robot
+
+if TYPE_CHECKING:
+    from py_trees.behaviour import Behaviour
 
 
 @dataclass
@@ -26,7 +30,7 @@ class RunOutputs:
     bt_dot: Optional[str] = None
     snapshots: Optional[str] = None
 
-    def check(self, inputs) -> None:
+    def check(self, inputs: Iterable[object]) -> None:
         """Each can be written and none is an input (``inputs``: paths or
         None) or another output."""
         given = [
@@ -38,15 +42,15 @@ class RunOutputs:
             )
             if p
         ]
-        inputs = [i for i in inputs if isinstance(i, str)]
+        paths = [i for i in inputs if isinstance(i, str)]
         for path, option in given:
             others = [x for x in given if x[1] != option]
             if option == "--snapshots":
-                check_output_folder(path, option, inputs, others)
+                check_output_folder(path, option, paths, others)
             else:
-                check_output_file(path, option, inputs, others)
+                check_output_file(path, option, paths, others)
 
-    def prepare_snapshots(self, robot, robot_name: str) -> None:
+    def prepare_snapshots(self, robot: Robot, robot_name: str) -> None:
         """The snapshot folder, made once the robot is known to have a camera."""
         if not self.snapshots:
             return
@@ -54,7 +58,7 @@ class RunOutputs:
             raise HtnError(f"--snapshots: the {robot_name} robot has no camera")
         make_output_folder(self.snapshots, "--snapshots")
 
-    def snapshot_listener(self, robot):
+    def snapshot_listener(self, robot: Robot) -> Optional[Callable[[dict[str, Any]], None]]:
         """The event listener that saves the snapshots (None: none asked)."""
         if not self.snapshots:
             return None
@@ -62,7 +66,7 @@ class RunOutputs:
 
         return snapshot_listener(robot, self.snapshots)
 
-    def write_dot(self, root) -> None:
+    def write_dot(self, root: Behaviour) -> None:
         """py_trees' DOT export of the tree ``root``, with readable names."""
         if not self.bt_dot:
             return

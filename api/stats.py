@@ -11,15 +11,21 @@ from __future__ import annotations
 import os
 import statistics
 import time
+from collections.abc import Iterable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Optional
+from typing import TYPE_CHECKING, Any, Optional
 
 from htn.installation import EXAMPLES
 from htn.jshop.language.errors import HtnError
 from htn.jshop.search.planner import Planner
 
 from .inputs import function_table, read_inputs
+
+if TYPE_CHECKING:
+    from htn.jshop.language.functions import Guard
+
+    from .inputs import FunctionsInput, StrPath
 
 # the paper's two scenarios, as bundled examples
 SCENARIOS = [
@@ -61,9 +67,9 @@ class ScenarioStats:
     timed_out: bool = False
     repeats: int = 1  # enumerations timed (fewer than asked when time ran out)
     # the located warnings of the inputs' check (as htn.plan has them)
-    warnings: list = field(default_factory=list)
+    warnings: list[str] = field(default_factory=list)
 
-    def as_dict(self) -> dict:
+    def as_dict(self) -> dict[str, Any]:
         """The figures (``htn stats --json``), without the warnings."""
         out = asdict(self)
         del out["warnings"]
@@ -82,20 +88,25 @@ def bundled_file(rel: str) -> str:
         return str(path)
 
 
-def scenarios(files=()) -> list[tuple[str, str]]:
+def scenarios(files: Iterable[StrPath] = ()) -> list[tuple[str, str]]:
     """The (domain, problem) pairs of ``files``: a DOMAIN and then PROBLEMs in
     it; without files, the paper's two scenarios (bring an object, guide a
     robot; the bundled examples)."""
-    files = [os.fspath(f) for f in files]
-    if len(files) == 1:
+    paths = [os.fspath(f) for f in files]
+    if len(paths) == 1:
         raise HtnError("give a domain and at least one problem (or no files)")
-    if not files:
+    if not paths:
         return [(bundled_file(d), bundled_file(p)) for d, p in SCENARIOS]
-    return [(files[0], p) for p in files[1:]]
+    return [(paths[0], p) for p in paths[1:]]
 
 
 def stats(
-    files=(), *, repeat: int = 1, functions=None, timeout: Optional[float] = None, stops=None
+    files: Iterable[StrPath] = (),
+    *,
+    repeat: int = 1,
+    functions: FunctionsInput = None,
+    timeout: Optional[float] = None,
+    stops: Optional[Guard] = None,
 ) -> list[ScenarioStats]:
     """The statistics of each scenario of ``files`` (see :func:`scenarios`):
     every plan enumerated ``repeat`` times, the median time reported.
@@ -110,7 +121,7 @@ def stats(
 def scenario_stats(
     domain_path: str,
     problem_path: str,
-    functions=None,
+    functions: FunctionsInput = None,
     repeat: int = 1,
     *,
     until: Optional[float] = None,
@@ -118,11 +129,11 @@ def scenario_stats(
     """Enumerate every plan ``repeat`` times; report the median wall time.
     ``until`` (a ``time.perf_counter()`` value) bounds all of them: an
     enumeration cut short is the last."""
-    functions = function_table(functions)
-    inputs = read_inputs(domain_path, problem_path, functions)
+    table = function_table(functions)
+    inputs = read_inputs(domain_path, problem_path, table)
     domain, problem = inputs.domain, inputs.problem
-    times = []
-    plans: list = []
+    times: list[float] = []
+    plans: list[tuple[str, ...]] = []
     timed_out = False
     for _ in range(max(1, repeat)):
         t0 = time.perf_counter()
@@ -130,8 +141,9 @@ def scenario_stats(
         for inst in problem.instances:
             # what is left of the time (at least a moment: the planner then stops at once)
             budget = None if until is None else max(until - time.perf_counter(), 1e-6)
-            planner = Planner(domain, inst, functions)
-            plans.extend(tuple(p.lines()) for p in planner.plans(budget))
+            planner = Planner(domain, inst, table)
+            # (None would mark a slice of CPU time: no slices are asked for here)
+            plans.extend(tuple(p.lines()) for p in planner.plans(budget) if p is not None)
             timed_out = timed_out or planner.stats.timed_out
         times.append(time.perf_counter() - t0)
         if timed_out or until is not None and time.perf_counter() >= until:

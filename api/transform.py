@@ -9,22 +9,33 @@ breaks the plan, or costs more on the chosen metric, is rolled back.
 
 from __future__ import annotations
 
+from collections.abc import Collection
 from dataclasses import dataclass
-from typing import Callable, Optional
+from typing import TYPE_CHECKING, Any, Callable, Optional, Union
 
 from htn.files import atomic_write
 from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import HtnError
+from htn.jshop.language.functions import Guard
 from htn.jshop.language.terms import source_atom
+from htn.jshop.plans.plan import Plan
 from htn.jshop.plans.planfile import header, plan_text
 
 from .inputs import function_table, path_of, read_inputs
+
+if TYPE_CHECKING:
+    from htn.transform.framework import Workspace
+
+    from .inputs import DomainInput, FunctionsInput, ProblemInput, StrPath
+
+# the rules to apply: names, or one comma-separated text (None: every enabled one)
+Rules = Union[str, Collection[str], None]
 
 
 class UnknownRules(HtnError):
     """``rules`` names a transformation that is not registered."""
 
-    def __init__(self, unknown: list, known: list):
+    def __init__(self, unknown: list[str], known: list[str]):
         super().__init__(f"unknown rule(s) {', '.join(unknown)}; known: {', '.join(known)}")
         self.unknown, self.known = unknown, known
 
@@ -37,10 +48,10 @@ class TransformResult:
     annotated tree), the transformed ``plan`` (with its task ``tree``) and
     the rewritten top-level ``tasks``."""
 
-    document: dict
-    plan: object
-    tasks: list
-    workspace: object
+    document: dict[str, Any]
+    plan: Plan
+    tasks: list[str]
+    workspace: Workspace
 
     def plan_file_text(
         self, out_path: str, domain: Optional[str] = None, problem: Optional[str] = None
@@ -60,16 +71,16 @@ class TransformResult:
 
 
 def transform_plan(
-    domain,
-    problem,
+    domain: DomainInput,
+    problem: ProblemInput,
     *,
-    rules=None,
+    rules: Rules = None,
     metric: str = "navigation",
-    functions=None,
+    functions: FunctionsInput = None,
     on_warning: Optional[Callable[[str], None]] = None,
     on_phase: Optional[Callable[[str], None]] = None,
-    stops=None,
-    output=None,
+    stops: Optional[Guard] = None,
+    output: Optional[StrPath] = None,
 ) -> TransformResult:
     """Plan ``problem`` (its first instance), apply the registered
     transformations in priority order (tray > container > both-hands, and any
@@ -95,7 +106,14 @@ def transform_plan(
 
 
 def _transform(
-    domain, problem, rules, metric, functions, on_warning, on_phase, stops
+    domain: DomainInput,
+    problem: ProblemInput,
+    rules: Rules,
+    metric: str,
+    functions: FunctionsInput,
+    on_warning: Optional[Callable[[str], None]],
+    on_phase: Optional[Callable[[str], None]],
+    stops: Optional[Guard],
 ) -> TransformResult:
     from htn.transform.framework import METRICS, Workspace
     from htn.transform.registered import default_framework
@@ -113,11 +131,13 @@ def _transform(
     say = on_phase or (lambda text: None)
     inputs = read_inputs(domain, problem, function_table(functions, stops))
     dom, prob = inputs.domain, inputs.problem
-    for w in inputs.warnings if on_warning else ():
-        on_warning(w)
+    if on_warning:
+        for w in inputs.warnings:
+            on_warning(w)
     say("planning")
     ws = Workspace.from_problem(dom, prob.instances[0])
     original = ws.plan
+    assert isinstance(original, Plan)  # the problem's first plan (from_problem)
     enabled = {t.name: t.enabled for t in fw.transformations}
     try:
         if rules:
@@ -128,6 +148,8 @@ def _transform(
         for t in fw.transformations:
             t.enabled = enabled[t.name]
     cost = METRICS[metric]
+    plan = ws.plan
+    assert isinstance(plan, Plan)  # the original, or the last transformed plan kept
     changes = [
         {
             "rule": u.transformed_by,
@@ -137,7 +159,7 @@ def _transform(
         for u in ws.units
         if u.transformed_by
     ]
-    document = {
+    document: dict[str, Any] = {
         "problem": path_of(problem) or path_of(prob),
         "metric": metric,
         "applied": [r for r, status, _ in ws.log if status == "applied"],
@@ -145,11 +167,11 @@ def _transform(
         "changes": changes,
         "original": {"steps": len(original.steps), metric: cost(ws, original)},
         "transformed": {
-            "steps": len(ws.plan.steps),
-            metric: cost(ws, ws.plan),
-            "plan": ws.plan.lines(),
+            "steps": len(plan.steps),
+            metric: cost(ws, plan),
+            "plan": plan.lines(),
         },
         "tree": ws.annotated_tree().to_dict(),
     }
     tasks = [source_atom(t.name, t.args) for t in S.task_atoms(ws.task_list())]
-    return TransformResult(document, ws.plan, tasks, ws)
+    return TransformResult(document, plan, tasks, ws)

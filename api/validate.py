@@ -17,15 +17,23 @@ competition's verifier does, decompositions included
 from __future__ import annotations
 
 import os
+from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import Optional
+from typing import TYPE_CHECKING, Optional, Union, cast
 
 from htn.jshop.checks.validate import Verdict, check_steps, validate_plan
 from htn.jshop.language.errors import HtnError
+from htn.jshop.language.functions import Guard
 from htn.jshop.plans.plan import Plan
 from htn.jshop.plans.planfile import PlanFile, read_plan_file
 
 from .inputs import domain_and_problem, function_table, is_path
+
+if TYPE_CHECKING:
+    from htn.jshop.checks.ipc_verify import IpcVerdict
+    from htn.jshop.plans.ipc import IpcPlan
+
+    from .inputs import DomainInput, FunctionsInput, ProblemInput, StrPath
 
 
 @dataclass
@@ -57,7 +65,13 @@ class PlanVerdict:
 
 
 def validate(
-    domain, problem, plan, *, plan_index: Optional[int] = None, functions=None, stops=None
+    domain: DomainInput,
+    problem: ProblemInput,
+    plan: Union[StrPath, PlanFile, Plan, Iterable[Plan]],
+    *,
+    plan_index: Optional[int] = None,
+    functions: FunctionsInput = None,
+    stops: Optional[Guard] = None,
 ) -> list[PlanVerdict]:
     """The verdict on each plan of ``plan`` (a plan file's path, a
     :class:`~htn.jshop.plans.planfile.PlanFile`, a
@@ -66,7 +80,7 @@ def validate(
     ``problem``, ``functions``: paths or loaded objects (:mod:`htn.api.inputs`)."""
     table = function_table(functions, stops)
     dom, prob = domain_and_problem(domain, problem, table)
-    file = None
+    file: Optional[str] = None
     if is_path(plan):
         plan = read_plan_file(os.fspath(plan))
     if isinstance(plan, PlanFile):
@@ -74,7 +88,7 @@ def validate(
     elif isinstance(plan, Plan):
         plans = [plan]
     else:
-        plans = list(plan)
+        plans = list(cast(Iterable[Plan], plan))  # a path was read above
     if plan_index is not None:
         if plan_index > len(plans):
             raise HtnError(f"--plan-index {plan_index}: the file holds {len(plans)} plan(s)", file)
@@ -85,7 +99,7 @@ def validate(
     return [PlanVerdict(p, validate_plan(dom, instance, p, table), file) for p in plans]
 
 
-def ipc_text(path) -> Optional[str]:
+def ipc_text(path: object) -> Optional[str]:
     """The text of the plan file ``path`` if it holds IPC-format plans
     (``==>`` ... ``<==``), else None."""
     from htn.jshop.plans.ipc import is_ipc_text
@@ -98,15 +112,15 @@ def ipc_text(path) -> Optional[str]:
 
 
 def validate_ipc(
-    domain,
-    problem,
-    plan,
+    domain: DomainInput,
+    problem: ProblemInput,
+    plan: StrPath,
     *,
     plan_index: Optional[int] = None,
-    functions=None,
+    functions: FunctionsInput = None,
     text: Optional[str] = None,
-    stops=None,
-) -> list:
+    stops: Optional[Guard] = None,
+) -> list[tuple[IpcPlan, IpcVerdict]]:
     """``[(IpcPlan, IpcVerdict)]`` for each IPC plan of the file ``plan``
     (``text``: its text, if read already): the actions replayed, every
     decomposition line checked against the domain's methods, every action

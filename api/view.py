@@ -25,11 +25,15 @@ prints or waits for Ctrl-C: the caller keeps the page up as long as it likes.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Optional, Union
+from typing import TYPE_CHECKING, Any, Optional, Union
 
 from htn.jshop.language.errors import HtnError
 
 from .extras import require_extra
+
+if TYPE_CHECKING:
+    from htn.view.live import GoalsView, RunView
+    from htn.view.server import ViewServer
 
 DEFAULT_HOST = "127.0.0.1"
 
@@ -39,7 +43,7 @@ class ViewLog:
     """A log of ``htn run --log``, read and checked for the page."""
 
     path: str
-    records: list = field(repr=False)
+    records: list[dict[str, Any]] = field(repr=False)
     warning: Optional[str] = None  # a last line cut short, left out
     note: Optional[str] = None  # a bag's: which of its goals this is
 
@@ -78,7 +82,7 @@ class LogPage:
     """The page of a finished log, served until :meth:`close` (also as a
     context manager)."""
 
-    def __init__(self, log: ViewLog, server):
+    def __init__(self, log: ViewLog, server: ViewServer) -> None:
         self.log, self.server = log, server
 
     @property
@@ -97,7 +101,7 @@ class LogPage:
     def __enter__(self) -> "LogPage":
         return self
 
-    def __exit__(self, *exc) -> None:
+    def __exit__(self, *exc: object) -> None:
         self.close()
 
 
@@ -117,7 +121,9 @@ def serve_log(
     return LogPage(log, ViewServer(hub, host, port).start())
 
 
-def start_live_view(host: str = DEFAULT_HOST, port: int = 0, what: str = "htn run --view"):
+def start_live_view(
+    host: str = DEFAULT_HOST, port: int = 0, what: str = "htn run --view"
+) -> RunView:
     """Start the view of a run on ``host``:``port``, before the robot moves:
     a started :class:`htn.view.live.RunView` (its ``url``; ``attach``,
     ``wait_for_page``, ``close``)."""
@@ -127,7 +133,9 @@ def start_live_view(host: str = DEFAULT_HOST, port: int = 0, what: str = "htn ru
     return RunView(host, port).start()
 
 
-def start_goals_view(host: str = DEFAULT_HOST, port: int = 0, what: str = "htn ros node --view"):
+def start_goals_view(
+    host: str = DEFAULT_HOST, port: int = 0, what: str = "htn ros node --view"
+) -> GoalsView:
     """Start the view of a robot node's goals on ``host``:``port``: a started
     :class:`htn.view.live.GoalsView` (its ``url``; ``event`` for each event
     of the goal being run, ``close``)."""

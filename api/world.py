@@ -18,10 +18,11 @@ from __future__ import annotations
 
 import os
 import threading
-from typing import Iterable, Optional
+from typing import TYPE_CHECKING, Any, Callable, Iterable, Optional, TypeVar, Union, cast
 
 from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import HtnError
+from htn.jshop.language.functions import Guard
 from htn.jshop.language.terms import source_atom
 from htn.jshop.readers.checks import check_problem, predicate_arities
 from htn.jshop.readers.load import load_domain, load_problem, parse_text
@@ -30,16 +31,32 @@ from htn.jshop.readers.source import check_nesting, position
 
 from .inputs import function_table, is_path
 
+if TYPE_CHECKING:
+    from .inputs import DomainInput, FunctionsInput, ProblemInput
+    from .plan import PlanStream
+
+T = TypeVar("T")
+# a fact as a run or a robot reports it: (pred, args)
+Fact = tuple[str, Iterable[Any]]
+
 
 class WorldModel:
     """The facts believed now, for ``domain`` (a path or a loaded domain);
     ``problem`` (a path or a loaded problem, optional) gives the first
     state. Safe to use from several threads (a node's callbacks)."""
 
-    def __init__(self, domain, problem=None, functions=None, stops=None):
+    def __init__(
+        self,
+        domain: DomainInput,
+        problem: Optional[ProblemInput] = None,
+        functions: FunctionsInput = None,
+        stops: Optional[Guard] = None,
+    ) -> None:
         self.functions = function_table(functions, stops)
         self.domain: S.Domain = (
-            load_domain(os.fspath(domain), self.functions) if is_path(domain) else domain
+            load_domain(os.fspath(domain), self.functions)
+            if is_path(domain)
+            else cast(S.Domain, domain)
         )
         if self.domain.language != "jshop2":
             raise HtnError(
@@ -47,14 +64,19 @@ class WorldModel:
                 "needs its objects' types)",
                 self.domain.file or None,
             )
-        prob = None
+        prob: Optional[S.Problem] = None
         if problem is not None:
-            prob = load_problem(os.fspath(problem), self.functions) if is_path(problem) else problem
+            prob = (
+                load_problem(os.fspath(problem), self.functions)
+                if is_path(problem)
+                else cast(S.Problem, problem)
+            )
             check_problem(self.domain, prob)
         self.arities = predicate_arities(self.domain, prob)
         self._lock = threading.Lock()
-        self._facts: dict[tuple, S.Atom] = {}
-        self._updates: list[tuple] = []  # (deleted, added) atoms of each update()
+        self._facts: dict[tuple[str, tuple[Any, ...]], S.Atom] = {}
+        # (deleted, added) atoms of each update()
+        self._updates: list[tuple[list[S.Atom], list[S.Atom]]] = []
         self._forgotten = 0  # updates dropped from the list, settled
         for atom in prob.instances[0].state if prob is not None else ():
             self._facts[(atom.pred, atom.args)] = atom
@@ -97,7 +119,7 @@ class WorldModel:
             self._updates.append((gone, new))
             return len(self._facts)
 
-    def _apply(self, gone, new) -> None:
+    def _apply(self, gone: Iterable[S.Atom], new: Iterable[S.Atom]) -> None:
         for a in gone:
             self._facts.pop((a.pred, a.args), None)
         for a in new:
@@ -108,7 +130,7 @@ class WorldModel:
         with self._lock:
             return self._forgotten + len(self._updates)
 
-    def believe(self, facts: Iterable[tuple], since: Optional[int] = None) -> None:
+    def believe(self, facts: Iterable[Fact], since: Optional[int] = None) -> None:
         """The facts are now these ``(pred, args)`` pairs (what a run
         verified: the executor's belief state when it ended), with the
         updates other programs made after the :meth:`mark` ``since`` applied
@@ -123,7 +145,7 @@ class WorldModel:
             self._forgotten += len(self._updates)
             self._updates.clear()
 
-    def observed(self, facts: Iterable[tuple]) -> None:
+    def observed(self, facts: Iterable[Fact]) -> None:
         """The robot observed ``facts`` (``(pred, args)`` pairs, every fact
         of the domain's dynamic predicates it perceives): they replace the
         believed facts of those predicates; the static facts stay (as
@@ -200,7 +222,7 @@ def _balanced(text: str, source: str) -> None:
         raise HtnError("this ')' closes nothing", source, *position(text, extra))
 
 
-def _on_first_line(read, source: str):
+def _on_first_line(read: Callable[[], T], source: str) -> T:
     """``read()``, its errors in the text on line 2 of a wrapper said on
     line 1 (the text the caller gave)."""
     try:
@@ -215,7 +237,7 @@ class _Var(str):
     """A pattern's ``?variable``."""
 
 
-def _pattern(text: str) -> tuple[str, tuple]:
+def _pattern(text: str) -> tuple[str, tuple[Union[str, float], ...]]:
     """``(at ?who kitchen)`` -> ``("at", (_Var("?who"), "kitchen"))``: one
     flat atom of symbols, numbers and variables (what a query asks)."""
     inner = text.strip()
@@ -232,7 +254,7 @@ def _pattern(text: str) -> tuple[str, tuple]:
             1,
         )
     pred, *words = inner[1:-1].lower().split()
-    args = []
+    args: list[Union[str, float]] = []
     for w in words:
         if w.startswith("?"):
             args.append(_Var(w))
@@ -244,10 +266,10 @@ def _pattern(text: str) -> tuple[str, tuple]:
     return pred, tuple(args)
 
 
-def _matches(pattern: tuple, args: tuple) -> bool:
+def _matches(pattern: tuple[object, ...], args: tuple[object, ...]) -> bool:
     if len(pattern) != len(args):
         return False
-    bound: dict = {}
+    bound: dict[_Var, object] = {}
     for p, a in zip(pattern, args):
         if isinstance(p, _Var):
             if bound.setdefault(p, a) != a:
@@ -263,9 +285,9 @@ def plan_goal(
     *,
     source: str = "goal",
     timeout: Optional[float] = None,
-    stops=None,
-    **options,
-):
+    stops: Optional[Guard] = None,
+    **options: Any,
+) -> PlanStream:
     """The plans of the goal ``tasks`` from the facts believed now (a
     :class:`htn.api.plan.PlanStream`; ``options`` as :func:`htn.api.plan.plan`)."""
     from .plan import plan
