@@ -48,7 +48,7 @@ __all__ = ["run", "prepare", "Execution", "RunResult", "read_run_log", "LoggedRu
 
 Listener = Callable[[dict[str, Any]], None]
 # a fact the run believes: (pred, args)
-Fact = tuple[str, tuple[Any, ...]]
+BelievedFact = tuple[str, tuple[Any, ...]]
 
 
 @dataclass
@@ -372,7 +372,7 @@ class Execution:
         self._halt = (why or "stopped by the user", outcome)
         return False
 
-    def running_action(self) -> Optional[tuple[ActionContext, list[Fact]]]:
+    def running_action(self) -> Optional[tuple[ActionContext, list[BelievedFact]]]:
         """``(context, facts)`` of the action running now (its context, with
         ``text``, the step; the facts the run believed as it began, ``(pred,
         args)`` pairs), or None; safe from any thread."""
@@ -419,7 +419,7 @@ class Execution:
         assert self.log is not None and self.dispatcher is not None  # begun
         return RunResult(summary, self.log.events, self.dispatcher.plan_lines(), self.notes)
 
-    def believed(self) -> list[Fact]:
+    def believed(self) -> list[BelievedFact]:
         """The facts the run believes now, ``(pred, args)`` pairs: the
         initial state with every verified step's effects (and, after a
         repair, what was observed); the problem's state before it begins."""
