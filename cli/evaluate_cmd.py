@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import os
+from typing import TYPE_CHECKING, Optional
 
 import click
 
@@ -22,6 +23,9 @@ from htn.process import deadline
 from .options import MAX_RUNS, MAX_WORKERS, SEED, TIMEOUT_HELP, Count, Timeout, current_stops
 from .output import warn
 from .progress import Phase
+
+if TYPE_CHECKING:
+    from rich.progress import TaskID
 
 
 @click.command("evaluate")
@@ -139,7 +143,7 @@ class _Progress(Progress):
 
         console = Console(stderr=True)
         self.bar = Bar(console=console, transient=True, disable=not console.is_terminal)
-        self.task = None
+        self.task: Optional[TaskID] = None
         self.spinner = Phase("starting")
         self.robot, self.runs = robot, runs
         self.label = f"{robot} runs"

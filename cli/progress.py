@@ -14,7 +14,10 @@ from __future__ import annotations
 
 import sys
 import threading
-from typing import Optional
+from typing import TYPE_CHECKING, Optional
+
+if TYPE_CHECKING:
+    from rich.status import Status
 
 DELAY = 1.0  # seconds a phase runs before its spinner shows
 
@@ -35,7 +38,7 @@ class Phase:
         self.text = text
         self.delay = delay
         self._lock = threading.Lock()
-        self._status = None
+        self._status: Optional[Status] = None
         self._timer: Optional[threading.Timer] = None
         self._ended = False
 

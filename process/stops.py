@@ -28,9 +28,18 @@ import signal
 import sys
 import time
 from contextlib import contextmanager
-from typing import Callable, Optional, Protocol
+from typing import TYPE_CHECKING, Callable, Optional, Protocol
 
 from htn.jshop.language.errors import is_stop, mark_stop
+
+if TYPE_CHECKING:
+    from htn.jshop.language.functions import Guard as _Guard
+
+    from .watchdog import Watchdog
+else:
+    # a Stops is the Guard user code runs under (htn.jshop.language.functions),
+    # to the type checker; at run time that module is not imported at start-up
+    _Guard = object
 
 INTERRUPT_EXIT = 128 + signal.SIGINT
 SIGTERM_EXIT = 128 + signal.SIGTERM
@@ -74,7 +83,7 @@ def timeout_reason(seconds) -> str:
     return f"--timeout {seconds:g} s ran out" if seconds is not None else "--timeout ran out"
 
 
-class Stops:
+class Stops(_Guard):
     """The stops of one command. ``owned``: htn's own entry point runs the
     process (:mod:`htn.cli.start`), so a stop may end it (``os._exit``) and a
     watchdog thread may interrupt it; a library caller's process is neither."""
@@ -99,7 +108,7 @@ class Stops:
         self.timeout: Optional[float] = None  # the --timeout in force (seconds)
         self.reported = False  # "interrupted" was printed
         self.started = time.perf_counter()
-        self.watchdog = None
+        self.watchdog: Optional[Watchdog] = None
         self.finalizers: list[Callable[[], Optional[str]]] = []
 
     # ------------------------------------------------------------ raising a stop
@@ -144,10 +153,10 @@ class Stops:
         self.running.append(what)
         return self.count
 
-    def leave(self, token: int) -> None:
+    def leave(self, token: object) -> None:
         self.running.pop()
 
-    def dropped(self, token: int) -> Optional[BaseException]:
+    def dropped(self, token: object) -> Optional[BaseException]:
         """A stop raised since :meth:`enter` returned ``token`` that the user
         code caught (and dropped, or turned into its own): raise it again."""
         if self.count != token and self.raised_last is not None:

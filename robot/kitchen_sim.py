@@ -120,6 +120,7 @@ class KitchenRobot(SimulatedRobot):
         held = [a for a in TwoArms.NAMES if self.arms.hands[a]]
         if held:
             arm = self.arms[self.draws.rng.choice(held)]
+            assert arm.held is not None  # its hand holds something
             arm.slip(arm.held, f"{arm.name} gripper while driving")
 
     def _hand_with(self, obj: str, arm: Optional[str]) -> Optional[str]:

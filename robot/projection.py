@@ -139,6 +139,10 @@ class ProjectionRobot(Robot):
     def sim_time(self) -> float:
         return self.metrics.sim_time
 
+    @sim_time.setter
+    def sim_time(self, value: float) -> None:  # Robot.sim_time is writeable
+        self.metrics.sim_time = value
+
     def _act(self, kind: str) -> bool:
         """Count an action attempt; True if it fails (probability by kind)."""
         self.metrics.actions += 1
@@ -152,9 +156,9 @@ class ProjectionRobot(Robot):
         x, y = self.world.places[place]
         return x + self.rng.gauss(0, spread), y + self.rng.gauss(0, spread)
 
-    def _reposition(self, place: str) -> None:
+    def _reposition(self, place: Optional[str]) -> None:
         """Move the base to a pose sampled for this action near ``place``."""
-        if place not in self.world.places:
+        if place is None or place not in self.world.places:
             return
         x, y = self._sample_near(place, self.noise * 2)
         d = math.dist(self.base, (x, y))
@@ -162,13 +166,17 @@ class ProjectionRobot(Robot):
         self.metrics.sim_time += d / BASE_SPEED
         self.base = (x, y)
 
-    def _arm_motion(self, arm: str, place: str) -> None:
+    def _arm_motion(self, arm: str, place: Optional[str]) -> None:
         """Rest -> pre-grasp -> grasp -> lift -> rest for one gripper, from a
         base pose sampled for this action."""
         self._reposition(place)
         bx, by = self.base
-        rx, ry, rz = ARM_REST.get(arm or "right")
-        tx, ty = self._sample_near(place, 0.15) if place in self.world.places else (bx + 0.6, by)
+        rx, ry, rz = ARM_REST[arm or "right"]
+        tx, ty = (
+            self._sample_near(place, 0.15)
+            if place is not None and place in self.world.places
+            else (bx + 0.6, by)
+        )
         # the target is within reach in front of the robot: pull it to 0.7 m
         d = math.hypot(tx - bx, ty - by) or 1.0
         reach = min(d, 0.55 + self.rng.uniform(0.0, 0.2))
@@ -374,7 +382,7 @@ class ProjectionRobot(Robot):
         return Check(ok, f"tray at {self.trays.get(tray)}")
 
     def observe(self) -> list[tuple[str, tuple]]:
-        facts = [("robot-at", (self.at,))] if self.at else []
+        facts: list[tuple[str, tuple]] = [("robot-at", (self.at,))] if self.at else []
         for obj, w in self.where.items():
             if isinstance(w, tuple):
                 facts.append(("holding", (w[1], obj)))

@@ -145,6 +145,10 @@ class SimulatedRobot(Robot):
     def sim_time(self) -> float:
         return self.physics.sim_time
 
+    @sim_time.setter
+    def sim_time(self, value: float) -> None:  # Robot.sim_time is writeable
+        self.physics.sim_time = value
+
     @property
     def injected(self) -> list[dict]:
         return self.draws.injected

@@ -53,7 +53,9 @@ class TableSpots:
                     out.append((u, v, self.radius[t]))
         return out
 
-    def free_spot(self, area: str, arm: Optional[SideArm], radius: float, skip=()):
+    def free_spot(
+        self, area: str, arm: Optional[SideArm], radius: float, skip=()
+    ) -> Optional[tuple[float, float, float]]:
         """A free spot on the area's table: near the front, on the side of
         ``arm`` and within its reach (any, without an arm). Returns world
         (x, y, table top) or None."""

@@ -252,7 +252,7 @@ class Trays:
             top = max(self.physics.furniture_top.values(), default=0.0)
             ok = self.hold is not None and self.hold.tray == tray and z > top + 0.06
             return Check(ok, f"{tray} held {z - top:.2f} m above the table tops")
-        ok = self.hold is None and self.physics.on_top(bid, where)
+        ok = self.hold is None and where is not None and self.physics.on_top(bid, where)
         return Check(
             ok, f"{tray} rests on " + (f"the table of {where}" if ok else "something else")
         )

@@ -12,9 +12,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Optional
+from typing import TYPE_CHECKING, Optional
 
 from htn.jshop.language.errors import HtnError
+
+if TYPE_CHECKING:
+    from htn.jshop.language.syntax import Pos
 
 
 @dataclass
@@ -162,7 +165,7 @@ def kitchen_world_from_state(atoms) -> World:
     """
     w = World()
     areas: dict[str, tuple] = {}
-    said: dict[tuple, object] = {}  # (predicate, first argument) -> position in the file
+    said: dict[tuple, Optional[Pos]] = {}  # (predicate, first argument) -> position in the file
     start_pos = None
     for a in atoms:
         p, args, pos = a.pred, a.args, a.pos
@@ -281,7 +284,7 @@ def _layout_tables(areas: dict, with_table: list, where_said: dict) -> dict:
     order = [0, 4, 8, 12, 2, 6, 10, 14, 1, 3, 5, 7, 9, 11, 13, 15]
     for name in with_table:
         x, y = areas[name]
-        best = None
+        best: Optional[tuple[float, float, list]] = None
         for k in order:
             yaw = math.pi * k / 8
             rect = _table_rect(x, y, yaw)
@@ -302,6 +305,7 @@ def _layout_tables(areas: dict, with_table: list, where_said: dict) -> dict:
                 best = (clear, yaw, rect)
             if clear >= 0.25:
                 break
+        assert best is not None  # order is not empty
         if best[0] < 0:
             raise HtnError.at(
                 where_said.get(name),

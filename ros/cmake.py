@@ -210,6 +210,7 @@ def run(source: Path, work: Path, say: Progress) -> int:
                 text=True,
                 errors="replace",
             )
+            assert proc.stdout is not None  # stdout=PIPE
             for line in proc.stdout:
                 log.write(line)
                 m = re.match(r"\[\s*(\d+)%\]", line)

@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import threading
 from dataclasses import replace
-from typing import Callable, Optional
+from typing import Callable, Optional, overload
 
 from htn.api.agent import Agent, GoalResult
 
@@ -146,6 +146,10 @@ class Turns:
         if not self.agent.preempt(why, next_goal=next_goal):
             goal.halt = why
 
+    @overload
+    def _take_turn(self, goal: Goal, before: None) -> GoalResult: ...
+    @overload
+    def _take_turn(self, goal: Goal, before: GoalResult) -> Optional[GoalResult]: ...
     def _take_turn(self, goal: Goal, before: Optional[GoalResult]) -> Optional[GoalResult]:
         """Run ``goal`` (``before``: resume it, preempted as that) when its
         turn comes, then decide who goes on. None: a goal to resume gave

@@ -255,9 +255,9 @@ def _preload(libraries: list[Path]) -> None:
             except OSError as error:
                 errors[lib] = error
         if len(errors) == len(pending):
-            lib, error = next(iter(errors.items()))
+            failed, why = next(iter(errors.items()))
             raise InterfaceBuildError(
-                f"cannot load {lib.name}: {error} (run the Python of the venv holding the "
+                f"cannot load {failed.name}: {why} (run the Python of the venv holding the "
                 "ROS wheels: its bootstrapper sets the library path at start)"
             )
         pending = list(errors)

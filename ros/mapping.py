@@ -41,7 +41,7 @@ import re
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Iterable, Optional
+from typing import Any, Callable, Iterable, NoReturn, Optional
 
 from htn.jshop.language.errors import HtnError
 
@@ -140,7 +140,7 @@ def read(path: str | Path) -> Mapping:
 
 
 def _mapping(data: dict, path: str, text: str) -> Mapping:
-    def fail(message: str, key: str = ""):
+    def fail(message: str, key: str = "") -> NoReturn:
         raise HtnError(message, path, _line_of(text, key) if key else None)
 
     for key in data:
@@ -168,13 +168,11 @@ def _mapping(data: dict, path: str, text: str) -> Mapping:
             for key in spec:
                 if key not in known:
                     fail(f"{where}: unknown key '{key}' (known: {', '.join(sorted(known))})", key)
-            into[name] = _call(
-                kind, name, spec, m, lambda msg, key=name: fail(f"{where}: {msg}", key)
-            )
+            into[name] = _call(kind, name, spec, m, lambda msg: fail(f"{where}: {msg}", name))
     return m
 
 
-def _call(kind: str, name: str, spec: dict, m: Mapping, fail) -> Call:
+def _call(kind: str, name: str, spec: dict, m: Mapping, fail: Callable[[str], NoReturn]) -> Call:
     for key in ("action", "service", "topic", "type", "where", "field"):
         if key in spec and not (isinstance(spec[key], str) and spec[key]):
             fail(f"'{key}' must be a non-empty string")

@@ -37,7 +37,7 @@ from __future__ import annotations
 
 import json
 from dataclasses import dataclass
-from typing import Optional
+from typing import TYPE_CHECKING, Any, Optional
 
 import rclpy
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
@@ -52,6 +52,9 @@ from htn.jshop.language.errors import HtnError
 from .goals import Turns
 from .interfaces import import_interfaces
 from .shutdown import end_within
+
+if TYPE_CHECKING:
+    from htn.view.live import GoalsView
 
 POLICIES = ("preempt", "reject", "queue")
 THREADS = 16  # callbacks at once: goals waiting for their turn or to resume block one each
@@ -96,7 +99,7 @@ class HtnNode(LifecycleNode):
         self.turns: Optional[Turns] = None  # the goals, one at a time
         self._served: list = []
         self._events = None
-        self.view = None  # the browser view of the goals, --view
+        self.view: Optional[GoalsView] = None  # the browser view of the goals, --view
 
     # ------------------------------------------------------------ lifecycle
     def on_configure(self, state: State) -> TransitionCallbackReturn:
@@ -143,12 +146,14 @@ class HtnNode(LifecycleNode):
             self.create_service(t.UpdateFacts, "~/update_facts", self._update, callback_group=g),
             self.create_subscription(t.Facts, "~/facts", self._facts, 100, callback_group=g),
         ]
+        assert self.turns is not None  # configured
         self.turns.serving()
         return super().on_activate(state)
 
     def on_deactivate(self, state: State) -> TransitionCallbackReturn:
         if self.agent is not None:
             self.agent.preempt("the node was deactivated")
+        if self.turns is not None:
             self.turns.drop_waiting("the node was deactivated")
         self._stop_serving()
         return super().on_deactivate(state)
@@ -161,6 +166,7 @@ class HtnNode(LifecycleNode):
     def on_shutdown(self, state: State) -> TransitionCallbackReturn:
         if self.agent is not None:
             self.agent.preempt("the node shuts down")
+        if self.turns is not None:  # None after a configure that failed past the agent
             self.turns.drop_waiting("the node shuts down")
         self._stop_serving()
         self._close_robot()
@@ -183,12 +189,14 @@ class HtnNode(LifecycleNode):
 
     # ------------------------------------------------------------ the action
     def _goal(self, request) -> GoalResponse:
+        assert self.turns is not None  # served while active
         if self.turns.busy() and self.settings.on_new_goal == "reject":
             self.get_logger().info("a goal is running: the new one is rejected")
             return GoalResponse.REJECT
         return GoalResponse.ACCEPT
 
     def _cancel(self, goal_handle) -> CancelResponse:
+        assert self.turns is not None  # served while active
         self.turns.cancel(goal_handle)
         return CancelResponse.ACCEPT
 
@@ -267,6 +275,7 @@ class HtnNode(LifecycleNode):
         return response
 
     def _facts(self, msg) -> None:
+        assert self.agent is not None  # served while active
         try:
             self.agent.world.update(msg.add, msg.remove, msg.source or "facts")
         except HtnError as exc:
@@ -306,6 +315,7 @@ def serve(settings: NodeSettings, managed: bool = False, name: str = "htn", on_v
         end_within("htn ros node")
         if node.agent is not None:
             node.agent.preempt("the node shuts down")
+        if node.turns is not None:
             node.turns.drop_waiting("the node shuts down")
         executor.shutdown(timeout_sec=5.0)
         if node.view is not None:
@@ -339,9 +349,11 @@ def send_goal(
     client = rclpy.create_node("htn_send")
     try:
         events: list = []
-        client.create_subscription(
-            types.Event, f"/{node_name}/events", lambda m: events.append(json.loads(m.record)), 100
-        )
+
+        def on_message(m: Any) -> None:  # an Event message
+            events.append(json.loads(m.record))
+
+        client.create_subscription(types.Event, f"/{node_name}/events", on_message, 100)
         action = ActionClient(client, types.ExecuteTasks, f"/{node_name}/execute")
         if not action.wait_for_server(timeout_sec=wait):
             raise HtnError(

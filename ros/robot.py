@@ -278,7 +278,7 @@ class RosRobot(Robot):
             self.node.create_subscription(
                 import_type(call.type),
                 call.name,
-                lambda m, n=name: self._topics.__setitem__(n, m),
+                lambda m: self._topics.__setitem__(name, m),
                 10,
             )
         until = time.monotonic() + self.mapping.wait

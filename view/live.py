@@ -17,11 +17,14 @@ last frame is rendered when the run ends.
 from __future__ import annotations
 
 import time
-from typing import Optional
+from typing import TYPE_CHECKING, Optional
 
 from .hub import Hub
 from .model import title_of
 from .server import ViewServer
+
+if TYPE_CHECKING:
+    from htn.robot.interface import Robot
 
 FRAME_RATE = 4.0  # camera frames a second, at most
 CAMERA_SHARE = 0.25  # of the robot thread's time, at most
@@ -34,7 +37,7 @@ class RunView:
     def __init__(self, host: str = "127.0.0.1", port: int = 0):
         self.hub = Hub("live")
         self.server = ViewServer(self.hub, host, port)
-        self.robot = None
+        self.robot: Optional[Robot] = None  # a robot with a camera, once attached
         self._next_frame = 0.0
         self.camera_seconds = 0.0  # spent rendering, in the robot's thread
 
@@ -80,6 +83,7 @@ class RunView:
             self._render()
 
     def _render(self) -> float:
+        assert self.robot is not None  # rendered only for an attached camera
         start = time.perf_counter()
         frame = self.robot.camera_frame(*FRAME_SIZE)
         spent = time.perf_counter() - start

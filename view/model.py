@@ -46,7 +46,7 @@ def read_log(path: str) -> tuple[list[dict], Optional[str]]:
             continue
         try:
             rec = json.loads(line)
-        except ValueError as exc:
+        except json.JSONDecodeError as exc:
             if number == len(lines) and records:  # no newline after it: cut short
                 warning = f"{path}:{number}: the last line is incomplete; left out"
                 break

@@ -20,7 +20,7 @@ import secrets
 import socket
 import threading
 from pathlib import Path
-from typing import Optional
+from typing import Any, Optional
 from urllib.parse import parse_qs
 
 from htn.jshop.language.errors import HtnError
@@ -139,7 +139,7 @@ class ViewServer:
         self.token = secrets.token_urlsafe(18)
         self.sock = _listen(host, port)
         self.port = self.sock.getsockname()[1]
-        self._server = None
+        self._server: Optional[Any] = None  # the uvicorn.Server, once started
         self.loop: Optional[asyncio.AbstractEventLoop] = None
         self._thread: Optional[threading.Thread] = None
 
