@@ -16,7 +16,7 @@ import logging
 import threading
 import warnings
 from contextlib import contextmanager, nullcontext
-from typing import Callable, Iterable, Iterator, Optional
+from typing import Any, Callable, Iterable, Iterator, Optional
 
 from htn.jshop.language.errors import HtnError
 
@@ -88,10 +88,11 @@ NEEDS = "the scheduler and every worker need htn, with its sim extra for --robot
 
 
 def _missing_module(exc: BaseException) -> Optional[str]:
-    while exc is not None:
-        if isinstance(exc, ModuleNotFoundError):
-            return exc.name
-        exc = exc.__cause__ or exc.__context__
+    e: Optional[BaseException] = exc
+    while e is not None:
+        if isinstance(e, ModuleNotFoundError):
+            return e.name
+        e = e.__cause__ or e.__context__
     return None
 
 
@@ -179,7 +180,9 @@ class LocalWorkers:
         self.preload = preload
         self.notes: list[str] = []
         self.started_in: Optional[float] = None  # seconds the start took
-        self._cluster = self._client = self._runner = None
+        self._cluster: Any = None  # the distributed.LocalCluster, once started
+        self._client: Any = None  # its distributed.Client
+        self._runner: Optional[DaskRunner] = None
         self._lock = threading.Lock()
         self._early: Optional[threading.Thread] = None
         self._early_error: Optional[BaseException] = None
@@ -289,7 +292,7 @@ def start_local_cluster(workers: int, preload: tuple = ("htn.evaluation.runs",))
     from distributed import Client
     from distributed import LocalCluster as DaskLocalCluster
 
-    settings = {
+    settings: dict[str, object] = {
         # the workers' statistical profiler feeds the dashboard, which is not
         # started; sampling the runs' Python stacks every 10 ms slows them
         "distributed.worker.profile.enabled": False

@@ -14,13 +14,15 @@ pooled failure proportion, which stays within [0, 1].
 from __future__ import annotations
 
 import os
+from typing import Any
 
 from .statistics import METRIC_NAMES, Comparison, applied_rules, format_change, format_p
 
 SERIES = {"original": ("original plan", "#0072B2"), "transformed": ("transformed plan", "#D55E00")}
 FORMATS = ("png", "pdf", "svg")
 DPI = 300
-STYLE = {
+# rc keys (matplotlib types them as a Literal of every rc name)
+STYLE: dict[Any, Any] = {
     "font.size": 8,
     "axes.titlesize": 8.5,
     "axes.labelsize": 8,

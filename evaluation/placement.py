@@ -33,7 +33,7 @@ import threading
 import time
 from contextlib import contextmanager
 from dataclasses import dataclass, field
-from typing import Callable, Optional
+from typing import Any, Callable, Optional
 
 EFFICIENCY = 0.9  # of each worker, against this process (sending tasks, results)
 MARGIN = 1.15  # the workers must be this much faster to be started
@@ -45,7 +45,7 @@ class Projection:
     """The rest of a study, projected from the batches run so far."""
 
     runs: int  # runs of the study
-    left: int  # runs not yet done
+    left: float  # runs not yet done (a fraction: some of a run's plans)
     per_run: float  # seconds per run (every plan once), measured here
     workers: int
     start: float  # seconds to start the workers
@@ -111,9 +111,9 @@ def place(
     if not tasks:
         return InProcess(), iter(())
     if getattr(runner, "starting", False):  # started early: no need to measure
-        starter = _Starter(runner, tasks, function, begun=0)
-        starter.run_here(take)
-        return starter.result()
+        early = _Starter(runner, tasks, function, begun=0)
+        early.run_here(take)
+        return early.result()
     runs, first = sum(runs_in(t) for t in tasks), runs_in(tasks[0])
 
     def projection(seconds: float) -> Projection:
@@ -132,7 +132,7 @@ def place(
     clock = _thread_clock()
     now = time.thread_time if clock is None else lambda: time.clock_gettime(clock)
     t0 = now()
-    starter = None
+    starter: Optional[_Starter] = None
     if clock is not None:  # another thread can read this one's clock
         starter = _Starter(
             runner,
@@ -178,7 +178,7 @@ def start_early(runner, runs: int, plans: int, least: float) -> None:
 
 
 _switching = threading.Lock()
-_switchers = [0, None]  # threads starting workers; the interval before them
+_switchers: list[Any] = [0, None]  # threads starting workers; the interval before them
 
 
 def _switch_fast() -> None:
@@ -241,7 +241,9 @@ class _Starter:
         self.lock = threading.Lock()
         self.stopped = threading.Event()
         self.starting = self.switched = False
-        self.workers = self.results = self.error = None
+        self.workers: Any = None  # the runner on the workers, once up
+        self.results: Any = None  # the iterator over the results they give
+        self.error: Optional[BaseException] = None
         self.thread = threading.Thread(
             target=self._start, name="htn: starting workers", daemon=True
         )

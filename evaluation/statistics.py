@@ -52,7 +52,7 @@ class Comparison:
         }
 
     def metrics(self) -> dict:
-        out = {}
+        out: dict = {}
         for name in METRIC_NAMES:
             a = [r[name] for r in self.original]
             b = [r[name] for r in self.transformed]
@@ -60,7 +60,7 @@ class Comparison:
             out[name] = {
                 "original": {"mean": ma, "sd": _sd(a)},
                 "transformed": {"mean": mb, "sd": _sd(b)},
-                "change_pct": (mb - ma) / ma * 100 if ma else None,
+                "change_pct": (mb - ma) / ma * 100 if ma and mb is not None else None,
                 "p_value": welch_p(a, b),
             }
         for side in ("original", "transformed"):

@@ -57,10 +57,12 @@ def prepare_study(
         on_phase("planning")
     ws = Workspace.from_problem(domain, instance)
     original = ws.plan
+    assert original is not None  # see Workspace.from_problem
     default_framework().apply_all_transformations(ws, on_phase=on_phase)
     if log is not None:
         log.extend(ws.log)
     applied = [rule for rule, status, _ in ws.log if status == "applied"]
+    assert ws.plan is not None
     plans = {"original": original.steps, "transformed": ws.plan.steps}
     return Study(
         domain, instance, plans, load_retries(domain_path, domain.operators), robot, faults
@@ -92,6 +94,7 @@ def run_study(
     planned = runner.requested if runner.deferred else runner.workers
     size = max(1, min(measure.batch, math.ceil(runs / (planned * BATCHES_PER_WORKER))))
     key, blob = study.pack()
+    tasks: list[tuple]
     if measure.per_plan:
         tasks = [
             (key, blob, batch, (name,))

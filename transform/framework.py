@@ -68,7 +68,9 @@ def tree_facts(ws: Workspace, vocabulary: Vocabulary = KITCHEN) -> list[tuple[st
     """
     containers = {a.args[0]: a.args[1] for a in ws.instance.state if a.pred == "container"}
     facts: list = [("tray-at", a.args[:2]) for a in ws.instance.state if a.pred == "tray"]
-    nodes = iter(ws.plan.tree.children)
+    plan = ws.plan
+    assert plan is not None and plan.tree is not None  # see Workspace.from_problem
+    nodes = iter(plan.tree.children)
     k = 0
     for unit in ws.units:
         unit_nodes = [next(nodes) for _ in unit.tasks]
@@ -89,11 +91,12 @@ def tree_facts(ws: Workspace, vocabulary: Vocabulary = KITCHEN) -> list[tuple[st
         else:
             facts.append(("fetch-area", (path, src)))
         facts.append(("deliver-area", (path, dst)))
-        arms = {
-            ws.plan.steps[leaf.step].args[-1]
-            for leaf in node.leaves()
-            if ws.plan.steps[leaf.step].name in vocabulary.handling
-        }
+        arms = set()
+        for leaf in node.leaves():
+            assert leaf.step is not None  # leaves() are the nodes with a step
+            step = plan.steps[leaf.step]
+            if step.name in vocabulary.handling:
+                arms.add(step.args[-1])
         if len(arms) == 1:
             facts.append(("one-arm", (path,)))
     return facts
@@ -282,7 +285,7 @@ class Framework:
         text = self.rules_text.rstrip().rstrip(")").rstrip().rstrip(")")
         domain = parse_text(f"{text}\n    (:method (query) {rule} ())\n  )\n)\n", "<rules>")
         (method,) = domain.methods["query"]
-        names = {}
+        names: dict = {}
         for v in _vars_of(method.branches[0].pre.expr):
             names.setdefault(v.name, v.index)
         state = State()

@@ -7,11 +7,15 @@ declared by a rule set: the built-in one's is
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Optional
+from typing import TYPE_CHECKING, Optional
 
 from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import HtnError
 from htn.jshop.search.planner import Planner
+
+if TYPE_CHECKING:
+    from htn.jshop.plans.plan import Plan
+    from htn.jshop.plans.tree import TaskTree
 
 
 @dataclass(frozen=True)
@@ -45,7 +49,7 @@ class Workspace:
     domain: S.Domain
     instance: S.ProblemInstance
     units: list
-    plan: object = None
+    plan: Optional[Plan] = None  # set by from_problem: the plan with its tree
     log: list = field(default_factory=list)  # (rule, status, detail)
     frozen: set = field(default_factory=set)  # paths of rolled-back rewrites
 
@@ -54,6 +58,7 @@ class Workspace:
         plan = next(Planner(domain, instance, record_trees=True).plans(), None)
         if plan is None:
             raise HtnError.at(instance.pos, "the problem has no plan to transform")
+        assert plan.tree is not None  # record_trees
         units = []
         for node, atom in zip(plan.tree.children, S.task_atoms(instance.tasks)):
             units.append(Unit([atom], [node.path]))
@@ -62,12 +67,13 @@ class Workspace:
     def task_list(self) -> S.TaskList:
         return S.TaskList([t for u in self.units for t in u.tasks])
 
-    def annotated_tree(self):
+    def annotated_tree(self) -> TaskTree:
         """The current plan's tree; each top-level node rewritten by a
         transformation carries the replacement tasks in its code-replacement
         slot (the paper's mechanism, here filled in for inspection)."""
         from htn.jshop.language.terms import source_atom
 
+        assert self.plan is not None and self.plan.tree is not None  # see from_problem
         tree = self.plan.tree
         nodes = iter(tree.children)
         for unit in self.units:
@@ -76,7 +82,7 @@ class Workspace:
                     node.code_replacement = [source_atom(t.name, t.args) for t in unit.tasks]
         return tree
 
-    def replan(self, units=None):
+    def replan(self, units: Optional[list[Unit]] = None) -> Optional[Plan]:
         """The first plan of ``units`` (default: the current ones), or None."""
         units = self.units if units is None else units
         tasks = S.TaskList([t for u in units for t in u.tasks])

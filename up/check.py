@@ -24,9 +24,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, Optional
 
-from htn.jshop.checks.validate import check_steps, validate_plan
+from htn.jshop.checks.validate import Unpriced, check_steps, validate_plan
 from htn.jshop.language.terms import Var
-from htn.jshop.plans.plan import Plan, Step
+from htn.jshop.plans.plan import Step
 
 from .convert import Conversion
 
@@ -52,7 +52,7 @@ def check(conv: Conversion, plan) -> Check:
         Step("!" + a.action.name, tuple(_name(x) for x in a.actual_parameters)) for a in actions
     ]
     check_steps(conv.domain, steps, "")
-    verdict = validate_plan(conv.domain, conv.instance, Plan(steps, None))
+    verdict = validate_plan(conv.domain, conv.instance, Unpriced(steps))
     if not verdict.valid:
         k = verdict.failed_step
         if k is not None and k < len(actions):

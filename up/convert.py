@@ -131,7 +131,7 @@ def convert(problem) -> Conversion:
     # problem_from_model leaves the names of the network's subtasks as written,
     # without the "!" of an action's operator (it does not see the domain)
     for t in instance.tasks.items:
-        if t.name in h.actions:
+        if isinstance(t, S.TaskAtom) and t.name in h.actions:  # a flat list of atoms
             t.name = "!" + t.name
     attach_roots(domain, read)
     methods = {m.branches[0].label: m for ms in domain.methods.values() for m in ms}

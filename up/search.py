@@ -74,9 +74,9 @@ def search(
     logs.append(LogMessage(LogLevel.INFO, _summary(found, best, stats, cut, timed_out)))
     if stats.bound is not None:
         logs.append(LogMessage(LogLevel.WARNING, str(stats.bound)))
-    plan = None
+    up_plan = None
     if best is not None:
-        plan = hierarchical_plan(conv, best) if hierarchical else sequential_plan(conv, best)
+        up_plan = hierarchical_plan(conv, best) if hierarchical else sequential_plan(conv, best)
     total = time.perf_counter() - started
     metrics = {
         "engine_internal_time": str(total),
@@ -88,7 +88,7 @@ def search(
     }
     if output_stream is not None:
         output_stream.write(f"htn: {status.name} after {total:.3f} s\n")
-    return PlanGenerationResult(status, plan, engine.name, metrics=metrics, log_messages=logs)
+    return PlanGenerationResult(status, up_plan, engine.name, metrics=metrics, log_messages=logs)
 
 
 def _status(best, timed_out: bool, complete: bool, bound, optimize: bool) -> Status:

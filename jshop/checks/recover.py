@@ -82,8 +82,7 @@ def check_runnable(
     sequence from the problem's initial state (manual 5.2.1; the plan's cost
     is not checked). A bad step is an input error at its line of the plan
     file (``lines``: the file's text, which locates a variable's column)."""
-    from htn.jshop.checks.validate import validate_plan
-    from htn.jshop.plans.plan import Plan
+    from htn.jshop.checks.validate import Unpriced, validate_plan
 
     for s in plan.steps:
         var = next((v for v in map(_variable, s.args) if v is not None), None)
@@ -97,7 +96,7 @@ def check_runnable(
                 s.line or None,
                 col if s.line else None,
             )
-    verdict = validate_plan(domain, instance, Plan(plan.steps, None), functions)
+    verdict = validate_plan(domain, instance, Unpriced(plan.steps), functions)
     if not verdict.valid:
         assert verdict.failed_step is not None  # set in every invalid verdict
         where = verdict.line or None

@@ -41,7 +41,16 @@ class Verdict:
     line: int = 0  # the plan file's line of that step (or of its cost)
 
 
-def check_steps(domain: S.Domain, steps, file: str) -> None:
+@dataclass
+class Unpriced:
+    """Steps to replay with :func:`validate_plan` whose cost is not stated
+    (not checked)."""
+
+    steps: list
+    cost: None = None
+
+
+def check_steps(domain: S.Domain, steps, file: Optional[str]) -> None:
     """Every step must name an operator of the domain, with its arity."""
     for s in steps:
         ops = domain.operators.get(s.name)

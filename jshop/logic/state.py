@@ -8,6 +8,8 @@ order, so keeping it is what makes plans come out in JSHOP2's order.
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+
 from htn.jshop.language.terms import is_ground
 
 
@@ -114,7 +116,7 @@ class State:
         s.nonground = self.nonground
         return s
 
-    def facts(self):
+    def facts(self) -> Iterator[tuple[str, tuple]]:
         """All atoms as ``(pred, args)``, predicates in first-use order."""
         for pred, lst in self.atoms.items():
             for args in lst:
