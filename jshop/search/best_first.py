@@ -195,8 +195,9 @@ class BestFirst:
         if self.cut is not None and not self.cut.ok(s, net):
             self.stats.goal_cuts += 1
             return
-        assert self.h is not None  # set by _prepared before the search
-        hv = self.h(s, net)
+        h = self.h
+        assert h is not None  # set by _prepared before the search
+        hv = h(s, net)
         if hv == INF:
             return
         nodes.append((s, net, parent, move, g))
