@@ -81,13 +81,14 @@ NAMED = ("domain", "problem", "functions")
 
 def header(
     out_path: str,
-    domain: str,
-    problem: str,
+    domain: Optional[str],
+    problem: Optional[str],
     functions: Optional[str] = None,
     functions_sha256: Optional[str] = None,
 ) -> str:
     """The comment lines that name the files a plan was made from
-    (``functions_sha256``: of the functions file's bytes as they were loaded)."""
+    (``functions_sha256``: of the functions file's bytes as they were loaded;
+    a file that is None, such as a domain made in memory, is not named)."""
     base = os.path.dirname(os.path.abspath(out_path))
     lines = ["; htn plan file: JSHOP2 plan format\n"]
     files = {"domain": domain, "problem": problem, "functions": functions}
