@@ -22,8 +22,8 @@ import re
 import stat
 import tempfile
 import threading
+from collections.abc import Iterable
 from contextlib import contextmanager
-from typing import Iterable, Optional
 
 from htn.jshop.language.errors import HtnError, WriteError
 
@@ -37,11 +37,11 @@ _pending: set = set()  # temporary files of this process not yet committed
 # caller does not name it).
 
 
-def _refused(path: str, option: Optional[str], message: str):
+def _refused(path: str, option: str | None, message: str):
     return HtnError(f"{option}: {message}" if option else message, path)
 
 
-def _identity(path) -> Optional[tuple]:
+def _identity(path) -> tuple | None:
     """(device, inode) of the file at ``path`` (links followed), or None."""
     try:
         st = os.stat(path)
@@ -71,7 +71,7 @@ KINDS = (
 
 
 def check_target(
-    path: str, option: Optional[str], inputs: Iterable = (), others: Iterable = ()
+    path: str, option: str | None, inputs: Iterable = (), others: Iterable = ()
 ) -> str:
     """The file ``path`` stands for (a symbolic link's target), refused if it
     is ``-``, not a regular file, one of ``inputs`` (paths), one of
@@ -115,7 +115,7 @@ def check_target(
 
 
 def check_output_file(
-    path: str, option: Optional[str] = None, inputs: Iterable = (), others: Iterable = ()
+    path: str, option: str | None = None, inputs: Iterable = (), others: Iterable = ()
 ) -> str:
     """Can ``path`` be written as a new file? It is not a folder, its folder
     exists and takes new files, a file already there may be replaced, and it
@@ -164,7 +164,7 @@ def make_output_folder(path: str, option: str) -> None:
     _probe(path, path, option)
 
 
-def _probe(folder: str, path: str, option: Optional[str]) -> None:
+def _probe(folder: str, path: str, option: str | None) -> None:
     """Can files be created in ``folder``? (Asked by creating one: permission
     bits say nothing to root, read-only file systems say it only then.)"""
     try:
@@ -191,7 +191,7 @@ class AtomicFile:
     def __init__(
         self,
         path: str,
-        option: Optional[str] = None,
+        option: str | None = None,
         inputs: Iterable = (),
         others: Iterable = (),
         binary: bool = False,
@@ -211,7 +211,7 @@ class AtomicFile:
         os.umask(umask)
         os.chmod(self.tmp, 0o666 & ~umask)  # mkstemp makes 0600; a plan file is ordinary
         self.fh = os.fdopen(fd, "wb") if binary else os.fdopen(fd, "w", encoding="utf-8")
-        self.failed: Optional[WriteError] = None
+        self.failed: WriteError | None = None
         self.done = False
         self.lock = threading.Lock()  # the watchdog may commit from its thread
 
@@ -312,7 +312,7 @@ def _alive(pid: int) -> bool:
 @contextmanager
 def atomic_write(
     path: str,
-    option: Optional[str] = None,
+    option: str | None = None,
     inputs: Iterable = (),
     others: Iterable = (),
     binary: bool = False,

@@ -37,9 +37,9 @@ from __future__ import annotations
 
 import json
 import threading
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field, replace
-from typing import TYPE_CHECKING, Any, Callable, Optional, Union
+from typing import TYPE_CHECKING, Any
 
 from htn.jshop.language.errors import HtnError
 from htn.jshop.language.functions import Guard
@@ -116,24 +116,24 @@ class Agent:
     def __init__(
         self,
         domain: DomainInput,
-        problem: Optional[ProblemInput] = None,
+        problem: ProblemInput | None = None,
         *,
-        robot: Union[str, Robot] = "symbolic",
+        robot: str | Robot = "symbolic",
         functions: FunctionsInput = None,
         faults: str = "",
         seed: int = 0,
         retries: RetriesInput = None,
         replan: bool = False,
-        stops: Optional[Guard] = None,
+        stops: Guard | None = None,
     ) -> None:
         self.world = WorldModel(domain, problem, functions, stops)
         self.retries, self.replan, self.stops = retries, replan, stops
         self.robot_name = robot if isinstance(robot, str) else type(robot).__name__
         self.robot: Robot = self._robot(robot, faults, seed) if isinstance(robot, str) else robot
         self._busy = False  # a goal is being planned or run
-        self._running: Optional[Execution] = None  # the Execution of the goal being run
-        self._preempted: Optional[str] = None
-        self._handover: Optional[_Handover] = None
+        self._running: Execution | None = None  # the Execution of the goal being run
+        self._preempted: str | None = None
+        self._handover: _Handover | None = None
         self._lock = threading.Lock()
         _warm_up()
 
@@ -153,14 +153,14 @@ class Agent:
         return robot
 
     # ------------------------------------------------------------ goals
-    def plan(self, tasks: str, source: str = "goal") -> Optional[Plan]:
+    def plan(self, tasks: str, source: str = "goal") -> Plan | None:
         """The first plan of ``tasks`` from the current world model, or None
         if there is none (an :class:`HtnError` for a bad goal)."""
         return self._first_plan(tasks, source)[0]
 
     def _first_plan(
-        self, tasks: str, source: str, facts: Optional[Iterable[Fact]] = None
-    ) -> tuple[Optional[Plan], S.Problem]:
+        self, tasks: str, source: str, facts: Iterable[Fact] | None = None
+    ) -> tuple[Plan | None, S.Problem]:
         """(the first plan or None, the goal's problem it was planned in):
         the goal read once, so the run checks the plan in the very state it
         was made from, whatever facts arrive meanwhile. ``facts``: plan from
@@ -187,8 +187,8 @@ class Agent:
         tasks: str,
         *,
         source: str = "goal",
-        log: Optional[StrPath] = None,
-        on_event: Optional[Callable[[dict[str, Any]], None]] = None,
+        log: StrPath | None = None,
+        on_event: Callable[[dict[str, Any]], None] | None = None,
     ) -> GoalResult:
         """Plan ``tasks`` from the world model and run the plan on the robot;
         ``on_event`` gets every event as it is logged (and ``log``, a path,
@@ -202,8 +202,8 @@ class Agent:
         self,
         result: GoalResult,
         *,
-        log: Optional[StrPath] = None,
-        on_event: Optional[Callable[[dict[str, Any]], None]] = None,
+        log: StrPath | None = None,
+        on_event: Callable[[dict[str, Any]], None] | None = None,
     ) -> GoalResult:
         """Go on with the preempted goal ``result``: plan its remaining
         tasks (:attr:`GoalResult.remaining`) from the world model and run
@@ -221,9 +221,9 @@ class Agent:
         self,
         tasks: str,
         source: str,
-        log: Optional[StrPath],
-        on_event: Optional[Callable[[dict[str, Any]], None]],
-        before: Optional[GoalResult] = None,
+        log: StrPath | None,
+        on_event: Callable[[dict[str, Any]], None] | None,
+        before: GoalResult | None = None,
     ) -> GoalResult:
         from .run import prepare
 
@@ -231,9 +231,9 @@ class Agent:
             self._busy, self._preempted = True, None
             handover, self._handover = self._handover, None
         try:
-            adopted: Optional[str] = None
+            adopted: str | None = None
             since = self.world.mark()  # facts reported from now on outlive the run
-            plan: Optional[Plan]
+            plan: Plan | None
             try:
                 if (
                     before is None
@@ -307,7 +307,7 @@ class Agent:
             if facts:
                 self.world.observed(facts)
 
-    def preempt(self, why: str = PREEMPTED, *, next_goal: Optional[str] = None) -> bool:
+    def preempt(self, why: str = PREEMPTED, *, next_goal: str | None = None) -> bool:
         """Halt the goal being run at its current action (the robot holds
         its pose), or the goal being planned before its first step; it ends
         ``preempted`` (the log's summary too, with ``why``). False if no
@@ -334,7 +334,7 @@ class Agent:
                     run.halt(why, "preempted")
             return True
 
-    def _keep(self, tasks: str) -> Optional[_Handover]:
+    def _keep(self, tasks: str) -> _Handover | None:
         """The handover of the action running now to the goal ``tasks``,
         if its plan from the running goal's belief starts with that action."""
         with self._lock:
@@ -351,7 +351,7 @@ class Agent:
             return None
         return _Handover(tasks, plan, problem, run, ctx)
 
-    def _refused(self, exc: HtnError, tasks: str, before: Optional[GoalResult]) -> GoalResult:
+    def _refused(self, exc: HtnError, tasks: str, before: GoalResult | None) -> GoalResult:
         if before is None:
             return GoalResult("refused", f"refused: {exc.message}", error=str(exc), tasks=tasks)
         return replace(
@@ -371,7 +371,7 @@ class Agent:
         result: RunResult,
         tasks: str,
         remaining: str,
-        before: Optional[GoalResult],
+        before: GoalResult | None,
     ) -> GoalResult:
         s = result.summary
         tree = json.dumps(plan.tree.to_dict()) if plan.tree is not None else ""

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass, field, fields, replace
-from typing import TYPE_CHECKING, Any, Optional
+from typing import TYPE_CHECKING, Any
 
 from htn.evaluation.cluster import ClusterError
 from htn.evaluation.statistics import METRIC_NAMES, applied_rules, format_change, format_p
@@ -88,10 +88,10 @@ class EvaluateOptions:
     seed: int = 0
     robot: str = "projection"
     faults: str = ""
-    workers: Optional[int] = None
-    scheduler: Optional[str] = None
-    records: Optional[str] = None
-    plot: Optional[str] = None
+    workers: int | None = None
+    scheduler: str | None = None
+    records: str | None = None
+    plot: str | None = None
 
     def __post_init__(self) -> None:
         for name in ("records", "plot"):  # paths as str (a Path is welcome)
@@ -139,7 +139,7 @@ class Evaluation:
         )
 
 
-def check_evaluation(problem: str, domain: Optional[str], options: EvaluateOptions) -> None:
+def check_evaluation(problem: str, domain: str | None, options: EvaluateOptions) -> None:
     """Every input and output of an evaluation, before any work starts (the
     scheduler's address is checked where it is used, by ``open_runner``;
     nothing is written before that)."""
@@ -213,10 +213,10 @@ _OPTIONS = tuple(f.name for f in fields(EvaluateOptions))
 
 def evaluate(
     problem: StrPath,
-    options: Optional[EvaluateOptions] = None,
+    options: EvaluateOptions | None = None,
     *,
-    domain: Optional[StrPath] = None,
-    progress: Optional[Progress] = None,
+    domain: StrPath | None = None,
+    progress: Progress | None = None,
     **settings: Any,
 ) -> Evaluation:
     """Plan ``problem`` (a path), transform the plan with every registered

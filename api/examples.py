@@ -87,5 +87,5 @@ def copy_examples(dest: StrPath, force: bool = False) -> list[Path]:
             dst.parent.mkdir(parents=True, exist_ok=True)
             shutil.copyfile(src, dst)
         except OSError as exc:
-            raise HtnError(f"cannot copy {src.name}: {exc.strerror}", str(dst))
+            raise HtnError(f"cannot copy {src.name}: {exc.strerror}", str(dst)) from exc
     return [dst for _, dst in pairs]

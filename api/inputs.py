@@ -18,7 +18,7 @@ from __future__ import annotations
 import os
 import re
 from dataclasses import dataclass, field
-from typing import Optional, TypeGuard, Union, cast
+from typing import TypeGuard, cast
 
 from htn.installation import EXAMPLES
 from htn.jshop.language import syntax as S
@@ -28,27 +28,27 @@ from htn.jshop.readers.checks import check_inputs
 from htn.jshop.readers.load import load_domain, load_problem, paired
 
 # what the use cases take: a path, or the object read from one
-StrPath = Union[str, os.PathLike[str]]
-DomainInput = Union[StrPath, S.Domain]
-ProblemInput = Union[StrPath, S.Problem]
-FunctionsInput = Union[StrPath, FunctionTable, None]
+StrPath = str | os.PathLike[str]
+DomainInput = StrPath | S.Domain
+ProblemInput = StrPath | S.Problem
+FunctionsInput = StrPath | FunctionTable | None
 
 
 def is_path(x: object) -> TypeGuard[StrPath]:
     return isinstance(x, (str, os.PathLike))
 
 
-def path_of(x: object) -> Optional[str]:
+def path_of(x: object) -> str | None:
     """The file ``x`` is, or was read from (None for one made in memory)."""
     if x is None:
         return None
     if is_path(x):
         return os.fspath(x)
-    file: Optional[str] = getattr(x, "file", None)
+    file: str | None = getattr(x, "file", None)
     return file or None
 
 
-def function_table(functions: FunctionsInput, stops: Optional[Guard] = None) -> FunctionTable:
+def function_table(functions: FunctionsInput, stops: Guard | None = None) -> FunctionTable:
     """A function table: ``functions`` itself, the functions of a Python file,
     or an empty table for None. ``stops``: the command's
     :class:`htn.process.Stops`, under which the user code runs (a table
@@ -74,7 +74,7 @@ class Inputs:
 
 
 def domain_and_problem(
-    domain: Optional[DomainInput], problem: Optional[ProblemInput], table: FunctionTable
+    domain: DomainInput | None, problem: ProblemInput | None, table: FunctionTable
 ) -> tuple[S.Domain, S.Problem]:
     """The domain and the problem, read if given as paths and checked (see
     :func:`read_inputs`)."""
@@ -83,7 +83,7 @@ def domain_and_problem(
 
 
 def read_inputs(
-    domain: Optional[DomainInput], problem: Optional[ProblemInput], table: FunctionTable
+    domain: DomainInput | None, problem: ProblemInput | None, table: FunctionTable
 ) -> Inputs:
     """The domain and the problem, read if given as paths, and checked: they
     belong together (a problem names its domain: manual 3.12) and pass the
@@ -144,7 +144,7 @@ def domain_for(problem: ProblemInput) -> str:
 HEAD = 65536  # bytes of a file read to see which domain it defines
 
 
-def _defining(folder: str, name: str, language: str) -> Optional[str]:
+def _defining(folder: str, name: str, language: str) -> str | None:
     """The first file (by name) in ``folder`` with the language's extension
     whose text defines the domain ``name``, or None."""
     ext = ".hddl" if language == "hddl" else ".jshop"

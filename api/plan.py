@@ -11,7 +11,8 @@ planner follows the JSHOP2 manual, sections 4 and 5 (:mod:`htn.jshop.search.plan
 from __future__ import annotations
 
 import time
-from typing import TYPE_CHECKING, Any, Iterator, Optional
+from collections.abc import Iterator
+from typing import TYPE_CHECKING, Any
 
 from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import HtnError
@@ -47,19 +48,19 @@ def plan(
     domain: DomainInput,
     problem: ProblemInput,
     *,
-    plans: Optional[int] = 1,
-    timeout: Optional[float] = None,
+    plans: int | None = 1,
+    timeout: float | None = None,
     functions: FunctionsInput = None,
     jshop2_compat: bool = False,
     max_depth: int = DEFAULT_MAX_DEPTH,
-    max_memory: Optional[int] = None,
+    max_memory: int | None = None,
     explain: bool = False,
     explain_all: bool = False,
     trees: bool = True,
     tree_paths: bool = True,
     search: str = "dfs",
-    stops: Optional[Guard] = None,
-) -> "PlanStream":
+    stops: Guard | None = None,
+) -> PlanStream:
     """The plans of ``problem`` in ``domain`` (paths or loaded objects, see
     :mod:`htn.api.inputs`), as a stream in JSHOP2's order.
 
@@ -112,7 +113,7 @@ def plan(
     )
 
 
-def ipc_text(plan: Plan, spelling: Optional[dict[str, str]] = None) -> str:
+def ipc_text(plan: Plan, spelling: dict[str, str] | None = None) -> str:
     """``plan`` in the IPC 2020 HTN plan format (actions and decompositions);
     ``spelling``: names as the input wrote them."""
     from htn.jshop.plans.ipc import ipc_text as text
@@ -147,8 +148,8 @@ class PlanStream:
         warnings: list[str],
         options: dict[str, Any],
         started: float,
-        timeout: Optional[float],
-        limit: Optional[int],
+        timeout: float | None,
+        limit: int | None,
         explain: bool,
         explain_all: bool,
         trees: bool,
@@ -172,16 +173,16 @@ class PlanStream:
         self.stats = self._plans.stats
 
     @property
-    def bound(self) -> Optional[str]:
+    def bound(self) -> str | None:
         bound = self._plans.bound
         return None if bound is None else str(bound)
 
     @property
-    def domain_file(self) -> Optional[str]:
+    def domain_file(self) -> str | None:
         return path_of(self.domain)
 
     @property
-    def problem_file(self) -> Optional[str]:
+    def problem_file(self) -> str | None:
         return path_of(self.problem)
 
     def __iter__(self) -> Iterator[Plan]:
@@ -194,7 +195,7 @@ class PlanStream:
         """End the search now (its statistics are then final)."""
         self._plans.close()
 
-    def __enter__(self) -> "PlanStream":
+    def __enter__(self) -> PlanStream:
         return self
 
     def __exit__(self, *exc: object) -> None:

@@ -12,7 +12,7 @@ its files and streams hold.
 from __future__ import annotations
 
 from collections.abc import Iterable
-from typing import TYPE_CHECKING, Any, Optional
+from typing import TYPE_CHECKING, Any
 
 from htn.files import AtomicFile
 from htn.jshop.plans.planfile import header, plan_text
@@ -28,14 +28,12 @@ class PlanFiles:
     """``output`` (a plan file) and ``dot`` (task trees), either may be None;
     ``inputs``: the command's input files, which they may not overwrite."""
 
-    def __init__(
-        self, output: Optional[str], dot: Optional[str], inputs: Iterable[Optional[str]] = ()
-    ):
+    def __init__(self, output: str | None, dot: str | None, inputs: Iterable[str | None] = ()):
         self.output_path, self.dot_path = output, dot
         self.plans = 0
-        self.shortest: Optional[int] = None
-        self.out: Optional[AtomicFile] = None
-        self.dot: Optional[_DotFile] = None
+        self.shortest: int | None = None
+        self.out: AtomicFile | None = None
+        self.dot: _DotFile | None = None
         read = tuple(inputs)
         try:
             if output:
@@ -48,7 +46,7 @@ class PlanFiles:
             self.close()
             raise
 
-    def __enter__(self) -> "PlanFiles":
+    def __enter__(self) -> PlanFiles:
         return self
 
     def __exit__(self, *exc: object) -> None:
@@ -110,7 +108,7 @@ class _DotFile:
     def __init__(self, file: AtomicFile):
         self.file = file
         self.count = 0
-        self.first: Optional[str] = None
+        self.first: str | None = None
 
     def add(self, tree: TaskTree) -> None:
         self.count += 1

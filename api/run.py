@@ -19,10 +19,10 @@ says ``interrupted``; a program that halts it for another goal
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from types import TracebackType
-from typing import TYPE_CHECKING, Any, Callable, Optional, Union
+from typing import TYPE_CHECKING, Any
 
 from htn.executor.dispatcher import RunSummary, TaskDispatcher
 from htn.executor.log import EventLog, event_line, run_header
@@ -75,20 +75,20 @@ class RunResult:
 def run(
     plan: PlanInput,
     *,
-    robot: Union[str, Robot],
-    domain: Optional[DomainInput] = None,
-    problem: Optional[ProblemInput] = None,
+    robot: str | Robot,
+    domain: DomainInput | None = None,
+    problem: ProblemInput | None = None,
     functions: FunctionsInput = None,
     plan_index: int = 1,
     faults: str = "",
     seed: int = 0,
     retries: RetriesInput = None,
     replan: bool = False,
-    log: Optional[StrPath] = None,
-    on_event: Optional[Listener] = None,
+    log: StrPath | None = None,
+    on_event: Listener | None = None,
     gui: bool = False,
-    argv: Optional[list[str]] = None,
-    stops: Optional[Guard] = None,
+    argv: list[str] | None = None,
+    stops: Guard | None = None,
 ) -> RunResult:
     """Execute ``plan`` on ``robot`` and return how it ended.
 
@@ -149,23 +149,23 @@ def robots() -> list[str]:
 def prepare(
     plan: PlanInput,
     *,
-    robot: Union[str, Robot],
-    domain: Optional[DomainInput] = None,
-    problem: Optional[ProblemInput] = None,
+    robot: str | Robot,
+    domain: DomainInput | None = None,
+    problem: ProblemInput | None = None,
     functions: FunctionsInput = None,
     plan_index: int = 1,
     faults: str = "",
     seed: int = 0,
     retries: RetriesInput = None,
     replan: bool = False,
-    log: Optional[StrPath] = None,
-    on_event: Optional[Listener] = None,
+    log: StrPath | None = None,
+    on_event: Listener | None = None,
     gui: bool = False,
-    stops: Optional[Guard] = None,
-    bt_dot: Optional[StrPath] = None,
-    snapshots: Optional[StrPath] = None,
-    read: Iterable[Optional[str]] = (),
-) -> "Execution":
+    stops: Guard | None = None,
+    bt_dot: StrPath | None = None,
+    snapshots: StrPath | None = None,
+    read: Iterable[str | None] = (),
+) -> Execution:
     """Everything :func:`run` does before the log begins: read and check the
     inputs (every step ground and applicable in turn, the retry limits, the
     task tree, the outputs' paths), build the robot and check that every step
@@ -241,7 +241,7 @@ class Execution:
         seed: int,
         replan: bool,
         outputs: RunOutputs,
-        on_event: Optional[Listener],
+        on_event: Listener | None,
     ) -> None:
         self.inputs = inputs
         self.robot = robot
@@ -251,10 +251,10 @@ class Execution:
         self.outputs = outputs
         self.log_path = outputs.log
         self.listeners: list[Listener] = [on_event] if on_event else []
-        self.log: Optional[EventLog] = None
-        self.dispatcher: Optional[TaskDispatcher] = None
-        self._halt: Optional[tuple[str, str]] = None  # (why, outcome), before it begins
-        self._adopted: Optional[tuple[int, str]] = None  # (count, detail), see adopt()
+        self.log: EventLog | None = None
+        self.dispatcher: TaskDispatcher | None = None
+        self._halt: tuple[str, str] | None = None  # (why, outcome), before it begins
+        self._adopted: tuple[int, str] | None = None  # (count, detail), see adopt()
         self._extra: dict[str, Any] = {}  # see annotate()
         self._closed = False
 
@@ -290,7 +290,7 @@ class Execution:
         else:
             self.listeners.append(listener)
 
-    def begin(self, argv: Optional[list[str]] = None) -> TaskDispatcher:
+    def begin(self, argv: list[str] | None = None) -> TaskDispatcher:
         """Open the log, write its header (``argv``: the command line it
         records) and build the task dispatcher on the plan's tree."""
         i = self.inputs
@@ -355,7 +355,7 @@ class Execution:
         return self._result(summary)
 
     def halt(
-        self, why: str = "", outcome: str = "interrupted", after: Optional[ActionContext] = None
+        self, why: str = "", outcome: str = "interrupted", after: ActionContext | None = None
     ) -> bool:
         """Stop the run before its next tick (safe from a signal handler or
         another thread); ``why`` is logged with the ``interrupted`` event
@@ -372,13 +372,13 @@ class Execution:
         self._halt = (why or "stopped by the user", outcome)
         return False
 
-    def running_action(self) -> Optional[tuple[ActionContext, list[BelievedFact]]]:
+    def running_action(self) -> tuple[ActionContext, list[BelievedFact]] | None:
         """``(context, facts)`` of the action running now (its context, with
         ``text``, the step; the facts the run believed as it began, ``(pred,
         args)`` pairs), or None; safe from any thread."""
         return None if self.dispatcher is None else self.dispatcher.running_action()
 
-    def last_verified(self) -> Optional[ActionContext]:
+    def last_verified(self) -> ActionContext | None:
         """The context of the step verified last, or None."""
         done = self.dispatcher.done if self.dispatcher is not None else []
         return done[-1] if done else None
@@ -458,14 +458,14 @@ class Execution:
         if self.owned:
             self.robot.close()
 
-    def __enter__(self) -> "Execution":
+    def __enter__(self) -> Execution:
         return self
 
     def __exit__(
         self,
-        kind: Optional[type[BaseException]],
-        exc: Optional[BaseException],
-        tb: Optional[TracebackType],
+        kind: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
     ) -> None:
         if exc is not None:
             self.fail(exc)

@@ -13,7 +13,7 @@ from __future__ import annotations
 import os
 from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Optional, Union
+from typing import TYPE_CHECKING, Any
 
 from htn.executor.config import load_retries, parse_overrides
 from htn.executor.log_header import (
@@ -45,9 +45,9 @@ if TYPE_CHECKING:
     from htn.jshop.plans.tree import TaskTree
 
 # a plan to run: a plan file's path, a plan file read, or a plan object
-PlanInput = Union[StrPath, PlanFile, Plan]
+PlanInput = StrPath | PlanFile | Plan
 # retry limits: {"grasp": 3}, "grasp=3,place=1", or several such texts
-RetriesInput = Union[dict[str, int], str, Iterable[str], None]
+RetriesInput = dict[str, int] | str | Iterable[str] | None
 
 
 @dataclass
@@ -60,15 +60,15 @@ class RunInputs:
     plan: Plan
     functions: FunctionTable
     limits: dict[str, int]  # retry limits by operator ('!grasp': 2)
-    tree: Optional[TaskTree]  # the task tree to execute, or None (one sequence)
-    plan_file: Optional[str]  # where the plan was read from (None: a plan object)
-    plan_sha256: Optional[str]
+    tree: TaskTree | None  # the task tree to execute, or None (one sequence)
+    plan_file: str | None  # where the plan was read from (None: a plan object)
+    plan_sha256: str | None
     plan_index: int
-    files: dict[str, Optional[str]]  # "domain", "problem", "functions" -> path or None
+    files: dict[str, str | None]  # "domain", "problem", "functions" -> path or None
     notes: list[str]  # one line each, e.g. how the tree was found
 
 
-def load_plan(plan: PlanInput) -> tuple[Optional[PlanFile], Optional[Plan]]:
+def load_plan(plan: PlanInput) -> tuple[PlanFile | None, Plan | None]:
     """A plan file (read from a path, or as given) or a plan object."""
     if is_path(plan):
         return read_plan_file(os.fspath(plan)), None
@@ -83,12 +83,12 @@ def load_plan(plan: PlanInput) -> tuple[Optional[PlanFile], Optional[Plan]]:
 
 def run_inputs(
     plan: PlanInput,
-    domain: Optional[DomainInput] = None,
-    problem: Optional[ProblemInput] = None,
+    domain: DomainInput | None = None,
+    problem: ProblemInput | None = None,
     functions: FunctionsInput = None,
     plan_index: int = 1,
     retries: RetriesInput = None,
-    stops: Optional[Guard] = None,
+    stops: Guard | None = None,
 ) -> RunInputs:
     """Read and check everything a run of ``plan`` needs (see :func:`htn.api.run.run`)."""
     pf, given = load_plan(plan)
@@ -128,7 +128,7 @@ def run_inputs(
     limits.update(overrides)
     check_runnable(dom, instance, chosen, where, table, pf.lines if pf else ())
     notes: list[str] = []
-    tree: Optional[TaskTree]
+    tree: TaskTree | None
     if pf is not None:
         tree = pf.tree(plan_index - 1, methods_of(dom, instance))
         source = f"{where}: plan {plan_index}"
@@ -190,12 +190,12 @@ def methods_of(domain: S.Domain, instance: S.ProblemInstance) -> dict[str, list[
 
 
 def checked_functions(
-    named: Optional[tuple[str, int, Optional[str]]],
+    named: tuple[str, int, str | None] | None,
     given: FunctionsInput,
-    where: Optional[str],
-    line: Optional[int] = None,
+    where: str | None,
+    line: int | None = None,
     option: str = "--functions",
-    stops: Optional[Guard] = None,
+    stops: Guard | None = None,
 ) -> FunctionsInput:
     """The functions to run with: ``given`` (a path or a loaded table, from
     the user), checked against ``named`` ((path, line, SHA-256 or None): the
@@ -239,8 +239,8 @@ class LoggedRun:
     log: str
     plan: PlanFile
     plan_index: int
-    domain: Optional[str]
-    problem: Optional[str]
+    domain: str | None
+    problem: str | None
     functions: FunctionsInput  # a path, or the file loaded once checked (its SHA-256)
     robot: str
     seed: int
@@ -265,7 +265,7 @@ class LoggedRun:
 
 
 def read_run_log(
-    path: StrPath, functions: FunctionsInput = None, stops: Optional[Guard] = None
+    path: StrPath, functions: FunctionsInput = None, stops: Guard | None = None
 ) -> LoggedRun:
     """The run a log records (its first event, the header): the plan file it
     ran, its domain and problem must be there and unchanged (their SHA-256),

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Optional
+from typing import TYPE_CHECKING, Any
 
 from htn.files import atomic_write, check_output_file, check_output_folder, make_output_folder
 from htn.jshop.language.errors import HtnError
@@ -26,9 +26,9 @@ if TYPE_CHECKING:
 class RunOutputs:
     """The paths a run writes (None: not written)."""
 
-    log: Optional[str] = None
-    bt_dot: Optional[str] = None
-    snapshots: Optional[str] = None
+    log: str | None = None
+    bt_dot: str | None = None
+    snapshots: str | None = None
 
     def check(self, inputs: Iterable[object]) -> None:
         """Each can be written and none is an input (``inputs``: paths or
@@ -58,7 +58,7 @@ class RunOutputs:
             raise HtnError(f"--snapshots: the {robot_name} robot has no camera")
         make_output_folder(self.snapshots, "--snapshots")
 
-    def snapshot_listener(self, robot: Robot) -> Optional[Callable[[dict[str, Any]], None]]:
+    def snapshot_listener(self, robot: Robot) -> Callable[[dict[str, Any]], None] | None:
         """The event listener that saves the snapshots (None: none asked)."""
         if not self.snapshots:
             return None

@@ -14,7 +14,7 @@ import time
 from collections.abc import Iterable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Optional
+from typing import TYPE_CHECKING, Any
 
 from htn.installation import EXAMPLES
 from htn.jshop.language.errors import HtnError
@@ -61,7 +61,7 @@ class ScenarioStats:
     plans: int
     distinct_plans: int
     plan_ms: float
-    min_length: Optional[int]
+    min_length: int | None
     methods: int
     operators: int
     timed_out: bool = False
@@ -105,8 +105,8 @@ def stats(
     *,
     repeat: int = 1,
     functions: FunctionsInput = None,
-    timeout: Optional[float] = None,
-    stops: Optional[Guard] = None,
+    timeout: float | None = None,
+    stops: Guard | None = None,
 ) -> list[ScenarioStats]:
     """The statistics of each scenario of ``files`` (see :func:`scenarios`):
     every plan enumerated ``repeat`` times, the median time reported.
@@ -124,7 +124,7 @@ def scenario_stats(
     functions: FunctionsInput = None,
     repeat: int = 1,
     *,
-    until: Optional[float] = None,
+    until: float | None = None,
 ) -> ScenarioStats:
     """Enumerate every plan ``repeat`` times; report the median wall time.
     ``until`` (a ``time.perf_counter()`` value) bounds all of them: an

@@ -9,9 +9,9 @@ breaks the plan, or costs more on the chosen metric, is rolled back.
 
 from __future__ import annotations
 
-from collections.abc import Collection
+from collections.abc import Callable, Collection
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Callable, Optional, Union
+from typing import TYPE_CHECKING, Any
 
 from htn.files import atomic_write
 from htn.jshop.language import syntax as S
@@ -29,7 +29,7 @@ if TYPE_CHECKING:
     from .inputs import DomainInput, FunctionsInput, ProblemInput, StrPath
 
 # the rules to apply: names, or one comma-separated text (None: every enabled one)
-Rules = Union[str, Collection[str], None]
+Rules = str | Collection[str] | None
 
 
 class UnknownRules(HtnError):
@@ -54,7 +54,7 @@ class TransformResult:
     workspace: Workspace
 
     def plan_file_text(
-        self, out_path: str, domain: Optional[str] = None, problem: Optional[str] = None
+        self, out_path: str, domain: str | None = None, problem: str | None = None
     ) -> str:
         """The transformed plan as a plan file at ``out_path`` (for
         :func:`htn.run` and ``htn run``): the header naming ``domain`` and
@@ -77,10 +77,10 @@ def transform_plan(
     rules: Rules = None,
     metric: str = "navigation",
     functions: FunctionsInput = None,
-    on_warning: Optional[Callable[[str], None]] = None,
-    on_phase: Optional[Callable[[str], None]] = None,
-    stops: Optional[Guard] = None,
-    output: Optional[StrPath] = None,
+    on_warning: Callable[[str], None] | None = None,
+    on_phase: Callable[[str], None] | None = None,
+    stops: Guard | None = None,
+    output: StrPath | None = None,
 ) -> TransformResult:
     """Plan ``problem`` (its first instance), apply the registered
     transformations in priority order (tray > container > both-hands, and any
@@ -111,9 +111,9 @@ def _transform(
     rules: Rules,
     metric: str,
     functions: FunctionsInput,
-    on_warning: Optional[Callable[[str], None]],
-    on_phase: Optional[Callable[[str], None]],
-    stops: Optional[Guard],
+    on_warning: Callable[[str], None] | None,
+    on_phase: Callable[[str], None] | None,
+    stops: Guard | None,
 ) -> TransformResult:
     from htn.transform.framework import METRICS, Workspace
     from htn.transform.registered import default_framework

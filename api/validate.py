@@ -19,7 +19,7 @@ from __future__ import annotations
 import os
 from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Optional, Union, cast
+from typing import TYPE_CHECKING, cast
 
 from htn.jshop.checks.validate import Verdict, check_steps, validate_plan
 from htn.jshop.language.errors import HtnError
@@ -42,21 +42,21 @@ class PlanVerdict:
 
     plan: Plan
     verdict: Verdict
-    file: Optional[str] = None
+    file: str | None = None
 
     @property
     def valid(self) -> bool:
         return self.verdict.valid
 
     @property
-    def where(self) -> Optional[str]:
+    def where(self) -> str | None:
         """``FILE:LINE:1`` of the step (or cost) that fails, or the file."""
         if self.verdict.line and self.file:
             return f"{self.file}:{self.verdict.line}:1"
         return self.file
 
     @property
-    def failed_step(self) -> Optional[int]:
+    def failed_step(self) -> int | None:
         """The 1-based step that fails (None: the plan as a whole, e.g. its cost)."""
         v = self.verdict
         if v.failed_step is not None and v.failed_step < v.steps:
@@ -67,11 +67,11 @@ class PlanVerdict:
 def validate(
     domain: DomainInput,
     problem: ProblemInput,
-    plan: Union[StrPath, PlanFile, Plan, Iterable[Plan]],
+    plan: StrPath | PlanFile | Plan | Iterable[Plan],
     *,
-    plan_index: Optional[int] = None,
+    plan_index: int | None = None,
     functions: FunctionsInput = None,
-    stops: Optional[Guard] = None,
+    stops: Guard | None = None,
 ) -> list[PlanVerdict]:
     """The verdict on each plan of ``plan`` (a plan file's path, a
     :class:`~htn.jshop.plans.planfile.PlanFile`, a
@@ -80,7 +80,7 @@ def validate(
     ``problem``, ``functions``: paths or loaded objects (:mod:`htn.api.inputs`)."""
     table = function_table(functions, stops)
     dom, prob = domain_and_problem(domain, problem, table)
-    file: Optional[str] = None
+    file: str | None = None
     if is_path(plan):
         plan = read_plan_file(os.fspath(plan))
     if isinstance(plan, PlanFile):
@@ -99,7 +99,7 @@ def validate(
     return [PlanVerdict(p, validate_plan(dom, instance, p, table), file) for p in plans]
 
 
-def ipc_text(path: object) -> Optional[str]:
+def ipc_text(path: object) -> str | None:
     """The text of the plan file ``path`` if it holds IPC-format plans
     (``==>`` ... ``<==``), else None."""
     from htn.jshop.plans.ipc import is_ipc_text
@@ -116,10 +116,10 @@ def validate_ipc(
     problem: ProblemInput,
     plan: StrPath,
     *,
-    plan_index: Optional[int] = None,
+    plan_index: int | None = None,
     functions: FunctionsInput = None,
-    text: Optional[str] = None,
-    stops: Optional[Guard] = None,
+    text: str | None = None,
+    stops: Guard | None = None,
 ) -> list[tuple[IpcPlan, IpcVerdict]]:
     """``[(IpcPlan, IpcVerdict)]`` for each IPC plan of the file ``plan``
     (``text``: its text, if read already): the actions replayed, every

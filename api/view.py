@@ -25,7 +25,7 @@ prints or waits for Ctrl-C: the caller keeps the page up as long as it likes.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Optional, Union
+from typing import TYPE_CHECKING, Any
 
 from htn.jshop.language.errors import HtnError
 
@@ -44,8 +44,8 @@ class ViewLog:
 
     path: str
     records: list[dict[str, Any]] = field(repr=False)
-    warning: Optional[str] = None  # a last line cut short, left out
-    note: Optional[str] = None  # a bag's: which of its goals this is
+    warning: str | None = None  # a last line cut short, left out
+    note: str | None = None  # a bag's: which of its goals this is
 
     @property
     def events(self) -> int:
@@ -53,7 +53,7 @@ class ViewLog:
         return len(self.records)
 
 
-def read_view_log(log_file: str, what: str = "htn view", goal: Optional[int] = None) -> ViewLog:
+def read_view_log(log_file: str, what: str = "htn view", goal: int | None = None) -> ViewLog:
     """The log ``log_file`` read for :func:`serve_log`: every line a JSON
     event, the first its header, else an input error at that line; a last
     line cut short is left out with a warning (:attr:`ViewLog.warning`).
@@ -98,7 +98,7 @@ class LogPage:
         """Close the pages' connections and stop the server."""
         self.server.close()
 
-    def __enter__(self) -> "LogPage":
+    def __enter__(self) -> LogPage:
         return self
 
     def __exit__(self, *exc: object) -> None:
@@ -106,7 +106,7 @@ class LogPage:
 
 
 def serve_log(
-    log: Union[ViewLog, str], host: str = DEFAULT_HOST, port: int = 0, what: str = "htn view"
+    log: ViewLog | str, host: str = DEFAULT_HOST, port: int = 0, what: str = "htn view"
 ) -> LogPage:
     """Serve the page of ``log`` (a :class:`ViewLog`, or the path of a log,
     read by :func:`read_view_log`) on ``host``:``port`` (0: a free port)."""
@@ -145,7 +145,7 @@ def start_goals_view(
     return GoalsView(host, port).start()
 
 
-def exposure_warning(host: str) -> Optional[str]:
+def exposure_warning(host: str) -> str | None:
     """What to warn of when serving on ``host``: None for an address only
     this machine reaches (loopback), else that anyone with the URL can watch."""
     from htn.view.server import is_loopback

@@ -18,7 +18,8 @@ from __future__ import annotations
 
 import os
 import threading
-from typing import TYPE_CHECKING, Any, Callable, Iterable, Optional, TypeVar, Union, cast
+from collections.abc import Callable, Iterable
+from typing import TYPE_CHECKING, Any, TypeVar, cast
 
 from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import HtnError
@@ -48,9 +49,9 @@ class WorldModel:
     def __init__(
         self,
         domain: DomainInput,
-        problem: Optional[ProblemInput] = None,
+        problem: ProblemInput | None = None,
         functions: FunctionsInput = None,
-        stops: Optional[Guard] = None,
+        stops: Guard | None = None,
     ) -> None:
         self.functions = function_table(functions, stops)
         self.domain: S.Domain = (
@@ -64,7 +65,7 @@ class WorldModel:
                 "needs its objects' types)",
                 self.domain.file or None,
             )
-        prob: Optional[S.Problem] = None
+        prob: S.Problem | None = None
         if problem is not None:
             prob = (
                 load_problem(os.fspath(problem), self.functions)
@@ -130,7 +131,7 @@ class WorldModel:
         with self._lock:
             return self._forgotten + len(self._updates)
 
-    def believe(self, facts: Iterable[Fact], since: Optional[int] = None) -> None:
+    def believe(self, facts: Iterable[Fact], since: int | None = None) -> None:
         """The facts are now these ``(pred, args)`` pairs (what a run
         verified: the executor's belief state when it ended), with the
         updates other programs made after the :meth:`mark` ``since`` applied
@@ -237,7 +238,7 @@ class _Var(str):
     """A pattern's ``?variable``."""
 
 
-def _pattern(text: str) -> tuple[str, tuple[Union[str, float], ...]]:
+def _pattern(text: str) -> tuple[str, tuple[str | float, ...]]:
     """``(at ?who kitchen)`` -> ``("at", (_Var("?who"), "kitchen"))``: one
     flat atom of symbols, numbers and variables (what a query asks)."""
     inner = text.strip()
@@ -254,7 +255,7 @@ def _pattern(text: str) -> tuple[str, tuple[Union[str, float], ...]]:
             1,
         )
     pred, *words = inner[1:-1].lower().split()
-    args: list[Union[str, float]] = []
+    args: list[str | float] = []
     for w in words:
         if w.startswith("?"):
             args.append(_Var(w))
@@ -284,8 +285,8 @@ def plan_goal(
     tasks: str,
     *,
     source: str = "goal",
-    timeout: Optional[float] = None,
-    stops: Optional[Guard] = None,
+    timeout: float | None = None,
+    stops: Guard | None = None,
     **options: Any,
 ) -> PlanStream:
     """The plans of the goal ``tasks`` from the facts believed now (a

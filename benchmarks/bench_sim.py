@@ -59,7 +59,7 @@ def main(problem, runs, faults, transformed):
         robot = simulated_robot(inst.state, faults=Faults.parse(faults), seed=seed)
         built = time.perf_counter()
         start_sim = robot.sim_time
-        log = EventLog(None, clock=lambda: robot.sim_time)
+        log = EventLog(None, clock=lambda robot=robot: robot.sim_time)
         summary = TaskDispatcher(
             robot, dom, inst, plan.steps, load_retries(domain), log, tree=plan.tree
         ).run()  # the behaviour tree htn run ticks

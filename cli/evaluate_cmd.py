@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import json
 import os
-from typing import TYPE_CHECKING, Optional
+from typing import TYPE_CHECKING
 
 import click
 
@@ -143,7 +143,7 @@ class _Progress(Progress):
 
         console = Console(stderr=True)
         self.bar = Bar(console=console, transient=True, disable=not console.is_terminal)
-        self.task: Optional[TaskID] = None
+        self.task: TaskID | None = None
         self.spinner = Phase("starting")
         self.robot, self.runs = robot, runs
         self.label = f"{robot} runs"

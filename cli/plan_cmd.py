@@ -3,7 +3,7 @@
 Every format streams: a plan is printed (and written to ``-o``/``--dot``) when
 the planner finds it and then forgotten, so ``--all`` runs in flat memory
 until it ends, times out or is interrupted. ``-f json`` is JSON Lines: one
-object per plan, then one with the statistics (see the README).
+object per plan, then one with the statistics (see docs/commands/plan.md).
 """
 
 from __future__ import annotations
@@ -132,7 +132,7 @@ FORMATS = ["text", "jshop", "json", "ipc"]
     show_default=True,
     help="How to search: "
     + "; ".join(f"{k}: {v}" for k, v in SEARCHES.items())
-    + ". See the README (HDDL).",
+    + ". See docs/hddl.md.",
 )
 def plan(domain, problem, fmt, output, timeout, functions, show_tree, dot, quiet, **flags):
     """Find plans for PROBLEM in DOMAIN (JSHOP2 files).

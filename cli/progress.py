@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import sys
 import threading
-from typing import TYPE_CHECKING, Optional
+from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from rich.status import Status
@@ -38,11 +38,11 @@ class Phase:
         self.text = text
         self.delay = delay
         self._lock = threading.Lock()
-        self._status: Optional[Status] = None
-        self._timer: Optional[threading.Timer] = None
+        self._status: Status | None = None
+        self._timer: threading.Timer | None = None
         self._ended = False
 
-    def __enter__(self) -> "Phase":
+    def __enter__(self) -> Phase:
         if stderr_is_terminal():
             self._timer = threading.Timer(self.delay, self._show)
             self._timer.daemon = True

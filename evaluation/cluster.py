@@ -15,8 +15,9 @@ from __future__ import annotations
 import logging
 import threading
 import warnings
+from collections.abc import Callable, Iterable, Iterator
 from contextlib import contextmanager, nullcontext
-from typing import Any, Callable, Iterable, Iterator, Optional
+from typing import Any
 
 from htn.jshop.language.errors import HtnError
 
@@ -87,8 +88,8 @@ class DaskRunner:
 NEEDS = "the scheduler and every worker need htn, with its sim extra for --robot pybullet"
 
 
-def _missing_module(exc: BaseException) -> Optional[str]:
-    e: Optional[BaseException] = exc
+def _missing_module(exc: BaseException) -> str | None:
+    e: BaseException | None = exc
     while e is not None:
         if isinstance(e, ModuleNotFoundError):
             return e.name
@@ -179,13 +180,13 @@ class LocalWorkers:
         self.requested = workers
         self.preload = preload
         self.notes: list[str] = []
-        self.started_in: Optional[float] = None  # seconds the start took
+        self.started_in: float | None = None  # seconds the start took
         self._cluster: Any = None  # the distributed.LocalCluster, once started
         self._client: Any = None  # its distributed.Client
-        self._runner: Optional[DaskRunner] = None
+        self._runner: DaskRunner | None = None
         self._lock = threading.Lock()
-        self._early: Optional[threading.Thread] = None
-        self._early_error: Optional[BaseException] = None
+        self._early: threading.Thread | None = None
+        self._early_error: BaseException | None = None
 
     @property
     def starting(self) -> bool:
@@ -211,7 +212,7 @@ class LocalWorkers:
     def workers(self) -> int:
         return self.requested if self._runner is not None else 1
 
-    def start(self) -> "DaskRunner":
+    def start(self) -> DaskRunner:
         """Start the workers (once) and return the runner on them."""
         early = self._early
         if early is not None and early is not threading.current_thread():
@@ -221,7 +222,7 @@ class LocalWorkers:
         with self._lock:
             return self._start()
 
-    def _start(self) -> "DaskRunner":
+    def _start(self) -> DaskRunner:
         if self._runner is None:
             import time
 
@@ -339,7 +340,7 @@ def _preload_forkserver(preload: tuple) -> None:
 
 @contextmanager
 def open_runner(
-    workers: int = 1, scheduler: Optional[str] = None, preload: tuple = ("htn.evaluation.runs",)
+    workers: int = 1, scheduler: str | None = None, preload: tuple = ("htn.evaluation.runs",)
 ):
     """A runner for ``workers`` processes (1: this process; more: a local
     Dask cluster, started when a study is worth it, see :class:`LocalWorkers`),

@@ -31,9 +31,10 @@ import os
 import sys
 import threading
 import time
+from collections.abc import Callable
 from contextlib import contextmanager
 from dataclasses import dataclass, field
-from typing import Any, Callable, Optional
+from typing import Any
 
 EFFICIENCY = 0.9  # of each worker, against this process (sending tasks, results)
 MARGIN = 1.15  # the workers must be this much faster to be started
@@ -96,7 +97,7 @@ def place(
     function: Callable,
     take: Callable[[list], None],
     description: str,
-    say: Optional[Callable[[str], None]] = None,
+    say: Callable[[str], None] | None = None,
 ):
     """Run ``tasks`` (batches) in this process until it is clear where the
     rest should go; return the runner for the rest and an iterator over the
@@ -132,7 +133,7 @@ def place(
     clock = _thread_clock()
     now = time.thread_time if clock is None else lambda: time.clock_gettime(clock)
     t0 = now()
-    starter: Optional[_Starter] = None
+    starter: _Starter | None = None
     if clock is not None:  # another thread can read this one's clock
         starter = _Starter(
             runner,
@@ -212,7 +213,7 @@ def fast_switching():
         _switch_back()
 
 
-def _thread_clock() -> Optional[int]:
+def _thread_clock() -> int | None:
     """The CPU-time clock of the calling thread, which another thread can read."""
     try:
         return time.pthread_getcpuclockid(threading.get_ident())
@@ -233,7 +234,7 @@ class _Starter:
         tasks: list,
         function: Callable,
         begun: int,
-        when: Optional[Callable[[], bool]] = None,
+        when: Callable[[], bool] | None = None,
     ):
         self.runner, self.tasks, self.function = runner, tasks, function
         self.begun = begun  # tasks[:begun] are (being) run here
@@ -243,7 +244,7 @@ class _Starter:
         self.starting = self.switched = False
         self.workers: Any = None  # the runner on the workers, once up
         self.results: Any = None  # the iterator over the results they give
-        self.error: Optional[BaseException] = None
+        self.error: BaseException | None = None
         self.thread = threading.Thread(
             target=self._start, name="htn: starting workers", daemon=True
         )

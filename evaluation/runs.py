@@ -17,8 +17,8 @@ from __future__ import annotations
 import hashlib
 import pickle
 from collections import OrderedDict
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable, Optional
 
 from htn.executor.dispatcher import RunSummary
 from htn.jshop.language import syntax as S
@@ -138,7 +138,7 @@ _PREPARED: OrderedDict = OrderedDict()  # study key -> (study, prepared), this p
 _KEEP = 4
 
 
-def run_batch(key: str, blob: bytes, runs: list, plans: Optional[tuple] = None) -> list[dict]:
+def run_batch(key: str, blob: bytes, runs: list, plans: tuple | None = None) -> list[dict]:
     """Execute runs ``[(number, seed), ...]`` of a packed study, each of
     ``plans`` (default: every plan) once per run; one record per plan
     execution. The study is unpacked and prepared once per process and kept

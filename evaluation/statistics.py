@@ -17,7 +17,6 @@ import statistics
 import warnings
 from collections import Counter
 from dataclasses import dataclass, field
-from typing import Optional
 
 METRIC_NAMES = ("navigation", "manipulation", "actions", "failures")
 UNDERFLOW = 1e-300  # p-values below this are shown as "< 1e-300"
@@ -68,15 +67,15 @@ class Comparison:
         return out
 
 
-def _mean(values) -> Optional[float]:
+def _mean(values) -> float | None:
     return statistics.fmean(values) if values else None
 
 
-def _sd(values) -> Optional[float]:
+def _sd(values) -> float | None:
     return statistics.stdev(values) if len(values) > 1 else None
 
 
-def welch_p(a, b) -> Optional[float]:
+def welch_p(a, b) -> float | None:
     """Two-sided p-value of Welch's t-test, or None where it is undefined."""
     if len(a) < 2 or len(b) < 2 or (statistics.pvariance(a) == 0 == statistics.pvariance(b)):
         return None
@@ -114,13 +113,13 @@ def pooled_failures(records) -> dict:
 # ------------------------------------------------------------------ display
 
 
-def format_p(p: Optional[float]) -> str:
+def format_p(p: float | None) -> str:
     if p is None:
         return "n/a"
     return f"< {UNDERFLOW:.0e}" if p < UNDERFLOW else f"{p:.2g}"
 
 
-def format_change(pct: Optional[float]) -> str:
+def format_change(pct: float | None) -> str:
     return "n/a" if pct is None else f"{pct:+.1f}%".replace("-", "\u2212")
 
 

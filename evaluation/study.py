@@ -18,7 +18,7 @@ from __future__ import annotations
 import json
 import math
 import time
-from typing import Callable, Optional
+from collections.abc import Callable
 
 from htn.executor.config import load_retries
 
@@ -34,8 +34,8 @@ def prepare_study(
     problem_path,
     robot: str = "projection",
     faults: str = "",
-    log: Optional[list] = None,
-    on_phase: Optional[Callable[[str], None]] = None,
+    log: list | None = None,
+    on_phase: Callable[[str], None] | None = None,
 ) -> tuple[Study, list]:
     """Plan the problem, transform the plan with every registered rule, and
     return the study of both plans with the names of the rules applied. The
@@ -82,8 +82,8 @@ def run_study(
     runs: int,
     seed: int,
     runner,
-    on_batch: Optional[Callable[[list], None]] = None,
-    say: Optional[Callable[[str], None]] = None,
+    on_batch: Callable[[list], None] | None = None,
+    say: Callable[[str], None] | None = None,
 ) -> Comparison:
     """Execute ``runs`` runs of every plan of ``study`` on ``runner``;
     ``on_batch`` gets each batch's new records as they arrive. On local

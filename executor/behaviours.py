@@ -29,7 +29,7 @@ from __future__ import annotations
 import inspect
 from collections.abc import Callable, Generator
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Optional, Protocol, cast
+from typing import TYPE_CHECKING, Any, Protocol, cast
 
 import py_trees
 from py_trees.behaviour import Behaviour
@@ -54,15 +54,15 @@ class Executor(Protocol):
 
     robot: Robot
 
-    def emit(self, ctx: "ActionContext", event: str, detail: str = "", **extra: Any) -> None: ...
+    def emit(self, ctx: ActionContext, event: str, detail: str = "", **extra: Any) -> None: ...
 
-    def begun(self, ctx: "ActionContext", first: bool) -> None:
+    def begun(self, ctx: ActionContext, first: bool) -> None:
         """``ctx``'s action runs now (``first``: its first attempt)."""
 
-    def retrying(self, ctx: "ActionContext") -> None:
+    def retrying(self, ctx: ActionContext) -> None:
         """``ctx``'s action was aborted and is tried again."""
 
-    def report(self, ctx: "ActionContext", ok: bool) -> None: ...
+    def report(self, ctx: ActionContext, ok: bool) -> None: ...
 
     def apply_internal(self, step: Step) -> bool: ...
 
@@ -72,14 +72,14 @@ class ActionContext:
     """One plan step being executed: what its behaviours share."""
 
     step: Step  # the plan Step
-    machine: Optional[ActionMachine]  # its ActionMachine (None for internal steps)
+    machine: ActionMachine | None  # its ActionMachine (None for internal steps)
     limit: int  # retries allowed after an aborted attempt
-    node: Optional[TaskTree] = None  # its task-tree node (path), if known
+    node: TaskTree | None = None  # its task-tree node (path), if known
     attempt: int = 0
-    outcome: Optional[Outcome] = None
+    outcome: Outcome | None = None
     preempted: bool = False
     done: bool = False  # verified: never run again
-    number: Optional[int] = None  # its 1-based step, once verified
+    number: int | None = None  # its 1-based step, once verified
     detail: str = ""
     holds: list[str] = field(default_factory=list)
     text: str = ""  # the step as the plan shows it
@@ -102,8 +102,8 @@ class ActionBehaviour(py_trees.behaviour.Behaviour):
 class Execute(ActionBehaviour):
     """Execute the action: start the robot skill, tick it to its end."""
 
-    ticking: Optional[Generator[None, None, SkillResult]]  # the skill in progress
-    result: Optional[SkillResult]  # the skill's result, once it has ended
+    ticking: Generator[None, None, SkillResult] | None  # the skill in progress
+    result: SkillResult | None  # the skill's result, once it has ended
 
     def initialise(self) -> None:
         ctx = self.ctx
@@ -300,5 +300,6 @@ def action_subtree(
             "attempt", memory=True, children=[execute, Monitor("monitor", ctx, executor)]
         )
         top = Report(RetryAborted(attempt, ctx, executor), ctx, executor)
-    setattr(top, "htn_action", ctx)  # an attribute of our own on py_trees' behaviour
+    # an attribute of our own on py_trees' behaviour, which does not declare it
+    setattr(top, "htn_action", ctx)  # noqa: B010
     return top

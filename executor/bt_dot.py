@@ -18,7 +18,7 @@ looks alike), labels the ``:`` itself.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Optional
+from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from py_trees.behaviour import Behaviour
@@ -64,11 +64,11 @@ def _label(b: Behaviour) -> str:
     return f"{b.name}\n{ctx.text}"
 
 
-def _action_of(b: Behaviour) -> Optional[ActionContext]:
+def _action_of(b: Behaviour) -> ActionContext | None:
     """The action context of the action subtree ``b`` belongs to, if any."""
-    node: Optional[Behaviour] = b
+    node: Behaviour | None = b
     while node is not None:
-        ctx: Optional[ActionContext] = getattr(node, "htn_action", None)
+        ctx: ActionContext | None = getattr(node, "htn_action", None)
         if ctx is not None:
             return ctx
         node = node.parent

@@ -13,7 +13,6 @@ from __future__ import annotations
 import os
 import tomllib
 from collections.abc import Iterable
-from typing import Optional
 
 from htn.jshop.language.errors import HtnError
 
@@ -25,7 +24,7 @@ def config_path(domain_path: str) -> str:
 DEFAULT_RETRIES = 1  # per operator, for a domain without a .toml
 
 
-def load_retries(domain_path: Optional[str], operators: Iterable[str] = ()) -> dict[str, int]:
+def load_retries(domain_path: str | None, operators: Iterable[str] = ()) -> dict[str, int]:
     """Retry limits by operator name ('!grasp'). Without a file beside the
     domain (or without a domain file: a domain built in memory):
     :data:`DEFAULT_RETRIES` for each of ``operators`` (names; the internal
@@ -37,7 +36,7 @@ def load_retries(domain_path: Optional[str], operators: Iterable[str] = ()) -> d
         with open(path, "rb") as fh:
             data = tomllib.load(fh)
     except tomllib.TOMLDecodeError as exc:
-        raise HtnError(f"bad TOML: {exc}", path)
+        raise HtnError(f"bad TOML: {exc}", path) from exc
     retries = data.get("retries", {})
     out = {}
     for name, n in retries.items():
@@ -58,7 +57,7 @@ def parse_overrides(items: Iterable[str]) -> dict[str, int]:
             try:
                 n = int(value)
             except ValueError:
-                raise HtnError(f"--retries: '{value}' is not a whole number")
+                raise HtnError(f"--retries: '{value}' is not a whole number") from None
             if n < 0:
                 raise HtnError(f"--retries: {part} must not be negative")
             out[_op(name.strip())] = n

@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import threading
 from collections.abc import Callable, Iterable, Sequence
-from typing import TYPE_CHECKING, Any, Optional
+from typing import TYPE_CHECKING, Any
 
 import py_trees
 from py_trees.behaviour import Behaviour
@@ -79,9 +79,9 @@ class TaskDispatcher:
         retries: dict[str, int],
         log: EventLog,
         replan: bool = False,
-        functions: Optional[FunctionTable] = None,
+        functions: FunctionTable | None = None,
         max_replans: int = 10,
-        tree: Optional[TaskTree] = None,
+        tree: TaskTree | None = None,
     ):
         self.robot = robot
         self.domain = domain
@@ -94,18 +94,18 @@ class TaskDispatcher:
         self.tree_known = tree is not None
         self.belief = Planner.for_state(domain, instance.state, functions)
         self.done: list[ActionContext] = []  # verified steps, in order
-        self.failed: Optional[ActionContext] = None
-        self.running: Optional[ActionContext] = None
+        self.failed: ActionContext | None = None
+        self.running: ActionContext | None = None
         self.retries = self.replans = self.started = 0
         self._faults_seen = 0
-        self._halt: Optional[str] = None
+        self._halt: str | None = None
         self._halt_as = INTERRUPTED  # what the summary of a halted run says
-        self._halt_later: Optional[tuple[str, str]] = None  # (why, as): at the next action
+        self._halt_later: tuple[str, str] | None = None  # (why, as): at the next action
         self._lock = threading.Lock()  # running and the belief, as another thread sees them
         self._in_tick = False
         self.summary_extra: dict[str, Any] = {}  # more fields for the summary event
         # (action, attempt) -> what it carries
-        self._carrying: tuple[Optional[tuple[int, int]], list[str]] = (None, [])
+        self._carrying: tuple[tuple[int, int] | None, list[str]] = (None, [])
         self.carry = carry_predicate(domain.name)  # the domain's word for carrying
         self.carry_checks = self.carry is not None and "still_held" in robot.check_names()
         steps = list(steps)
@@ -133,9 +133,7 @@ class TaskDispatcher:
     def number(self, ctx: ActionContext) -> int:
         return ctx.number or len(self.done) + 1
 
-    def emit(
-        self, ctx: Optional[ActionContext], event: str, detail: str = "", **extra: Any
-    ) -> None:
+    def emit(self, ctx: ActionContext | None, event: str, detail: str = "", **extra: Any) -> None:
         self._flush_faults()
         if ctx is not None:
             extra = {"node": self.nodes.of(ctx.node), **extra}
@@ -151,9 +149,9 @@ class TaskDispatcher:
     def _log_tree(
         self,
         tops: Iterable[TaskTree],
-        parent: Optional[int],
-        step_of: Callable[[TaskTree], Optional[int]],
-        replaces: Sequence[Optional[int]] = (),
+        parent: int | None,
+        step_of: Callable[[TaskTree], int | None],
+        replaces: Sequence[int | None] = (),
     ) -> None:
         """A ``tree`` event with the nodes of the subtrees ``tops``, each
         under ``parent`` (see :mod:`htn.executor.tree_events`)."""
@@ -220,7 +218,7 @@ class TaskDispatcher:
                 top.final_status = Status.SUCCESS  # it bounces: success, not run
             self.emit(ctx, Outcome.VERIFIED.value, detail, adopted=True)
 
-    def running_action(self) -> Optional[tuple[ActionContext, list[tuple[str, tuple[Any, ...]]]]]:
+    def running_action(self) -> tuple[ActionContext, list[tuple[str, tuple[Any, ...]]]] | None:
         """``(its context, the belief state's facts as it began)`` of the
         action running now, or None (between actions, an internal step, an
         action that has ended, a halted run): what another thread needs to
@@ -287,7 +285,7 @@ class TaskDispatcher:
 
     # ------------------------------------------------------------ the tick loop
     def halt(
-        self, why: str = "", outcome: str = INTERRUPTED, after: Optional[ActionContext] = None
+        self, why: str = "", outcome: str = INTERRUPTED, after: ActionContext | None = None
     ) -> bool:
         """Stop the tree before its next tick (safe from a signal handler or
         another thread); ``why`` is logged with the ``interrupted`` event
@@ -381,9 +379,9 @@ class TaskDispatcher:
     def _summary(
         self,
         result: str,
-        ctx: Optional[ActionContext] = None,
-        advice: Optional[str] = None,
-        reason: Optional[str] = None,
+        ctx: ActionContext | None = None,
+        advice: str | None = None,
+        reason: str | None = None,
     ) -> RunSummary:
         pending = sum(1 for a in actions(self.root) if not a.done)
         summary = RunSummary(
@@ -474,6 +472,6 @@ class TaskDispatcher:
         return True
 
 
-def _plan_step(node: TaskTree) -> Optional[int]:
+def _plan_step(node: TaskTree) -> int | None:
     """The 1-based step of an operator node of the plan's tree (its leaves index the steps)."""
     return None if node.step is None else node.step + 1

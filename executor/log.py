@@ -16,7 +16,7 @@ import os
 import threading
 import time
 from collections.abc import Callable
-from typing import Any, Optional
+from typing import Any
 
 from htn.jshop.language.errors import WriteError
 
@@ -32,13 +32,13 @@ class LineFile:
     ``option``); after it, only a ``last`` line (a summary) is tried once
     more, and silently dropped if it does not fit either."""
 
-    def __init__(self, path: str, option: Optional[str] = None):
+    def __init__(self, path: str, option: str | None = None):
         self.path, self.option = path, option
-        self.failed: Optional[WriteError] = None
+        self.failed: WriteError | None = None
         self.size = 0  # bytes of whole lines written
         self.lock = threading.Lock()  # the watchdog may end the file from its thread
         try:
-            self.fd: Optional[int] = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o666)
+            self.fd: int | None = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o666)
         except OSError as exc:
             raise self._error(exc) from None
 
@@ -98,11 +98,11 @@ class EventLog:
 
     def __init__(
         self,
-        path: Optional[str] = None,
-        clock: Optional[Callable[[], float]] = None,
-        option: Optional[str] = "--log",
+        path: str | None = None,
+        clock: Callable[[], float] | None = None,
+        option: str | None = "--log",
     ):
-        self._file: Optional[LineFile] = LineFile(path, option) if path else None
+        self._file: LineFile | None = LineFile(path, option) if path else None
         self.path = path
         self.clock = clock or (lambda: 0.0)
         self.start = time.perf_counter()
@@ -111,17 +111,17 @@ class EventLog:
         self.ended = False
 
     @property
-    def failed(self) -> Optional[WriteError]:
+    def failed(self) -> WriteError | None:
         return self._file.failed if self._file is not None else None
 
     def emit(
         self,
-        step: Optional[int],
-        action: Optional[str],
+        step: int | None,
+        action: str | None,
         event: str,
-        attempt: Optional[int] = None,
+        attempt: int | None = None,
         detail: str = "",
-        sim_t: Optional[float] = None,
+        sim_t: float | None = None,
         **extra: Any,
     ) -> dict[str, Any]:
         record: dict[str, Any] = {
@@ -164,7 +164,7 @@ SHOWN = (
 )
 
 
-def event_line(rec: dict[str, Any]) -> Optional[str]:
+def event_line(rec: dict[str, Any]) -> str | None:
     """``' 3 verified    (!goto robby dock kitchen)  [try 1, t=2.0s] DETAIL'``
     for an event of the run's log worth a line, else None (starts, ticks,
     feedback: the live tree shows those)."""

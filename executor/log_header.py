@@ -16,14 +16,14 @@ import hashlib
 import json
 import os
 from collections.abc import Callable, Mapping, Sequence
-from typing import Any, Optional
+from typing import Any
 
 from htn.jshop.language.errors import HtnError
 
 FILES = ("plan", "domain", "problem", "functions")
 
 
-def file_sha256(path: Optional[str]) -> Optional[str]:
+def file_sha256(path: str | None) -> str | None:
     """The SHA-256 of the bytes of ``path`` (None for no path or no such file)."""
     if not path:
         return None
@@ -35,19 +35,19 @@ def file_sha256(path: Optional[str]) -> Optional[str]:
 
 
 def run_header(
-    plan_file: Optional[str],
-    plan_sha256: Optional[str],
+    plan_file: str | None,
+    plan_sha256: str | None,
     plan_index: int,
-    domain: Optional[str],
-    problem: Optional[str],
-    functions: Optional[str],
+    domain: str | None,
+    problem: str | None,
+    functions: str | None,
     robot: str,
     seed: int,
-    faults: Optional[str],
+    faults: str | None,
     retries: Mapping[str, int],
     replan: bool,
-    argv: Optional[Sequence[str]],
-    digests: Mapping[str, Optional[str]],
+    argv: Sequence[str] | None,
+    digests: Mapping[str, str | None],
 ) -> dict[str, Any]:
     """What a log's header records: enough to run the same thing again
     (``argv``: the command line as given, None for a program's call), with
@@ -59,13 +59,13 @@ def run_header(
 
     from htn.installation import version as htn_version
 
-    def installed(name: str) -> Optional[str]:
+    def installed(name: str) -> str | None:
         try:
             return version(name)
         except PackageNotFoundError:
             return None
 
-    def absolute(p: Optional[str]) -> Optional[str]:
+    def absolute(p: str | None) -> str | None:
         return os.path.abspath(p) if p else None
 
     return {
@@ -120,7 +120,7 @@ def read_header(path: str) -> dict[str, Any]:
             first = fh.readline(10_000_000)
         rec = json.loads(first)
     except (OSError, UnicodeDecodeError, ValueError, RecursionError) as exc:
-        raise HtnError(f"not a log of htn run --log: {str(exc)[:200]}", path, 1, 1)
+        raise HtnError(f"not a log of htn run --log: {str(exc)[:200]}", path, 1, 1) from exc
     if not isinstance(rec, dict) or rec.get("event") != "header":
         raise HtnError("not a log of htn run --log: its first line is no header event", path, 1, 1)
     missing = [k for k in HEADER_KEYS if k not in rec]
@@ -134,11 +134,11 @@ def read_header(path: str) -> dict[str, Any]:
     return rec
 
 
-FieldCheck = Callable[[Any], Optional[str]]  # a field's value -> what is wrong with it, or None
+FieldCheck = Callable[[Any], str | None]  # a field's value -> what is wrong with it, or None
 
 
 def _text(optional: bool) -> FieldCheck:
-    def check(v: Any) -> Optional[str]:
+    def check(v: Any) -> str | None:
         if v is None and optional:
             return None
         if not isinstance(v, str) or not v or len(v) > MAX_TEXT or "\0" in v:
@@ -148,7 +148,7 @@ def _text(optional: bool) -> FieldCheck:
     return check
 
 
-def _digest(v: Any) -> Optional[str]:
+def _digest(v: Any) -> str | None:
     if v is None:
         return None
     if not isinstance(v, str) or len(v) != 64 or any(c not in "0123456789abcdef" for c in v):
@@ -156,25 +156,25 @@ def _digest(v: Any) -> Optional[str]:
     return None
 
 
-def _plan_index(v: Any) -> Optional[str]:
+def _plan_index(v: Any) -> str | None:
     if type(v) is not int or not 1 <= v <= 10**9:
         return "expected a plan number, 1 or more (the first plan is 1)"
     return None
 
 
-def _seed(v: Any) -> Optional[str]:
+def _seed(v: Any) -> str | None:
     if type(v) is not int or not -MAX_SEED <= v < MAX_SEED:
         return "expected an integer"
     return None
 
 
-def _robot(v: Any) -> Optional[str]:
+def _robot(v: Any) -> str | None:
     if not isinstance(v, str) or not v or len(v) > 200:
         return "expected a robot's name"
     return None
 
 
-def _faults(v: Any) -> Optional[str]:
+def _faults(v: Any) -> str | None:
     if v is None:
         return None
     if not isinstance(v, str) or len(v) > MAX_TEXT:
@@ -182,7 +182,7 @@ def _faults(v: Any) -> Optional[str]:
     return None
 
 
-def _retries(v: Any) -> Optional[str]:
+def _retries(v: Any) -> str | None:
     if v is None:
         return None
     if not isinstance(v, dict) or not all(
@@ -192,7 +192,7 @@ def _retries(v: Any) -> Optional[str]:
     return None
 
 
-def _replan(v: Any) -> Optional[str]:
+def _replan(v: Any) -> str | None:
     return None if type(v) is bool else "expected true or false"
 
 
@@ -214,7 +214,7 @@ CHECKS: dict[str, FieldCheck] = {
 }
 
 
-def check_plan_present(plan_file: Optional[str], log_path: str) -> None:
+def check_plan_present(plan_file: str | None, log_path: str) -> None:
     """The plan file a header names is there; otherwise an input error at the
     log's first line."""
     if not plan_file:
@@ -228,7 +228,7 @@ def check_plan_present(plan_file: Optional[str], log_path: str) -> None:
         raise HtnError(f"the plan file of this run is missing: {plan_file}", log_path, 1, 1)
 
 
-def check_plan_digest(plan_file: str, recorded: Optional[str], actual: str, log_path: str) -> None:
+def check_plan_digest(plan_file: str, recorded: str | None, actual: str, log_path: str) -> None:
     """The plan file is unchanged since the logged run (when the header has
     its SHA-256): ``actual`` is the digest of the bytes read now."""
     if recorded and actual != recorded:

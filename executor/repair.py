@@ -21,7 +21,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Optional
+from typing import TYPE_CHECKING
 
 from py_trees.behaviour import Behaviour
 from py_trees.composites import Composite
@@ -74,7 +74,7 @@ def observed_instance(
     domain: S.Domain,
     instance: S.ProblemInstance,
     robot: Robot,
-    tasks: Optional[S.TaskList] = None,
+    tasks: S.TaskList | None = None,
 ) -> S.ProblemInstance:
     """The current state as the robot observes it: static facts of the
     problem plus the observed facts of the domain's dynamic predicates."""
@@ -134,8 +134,8 @@ def find_repair(
     domain: S.Domain,
     observed: S.ProblemInstance,
     problem_tasks: S.TaskList,
-    functions: Optional[FunctionTable] = None,
-) -> tuple[Optional[Repair], list[str]]:
+    functions: FunctionTable | None = None,
+) -> tuple[Repair | None, list[str]]:
     """The repair for the failed action subtree ``shot``, and the node paths tried."""
     tried: list[str] = []
     for seq, replaced, tasks in candidates(shot, root, tree_known, problem_tasks):
@@ -165,7 +165,7 @@ def retry_applies(
     root: Behaviour,
     domain: S.Domain,
     observed: S.ProblemInstance,
-    functions: Optional[FunctionTable] = None,
+    functions: FunctionTable | None = None,
 ) -> bool:
     """Does the failed step ``ctx`` apply again in the observed state, and the
     steps still to come after it? Then trying it again is the smallest repair:
@@ -183,7 +183,7 @@ def _atoms(tasks: S.TaskList) -> list[str]:
 def _applies(
     domain: S.Domain,
     observed: S.ProblemInstance,
-    functions: Optional[FunctionTable],
+    functions: FunctionTable | None,
     steps: Iterable[Step],
 ) -> bool:
     """Do ``steps`` apply in sequence from the observed state?"""

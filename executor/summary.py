@@ -4,7 +4,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Optional
+from typing import Any
 
 
 @dataclass
@@ -15,11 +15,11 @@ class RunSummary:
     retries: int
     replans: int
     sim_time: float
-    failed_step: Optional[str] = None  # the action that ended the run
-    failed_at: Optional[int] = None  # its 1-based step
+    failed_step: str | None = None  # the action that ended the run
+    failed_at: int | None = None  # its 1-based step
     executed: int = 0  # steps started (each once, however many attempts)
-    advice: Optional[str] = None  # what might have saved it (retries used up)
-    reason: Optional[str] = None  # why it was halted (interrupted, preempted)
+    advice: str | None = None  # what might have saved it (retries used up)
+    reason: str | None = None  # why it was halted (interrupted, preempted)
 
     def as_dict(self) -> dict[str, Any]:
         d = dict(self.__dict__)

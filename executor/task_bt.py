@@ -18,7 +18,7 @@ stays shallow.
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from typing import TYPE_CHECKING, Optional
+from typing import TYPE_CHECKING
 
 import py_trees
 from py_trees.behaviour import Behaviour
@@ -74,19 +74,20 @@ def build(
 
 def _sequence(node: TaskTree) -> py_trees.composites.Sequence:
     seq = py_trees.composites.Sequence(node.path or ROOT_NAME, memory=True)
-    setattr(seq, "htn_task", node)  # an attribute of our own on py_trees' behaviour
+    # an attribute of our own on py_trees' behaviour, which does not declare it
+    setattr(seq, "htn_task", node)  # noqa: B010
     return seq
 
 
-def task_of(behaviour: Behaviour) -> Optional[TaskTree]:
+def task_of(behaviour: Behaviour) -> TaskTree | None:
     """The task-tree node a task's sequence carries (``htn_task``), else None."""
-    node: Optional[TaskTree] = getattr(behaviour, "htn_task", None)
+    node: TaskTree | None = getattr(behaviour, "htn_task", None)
     return node
 
 
-def action_of(behaviour: Behaviour) -> Optional[ActionContext]:
+def action_of(behaviour: Behaviour) -> ActionContext | None:
     """The context the top of an action subtree carries (``htn_action``), else None."""
-    ctx: Optional[ActionContext] = getattr(behaviour, "htn_action", None)
+    ctx: ActionContext | None = getattr(behaviour, "htn_action", None)
     return ctx
 
 

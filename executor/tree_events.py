@@ -26,7 +26,7 @@ ancestors, which would make a deep tree's event quadratic in its depth.
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any, Optional
+from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     from htn.jshop.plans.tree import TaskTree
@@ -43,7 +43,7 @@ class NodeNumbers:
     def __len__(self) -> int:
         return len(self._ids)
 
-    def of(self, node: object) -> Optional[int]:
+    def of(self, node: object) -> int | None:
         got = self._ids.get(id(node))
         return None if got is None else got[0]
 
@@ -56,9 +56,9 @@ class NodeNumbers:
 def tree_nodes(
     top: TaskTree,
     numbers: NodeNumbers,
-    parent: Optional[int],
-    step_of: Callable[[TaskTree], Optional[int]],
-    action_of: Callable[[TaskTree], Optional[ActionContext]],
+    parent: int | None,
+    step_of: Callable[[TaskTree], int | None],
+    action_of: Callable[[TaskTree], ActionContext | None],
 ) -> list[dict[str, Any]]:
     """The nodes of the task tree ``top`` (depth first), numbered from
     ``len(numbers)`` on; ``top``'s parent is the node numbered ``parent``.
@@ -68,7 +68,7 @@ def tree_nodes(
     arguments as they were when its task was decomposed, where a variable may
     have been bound only later), with the action's hold-monitors."""
     out: list[dict[str, Any]] = []
-    stack: list[tuple[TaskTree, Optional[int]]] = [(top, parent)]
+    stack: list[tuple[TaskTree, int | None]] = [(top, parent)]
     while stack:
         node, up = stack.pop()
         number = numbers.add(node)

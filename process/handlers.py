@@ -23,7 +23,6 @@ import signal
 import sys
 import time
 from contextlib import contextmanager
-from typing import Optional
 
 from htn.jshop.language.errors import is_stop
 
@@ -67,7 +66,7 @@ def begin_process(stops: Stops) -> None:
 
 
 @contextmanager
-def command(stops: Optional[Stops] = None):
+def command(stops: Stops | None = None):
     """Run a command under ``stops`` (a new one if None); see the module's
     docstring. Yields the :class:`Stops`."""
     stops = stops if stops is not None else Stops()
@@ -135,7 +134,7 @@ def _on_alarm(stops: Stops):
 
 
 @contextmanager
-def deadline(stops: Stops, seconds: Optional[float], started: Optional[float] = None):
+def deadline(stops: Stops, seconds: float | None, started: float | None = None):
     """Raise :class:`DeadlineExceeded` (into a watched run: halt it with
     :class:`TimedOut`) once ``seconds`` have passed since ``started`` (a
     ``time.perf_counter()`` value; default: now). None (or more than

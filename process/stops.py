@@ -27,8 +27,9 @@ import os
 import signal
 import sys
 import time
+from collections.abc import Callable
 from contextlib import contextmanager
-from typing import TYPE_CHECKING, Callable, Optional, Protocol
+from typing import TYPE_CHECKING, Protocol
 
 from htn.jshop.language.errors import is_stop, mark_stop
 
@@ -93,23 +94,23 @@ class Stops(_Guard):
         self.phase = COMMAND  # START and EXIT only in an owned process
         self.count = 0  # stops raised into the program so far
         self.running: list[str] = []  # user code running now (innermost last)
-        self.raised_last: Optional[BaseException] = None
-        self.exit_code: Optional[int] = None  # set when an owned process leaves
+        self.raised_last: BaseException | None = None
+        self.exit_code: int | None = None  # set when an owned process leaves
         self.reset()
 
     def reset(self) -> None:
-        self.received: Optional[BaseException] = None  # the first SIGINT / SIGTERM
-        self.raised: Optional[BaseException] = None  # the stop raised into the program
+        self.received: BaseException | None = None  # the first SIGINT / SIGTERM
+        self.raised: BaseException | None = None  # the stop raised into the program
         self.swallowed = False  # ... and dropped where Python cannot let it out
         self.quiet = False  # record signals only: the command ends in order
         self.holding = 0
-        self.pending: Optional[BaseException] = None  # came during a held() block
-        self.halting: Optional[Haltable] = None  # halted instead of raised into
-        self.timeout: Optional[float] = None  # the --timeout in force (seconds)
+        self.pending: BaseException | None = None  # came during a held() block
+        self.halting: Haltable | None = None  # halted instead of raised into
+        self.timeout: float | None = None  # the --timeout in force (seconds)
         self.reported = False  # "interrupted" was printed
         self.started = time.perf_counter()
-        self.watchdog: Optional[Watchdog] = None
-        self.finalizers: list[Callable[[], Optional[str]]] = []
+        self.watchdog: Watchdog | None = None
+        self.finalizers: list[Callable[[], str | None]] = []
 
     # ------------------------------------------------------------ raising a stop
     def raise_(self, exc: BaseException) -> BaseException:
@@ -138,7 +139,7 @@ class Stops(_Guard):
             return
         raise self.raise_(exc)
 
-    def signal_to_raise_again(self) -> Optional[int]:
+    def signal_to_raise_again(self) -> int | None:
         """The signal to raise a swallowed stop again with (None: none swallowed)."""
         if not self.swallowed or self.raised is None:
             return None
@@ -156,14 +157,14 @@ class Stops(_Guard):
     def leave(self, token: object) -> None:
         self.running.pop()
 
-    def dropped(self, token: object) -> Optional[BaseException]:
+    def dropped(self, token: object) -> BaseException | None:
         """A stop raised since :meth:`enter` returned ``token`` that the user
         code caught (and dropped, or turned into its own): raise it again."""
         if self.count != token and self.raised_last is not None:
             return self.raise_(self.raised_last)
         return None
 
-    def running_user_code(self) -> Optional[str]:
+    def running_user_code(self) -> str | None:
         return self.running[-1] if self.running else None
 
     # ------------------------------------------------------------ during a command
@@ -216,13 +217,13 @@ class Stops(_Guard):
         Ctrl-C is how a server stops), not with 130/143."""
         self.received = None
 
-    def on_emergency(self, finalizer: Callable[[], Optional[str]]) -> None:
+    def on_emergency(self, finalizer: Callable[[], str | None]) -> None:
         """``finalizer()`` (returning a note or None) keeps what is whole if
         the watchdog has to end the process (:mod:`htn.process.watchdog`)."""
         self.finalizers.append(finalizer)
 
     @property
-    def cause(self) -> Optional[BaseException]:
+    def cause(self) -> BaseException | None:
         """The stop that ends the command: the signal received, else the one raised."""
         return self.received or self.raised
 
@@ -236,7 +237,7 @@ class Stops(_Guard):
             return TIMEOUT_EXIT, "timed out" + (f" after {seconds:g} s" if seconds else "")
         return INTERRUPT_EXIT, "interrupted"
 
-    def interrupt_exit(self, exc: Optional[BaseException], note: str = "", now: bool = False):
+    def interrupt_exit(self, exc: BaseException | None, note: str = "", now: bool = False):
         """End the command after the stop ``exc``: "terminated" (SIGTERM),
         "timed out" (the deadline) or "interrupted" (anything else), then
         ``; note`` if given, on stderr; exit code 143, 1 or 130. ``now``:

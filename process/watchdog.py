@@ -43,7 +43,7 @@ class Watchdog:
         self.done = threading.Event()
         self._thread = threading.Thread(target=self._watch, name="htn-watchdog", daemon=True)
 
-    def begin(self) -> "Watchdog":
+    def begin(self) -> Watchdog:
         self._thread.start()
         return self
 

@@ -10,7 +10,6 @@ two arms holds two of them (:mod:`~htn.robot.two_arms`).
 from __future__ import annotations
 
 import math
-from typing import Optional
 
 import numpy as np
 
@@ -49,8 +48,8 @@ class Arm:
             physicsClientId=physics.cid,
         )
         base.mount(self.body, offset)
-        self.held: Optional[str] = None  # what the gripper holds (a constraint)
-        self.grip: Optional[int] = None  # that constraint
+        self.held: str | None = None  # what the gripper holds (a constraint)
+        self.grip: int | None = None  # that constraint
 
     def ee(self) -> np.ndarray:
         p, c = self.physics.p, self.physics.cid
@@ -68,7 +67,7 @@ class Arm:
         for j, v in zip(ARM_JOINTS, q):
             self.physics.p.resetJointState(self.body, j, v, physicsClientId=self.physics.cid)
 
-    def ik(self, pos, down: bool = True, yaw: Optional[float] = None) -> Optional[list[float]]:
+    def ik(self, pos, down: bool = True, yaw: float | None = None) -> list[float] | None:
         """Joint angles that put the gripper at ``pos`` (pointing down, or
         level), or None if no solution comes within 2 cm."""
         p, c = self.physics.p, self.physics.cid
@@ -108,7 +107,7 @@ class Arm:
             self._follow([u + (v - u) * a for u, v in zip(q0, q_goal)])
             yield from self.physics.step()
 
-    def reach(self, pos, seconds: float = 1.0, down: bool = True, yaw: Optional[float] = None):
+    def reach(self, pos, seconds: float = 1.0, down: bool = True, yaw: float | None = None):
         """Move the gripper to ``pos``; returns False (without moving) if out of reach."""
         q = self.ik(pos, down, yaw)
         if q is None:

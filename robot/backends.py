@@ -15,8 +15,9 @@ by raising :class:`~htn.jshop.language.errors.HtnError`, before anything moves.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, Callable, Optional
+from typing import Any
 
 from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import HtnError
@@ -72,7 +73,7 @@ class Backend:
     name: str
     factory: Callable
     description: str
-    extra: Optional[str] = None  # the install extra it needs ('sim'), if any
+    extra: str | None = None  # the install extra it needs ('sim'), if any
 
 
 BUILTIN = {
@@ -116,14 +117,14 @@ def _lazy(ep) -> Callable:
             if ep.dist is not None and ep.dist.name == "htn":  # htn's own: its extra, same name
                 raise HtnError(
                     f"--robot {ep.name} needs the {ep.name} extra: pip install 'htn[{ep.name}]'"
-                )
+                ) from exc
             raise HtnError(
                 f"robot plugin '{ep.name}' ({ep.value}) failed to load: {type(exc).__name__}: {exc}"
-            )
+            ) from exc
         except Exception as exc:  # a broken plugin: say which, no traceback
             raise HtnError(
                 f"robot plugin '{ep.name}' ({ep.value}) failed to load: {type(exc).__name__}: {exc}"
-            )
+            ) from exc
         return make(req)
 
     return factory

@@ -15,7 +15,7 @@ slips out of a gripper while the base drives with it (``slip``, see
 from __future__ import annotations
 
 import math
-from typing import Callable, Optional
+from collections.abc import Callable
 
 from .drive import Limits, angle_diff, drive_steps, turn_steps
 from .faults import FaultDraws
@@ -101,7 +101,7 @@ class MobileBase:
         gx: float,
         gy: float,
         fraction: float = 1.0,
-        slip: Optional[float] = None,
+        slip: float | None = None,
         drop: Callable[[], None] = lambda: None,
     ):
         """Drive straight to (gx, gy), forwards or backwards, or ``fraction``
@@ -129,7 +129,7 @@ class MobileBase:
             return fraction
         return 1.0
 
-    def carry_slip(self, carrying: bool) -> Optional[float]:
+    def carry_slip(self, carrying: bool) -> float | None:
         """When the base drives with an object in a gripper (``carrying``), the
         object slips with probability ``slip``, at a random point of the drive."""
         if carrying and self.draws.happens("slip"):
@@ -150,7 +150,7 @@ class MobileBase:
                     names.append(self.physics.bodies_named.get(cp[2], str(cp[2])))
         return sorted(set(names))
 
-    def place_here(self) -> Optional[str]:
+    def place_here(self) -> str | None:
         """The named place whose pose the base is at, if any."""
         x, y, yaw = self.pose
         for pl in self.world.places.values():

@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import io
 import math
-from typing import Optional
 
 import numpy as np
 
@@ -58,7 +57,7 @@ class OverviewCamera:
         )
         return np.asarray(rgb, dtype=np.uint8).reshape(h_, w_, 4)[:, :, :3]
 
-    def snapshot(self, path: str, label: Optional[Caption] = None) -> Optional[str]:
+    def snapshot(self, path: str, label: Caption | None = None) -> str | None:
         """Save a PNG (:data:`SIZE`) from the overview camera, with ``label`` drawn on it."""
         from PIL import Image
 
@@ -68,7 +67,7 @@ class OverviewCamera:
         image.save(path)
         return path
 
-    def camera_frame(self, width: int = 320, height: int = 240) -> Optional[bytes]:
+    def camera_frame(self, width: int = 320, height: int = 240) -> bytes | None:
         """The overview camera's image now, as JPEG bytes."""
         from PIL import Image
 

@@ -13,7 +13,6 @@ from __future__ import annotations
 import math
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
-from typing import Optional
 
 from .areas import AreaFrames
 from .interface import Check, SkillResult
@@ -194,7 +193,7 @@ class Drawers(Mapping):
             and obj not in self.arms.hands.values()
         )
 
-    def container_of(self, obj: str) -> Optional[Drawer]:
+    def container_of(self, obj: str) -> Drawer | None:
         return next((d for d in self._drawers.values() if self.holds(obj, d)), None)
 
     @staticmethod

@@ -4,13 +4,13 @@ kinds a robot back end can inject (no simulator needed to check them)."""
 from __future__ import annotations
 
 import random
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, fields
-from typing import Callable, Iterable, Optional
 
 from htn.jshop.language.errors import HtnError
 
 
-def parse_faults(text: Optional[str], known: Iterable[str]) -> dict[str, float]:
+def parse_faults(text: str | None, known: Iterable[str]) -> dict[str, float]:
     """``"slip=0.3,nav=0.1"`` -> ``{"slip": 0.3, "nav": 0.1}``; every name must
     be one of ``known`` and every value a probability."""
     known = tuple(known)
@@ -50,7 +50,7 @@ class Faults:
         return tuple(f.name for f in fields(cls))
 
     @classmethod
-    def parse(cls, text: Optional[str]) -> "Faults":
+    def parse(cls, text: str | None) -> Faults:
         return cls(**parse_faults(text, cls.kinds()))
 
 

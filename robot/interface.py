@@ -23,8 +23,9 @@ world itself.
 
 from __future__ import annotations
 
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
-from typing import Any, Callable, Iterator, Optional, Union
+from typing import Any
 
 
 @dataclass
@@ -63,7 +64,7 @@ class Check:
 
 
 Ticking = Iterator[None]  # a skill in progress: one physics step per next()
-SkillRun = Union[SkillResult, Ticking]  # what act() returns: done at once, or ticking
+SkillRun = SkillResult | Ticking  # what act() returns: done at once, or ticking
 
 
 def skill(name: str) -> Callable:
@@ -184,12 +185,12 @@ class Robot:
     def close(self) -> None:
         pass
 
-    def snapshot(self, path: str, label: Optional[Caption] = None) -> Optional[str]:
+    def snapshot(self, path: str, label: Caption | None = None) -> str | None:
         """Save a picture of the world as PNG at ``path``, with ``label``
         drawn on it; the path, or None for a robot without a camera."""
         return None
 
-    def camera_frame(self, width: int = 320, height: int = 240) -> Optional[bytes]:
+    def camera_frame(self, width: int = 320, height: int = 240) -> bytes | None:
         """A camera image of the world now, as JPEG bytes (None: no camera).
         Called between two ticks, in the thread that runs the robot."""
         return None

@@ -19,7 +19,6 @@ forward from the base pose towards the table, ``v`` to the robot's left.
 from __future__ import annotations
 
 import math
-from typing import Optional
 
 from htn.jshop.language.errors import HtnError
 
@@ -105,7 +104,7 @@ class KitchenRobot(SimulatedRobot):
         """Slower and gentler with the tray: what stands on it is held by friction only."""
         return TRAY_LIMITS if self.trays.hold else LIMITS
 
-    def _holding(self, obj: str) -> Optional[SideArm]:
+    def _holding(self, obj: str) -> SideArm | None:
         return self.arms.holding(obj)
 
     def _carried_bodies(self) -> set:
@@ -123,7 +122,7 @@ class KitchenRobot(SimulatedRobot):
             assert arm.held is not None  # its hand holds something
             arm.slip(arm.held, f"{arm.name} gripper while driving")
 
-    def _hand_with(self, obj: str, arm: Optional[str]) -> Optional[str]:
+    def _hand_with(self, obj: str, arm: str | None) -> str | None:
         """``arm`` if it names one, else the arm that holds ``obj``."""
         if arm in TwoArms.NAMES:
             return arm
@@ -199,7 +198,7 @@ class KitchenRobot(SimulatedRobot):
         return SkillResult(True, f"{obj} not seen")
 
     @skill("grasp")
-    def grasp(self, obj: str, where: str, arm: Optional[str] = None):
+    def grasp(self, obj: str, where: str, arm: str | None = None):
         """Top grasp at the detected pose: open, descend, close, lift, hold at the side."""
         arm = self.arms.pick(arm)
         if arm is None:
@@ -260,7 +259,7 @@ class KitchenRobot(SimulatedRobot):
         return SkillResult(True, f"{arm.name} gripper opened over {what}")
 
     @skill("place_object")
-    def place_object(self, obj: str, where: str, arm: Optional[str] = None):
+    def place_object(self, obj: str, where: str, arm: str | None = None):
         arm = self._hand_with(obj, arm)
         if arm is None or self.arms.hands[arm] != obj:
             return SkillResult(True, f"{obj} is not in the {arm or 'robot'}'s hand")
@@ -280,7 +279,7 @@ class KitchenRobot(SimulatedRobot):
         return self.drawers.pull(container, opened=False)
 
     @skill("put_on_tray")
-    def put_on_tray(self, obj: str, tray: str, arm: Optional[str] = None):
+    def put_on_tray(self, obj: str, tray: str, arm: str | None = None):
         arm = self._hand_with(obj, arm)
         if tray not in self.trays.bodies:
             return SkillResult(False, f"no tray {tray}")
@@ -292,7 +291,7 @@ class KitchenRobot(SimulatedRobot):
         return (yield from self._put_down(self.arms[arm], obj, *spot, what=f"{tray}"))
 
     @skill("take_from_tray")
-    def take_from_tray(self, obj: str, tray: str, arm: Optional[str] = None):
+    def take_from_tray(self, obj: str, tray: str, arm: str | None = None):
         arm = self.arms.pick(arm)
         if arm is None or self.arms.hands[arm] is not None:
             return SkillResult(False, f"the {arm or 'robot'}'s hand is not free")
@@ -340,7 +339,7 @@ class KitchenRobot(SimulatedRobot):
         return self.trays.check_on_tray(obj, tray)
 
     @check("tray_carried")
-    def check_tray_carried(self, tray: str, carried: bool, where: Optional[str] = None) -> Check:
+    def check_tray_carried(self, tray: str, carried: bool, where: str | None = None) -> Check:
         return self.trays.check_carried(tray, carried, where)
 
     # ------------------------------------------------------------ state estimation

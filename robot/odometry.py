@@ -11,7 +11,6 @@ base and arm motion of both PyBullet robots is counted.
 from __future__ import annotations
 
 import math
-from typing import Optional
 
 from .arm import EE_LINK
 from .base import MobileBase
@@ -27,7 +26,7 @@ class Odometry:
         self._physics, self._base = physics, base
         self.base = 0.0
         self.grippers = 0.0
-        self._last: Optional[tuple] = None  # base (x, y), grippers in the base frame
+        self._last: tuple | None = None  # base (x, y), grippers in the base frame
 
     def sample(self) -> None:
         p, c = self._physics.p, self._physics.cid

@@ -16,8 +16,8 @@ from __future__ import annotations
 import ctypes
 import os
 import sys
+from collections.abc import Callable
 from contextlib import contextmanager
-from typing import Callable, Optional
 
 import numpy as np
 
@@ -70,7 +70,7 @@ class Physics:
                 f"{os.environ.get('DISPLAY', '(none)')!r}"
             )
         p.setAdditionalSearchPath(pybullet_data.getDataPath(), physicsClientId=self.cid)
-        self.plane: Optional[int] = None
+        self.plane: int | None = None
         self.body_of: dict[str, int] = {}
         self.bodies_named: dict[int, str] = {}  # see name_bodies
         self.furniture_top: dict[str, float] = {}

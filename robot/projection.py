@@ -23,7 +23,6 @@ from __future__ import annotations
 import math
 import random
 from dataclasses import dataclass, field, fields, replace
-from typing import Optional
 
 from htn.jshop.language.errors import HtnError
 
@@ -49,14 +48,14 @@ class FailureRates:
     tray: float = 0.05
 
     @classmethod
-    def none(cls) -> "FailureRates":
+    def none(cls) -> FailureRates:
         return cls(0, 0, 0, 0, 0, 0, 0)
 
     @classmethod
     def kinds(cls) -> tuple[str, ...]:
         return tuple(f.name for f in fields(cls))
 
-    def with_faults(self, text: Optional[str]) -> "FailureRates":
+    def with_faults(self, text: str | None) -> FailureRates:
         """These rates, with the ``--faults`` probabilities ``text`` gives
         (``grasp=0.3,navigate=0.1``) in place of theirs."""
         return replace(self, **parse_faults(text, self.kinds()))
@@ -80,7 +79,7 @@ class ProjectedWorld:
     where: dict = field(default_factory=dict)  # object -> area or container or tray
     containers: dict = field(default_factory=dict)  # container -> area
     trays: dict = field(default_factory=dict)  # tray -> area (None while carried)
-    start: Optional[str] = None
+    start: str | None = None
 
 
 def world_from_atoms(atoms) -> ProjectedWorld:
@@ -115,7 +114,7 @@ class ProjectionRobot(Robot):
         self,
         world: ProjectedWorld,
         seed: int = 0,
-        failures: Optional[FailureRates] = None,
+        failures: FailureRates | None = None,
         pose_noise: float = 0.25,
     ):
         self.world = world
@@ -127,7 +126,7 @@ class ProjectionRobot(Robot):
         self.trays = dict(world.trays)
         self.opened: set = set()
         self.hands: dict = {"left": None, "right": None}
-        self.carrying_tray: Optional[str] = None
+        self.carrying_tray: str | None = None
         self.detections: set = set()
         self.spoken: list = []
         self.at = world.start
@@ -156,7 +155,7 @@ class ProjectionRobot(Robot):
         x, y = self.world.places[place]
         return x + self.rng.gauss(0, spread), y + self.rng.gauss(0, spread)
 
-    def _reposition(self, place: Optional[str]) -> None:
+    def _reposition(self, place: str | None) -> None:
         """Move the base to a pose sampled for this action near ``place``."""
         if place is None or place not in self.world.places:
             return
@@ -166,7 +165,7 @@ class ProjectionRobot(Robot):
         self.metrics.sim_time += d / BASE_SPEED
         self.base = (x, y)
 
-    def _arm_motion(self, arm: str, place: Optional[str]) -> None:
+    def _arm_motion(self, arm: str, place: str | None) -> None:
         """Rest -> pre-grasp -> grasp -> lift -> rest for one gripper, from a
         base pose sampled for this action."""
         self._reposition(place)
@@ -221,7 +220,7 @@ class ProjectionRobot(Robot):
         return tuple(c for c, a in self.world.containers.items() if a == area)
 
     @skill("grasp")
-    def grasp(self, obj: str, where: str, arm: Optional[str] = None) -> SkillResult:
+    def grasp(self, obj: str, where: str, arm: str | None = None) -> SkillResult:
         arm = arm or ("left" if self.hands["left"] is None else "right")
         if self.hands.get(arm) is not None:
             return SkillResult(False, f"the {arm} hand is not free")
@@ -236,7 +235,7 @@ class ProjectionRobot(Robot):
         return SkillResult(True, f"{arm} gripper closed")
 
     @skill("place_object")
-    def place_object(self, obj: str, where: str, arm: Optional[str] = None) -> SkillResult:
+    def place_object(self, obj: str, where: str, arm: str | None = None) -> SkillResult:
         arm = arm or next((a for a, o in self.hands.items() if o == obj), None)
         if arm is None or self.hands.get(arm) != obj:
             return SkillResult(True, f"{obj} is not in a hand")
@@ -264,7 +263,7 @@ class ProjectionRobot(Robot):
         return SkillResult(True, "pushed")
 
     @skill("put_on_tray")
-    def put_on_tray(self, obj: str, tray: str, arm: Optional[str] = None) -> SkillResult:
+    def put_on_tray(self, obj: str, tray: str, arm: str | None = None) -> SkillResult:
         arm = arm or next((a for a, o in self.hands.items() if o == obj), None)
         if arm is None:
             return SkillResult(True, f"{obj} is not in a hand")
@@ -294,7 +293,7 @@ class ProjectionRobot(Robot):
         return SkillResult(True, "tray lowered")
 
     @skill("take_from_tray")
-    def take_from_tray(self, obj: str, tray: str, arm: Optional[str] = None) -> SkillResult:
+    def take_from_tray(self, obj: str, tray: str, arm: str | None = None) -> SkillResult:
         arm = arm or ("left" if self.hands["left"] is None else "right")
         failed = self._act("grasp")
         self._arm_motion(arm, "")  # the tray is beside the robot
@@ -377,7 +376,7 @@ class ProjectionRobot(Robot):
         return Check(self.where.get(obj) == tray, f"{obj} at {self.where.get(obj)}")
 
     @check("tray_carried")
-    def check_tray_carried(self, tray: str, carried: bool, where: Optional[str] = None) -> Check:
+    def check_tray_carried(self, tray: str, carried: bool, where: str | None = None) -> Check:
         ok = (self.carrying_tray == tray) if carried else (self.trays.get(tray) == where)
         return Check(ok, f"tray at {self.trays.get(tray)}")
 

@@ -20,7 +20,6 @@ random generator, so the same seed gives the same run.
 from __future__ import annotations
 
 import math
-from typing import Optional
 
 from .arm import ARM_JOINTS, Arm
 from .base import MobileBase
@@ -46,7 +45,7 @@ class PyBulletRobot(SimulatedRobot):
         self,
         world: World,
         gui: bool = False,
-        faults: Optional[Faults] = None,
+        faults: Faults | None = None,
         seed: int = 0,
         speech=None,
     ):
@@ -121,7 +120,7 @@ class PyBulletRobot(SimulatedRobot):
         return f.x + offset, ((y0 + 0.14) if dy < 0 else (y1 - 0.14)), z1
 
     # ------------------------------------------------------------ what the robot carries
-    def _holding(self, obj: str) -> Optional[Arm]:
+    def _holding(self, obj: str) -> Arm | None:
         return self.arm if self.arm.held == obj else None
 
     def _carried_objects(self) -> list[str]:

@@ -14,8 +14,6 @@ robots share are here, with the grasp's preamble.
 
 from __future__ import annotations
 
-from typing import Optional
-
 from .arm import Arm
 from .base import MobileBase
 from .camera import OverviewCamera
@@ -40,7 +38,7 @@ class SimulatedRobot(Robot):
         self,
         world: World,
         gui: bool = False,
-        faults: Optional[Faults] = None,
+        faults: Faults | None = None,
         seed: int = 0,
         speech=None,
     ):
@@ -61,7 +59,7 @@ class SimulatedRobot(Robot):
         raise NotImplementedError
 
     # ------------------------------------------------------------ what each robot says
-    def _holding(self, obj: str) -> Optional[Arm]:  # pragma: no cover
+    def _holding(self, obj: str) -> Arm | None:  # pragma: no cover
         """The arm whose gripper holds ``obj``, if any."""
         raise NotImplementedError
 
@@ -156,10 +154,10 @@ class SimulatedRobot(Robot):
     def inject(self, kind: str, detail: str) -> None:
         self.draws.inject(kind, detail)
 
-    def snapshot(self, path: str, label: Optional[Caption] = None) -> Optional[str]:
+    def snapshot(self, path: str, label: Caption | None = None) -> str | None:
         return self.camera.snapshot(path, label)
 
-    def camera_frame(self, width: int = 320, height: int = 240) -> Optional[bytes]:
+    def camera_frame(self, width: int = 320, height: int = 240) -> bytes | None:
         return self.camera.camera_frame(width, height)
 
     def close(self) -> None:
@@ -176,7 +174,7 @@ class SimulatedRobot(Robot):
         return self.physics.cid
 
     @property
-    def plane(self) -> Optional[int]:
+    def plane(self) -> int | None:
         return self.physics.plane
 
     @property

@@ -20,7 +20,6 @@ Each action takes one second of simulated time.
 from __future__ import annotations
 
 import random
-from typing import Optional
 
 from htn.jshop.language import syntax as S
 from htn.jshop.language.terms import atom_str
@@ -42,7 +41,7 @@ class SymbolicRobot(Robot):
         domain: S.Domain,
         instance: S.ProblemInstance,
         functions=None,
-        faults: Optional[dict] = None,
+        faults: dict | None = None,
         seed: int = 0,
     ):
         from htn.jshop.search.planner import Planner

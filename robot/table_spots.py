@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from typing import Optional
 
 from .areas import AreaFrames
 from .drawer import Drawer, drawer_discs
@@ -54,8 +53,8 @@ class TableSpots:
         return out
 
     def free_spot(
-        self, area: str, arm: Optional[SideArm], radius: float, skip=()
-    ) -> Optional[tuple[float, float, float]]:
+        self, area: str, arm: SideArm | None, radius: float, skip=()
+    ) -> tuple[float, float, float] | None:
         """A free spot on the area's table: near the front, on the side of
         ``arm`` and within its reach (any, without an arm). Returns world
         (x, y, table top) or None."""

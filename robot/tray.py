@@ -12,8 +12,8 @@ its side. The base drives slower with it (see the kitchen robot's
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable, Optional
 
 from .areas import AreaFrames
 from .arm import EE_LINK, FINGERS
@@ -77,7 +77,7 @@ class Trays:
         self.physics, self.frames, self.world = physics, frames, world
         self.base, self.arms, self.footprints = base, arms, footprints
         self.bodies = bodies
-        self.hold: Optional[Hold] = None
+        self.hold: Hold | None = None
 
     def on_tray(self, tray: str) -> list[str]:
         ph = self.physics
@@ -111,7 +111,7 @@ class Trays:
             physicsClientId=c,
         )
 
-    def free_spot(self, tray: str, arm: str) -> Optional[tuple[float, float, float]]:
+    def free_spot(self, tray: str, arm: str) -> tuple[float, float, float] | None:
         """A free spot on ``tray`` that ``arm`` reaches: world x, y and the tray's floor."""
         p, c = self.physics.p, self.physics.cid
         tpos, torn = p.getBasePositionAndOrientation(self.bodies[tray], physicsClientId=c)
@@ -243,7 +243,7 @@ class Trays:
         ok = obj in self.on_tray(tray)
         return Check(ok, f"{obj} {'rests' if ok else 'does not rest'} on {tray}")
 
-    def check_carried(self, tray: str, carried: bool, where: Optional[str] = None) -> Check:
+    def check_carried(self, tray: str, carried: bool, where: str | None = None) -> Check:
         if tray not in self.bodies:
             return Check(False, f"no tray {tray}")
         bid = self.bodies[tray]

@@ -6,7 +6,6 @@ in joint space for the tray."""
 from __future__ import annotations
 
 import math
-from typing import Optional
 
 from .arm import ARM_JOINTS, FINGERS, Arm
 from .base import MobileBase
@@ -21,7 +20,7 @@ MOUNTS = {"left": (0.25, 0.2, 0.48), "right": (0.25, -0.2, 0.48)}
 SIDE = {"left": 1.0, "right": -1.0}
 ARM_AND_FINGERS = [*ARM_JOINTS, *FINGERS]
 
-Hands = dict[str, Optional[str]]  # what each hand holds (None: nothing), by arm
+Hands = dict[str, str | None]  # what each hand holds (None: nothing), by arm
 
 
 class SideArm(Arm):
@@ -42,11 +41,11 @@ class SideArm(Arm):
         self.set_fingers(0.04)
 
     @property
-    def held(self) -> Optional[str]:
+    def held(self) -> str | None:
         return self.hands[self.name]
 
     @held.setter
-    def held(self, obj: Optional[str]) -> None:
+    def held(self, obj: str | None) -> None:
         self.hands[self.name] = obj
 
     @property
@@ -111,13 +110,13 @@ class TwoArms:
     def all(self) -> list[SideArm]:
         return list(self.by_name.values())
 
-    def pick(self, arm: Optional[str]) -> Optional[str]:
+    def pick(self, arm: str | None) -> str | None:
         """``arm`` if it names one, else the first free one (None: both hands are full)."""
         if arm in self.NAMES:
             return arm
         return next((a for a in self.NAMES if self.hands[a] is None), None)
 
-    def holding(self, obj: str) -> Optional[SideArm]:
+    def holding(self, obj: str) -> SideArm | None:
         return next((self.by_name[a] for a in self.NAMES if self.hands[a] == obj), None)
 
     def held_objects(self) -> list[str]:

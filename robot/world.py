@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Optional
+from typing import TYPE_CHECKING
 
 from htn.jshop.language.errors import HtnError
 
@@ -45,7 +45,7 @@ class Furniture:
 class Thing:
     name: str
     kind: str
-    on: Optional[str] = None  # furniture name
+    on: str | None = None  # furniture name
     grasps: tuple = ()
 
 
@@ -54,7 +54,7 @@ class Person:
     name: str
     x: float
     y: float
-    at: Optional[str] = None  # Place where the robot meets them
+    at: str | None = None  # Place where the robot meets them
     can_receive: bool = False
 
 
@@ -65,8 +65,8 @@ class World:
     things: dict = field(default_factory=dict)
     persons: dict = field(default_factory=dict)
     robot: str = "robot"
-    robot_at: Optional[str] = None
-    holding: Optional[str] = None
+    robot_at: str | None = None
+    holding: str | None = None
     static_facts: list = field(default_factory=list)  # (pred, args) never changed by actions
     # the kitchen (pick and place) vocabulary, see kitchen_world_from_state
     containers: dict = field(default_factory=dict)  # container -> area
@@ -77,7 +77,9 @@ class World:
         try:
             return self.places[name]
         except KeyError:
-            raise HtnError(f"unknown location '{name}' (no (location {name} x y theta) fact)")
+            raise HtnError(
+                f"unknown location '{name}' (no (location {name} x y theta) fact)"
+            ) from None
 
 
 def number_arg(args, i, what, pos) -> float:
@@ -132,7 +134,7 @@ def world_from_state(atoms) -> World:
             elif p == "holding":
                 w.holding = args[1]
         except IndexError:
-            raise HtnError.at(pos, f"({p} ...) has too few arguments")
+            raise HtnError.at(pos, f"({p} ...) has too few arguments") from None
     if w.robot_at is None:
         raise HtnError("the initial state has no (robot_at ROBOT LOCATION) fact")
     w.place(w.robot_at)
@@ -165,7 +167,7 @@ def kitchen_world_from_state(atoms) -> World:
     """
     w = World()
     areas: dict[str, tuple] = {}
-    said: dict[tuple, Optional[Pos]] = {}  # (predicate, first argument) -> position in the file
+    said: dict[tuple, Pos | None] = {}  # (predicate, first argument) -> position in the file
     start_pos = None
     for a in atoms:
         p, args, pos = a.pred, a.args, a.pos
@@ -191,7 +193,7 @@ def kitchen_world_from_state(atoms) -> World:
                     f"(the state says (holding {' '.join(map(str, args))}))",
                 )
         except IndexError:
-            raise HtnError.at(pos, f"({p} ...) has too few arguments")
+            raise HtnError.at(pos, f"({p} ...) has too few arguments") from None
     if w.robot_at is None:
         raise HtnError("the initial state has no (robot-at AREA) fact")
     if w.robot_at not in areas:
@@ -222,7 +224,7 @@ def kitchen_world_from_state(atoms) -> World:
     for name, (x, y) in areas.items():
         yaw = tables[name][2] if name in tables else 0.0
         w.places[name] = Place(name, x, y, yaw)
-    for name, (cx, cy, yaw) in tables.items():
+    for name, (cx, cy, _yaw) in tables.items():
         w.furniture[name] = Furniture(name, "table", cx, cy, name)
     return w
 
@@ -284,7 +286,7 @@ def _layout_tables(areas: dict, with_table: list, where_said: dict) -> dict:
     order = [0, 4, 8, 12, 2, 6, 10, 14, 1, 3, 5, 7, 9, 11, 13, 15]
     for name in with_table:
         x, y = areas[name]
-        best: Optional[tuple[float, float, list]] = None
+        best: tuple[float, float, list] | None = None
         for k in order:
             yaw = math.pi * k / 8
             rect = _table_rect(x, y, yaw)

@@ -27,8 +27,9 @@ needs only ``request.tasks`` and ``is_cancel_requested``.
 from __future__ import annotations
 
 import threading
+from collections.abc import Callable
 from dataclasses import replace
-from typing import Callable, Optional, overload
+from typing import overload
 
 from htn.api.agent import Agent, GoalResult
 
@@ -44,11 +45,11 @@ class Goal:
         self.handle = handle
         self.tasks: str = handle.request.tasks
         self.number = 0
-        self.halt: Optional[str] = None  # a halt its run has yet to take (see Turns._halt)
-        self.why: Optional[str] = None  # why it was last asked to halt
+        self.halt: str | None = None  # a halt its run has yet to take (see Turns._halt)
+        self.why: str | None = None  # why it was last asked to halt
         self.waits = False  # preempted, it waits to resume
         self.wake = threading.Event()  # ... and its turn came, or it ends (drop)
-        self.drop: Optional[str] = None  # why it is not resumed
+        self.drop: str | None = None  # why it is not resumed
 
     def cancelled(self) -> bool:
         return self.handle.is_cancel_requested
@@ -67,7 +68,7 @@ class Turns:
         agent: Agent,
         policy: str = "preempt",
         resume: bool = False,
-        log_dir: Optional[str] = None,
+        log_dir: str | None = None,
         emit: Callable[[object, dict], None] = lambda handle, rec: None,
     ):
         self.agent, self.policy, self.resume, self.log_dir = agent, policy, resume, log_dir
@@ -75,7 +76,7 @@ class Turns:
         self._turn = threading.Lock()  # one goal runs at a time
         self._gate = threading.Lock()  # the fields below, between goals' threads
         self._waiting = 0  # new goals waiting for their turn
-        self._current: Optional[Goal] = None  # the goal whose turn it is
+        self._current: Goal | None = None  # the goal whose turn it is
         self._resumable: list = []  # preempted goals waiting to resume, newest last
         self._serving = True  # preempted goals may wait to resume
         self._goals = 0
@@ -138,7 +139,7 @@ class Turns:
             self._drop(why)
 
     # ------------------------------------------------------------ inside
-    def _halt(self, goal: Goal, why: str, next_goal: Optional[str] = None) -> None:
+    def _halt(self, goal: Goal, why: str, next_goal: str | None = None) -> None:
         """Preempt ``goal``'s run (``next_goal``: the tasks of the goal that
         preempts it, whose plan may go on with the running action); if it
         has not begun yet, its run takes the halt with its first event."""
@@ -149,8 +150,8 @@ class Turns:
     @overload
     def _take_turn(self, goal: Goal, before: None) -> GoalResult: ...
     @overload
-    def _take_turn(self, goal: Goal, before: GoalResult) -> Optional[GoalResult]: ...
-    def _take_turn(self, goal: Goal, before: Optional[GoalResult]) -> Optional[GoalResult]:
+    def _take_turn(self, goal: Goal, before: GoalResult) -> GoalResult | None: ...
+    def _take_turn(self, goal: Goal, before: GoalResult | None) -> GoalResult | None:
         """Run ``goal`` (``before``: resume it, preempted as that) when its
         turn comes, then decide who goes on. None: a goal to resume gave
         way to a new goal waiting for its turn, and waits again."""
@@ -174,7 +175,7 @@ class Turns:
             self._after(goal, outcome)
             return outcome
 
-    def _run(self, goal: Goal, before: Optional[GoalResult]) -> GoalResult:
+    def _run(self, goal: Goal, before: GoalResult | None) -> GoalResult:
         if goal.cancelled():
             return before or GoalResult("preempted", "preempted before it started")
         log = None

@@ -39,9 +39,10 @@ from __future__ import annotations
 import math
 import re
 import tomllib
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Iterable, NoReturn, Optional
+from typing import Any, NoReturn
 
 from htn.jshop.language.errors import HtnError
 
@@ -61,7 +62,7 @@ _SERVED = {
 _FUNCTION = re.compile(r"(yaw|yaw_degrees)\((.*)\)\Z")
 
 
-def beside(domain: str | Path) -> Optional[Path]:
+def beside(domain: str | Path) -> Path | None:
     """The mapping file beside the domain file ``domain``, if there is one."""
     path = Path(domain)
     found = path.with_name(path.name.split(".")[0] + SUFFIX)
@@ -127,7 +128,7 @@ def read(path: str | Path) -> Mapping:
     try:
         text = Path(path).read_text(encoding="utf-8")
     except OSError as exc:
-        raise HtnError(f"cannot read the mapping file: {exc.strerror or exc}", path)
+        raise HtnError(f"cannot read the mapping file: {exc.strerror or exc}", path) from exc
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
@@ -135,7 +136,7 @@ def read(path: str | Path) -> Mapping:
         message = re.sub(r"\s*\(at line \d+, column \d+\)", "", str(exc))
         raise HtnError(
             f"not TOML: {message}", path, int(m[1]) if m else None, int(m[2]) if m else None
-        )
+        ) from exc
     return _mapping(data, path, text)
 
 
@@ -168,7 +169,11 @@ def _mapping(data: dict, path: str, text: str) -> Mapping:
             for key in spec:
                 if key not in known:
                     fail(f"{where}: unknown key '{key}' (known: {', '.join(sorted(known))})", key)
-            into[name] = _call(kind, name, spec, m, lambda msg: fail(f"{where}: {msg}", name))
+
+            def failed(msg: str, where: str = where, name: str = name) -> NoReturn:
+                fail(f"{where}: {msg}", name)
+
+            into[name] = _call(kind, name, spec, m, failed)
     return m
 
 
@@ -214,7 +219,7 @@ def _check_fields(fields: dict, fail) -> None:
                 fail(f"{inner[1]}() needs an argument")
 
 
-def _line_of(text: str, key: str) -> Optional[int]:
+def _line_of(text: str, key: str) -> int | None:
     """The first line that names ``key`` (a table header or an assignment)."""
     pattern = re.compile(rf'(^|[\s\[."]){re.escape(key)}(["\].\s=]|$)')
     for number, line in enumerate(text.splitlines(), 1):
@@ -261,7 +266,7 @@ def _arg(token: str, args: tuple, where: str):
     try:
         return args[int(token[1:]) - 1]
     except (ValueError, IndexError):
-        raise HtnError(f"{where}: {token} is not one of the {len(args)} argument(s)")
+        raise HtnError(f"{where}: {token} is not one of the {len(args)} argument(s)") from None
 
 
 def _value(expr: Any, args: tuple, bound: dict, where: str) -> Any:
@@ -318,4 +323,4 @@ def _set(target: Any, name: str, value: Any, path: str) -> None:
             value = [str(v) for v in value] if isinstance(value, (list, tuple)) else [str(value)]
         setattr(target, name, value)
     except (TypeError, ValueError, AssertionError) as exc:
-        raise HtnError(f"cannot set '{path}' to {value!r}: {exc}")
+        raise HtnError(f"cannot set '{path}' to {value!r}: {exc}") from exc

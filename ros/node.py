@@ -37,7 +37,7 @@ from __future__ import annotations
 
 import json
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Optional
+from typing import TYPE_CHECKING, Any
 
 import rclpy
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
@@ -65,15 +65,15 @@ class NodeSettings:
     """What ``htn ros node`` is told."""
 
     domain: str
-    problem: Optional[str] = None
+    problem: str | None = None
     robot: str = "auto"  # auto: ros where a mapping file lies beside the domain
     faults: str = ""
     seed: int = 0
     replan: bool = False
     on_new_goal: str = "preempt"
-    log_dir: Optional[str] = None  # a JSON Lines log per goal, as htn run --log writes
+    log_dir: str | None = None  # a JSON Lines log per goal, as htn run --log writes
     resume: bool = False  # a goal preempted by a newer one goes on after it
-    view: Optional[tuple] = None  # (host, port): the browser view of the goals
+    view: tuple | None = None  # (host, port): the browser view of the goals
 
 
 def robot_for(name: str, domain: str) -> str:
@@ -93,13 +93,13 @@ class HtnNode(LifecycleNode):
         super().__init__(name)
         self.settings, self.managed = settings, managed
         self.types = import_interfaces()
-        self.agent: Optional[Agent] = None
-        self.configure_error: Optional[str] = None
+        self.agent: Agent | None = None
+        self.configure_error: str | None = None
         self._group = ReentrantCallbackGroup()
-        self.turns: Optional[Turns] = None  # the goals, one at a time
+        self.turns: Turns | None = None  # the goals, one at a time
         self._served: list = []
         self._events = None
-        self.view: Optional[GoalsView] = None  # the browser view of the goals, --view
+        self.view: GoalsView | None = None  # the browser view of the goals, --view
 
     # ------------------------------------------------------------ lifecycle
     def on_configure(self, state: State) -> TransitionCallbackReturn:
@@ -290,7 +290,7 @@ def _log_folder(path: str) -> None:
     try:
         os.makedirs(path, exist_ok=True)
     except OSError as exc:
-        raise HtnError(f"--log-dir: cannot make the folder: {exc.strerror or exc}", path)
+        raise HtnError(f"--log-dir: cannot make the folder: {exc.strerror or exc}", path) from exc
 
 
 def serve(settings: NodeSettings, managed: bool = False, name: str = "htn", on_view=None) -> int:
@@ -330,7 +330,7 @@ def send_goal(
     tasks: str,
     *,
     on_event=None,
-    cancel_after: Optional[float] = None,
+    cancel_after: float | None = None,
     wait: float = 30.0,
     node_name: str = "htn",
 ):

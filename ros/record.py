@@ -32,10 +32,10 @@ from __future__ import annotations
 
 import os
 import time
+from collections.abc import Callable
 from contextlib import nullcontext
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable, Optional
 
 from htn.jshop.language.errors import HtnError
 
@@ -154,7 +154,7 @@ class BagWriter:
 def record(
     output: str,
     node_name: str = "htn",
-    duration: Optional[float] = None,
+    duration: float | None = None,
     *,
     say: Callable[[str], None] = lambda line: None,
     held=nullcontext,
@@ -209,9 +209,7 @@ def record(
     return Recording(str(out), dict(bag.counts))
 
 
-def _spin(
-    node, bag: BagWriter, events: str, node_name: str, duration: Optional[float], say
-) -> None:
+def _spin(node, bag: BagWriter, events: str, node_name: str, duration: float | None, say) -> None:
     """Take messages until ``duration`` is over (or an interrupt); say when
     the node's events topic gets (or loses) its publisher."""
     import rclpy

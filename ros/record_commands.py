@@ -21,7 +21,9 @@ def _seconds(ctx, param, value):
     try:
         seconds = float(text)
     except ValueError:
-        raise click.BadParameter(f"{text[:40]!r} is not a number of seconds (e.g. 10 or 0.5)")
+        raise click.BadParameter(
+            f"{text[:40]!r} is not a number of seconds (e.g. 10 or 0.5)"
+        ) from None
     if not math.isfinite(seconds) or seconds <= 0:
         raise click.BadParameter(f"{text[:40]!r}: give a positive number of seconds")
     return seconds

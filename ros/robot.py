@@ -70,7 +70,7 @@ class RosRobot(Robot):
         try:
             self.types = import_interfaces()
         except InterfaceBuildError as exc:
-            raise HtnError(str(exc))
+            raise HtnError(str(exc)) from exc
         self.mapping, self.facts, self.dynamic = table, list(facts), set(dynamic)
         self.observes_world = bool(table.observe)
         self.injected: list[dict] = []

@@ -27,7 +27,6 @@ import math
 import threading
 import time
 from dataclasses import dataclass
-from typing import Optional
 
 import rclpy
 from geometry_msgs.msg import PoseStamped
@@ -50,7 +49,7 @@ POSE_HZ = 20.0
 class RobotSettings:
     """What ``htn ros robot`` is told."""
 
-    problem: Optional[str] = None  # the world; default: the bundled bring_object problem
+    problem: str | None = None  # the world; default: the bundled bring_object problem
     faults: str = ""
     seed: int = 0
     speed: float = 1.0  # times real time; 0: as fast as it can

@@ -27,9 +27,9 @@ from __future__ import annotations
 
 import math
 import statistics
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable, Optional
 
 from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import HtnError
@@ -129,7 +129,7 @@ def projected(metric: str) -> Callable:
     projection robot, with the same seeds for every plan (a paired comparison,
     so the same plan always gets the same cost)."""
 
-    def cost(ws: "Workspace", plan) -> float:
+    def cost(ws: Workspace, plan) -> float:
         from htn.executor.config import load_retries
 
         from .projection import project
@@ -175,7 +175,7 @@ class Framework:
 
     # -- the paper's API
     def register_transformation(
-        self, function: Callable, applicability_rule: str, name: Optional[str] = None
+        self, function: Callable, applicability_rule: str, name: str | None = None
     ) -> Transformation:
         t = Transformation(
             name or function.__name__.replace("_", "-"), function, applicability_rule
@@ -220,7 +220,7 @@ class Framework:
         self,
         ws: Workspace,
         metric: str = "navigation",
-        on_phase: Optional[Callable[[str], None]] = None,
+        on_phase: Callable[[str], None] | None = None,
     ) -> Workspace:
         """Apply every enabled transformation, highest priority first, each as
         often as its rule finds untransformed tasks; keep only those that leave

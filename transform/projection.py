@@ -11,7 +11,7 @@ run plans on the fast projection robot with :func:`project`; the evaluation
 
 from __future__ import annotations
 
-from typing import Callable, Optional
+from collections.abc import Callable
 
 from htn.executor.dispatcher import RunSummary, TaskDispatcher
 from htn.executor.log import EventLog
@@ -73,8 +73,8 @@ def project(
     instance: S.ProblemInstance,
     steps,
     seed: int,
-    rates: Optional[FailureRates] = None,
-    retries: Optional[dict] = None,
+    rates: FailureRates | None = None,
+    retries: dict | None = None,
 ) -> dict:
     """Execute ``steps`` once on the projection robot; metrics of the run and
     the outcome of each step (for :func:`projected_tree`).
@@ -94,7 +94,7 @@ def projected_tree(
     instance: S.ProblemInstance,
     plan,
     seed: int = 0,
-    retries: Optional[dict] = None,
+    retries: dict | None = None,
 ):
     """The plan's task tree annotated with the outcomes of one projected run."""
     from htn.jshop.plans.tree import annotate

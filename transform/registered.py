@@ -6,12 +6,10 @@ module-level API over it."""
 
 from __future__ import annotations
 
-from typing import Optional
-
 from . import rules
 from .framework import Framework, Workspace
 
-_DEFAULT: Optional[Framework] = None
+_DEFAULT: Framework | None = None
 
 
 def default_framework() -> Framework:

@@ -106,7 +106,8 @@ def tray(ws, schemas):
         groups.setdefault((s["tray"], s["from"], s["to"]), [])
         if s["t"] not in groups[(s["tray"], s["from"], s["to"])]:
             groups[(s["tray"], s["from"], s["to"])].append(s["t"])
-    for (tray_, src, dst), paths in groups.items():
+    # the loop's variables are the group found, read after the break
+    for (tray_, src, dst), paths in groups.items():  # noqa: B007
         if len(paths) > 2:
             break
     else:

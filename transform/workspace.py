@@ -7,7 +7,7 @@ declared by a rule set: the built-in one's is
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Optional
+from typing import TYPE_CHECKING
 
 from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import HtnError
@@ -38,7 +38,7 @@ class Unit:
 
     tasks: list  # [S.TaskAtom]
     paths: list  # node paths of the original tasks it stands for
-    transformed_by: Optional[str] = None
+    transformed_by: str | None = None
 
 
 @dataclass
@@ -49,12 +49,12 @@ class Workspace:
     domain: S.Domain
     instance: S.ProblemInstance
     units: list
-    plan: Optional[Plan] = None  # set by from_problem: the plan with its tree
+    plan: Plan | None = None  # set by from_problem: the plan with its tree
     log: list = field(default_factory=list)  # (rule, status, detail)
     frozen: set = field(default_factory=set)  # paths of rolled-back rewrites
 
     @classmethod
-    def from_problem(cls, domain: S.Domain, instance: S.ProblemInstance) -> "Workspace":
+    def from_problem(cls, domain: S.Domain, instance: S.ProblemInstance) -> Workspace:
         plan = next(Planner(domain, instance, record_trees=True).plans(), None)
         if plan is None:
             raise HtnError.at(instance.pos, "the problem has no plan to transform")
@@ -82,7 +82,7 @@ class Workspace:
                     node.code_replacement = [source_atom(t.name, t.args) for t in unit.tasks]
         return tree
 
-    def replan(self, units: Optional[list[Unit]] = None) -> Optional[Plan]:
+    def replan(self, units: list[Unit] | None = None) -> Plan | None:
         """The first plan of ``units`` (default: the current ones), or None."""
         units = self.units if units is None else units
         tasks = S.TaskList([t for u in units for t in u.tasks])

@@ -10,7 +10,7 @@ global environment, so that afterwards::
 
 works, and ``PlanValidator(name="htn")`` validates hierarchical plans. UP 1.3
 discovers engines outside its own list only through ``Factory.add_engine``
-(what :func:`register` calls) or an ``up.ini`` file; see the README for the
+(what :func:`register` calls) or an ``up.ini`` file; see docs/up.md for the
 file. Needs the ``up`` extra (``pip install 'htn[up]'``); ``import htn``
 does not import this module.
 

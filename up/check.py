@@ -22,7 +22,7 @@ AAAI 2020) when
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Optional
+from typing import Any
 
 from htn.jshop.checks.validate import Unpriced, check_steps, validate_plan
 from htn.jshop.language.terms import Var
@@ -37,7 +37,7 @@ class Check:
 
     valid: bool
     message: str = ""
-    failed_action: Optional[Any] = None  # the UP action instance that cannot be applied
+    failed_action: Any | None = None  # the UP action instance that cannot be applied
     goal_failed: bool = False
 
 

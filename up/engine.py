@@ -51,7 +51,8 @@ from __future__ import annotations
 
 import time
 import warnings
-from typing import IO, Callable, Optional
+from collections.abc import Callable
+from typing import IO
 
 from unified_planning.engines import (
     Credits,
@@ -91,8 +92,8 @@ PLAN_KINDS = ("hierarchical", "sequential")
 CREDITS = Credits(
     name="htn",
     author="the htn developers",
-    contact="the htn project (see its README)",
-    website="the htn project's README (unified-planning section)",
+    contact="the htn project (see its README.md)",
+    website="the htn project's documentation, docs/up.md",
     license="MIT",
     short_description="htn: a JSHOP2-compatible HTN planner that reads HDDL, with "
     "depth-first and heuristic searches.",
@@ -157,16 +158,16 @@ class HtnEngine(Engine, OneshotPlannerMixin, PlanValidatorMixin):
         return optimality_guarantee == OptimalityGuarantee.SATISFICING
 
     @staticmethod
-    def get_credits(**kwargs) -> Optional[Credits]:
+    def get_credits(**kwargs) -> Credits | None:
         return CREDITS
 
     # ------------------------------------------------------------ planning
     def _solve(
         self,
         problem,
-        heuristic: Optional[Callable] = None,
-        timeout: Optional[float] = None,
-        output_stream: Optional[IO[str]] = None,
+        heuristic: Callable | None = None,
+        timeout: float | None = None,
+        output_stream: IO[str] | None = None,
     ) -> PlanGenerationResult:
         from .search import search
 
@@ -175,7 +176,8 @@ class HtnEngine(Engine, OneshotPlannerMixin, PlanValidatorMixin):
         if heuristic is not None:
             warnings.warn(
                 "htn does not use a heuristic given by the caller: its searches "
-                "use their own (the 'search' option)"
+                "use their own (the 'search' option)",
+                stacklevel=2,
             )
             logs.append(LogMessage(LogLevel.WARNING, "heuristic ignored"))
         try:
@@ -245,7 +247,7 @@ class HtnEngine(Engine, OneshotPlannerMixin, PlanValidatorMixin):
         )
 
 
-def _metric_values(problem, plan) -> Optional[dict]:
+def _metric_values(problem, plan) -> dict | None:
     """The value of each of the problem's quality metrics for a valid plan."""
     out = {}
     actions = plan.action_plan.actions

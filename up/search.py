@@ -5,7 +5,7 @@ the statuses and options)."""
 from __future__ import annotations
 
 import time
-from typing import IO, Optional
+from typing import IO
 
 from unified_planning.engines import LogLevel, LogMessage, PlanGenerationResult
 from unified_planning.engines import PlanGenerationResultStatus as Status
@@ -24,8 +24,8 @@ def search(
     conv: Conversion,
     options: dict,
     started: float,
-    timeout: Optional[float],
-    output_stream: Optional[IO[str]],
+    timeout: float | None,
+    output_stream: IO[str] | None,
     logs: list,
 ) -> PlanGenerationResult:
     """Plan for ``conv`` within ``timeout`` seconds of ``started``."""

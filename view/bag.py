@@ -30,7 +30,6 @@ import os
 from dataclasses import dataclass
 from importlib.util import find_spec
 from pathlib import Path
-from typing import Optional
 
 from htn.jshop.language.errors import HtnError
 
@@ -54,10 +53,10 @@ class BagGoal:
     records: list
     goal: int  # 1-based
     goals: int  # in the bag
-    warning: Optional[str] = None
+    warning: str | None = None
 
     @property
-    def note(self) -> Optional[str]:
+    def note(self) -> str | None:
         if self.goals < 2:
             return None
         return f"goal {self.goal} of {self.goals}; --goal N shows another"
@@ -72,7 +71,7 @@ def is_bag(path) -> bool:
     return p.suffix.lower() in SUFFIXES
 
 
-def read_bag(path, goal: Optional[int] = None) -> BagGoal:
+def read_bag(path, goal: int | None = None) -> BagGoal:
     """The records of goal ``goal`` (1-based; None: the last) of the bag at
     ``path``, checked as a log's are: every record a JSON object with an
     ``event``, the goal's first the ``header``."""

@@ -27,7 +27,6 @@ import asyncio
 import json
 import threading
 import time
-from typing import Optional
 
 BATCH = 20000  # events per message, at most (a page shows each message at once)
 
@@ -54,14 +53,14 @@ class Hub:
         records=(),
         title: str = "",
         camera: bool = False,
-        wall_start: Optional[float] = None,
+        wall_start: float | None = None,
     ):
         self.mode, self.title, self.camera, self.wall_start = mode, title, camera, wall_start
         self.history: list[dict] = list(records)
-        self.frame: Optional[tuple[int, float, bytes]] = None  # (number, sim_t, jpeg)
+        self.frame: tuple[int, float, bytes] | None = None  # (number, sim_t, jpeg)
         self.frames = 0
         self.pages = 0  # connected now (read by the robot's thread)
-        self.loop: Optional[asyncio.AbstractEventLoop] = None
+        self.loop: asyncio.AbstractEventLoop | None = None
         self._pages: set = set()
         self._poked = False
         self._closed = False

@@ -17,7 +17,7 @@ last frame is rendered when the run ends.
 from __future__ import annotations
 
 import time
-from typing import TYPE_CHECKING, Optional
+from typing import TYPE_CHECKING
 
 from .hub import Hub
 from .model import title_of
@@ -37,7 +37,7 @@ class RunView:
     def __init__(self, host: str = "127.0.0.1", port: int = 0):
         self.hub = Hub("live")
         self.server = ViewServer(self.hub, host, port)
-        self.robot: Optional[Robot] = None  # a robot with a camera, once attached
+        self.robot: Robot | None = None  # a robot with a camera, once attached
         self._next_frame = 0.0
         self.camera_seconds = 0.0  # spent rendering, in the robot's thread
 
@@ -45,7 +45,7 @@ class RunView:
     def url(self) -> str:
         return self.server.url
 
-    def start(self) -> "RunView":
+    def start(self) -> RunView:
         self.server.start()
         return self
 
@@ -92,7 +92,7 @@ class RunView:
             self.hub.set_frame(frame, self.robot.sim_time)
         return spent
 
-    def wait_for_page(self, timeout: Optional[float] = None) -> bool:
+    def wait_for_page(self, timeout: float | None = None) -> bool:
         """Block until a page has connected and shown the run so far (Ctrl-C
         still interrupts)."""
         deadline = None if timeout is None else time.monotonic() + timeout
@@ -117,7 +117,7 @@ class GoalsView:
     def url(self) -> str:
         return self.server.url
 
-    def start(self) -> "GoalsView":
+    def start(self) -> GoalsView:
         self.server.start()
         return self
 

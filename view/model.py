@@ -1,6 +1,6 @@
 """The page's input: the events of a run, as ``htn run --log`` writes them.
 
-A page is driven by nothing but log records (see the README's event log and
+A page is driven by nothing but log records (see docs/executor.md, the event log, and
 :mod:`htn.executor.tree_events`): the ``header``, the ``tree`` events that
 give the task tree and each graft, and every event about an action, which
 names its tree node (``node``). The same records come live from a run's
@@ -16,14 +16,13 @@ from __future__ import annotations
 
 import json
 import os
-from typing import Optional
 
 from htn.jshop.language.errors import HtnError
 
 OUTCOMES = ("finished", "verified", "failed", "aborted", "retrying", "interrupted")
 
 
-def read_log(path: str) -> tuple[list[dict], Optional[str]]:
+def read_log(path: str) -> tuple[list[dict], str | None]:
     """The records of the log file ``path`` and a warning (or None).
 
     Every line must be a JSON object with an ``event``, the first one the
@@ -35,7 +34,7 @@ def read_log(path: str) -> tuple[list[dict], Optional[str]]:
         with open(path, encoding="utf-8-sig") as fh:
             lines = fh.read().split("\n")
     except (OSError, UnicodeDecodeError) as exc:
-        raise HtnError(f"not a log of htn run --log: {exc}", path)
+        raise HtnError(f"not a log of htn run --log: {exc}", path) from exc
     records: list[dict] = []
     warning = None
     last = len(lines) - 1
@@ -50,7 +49,7 @@ def read_log(path: str) -> tuple[list[dict], Optional[str]]:
             if number == len(lines) and records:  # no newline after it: cut short
                 warning = f"{path}:{number}: the last line is incomplete; left out"
                 break
-            raise HtnError(f"not a JSON line: {exc.msg}", path, number, exc.colno)
+            raise HtnError(f"not a JSON line: {exc.msg}", path, number, exc.colno) from exc
         if not isinstance(rec, dict) or not isinstance(rec.get("event"), str):
             raise HtnError('not an event of htn run --log (no "event")', path, number, 1)
         if not records and rec["event"] != "header":

@@ -20,7 +20,7 @@ import secrets
 import socket
 import threading
 from pathlib import Path
-from typing import Any, Optional
+from typing import Any
 from urllib.parse import parse_qs
 
 from htn.jshop.language.errors import HtnError
@@ -139,9 +139,9 @@ class ViewServer:
         self.token = secrets.token_urlsafe(18)
         self.sock = _listen(host, port)
         self.port = self.sock.getsockname()[1]
-        self._server: Optional[Any] = None  # the uvicorn.Server, once started
-        self.loop: Optional[asyncio.AbstractEventLoop] = None
-        self._thread: Optional[threading.Thread] = None
+        self._server: Any | None = None  # the uvicorn.Server, once started
+        self.loop: asyncio.AbstractEventLoop | None = None
+        self._thread: threading.Thread | None = None
 
     @property
     def url(self) -> str:
@@ -152,7 +152,7 @@ class ViewServer:
             host = f"[{host}]"
         return f"http://{host}:{self.port}/?token={self.token}"
 
-    def start(self, timeout: float = 10.0) -> "ViewServer":
+    def start(self, timeout: float = 10.0) -> ViewServer:
         import uvicorn
 
         config = uvicorn.Config(
@@ -221,7 +221,9 @@ def _listen(host: str, port: int) -> socket.socket:
     try:
         infos = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM, flags=socket.AI_PASSIVE)
     except socket.gaierror as exc:
-        raise HtnError(f"cannot serve the view on {host}: no such address ({exc.strerror})")
+        raise HtnError(
+            f"cannot serve the view on {host}: no such address ({exc.strerror})"
+        ) from exc
     family, _, _, _, address = infos[0]
     sock = socket.socket(family, socket.SOCK_STREAM)
     try:
@@ -230,6 +232,6 @@ def _listen(host: str, port: int) -> socket.socket:
         sock.listen(16)
     except OSError as exc:
         sock.close()
-        raise HtnError(f"cannot serve the view on {host} port {port}: {exc.strerror}")
+        raise HtnError(f"cannot serve the view on {host} port {port}: {exc.strerror}") from exc
     sock.setblocking(False)
     return sock

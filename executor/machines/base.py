@@ -30,7 +30,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from importlib import import_module
-from typing import Any, Optional, TypeVar
+from typing import Any, TypeVar
 
 from htn.robot.interface import Check, Robot, SkillResult, SkillRun
 
@@ -60,11 +60,11 @@ class ActionMachine:
 
 
 # (domain or None, operator) -> machine class
-REGISTRY: dict[tuple[Optional[str], str], type[ActionMachine]] = {}
+REGISTRY: dict[tuple[str | None, str], type[ActionMachine]] = {}
 M = TypeVar("M", bound=type[ActionMachine])  # a machine class, as the decorator returns it
 
 
-def action(operator: str, domain: Optional[str] = None) -> Callable[[M], M]:
+def action(operator: str, domain: str | None = None) -> Callable[[M], M]:
     """Class decorator: register an :class:`ActionMachine` for an operator name,
     for every domain or (``domain=``) for one domain whose operator of the same
     name means something else."""
@@ -77,10 +77,10 @@ def action(operator: str, domain: Optional[str] = None) -> Callable[[M], M]:
     return register
 
 
-CARRIED: dict[Optional[str], str] = {}  # domain or None -> predicate of what is carried
+CARRIED: dict[str | None, str] = {}  # domain or None -> predicate of what is carried
 
 
-def carried_by(predicate: str, domain: Optional[str] = None) -> None:
+def carried_by(predicate: str, domain: str | None = None) -> None:
     """Declare that in the belief state ``(predicate ... ?obj)`` means the
     robot carries ``?obj`` (for every domain, or for one): while any action
     runs, the task dispatcher then checks on every tick that what the robot
@@ -88,7 +88,7 @@ def carried_by(predicate: str, domain: Optional[str] = None) -> None:
     CARRIED[domain] = predicate
 
 
-def carry_predicate(domain: Optional[str]) -> Optional[str]:
+def carry_predicate(domain: str | None) -> str | None:
     """The predicate of what the robot carries in ``domain``, if declared."""
     load_plugins()
     return CARRIED.get(domain) or CARRIED.get(None)
@@ -121,12 +121,12 @@ def load_plugins() -> None:
             raise HtnError(
                 f"action plugin '{ep.name}' ({ep.value}) failed to load: "
                 f"{type(exc).__name__}: {exc}"
-            )
+            ) from exc
 
 
 def machine_for(
-    operator: str, domain: Optional[str] = None, robot: Optional[Robot] = None
-) -> Optional[ActionMachine]:
+    operator: str, domain: str | None = None, robot: Robot | None = None
+) -> ActionMachine | None:
     """The action state machine for an operator: the operator model's on a
     robot that executes it, else the one registered for this domain, else
     the one registered for every domain, else None."""

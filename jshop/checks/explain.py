@@ -23,7 +23,6 @@ end too. ``--explain-all`` keeps every dead end, in the order met.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Optional
 
 from htn.jshop.language import syntax as S
 from htn.jshop.language.terms import atom_str, source_atom
@@ -37,9 +36,9 @@ class Attempt:
     """One operator or method branch tried on a dead-end task."""
 
     what: str  # "operator (!pick ?x)" / "method deliver, branch m1"
-    where: Optional[S.Pos]
+    where: S.Pos | None
     reason: str
-    literal_at: Optional[S.Pos] = None
+    literal_at: S.Pos | None = None
 
     def to_dict(self) -> dict:
         return {
@@ -53,7 +52,7 @@ class Attempt:
 @dataclass
 class DeadEnd:
     task: str
-    where: Optional[S.Pos]  # where the task is written (method body or problem)
+    where: S.Pos | None  # where the task is written (method body or problem)
     steps: int  # plan steps before it
     attempts: list = field(default_factory=list)
 
@@ -65,7 +64,7 @@ class DeadEnd:
             "attempts": [a.to_dict() for a in self.attempts],
         }
 
-    def lines(self, limit: Optional[int] = None) -> list:
+    def lines(self, limit: int | None = None) -> list:
         at = f" ({self.where})" if self.where else ""
         out = [f"task {self.task}{at}, after {self.steps} step(s):"]
         shown = self.attempts if limit is None else self.attempts[:limit]
@@ -85,7 +84,7 @@ class Explainer:
 
     def __init__(self, keep_all: bool = False):
         self.keep_all = keep_all
-        self.deepest: Optional[DeadEnd] = None
+        self.deepest: DeadEnd | None = None
         self.all: list = []
         self.count = 0
         self._prefixes: dict = {}
@@ -178,7 +177,7 @@ class Explainer:
     def _methods(self, planner, task) -> list:
         out = []
         methods = planner._methods.get(task.name, ())
-        for index, (m, unify_head, branches) in enumerate(methods):
+        for m, unify_head, branches in methods:
             env = [None] * m.nvars
             if not unify_head(task.args, env):
                 out.append(

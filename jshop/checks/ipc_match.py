@@ -25,7 +25,6 @@ leaves out a subtask whose actions have no effect can pass there.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Optional
 
 from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import HtnError
@@ -49,7 +48,7 @@ class Shape:
     pre: S.Precondition  # written precondition, :constraints, parameter types
     bound: tuple  # the variables the head and the subtasks bind
     nvars: int
-    pos: Optional[S.Pos] = None
+    pos: S.Pos | None = None
 
 
 @dataclass
@@ -67,7 +66,7 @@ class Mismatch:
     position in the line's id list it is about (None: the line itself)."""
 
     message: str
-    at: Optional[int] = None
+    at: int | None = None
     depth: int = -1
 
 

@@ -13,8 +13,6 @@ gives (a hand-written one) has no recoverable tree; it runs as one sequence.
 
 from __future__ import annotations
 
-from typing import Optional
-
 from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import HtnError
 from htn.jshop.language.terms import Var
@@ -31,7 +29,7 @@ def recover_tree(
     functions=None,
     timeout: float = RECOVER_TIMEOUT,
     max_plans: int = RECOVER_PLANS,
-    tasks: Optional[str] = None,
+    tasks: str | None = None,
 ):
     """The task tree of the first plan of ``instance`` whose steps are ``steps``,
     or None. ``tasks`` (a task list's text, as ``htn transform -o`` notes it)
@@ -59,7 +57,7 @@ def recover_tree(
     return None
 
 
-def _variable(term) -> Optional[Var]:
+def _variable(term) -> Var | None:
     stack = [term]
     while stack:
         t = stack.pop()
@@ -74,7 +72,7 @@ def check_runnable(
     domain: S.Domain,
     instance: S.ProblemInstance,
     plan,
-    plan_file: Optional[str],
+    plan_file: str | None,
     functions=None,
     lines=(),
 ) -> None:

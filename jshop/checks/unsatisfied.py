@@ -8,13 +8,11 @@ that has no satisfier under the bindings found for the conjuncts before it.
 
 from __future__ import annotations
 
-from typing import Optional
-
 from htn.jshop.language import syntax as S
 from htn.jshop.language.terms import Var, subst, term_str
 
 
-def failing_literal(logic, expr, env: list, cache: Optional[dict] = None):
+def failing_literal(logic, expr, env: list, cache: dict | None = None):
     """The first conjunct of ``expr`` with no satisfier after those before
     it, and the bindings under which it failed; ``(None, env)`` when the
     whole expression holds. ``logic`` is the planner's

@@ -19,7 +19,6 @@ decomposition, which :mod:`htn.jshop.checks.ipc_verify` checks as well.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Optional
 
 from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import HtnError
@@ -36,7 +35,7 @@ class Verdict:
     valid: bool
     steps: int
     cost: float  # the steps' cost (of the deepest replay)
-    failed_step: Optional[int] = None  # 0-based index of the step that fails
+    failed_step: int | None = None  # 0-based index of the step that fails
     reason: str = ""
     line: int = 0  # the plan file's line of that step (or of its cost)
 
@@ -50,7 +49,7 @@ class Unpriced:
     cost: None = None
 
 
-def check_steps(domain: S.Domain, steps, file: Optional[str]) -> None:
+def check_steps(domain: S.Domain, steps, file: str | None) -> None:
     """Every step must name an operator of the domain, with its arity."""
     for s in steps:
         ops = domain.operators.get(s.name)

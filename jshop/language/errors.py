@@ -4,7 +4,7 @@ from what user code raises."""
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Optional
+from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from typing import Protocol
@@ -35,9 +35,9 @@ class HtnError(Exception):
     def __init__(
         self,
         message: str,
-        file: Optional[str] = None,
-        line: Optional[int] = None,
-        col: Optional[int] = None,
+        file: str | None = None,
+        line: int | None = None,
+        col: int | None = None,
     ) -> None:
         super().__init__(message)
         self.message = message
@@ -46,7 +46,7 @@ class HtnError(Exception):
         self.col = col
 
     @classmethod
-    def at(cls, pos: Optional[Place], message: str) -> "HtnError":
+    def at(cls, pos: Place | None, message: str) -> HtnError:
         if pos is None:
             return cls(message)
         return cls(message, pos.file, pos.line, pos.col)
@@ -59,7 +59,7 @@ class HtnError(Exception):
         loc = self.location()
         return f"{loc}: {self.message}" if loc else self.message
 
-    def source_line(self) -> Optional[str]:
+    def source_line(self) -> str | None:
         """The offending line of the input file with a caret, if readable;
         a line longer than :data:`SHOWN` characters is shown around the column."""
         if not self.file or not self.line:

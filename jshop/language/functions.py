@@ -32,7 +32,7 @@ import operator
 import os
 import types
 from collections.abc import Callable, Container
-from typing import TYPE_CHECKING, Any, Optional, Union
+from typing import TYPE_CHECKING, Any
 
 from .errors import HtnError, is_stop
 from .terms import NIL, Dotted, shown_term
@@ -40,7 +40,7 @@ from .terms import NIL, Dotted, shown_term
 if TYPE_CHECKING:
     # what a call term runs: its ground arguments to a term
     _Function = Callable[[tuple[Any, ...]], Any]
-    _Truth = Union[float, tuple[Any, ...]]  # TRUE or NIL
+    _Truth = float | tuple[Any, ...]  # TRUE or NIL
 
 TRUE = 1.0
 
@@ -151,7 +151,7 @@ STDLIB: dict[str, _Function] = {
 
 # How many arguments a standard function needs, where any number will not do:
 # (min, max or None). JSHOP2 leaves these unchecked until run time.
-STDLIB_ARITY: dict[str, tuple[int, Optional[int]]] = {
+STDLIB_ARITY: dict[str, tuple[int, int | None]] = {
     "-": (1, None),
     "/": (1, None),
     "^": (1, None),
@@ -253,7 +253,7 @@ class Guard:
     def leave(self, token: object) -> None:
         """It returned or raised."""
 
-    def dropped(self, token: object) -> Optional[BaseException]:
+    def dropped(self, token: object) -> BaseException | None:
         """A stop raised into the user code since :meth:`enter` that it
         caught (dropped, or turned into its own): the caller raises it."""
         return None
@@ -262,10 +262,10 @@ class Guard:
 PLAIN = Guard()
 
 
-def _user_frame(exc: BaseException, files: Container[str]) -> tuple[Optional[str], Optional[int]]:
+def _user_frame(exc: BaseException, files: Container[str]) -> tuple[str | None, int | None]:
     """(file, line) of the innermost frame of ``exc``'s traceback in one
     of ``files`` (the user's own code), or (None, None)."""
-    place: tuple[Optional[str], Optional[int]] = (None, None)
+    place: tuple[str | None, int | None] = (None, None)
     tb = exc.__traceback__
     while tb is not None:
         name = tb.tb_frame.f_code.co_filename
@@ -323,7 +323,7 @@ def run_user_code(what: str, fn: Callable[..., Any], *args: Any, guard: Guard = 
     return result
 
 
-def wrap_user_function(name: str, fn: Callable[..., Any], table: "FunctionTable") -> _Function:
+def wrap_user_function(name: str, fn: Callable[..., Any], table: FunctionTable) -> _Function:
     what = f"function {name}"
 
     def call(args: tuple[Any, ...]) -> Any:
@@ -348,7 +348,7 @@ def compare(name: str, fn: Callable[..., Any], a: Any, b: Any, guard: Guard = PL
     """A user comparator's verdict on two terms: negative, zero or positive
     (manual appendix B); anything but a number is an error."""
     r = run_user_code(f"comparator {name}", fn, to_python(a), to_python(b), guard=guard)
-    n: Optional[float] = None
+    n: float | None = None
     if not isinstance(r, bool) and isinstance(r, (int, float)):
         # the built-in value, without calling a subclass's methods
         n = int.__index__(r) if isinstance(r, int) else float.__float__(r)

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from dataclasses import dataclass, field
-from typing import Any, Optional, Union
+from typing import Any
 
 from .terms import CallTerm, Var
 
@@ -32,7 +32,7 @@ class Atom:
 
     pred: str
     args: tuple[Any, ...]
-    pos: Optional[Pos] = None
+    pos: Pos | None = None
 
 
 @dataclass
@@ -40,25 +40,25 @@ class VarAtom:
     """A variable standing for an atom, bound at planning time (3.14)."""
 
     var: Var
-    pos: Optional[Pos] = None
+    pos: Pos | None = None
 
 
 @dataclass
 class And:
     items: list[Any]
-    pos: Optional[Pos] = None
+    pos: Pos | None = None
 
 
 @dataclass
 class Or:
     items: list[Any]
-    pos: Optional[Pos] = None
+    pos: Pos | None = None
 
 
 @dataclass
 class Not:
     expr: Any
-    pos: Optional[Pos] = None
+    pos: Pos | None = None
 
 
 @dataclass
@@ -68,7 +68,7 @@ class ForAll:
     vars: list[Var]
     cond: Any
     then: Any
-    pos: Optional[Pos] = None
+    pos: Pos | None = None
 
 
 @dataclass
@@ -78,14 +78,14 @@ class Equal:
 
     left: Any
     right: Any
-    pos: Optional[Pos] = None
+    pos: Pos | None = None
 
 
 @dataclass
 class Assign:
     var: Var
     term: Any
-    pos: Optional[Pos] = None
+    pos: Pos | None = None
 
 
 @dataclass
@@ -93,7 +93,7 @@ class CallExpr:
     """A call expression: true unless the call returns NIL (3.4.7)."""
 
     call: CallTerm
-    pos: Optional[Pos] = None
+    pos: Pos | None = None
 
 
 @dataclass
@@ -102,9 +102,9 @@ class Precondition:
 
     expr: Any
     first: bool = False
-    sort_var: Optional[Var] = None
-    comparator: Optional[str] = None  # '<', '>' or a user function name
-    pos: Optional[Pos] = None
+    sort_var: Var | None = None
+    comparator: str | None = None  # '<', '>' or a user function name
+    pos: Pos | None = None
 
 
 # ------------------------------------------------------ operator effects
@@ -113,7 +113,7 @@ class Precondition:
 @dataclass
 class Protection:
     atom: Any  # Atom or VarAtom
-    pos: Optional[Pos] = None
+    pos: Pos | None = None
 
 
 @dataclass
@@ -123,7 +123,7 @@ class EffectForAll:
     vars: list[Var]
     cond: Any
     atoms: list[Any]  # Atom or VarAtom
-    pos: Optional[Pos] = None
+    pos: Pos | None = None
 
 
 @dataclass
@@ -131,7 +131,7 @@ class Effects:
     """A delete or add list: a list of elements, or one variable (3.14)."""
 
     items: list[Any] = field(default_factory=list)
-    var: Optional[Var] = None
+    var: Var | None = None
 
 
 # ------------------------------------------------------ tasks
@@ -142,7 +142,7 @@ class TaskAtom:
     name: str
     args: tuple[Any, ...]
     immediate: bool = False
-    pos: Optional[Pos] = None
+    pos: Pos | None = None
 
     @property
     def primitive(self) -> bool:
@@ -176,19 +176,19 @@ class TaskList:
     ``order``, set by the HDDL reader only, is the partial order of an
     unordered list's members (None: no two members are ordered)."""
 
-    items: list[Union[TaskAtom, TaskList]]
+    items: list[TaskAtom | TaskList]
     ordered: bool = True
-    pos: Optional[Pos] = None
-    order: Optional[PartialOrder] = None
+    pos: Pos | None = None
+    order: PartialOrder | None = None
 
     @property
-    def order_flag(self) -> Union[bool, PartialOrder]:
+    def order_flag(self) -> bool | PartialOrder:
         """What the search keeps for this list: True (in order), False
         (interleaved) or its :class:`PartialOrder`."""
         return self.order if self.order is not None else self.ordered
 
 
-def task_atoms(tl: Union[TaskList, TaskAtom]) -> Iterator[TaskAtom]:
+def task_atoms(tl: TaskList | TaskAtom) -> Iterator[TaskAtom]:
     """The task atoms of a task list (or a single atom), nested lists included."""
     if isinstance(tl, TaskAtom):
         yield tl
@@ -208,7 +208,7 @@ class Operator:
     add: Effects
     cost: Any  # a term; default 1.0
     nvars: int = 0
-    pos: Optional[Pos] = None
+    pos: Pos | None = None
     # PDDL/HDDL semantics: every effect condition (forall, when) is evaluated
     # in the state before the operator, then deletions, then additions. JSHOP2
     # evaluates a delete list's forall while earlier atoms are already deleted
@@ -229,7 +229,7 @@ class Branch:
     label: str
     pre: Precondition
     tasks: TaskList
-    pos: Optional[Pos] = None
+    pos: Pos | None = None
 
 
 @dataclass
@@ -238,7 +238,7 @@ class Method:
     branches: list[Branch]
     nvars: int = 0
     index: int = 0
-    pos: Optional[Pos] = None
+    pos: Pos | None = None
 
     @property
     def name(self) -> str:
@@ -249,7 +249,7 @@ class Method:
 class AxiomBranch:
     label: str
     pre: Precondition
-    pos: Optional[Pos] = None
+    pos: Pos | None = None
 
 
 @dataclass
@@ -257,7 +257,7 @@ class Axiom:
     head: Atom
     branches: list[AxiomBranch]
     nvars: int = 0
-    pos: Optional[Pos] = None
+    pos: Pos | None = None
 
 
 @dataclass
@@ -267,7 +267,7 @@ class Domain:
     methods: dict[str, list[Method]] = field(default_factory=dict)  # name -> [Method]
     axioms: dict[str, list[Axiom]] = field(default_factory=dict)  # pred -> [Axiom]
     file: str = ""
-    pos: Optional[Pos] = None
+    pos: Pos | None = None
     language: str = "jshop2"  # or "hddl": the file it was read from
     # HDDL typing (empty for JSHOP2): ground atoms true in every problem (the
     # domain's constants and their types), and for a type predicate the
@@ -279,7 +279,7 @@ class Domain:
     pullup: bool = False  # HDDL: methods test pulled-up conditions
     sha256: str = ""  # of the bytes it was parsed from
 
-    def elements(self) -> Iterator[Union[Operator, Method, Axiom]]:
+    def elements(self) -> Iterator[Operator | Method | Axiom]:
         for ops in self.operators.values():
             yield from ops
         for ms in self.methods.values():
@@ -318,8 +318,8 @@ class ProblemInstance:
 
     state: list[Atom]  # ground
     tasks: TaskList
-    pos: Optional[Pos] = None
-    goal: Optional[Precondition] = None
+    pos: Pos | None = None
+    goal: Precondition | None = None
     goal_nvars: int = 0
     # an HDDL initial task network with parameters: the (HDDL) method of an
     # artificial root task whose body is ``tasks`` and which binds them
@@ -327,7 +327,7 @@ class ProblemInstance:
     # ... and that method in the domain's terms (a Method, pulled-up
     # conditions included), built once the domain is known
     # (htn.jshop.readers.load.paired): what the searches and checks use
-    root: Optional[Method] = None
+    root: Method | None = None
 
 
 @dataclass
@@ -336,15 +336,15 @@ class Problem:
     domain_name: str
     instances: list[ProblemInstance]
     file: str = ""
-    pos: Optional[Pos] = None
-    domain_pos: Optional[Pos] = None  # where the domain's name is written
+    pos: Pos | None = None
+    domain_pos: Pos | None = None  # where the domain's name is written
     language: str = "jshop2"
     spelling: dict[str, str] = field(default_factory=dict)  # lower-case name -> as written
     hddl: Any = None  # the HDDL model it was read from
     sha256: str = ""  # of the bytes it was parsed from
 
 
-def root_method(instance: ProblemInstance) -> "Method":
+def root_method(instance: ProblemInstance) -> Method:
     """The root method of an HDDL instance whose initial task network has
     parameters (``instance.top``), as the reader built it with the domain."""
     if instance.root is None:

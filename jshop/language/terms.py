@@ -25,7 +25,7 @@ the wrong binding there and fails.
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from typing import TYPE_CHECKING, Any, Optional
+from typing import TYPE_CHECKING, Any
 
 from .errors import HtnError, PlanningError
 
@@ -56,7 +56,7 @@ class Dotted:
     def __init__(self, items: tuple[Any, ...], tail: Any) -> None:
         self.items = items
         self.tail = tail
-        self._hash: Optional[int] = None
+        self._hash: int | None = None
 
     def __eq__(self, other: object) -> bool:
         return type(other) is Dotted and self.items == other.items and self.tail == other.tail
@@ -94,7 +94,7 @@ class CallTerm:
         name: str,
         func: Callable[[tuple[Any, ...]], Any],
         args: tuple[Any, ...],
-        pos: Optional[Place] = None,
+        pos: Place | None = None,
     ) -> None:
         self.name = name
         self.func = func
@@ -147,7 +147,7 @@ def subst(t: Any, env: list[Any]) -> Any:
             try:
                 return t.func(args)
             except HtnError as exc:
-                raise at_call(exc, t)
+                raise at_call(exc, t) from exc
         return CallTerm(t.name, t.func, args, t.pos)
     if tt is Dotted:
         return make_list([subst(x, env) for x in t.items], subst(t.tail, env))
@@ -402,7 +402,7 @@ def variables(t: Any, out: list[Var]) -> list[Var]:
     return out
 
 
-def atom_from_term(t: Any, pos: Optional[Place]) -> tuple[str, tuple[Any, ...]]:
+def atom_from_term(t: Any, pos: Place | None) -> tuple[str, tuple[Any, ...]]:
     """A list term ``(p a1 .. an)`` used as an atom (manual 3.14)."""
     if type(t) is tuple and t and type(t[0]) is str:
         return t[0], t[1:]

@@ -5,7 +5,7 @@ checks, the compiled conjunctions and the HDDL builder collect variables."""
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any, Union
+from typing import TYPE_CHECKING, Any
 
 from . import syntax as S
 from .terms import variables
@@ -53,7 +53,7 @@ def walk_pre(p: S.Precondition, cb: _Visit) -> None:
     walk_expr(p.expr, cb)
 
 
-def walk_tasks(tl: Union[S.TaskList, S.TaskAtom], cb: _Visit) -> None:
+def walk_tasks(tl: S.TaskList | S.TaskAtom, cb: _Visit) -> None:
     if isinstance(tl, S.TaskAtom):
         walk_term(tl.args, cb)
     else:

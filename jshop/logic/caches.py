@@ -12,7 +12,8 @@ so that memory stays flat whatever the caller does.
 
 from __future__ import annotations
 
-from typing import Any, Callable, Hashable, Optional
+from collections.abc import Callable, Hashable
+from typing import Any
 
 _REGISTERED: list = []
 _HOOKS: list = []
@@ -42,21 +43,21 @@ class IdentityCache:
         if global_:
             _REGISTERED.append(self)
 
-    def get(self, obj, key: Optional[Hashable] = None, default: Any = None) -> Any:
+    def get(self, obj, key: Hashable | None = None, default: Any = None) -> Any:
         """The value kept for ``obj`` (under ``key``), else ``default``."""
         hit = self.entries.get(id(obj) if key is None else key)
         if hit is not None and hit[0] is obj:
             return hit[1]
         return default
 
-    def put(self, obj, value, key: Optional[Hashable] = None):
+    def put(self, obj, value, key: Hashable | None = None):
         """Keep ``value`` for ``obj`` (under ``key``); returns it."""
         if len(self.entries) >= self.limit:
             self.entries.clear()
         self.entries[id(obj) if key is None else key] = (obj, value)
         return value
 
-    def make(self, obj, build: Callable[[], Any], key: Optional[Hashable] = None):
+    def make(self, obj, build: Callable[[], Any], key: Hashable | None = None):
         """The value kept for ``obj``, made with ``build()`` the first time."""
         hit = self.entries.get(id(obj) if key is None else key)
         if hit is not None and hit[0] is obj:

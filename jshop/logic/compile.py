@@ -22,7 +22,7 @@ nested deeper than :data:`FAST_PATH_DEPTH` take the generic path.
 
 from __future__ import annotations
 
-from typing import Callable
+from collections.abc import Callable
 
 from htn.jshop.language.errors import HtnError
 from htn.jshop.language.terms import CallTerm, Var, is_ground, source_str, subst, unify

@@ -6,8 +6,6 @@ makes, and the lengths a predicate's atoms can have (:func:`arities`)."""
 
 from __future__ import annotations
 
-from typing import Optional
-
 from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import HtnError
 from htn.jshop.language.terms import CallTerm, Var, at_call, is_ground, variables
@@ -128,7 +126,7 @@ def flatten(items: list) -> list:
     return out
 
 
-def arities(domain: S.Domain, state) -> Optional[dict]:
+def arities(domain: S.Domain, state) -> dict | None:
     """``pred -> {arity}``: the lengths the atoms of each predicate can have
     in ``state`` from now on (those already there and those of add lists);
     None when an add list has a variable atom (3.14), which can be anything."""

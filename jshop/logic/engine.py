@@ -15,7 +15,7 @@ with Java's sort algorithm (see :mod:`~htn.jshop.logic.java_sort`).
 
 from __future__ import annotations
 
-from typing import Callable, Iterator
+from collections.abc import Callable, Iterator
 
 from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import PlanningError

@@ -32,7 +32,7 @@ and each planner binds it to its own state's lists when a mode first occurs.
 
 from __future__ import annotations
 
-from typing import Callable
+from collections.abc import Callable
 
 from htn.jshop.language import syntax as S
 from htn.jshop.language.terms import Var, is_ground

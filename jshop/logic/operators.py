@@ -16,8 +16,6 @@ that needs no condition at all.
 
 from __future__ import annotations
 
-from typing import Optional
-
 from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import PlanningError
 from htn.jshop.language.terms import atom_from_term, shown_term, source_atom
@@ -172,7 +170,7 @@ def _plain_lists(op: S.Operator) -> tuple:
     return _PLAIN.make(op, lambda: (_plain(op.delete, op), _plain(op.add, op)))
 
 
-def _plain(eff: S.Effects, op: S.Operator) -> Optional[list]:
+def _plain(eff: S.Effects, op: S.Operator) -> list | None:
     """``[[pred, substituter]]`` for a list of plain atoms, else None (general
     case). The substituters are warming: compiled ones replace them in place."""
     if eff.var is not None or not all(isinstance(i, S.Atom) for i in eff.items):

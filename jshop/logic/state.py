@@ -108,7 +108,7 @@ class State:
             self.protections[key] = n - 1
         return True
 
-    def copy(self) -> "State":
+    def copy(self) -> State:
         s = State()
         s.atoms = {p: list(v) for p, v in self.atoms.items()}
         s.members = {p: set(v) for p, v in self.members.items()}

@@ -4,7 +4,7 @@ binds a method body each time it reduces a task with it)."""
 
 from __future__ import annotations
 
-from typing import Callable
+from collections.abc import Callable
 
 from htn.jshop.language.terms import Var, source_atom
 

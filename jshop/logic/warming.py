@@ -18,7 +18,7 @@ the switch happens changes the speed only, never a result or its order.
 
 from __future__ import annotations
 
-from typing import Callable
+from collections.abc import Callable
 
 from htn.jshop.language.terms import Var, is_ground, subst, unify
 

@@ -28,7 +28,7 @@ from __future__ import annotations
 import re
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Optional
+from typing import TYPE_CHECKING, Any
 
 from htn.jshop.language.errors import HtnError
 from htn.jshop.language.terms import term_str
@@ -88,7 +88,7 @@ class IpcLine:
     line: int
     col: int  # column of the id
     cols: tuple[int, ...]  # columns of the name and the arguments
-    method: Optional[str] = None
+    method: str | None = None
     method_col: int = 0
     children: tuple[int, ...] = ()
     child_cols: tuple[int, ...] = ()
@@ -126,7 +126,7 @@ def read_ipc_plans(text: str, file: str) -> list[IpcPlan]:
     log). Raises :class:`HtnError` (``file:line:col``) for a block that
     cannot be read."""
     plans: list[IpcPlan] = []
-    current: Optional[IpcPlan] = None
+    current: IpcPlan | None = None
     section = ""
     for n, raw in enumerate(text.splitlines(), 1):
         tokens = [(m.group(), m.start() + 1) for m in _TOKEN.finditer(raw)]

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Optional
+from typing import TYPE_CHECKING, Any
 
 from htn.jshop.language.terms import atom_str, java_double
 
@@ -34,7 +34,7 @@ class Step:
 class Plan:
     steps: list[Step]
     cost: float
-    tree: Optional[TaskTree] = None  # when recorded
+    tree: TaskTree | None = None  # when recorded
     index: int = 0  # 0-based position in the planner's stream
     line: int = 0  # line of its 'Plan cost:' in a plan file it was read from
 

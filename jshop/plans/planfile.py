@@ -63,7 +63,7 @@ import hashlib
 import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Optional
+from typing import TYPE_CHECKING
 
 from htn.jshop.language.errors import HtnError
 from htn.jshop.readers.jshop2 import parse_step
@@ -81,10 +81,10 @@ NAMED = ("domain", "problem", "functions")
 
 def header(
     out_path: str,
-    domain: Optional[str],
-    problem: Optional[str],
-    functions: Optional[str] = None,
-    functions_sha256: Optional[str] = None,
+    domain: str | None,
+    problem: str | None,
+    functions: str | None = None,
+    functions_sha256: str | None = None,
 ) -> str:
     """The comment lines that name the files a plan was made from
     (``functions_sha256``: of the functions file's bytes as they were loaded;
@@ -122,9 +122,9 @@ class PlanFile:
     lines: list[str] = field(default_factory=list)  # the file's text, line by line
     sha256: str = ""  # of the file's bytes, as read
     # per plan: its tree's [(line, text)] or None
-    trees: list[Optional[list[tuple[int, str]]]] = field(default_factory=list)
+    trees: list[list[tuple[int, str]] | None] = field(default_factory=list)
 
-    def file(self, kind: str) -> Optional[str]:
+    def file(self, kind: str) -> str | None:
         """The ``kind`` ("domain", "problem", "functions") file the header
         names: relative to the plan file if it is there, else the absolute
         path; None if the header names none. A named file found nowhere is
@@ -143,7 +143,7 @@ class PlanFile:
             1,
         )
 
-    def named_functions(self) -> Optional[tuple[str, int, Optional[str]]]:
+    def named_functions(self) -> tuple[str, int, str | None] | None:
         """(path as written, line, SHA-256 or None) of the functions file the
         plans were made with, if the header names one. It is never loaded
         because of that (see :func:`htn.api.run_inputs.checked_functions`)."""
@@ -155,16 +155,16 @@ class PlanFile:
         return path, candidates[0][1], digest
 
     @property
-    def domain(self) -> Optional[str]:
+    def domain(self) -> str | None:
         return self.file("domain")
 
     @property
-    def problem(self) -> Optional[str]:
+    def problem(self) -> str | None:
         return self.file("problem")
 
     def tree(
-        self, index: int, methods: Optional[Mapping[str, Sequence[Method]]] = None
-    ) -> Optional[TaskTree]:
+        self, index: int, methods: Mapping[str, Sequence[Method]] | None = None
+    ) -> TaskTree | None:
         """The task tree written before plan ``index`` (0-based), or None if
         the file holds none for it. ``methods`` (task name -> the domain's
         methods for it) also checks that each method and branch exists and
@@ -185,14 +185,14 @@ def read_plan_file(path: str) -> PlanFile:
         with open(path, "rb") as fh:
             data = fh.read()
     except OSError as exc:
-        raise HtnError(f"cannot read: {exc.strerror}", path)
+        raise HtnError(f"cannot read: {exc.strerror}", path) from exc
     lines = decode_source(data, path).splitlines()  # UTF-8, BOM or not; bad bytes at line:col
     base = os.path.dirname(os.path.abspath(path))
     pf = PlanFile(path, lines=lines, sha256=hashlib.sha256(data).hexdigest())
     steps: list[Step] = []
-    cost: Optional[float] = None
+    cost: float | None = None
     cost_line = 0
-    tree: Optional[list[tuple[int, str]]] = None  # the task tree lines before the next plan
+    tree: list[tuple[int, str]] | None = None  # the task tree lines before the next plan
     in_tree = False
     for n, line in enumerate(lines, 1):
         text = line.strip()
@@ -224,7 +224,7 @@ def read_plan_file(path: str) -> PlanFile:
             try:
                 cost = float(text.split(":", 1)[1])
             except ValueError:
-                raise HtnError("bad plan cost", path, n, 1)
+                raise HtnError("bad plan cost", path, n, 1) from None
             steps = []
             cost_line = n
             continue

@@ -17,7 +17,7 @@ from __future__ import annotations
 from collections import Counter
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Optional
+from typing import Any
 
 from htn.jshop.language.terms import atom_str, term_str
 
@@ -29,13 +29,13 @@ class TaskTree:
     name: str
     args: tuple[Any, ...] = ()
     path: str = ""
-    method: Optional[str] = None  # method head name that decomposed it
-    method_index: Optional[int] = None  # which of the methods for that task (0-based)
-    branch: Optional[str] = None  # that method's branch label
-    step: Optional[int] = None  # index in the plan, for primitive tasks
+    method: str | None = None  # method head name that decomposed it
+    method_index: int | None = None  # which of the methods for that task (0-based)
+    branch: str | None = None  # that method's branch label
+    step: int | None = None  # index in the plan, for primitive tasks
     children: list[TaskTree] = field(default_factory=list)
-    outcome: Optional[str] = None  # after an execution or projection (annotate())
-    code_replacement: Optional[list[str]] = None  # what a transformation put in its place
+    outcome: str | None = None  # after an execution or projection (annotate())
+    code_replacement: list[str] | None = None  # what a transformation put in its place
 
     @property
     def primitive(self) -> bool:
@@ -45,7 +45,7 @@ class TaskTree:
     def task(self) -> str:
         return atom_str(self.name, self.args) if self.name else "(root)"
 
-    def walk(self) -> Iterator["TaskTree"]:
+    def walk(self) -> Iterator[TaskTree]:
         """Every node, depth first in order (iterative: trees can be thousands deep)."""
         stack = [self]
         while stack:
@@ -53,10 +53,10 @@ class TaskTree:
             yield node
             stack.extend(reversed(node.children))
 
-    def leaves(self) -> list["TaskTree"]:
+    def leaves(self) -> list[TaskTree]:
         return [n for n in self.walk() if n.step is not None]
 
-    def find(self, path: str) -> Optional["TaskTree"]:
+    def find(self, path: str) -> TaskTree | None:
         for n in self.walk():
             if n.path == path:
                 return n
@@ -69,7 +69,7 @@ class TaskTree:
         None for the root, whose task is ``(root)``), so a node's children are
         the nodes naming it as parent, in list order."""
         nodes: list[dict[str, Any]] = []
-        stack: list[tuple[TaskTree, Optional[int]]] = [(self, None)]
+        stack: list[tuple[TaskTree, int | None]] = [(self, None)]
         while stack:
             node, parent = stack.pop()
             args = [term_str(a) for a in node.args]

@@ -12,7 +12,7 @@ from __future__ import annotations
 import re
 from collections import Counter
 from collections.abc import Iterable, Mapping, Sequence
-from typing import TYPE_CHECKING, Any, Optional
+from typing import TYPE_CHECKING, Any
 
 from htn.jshop.language.errors import HtnError
 from htn.jshop.language.terms import Var, term_str
@@ -56,7 +56,7 @@ def read_tree(
     lines: list[tuple[int, str]],
     path: str,
     steps: Sequence[Step],
-    methods: Optional[_Methods] = None,
+    methods: _Methods | None = None,
 ) -> TaskTree:
     """The tree of ``lines`` (``(line number, text)``: the header, then the
     nodes), whose leaves index ``steps``; ``methods`` (task name -> methods)
@@ -68,7 +68,7 @@ class _TreeReader:
     """Reads the lines of one task tree (see the module docstring) into a
     :class:`TaskTree` whose leaves index ``steps``."""
 
-    def __init__(self, path: str, steps: Sequence[Step], methods: Optional[_Methods]) -> None:
+    def __init__(self, path: str, steps: Sequence[Step], methods: _Methods | None) -> None:
         self.path, self.steps, self.methods = path, steps, methods
 
     def error(self, message: str, n: int, text: str = "", token: str = "") -> HtnError:
@@ -233,7 +233,7 @@ def _with_indices(t: Any) -> Any:
     return t
 
 
-def _atom_end(text: str) -> Optional[int]:
+def _atom_end(text: str) -> int | None:
     """The end of the parenthesised atom ``text`` starts with, or None."""
     if not text.startswith("("):
         return None

@@ -18,7 +18,6 @@ from __future__ import annotations
 
 from functools import lru_cache
 from pathlib import Path
-from typing import Optional
 
 from lark import Lark, Token
 from lark.exceptions import VisitError
@@ -69,7 +68,7 @@ class Builder(Transformer_NonRecursive):
         self.file = file
         self.spelling: dict = {}
 
-    def pos(self, meta) -> Optional[S.Pos]:
+    def pos(self, meta) -> S.Pos | None:
         if getattr(meta, "empty", True):
             return None
         return S.Pos(self.file, meta.line, meta.column)
@@ -313,7 +312,7 @@ class Builder(Transformer_NonRecursive):
             elif part[0] == "constants":
                 d.constants += part[1]
             elif part[0] == "predicates":
-                for pos, pname, params in part[1]:
+                for _pos, pname, params in part[1]:
                     d.predicates[pname] = params
         d.spelling = self.spelling
         return d

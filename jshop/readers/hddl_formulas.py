@@ -6,8 +6,6 @@ so that JSHOP2's left-to-right evaluation binds variables early
 
 from __future__ import annotations
 
-from typing import Optional
-
 from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import HtnError
 from htn.jshop.language.terms import Var, variables
@@ -49,7 +47,7 @@ class Formulas:
     variables of ``exists`` at the top level of the precondition).
     """
 
-    def __init__(self, scope: Scope, predicates: Optional[dict] = None):
+    def __init__(self, scope: Scope, predicates: dict | None = None):
         self.scope = scope
         self.predicates = predicates  # name -> params, to check atoms (domain only)
         self.outer: set = set()

@@ -5,7 +5,6 @@ syntax objects (:mod:`htn.jshop.readers.hddl_domain`)."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Optional
 
 from htn.jshop.language import syntax as S
 
@@ -20,23 +19,23 @@ class Param:
 
     name: str
     types: tuple
-    pos: Optional[S.Pos] = None
-    type_pos: Optional[S.Pos] = None  # where its type is written
+    pos: S.Pos | None = None
+    type_pos: S.Pos | None = None  # where its type is written
 
 
 @dataclass
 class TaskDef:
     name: str
     params: list
-    pos: Optional[S.Pos] = None
+    pos: S.Pos | None = None
 
 
 @dataclass
 class Subtask:
-    label: Optional[str]
+    label: str | None
     name: str
     args: tuple
-    pos: Optional[S.Pos] = None
+    pos: S.Pos | None = None
 
 
 @dataclass
@@ -48,7 +47,7 @@ class Network:
     ordered: bool = False
     ordering: list = field(default_factory=list)  # [(before, after, pos)]
     constraints: object = None
-    pos: Optional[S.Pos] = None
+    pos: S.Pos | None = None
 
 
 @dataclass
@@ -58,7 +57,7 @@ class MethodDef:
     task: Subtask
     pre: object  # a syntax expression or None
     network: Network
-    pos: Optional[S.Pos] = None
+    pos: S.Pos | None = None
 
 
 @dataclass
@@ -67,7 +66,7 @@ class ActionDef:
     params: list
     pre: object
     effect: object  # a nested effect structure, see Effect*
-    pos: Optional[S.Pos] = None
+    pos: S.Pos | None = None
 
 
 @dataclass
@@ -77,7 +76,7 @@ class Exists:
 
     vars: list
     expr: object
-    pos: Optional[S.Pos] = None
+    pos: S.Pos | None = None
 
 
 @dataclass
@@ -85,20 +84,20 @@ class EffectWhen:
     vars: list  # [Param] of enclosing foralls
     cond: object
     effect: object
-    pos: Optional[S.Pos] = None
+    pos: S.Pos | None = None
 
 
 @dataclass
 class EffectForall:
     vars: list
     effect: object
-    pos: Optional[S.Pos] = None
+    pos: S.Pos | None = None
 
 
 @dataclass
 class EffectCost:
     amount: object  # a number
-    pos: Optional[S.Pos] = None
+    pos: S.Pos | None = None
 
 
 @dataclass
@@ -113,7 +112,7 @@ class HDomain:
     actions: dict = field(default_factory=dict)  # name -> ActionDef
     spelling: dict = field(default_factory=dict)
     file: str = ""
-    pos: Optional[S.Pos] = None
+    pos: S.Pos | None = None
 
 
 @dataclass
@@ -122,12 +121,12 @@ class HProblem:
     domain_name: str
     objects: list = field(default_factory=list)
     params: list = field(default_factory=list)
-    network: Optional[Network] = None
+    network: Network | None = None
     init: list = field(default_factory=list)  # [S.Atom]
     goal: object = None
     spelling: dict = field(default_factory=dict)
     file: str = ""
-    pos: Optional[S.Pos] = None
+    pos: S.Pos | None = None
 
 
 # ------------------------------------------------------------------ builder

@@ -16,15 +16,13 @@ interleave. :func:`subtask_order` gives the subtasks in a topological order
 
 from __future__ import annotations
 
-from typing import Optional
-
 from htn.jshop.language.errors import HtnError
 from htn.jshop.language.syntax import PartialOrder
 
 from .hddl_model import Network
 
 
-def subtask_order(net: Optional[Network], owner: str, pos) -> tuple[list, object]:
+def subtask_order(net: Network | None, owner: str, pos) -> tuple[list, object]:
     """``(subtasks, order)``: the subtasks in a topological order and
     ``True`` (total order), ``False`` (no two ordered) or a
     :class:`PartialOrder` (see the module docstring)."""
@@ -83,12 +81,12 @@ def _topological(labels: dict, after: dict, preds: dict, written: dict) -> tuple
     return order, total
 
 
-def linearise(net: Optional[Network], owner: str, pos) -> list:
+def linearise(net: Network | None, owner: str, pos) -> list:
     """The subtasks of a network in a topological order (one linearisation)."""
     return subtask_order(net, owner, pos)[0]
 
 
-def is_total(net: Optional[Network]) -> bool:
+def is_total(net: Network | None) -> bool:
     """Whether a network's subtasks are totally ordered (see :func:`subtask_order`);
     the caller reports malformed orderings where it reads them."""
     try:

@@ -342,7 +342,9 @@ def parse_step(text: str, file: str = "<plan>", line: int = 1):
     try:
         tree = _lark().parse(text, start="task_atom")
     except UnexpectedInput as e:
-        raise HtnError(f"not a plan step: {text.strip()!r}", file, line, getattr(e, "column", 1))
+        raise HtnError(
+            f"not a plan step: {text.strip()!r}", file, line, getattr(e, "column", 1)
+        ) from e
     try:
         return Builder(file, FunctionTable()).transform(tree)
     except VisitError as e:

@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass, field
-from typing import Optional
 
 _TOKEN = re.compile(r"[()]|;[^\n\r]*|[^\s();]+")
 
@@ -55,7 +54,7 @@ class Suspect:
         return text[: self.at] + text[self.at + 1 :]
 
 
-def scan(text: str, upto: Optional[int] = None):
+def scan(text: str, upto: int | None = None):
     """Walk the tokens before offset ``upto``; yields ``(token, offset, line,
     col, first, stack)`` for each '(' / ')' / word (comments skipped):
     ``first`` when it is the first token of its line, ``stack`` the lists
@@ -91,12 +90,12 @@ def scan(text: str, upto: Optional[int] = None):
 def open_lists(text: str, upto: int) -> list[List_]:
     """The lists still open at offset ``upto``, outermost first."""
     stack: list[List_] = []
-    for *_, stack in scan(text, upto):
+    for *_, stack in scan(text, upto):  # noqa: B007 (the last one is the answer)
         pass  # the same list, up to date once the scan ends
     return list(stack)
 
 
-def layout_suspects(text: str, upto: Optional[int] = None, limit: int = 4) -> list[Suspect]:
+def layout_suspects(text: str, upto: int | None = None, limit: int = 4) -> list[Suspect]:
     """Parentheses the layout disagrees with, before offset ``upto``, in
     text order (at most ``limit``):
 
@@ -110,7 +109,7 @@ def layout_suspects(text: str, upto: Optional[int] = None, limit: int = 4) -> li
     """
     found: list[Suspect] = []
     prev_end = 0  # end of the previous token
-    closed: Optional[tuple] = None  # (list closed last, offset of its ')'), this line
+    closed: tuple | None = None  # (list closed last, offset of its ')'), this line
     for tok, at, line, col, first, stack in scan(text, upto):
         if first and tok != ")":
             late = [s for s in stack if s.line < line and s.indent >= col]
@@ -133,7 +132,7 @@ def layout_suspects(text: str, upto: Optional[int] = None, limit: int = 4) -> li
     return found
 
 
-def first_unmatched_close(text: str, upto: Optional[int] = None) -> Optional[int]:
+def first_unmatched_close(text: str, upto: int | None = None) -> int | None:
     """Offset of the first ``)`` that closes nothing, if any."""
     for tok, at, *_, stack in scan(text, upto):
         if tok == ")" and not stack:

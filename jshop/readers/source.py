@@ -26,7 +26,7 @@ def read_bytes(path: str) -> bytes:
         with open(path, "rb") as fh:
             return fh.read()
     except OSError as exc:
-        raise HtnError(f"cannot read: {exc.strerror}", path)
+        raise HtnError(f"cannot read: {exc.strerror}", path) from exc
 
 
 def decode_source(data: bytes, path: str) -> str:

@@ -29,7 +29,8 @@ from __future__ import annotations
 
 import heapq
 import time
-from typing import TYPE_CHECKING, Generator, Optional
+from collections.abc import Generator
+from typing import TYPE_CHECKING
 
 from htn.jshop.language import syntax as S
 from htn.jshop.plans.plan import Plan, Step
@@ -58,12 +59,12 @@ class BestFirst:
         domain: S.Domain,
         instance: S.ProblemInstance,
         heuristic: str = "rc",
-        weight: Optional[float] = None,
-        max_memory: Optional[int] = None,
+        weight: float | None = None,
+        max_memory: int | None = None,
         tree_paths: bool = True,
         label: str = "gbfs",
         commit: bool = True,
-        ties: Optional[str] = None,
+        ties: str | None = None,
         **_ignored,
     ):
         self.domain, self.instance = domain, instance
@@ -73,10 +74,10 @@ class BestFirst:
         self.max_memory = max_memory
         self.tree_paths = tree_paths
         self.stats = Stats()
-        self.slice_s: Optional[float] = None  # CPU seconds between pauses, see plans()
-        self.model: Optional[GroundModel] = None
-        self.h: Optional[Heuristic] = None  # the heuristic, once grounded
-        self.cut: Optional[GoalChain] = None  # the goal-chain cut (None: off), once grounded
+        self.slice_s: float | None = None  # CPU seconds between pauses, see plans()
+        self.model: GroundModel | None = None
+        self.h: Heuristic | None = None  # the heuristic, once grounded
+        self.cut: GoalChain | None = None  # the goal-chain cut (None: off), once grounded
         self.generated = 0
         self.commit = commit  # the rule of committed() (False: every move)
         self.ties = ties  # "fifo", "lifo", None: see interleaves()
@@ -89,7 +90,7 @@ class BestFirst:
             self._prepared(ground(self.domain, self.instance))
 
     def _prepared(
-        self, model: GroundModel, h: Optional[Heuristic] = None, cut: Optional[GoalChain] = None
+        self, model: GroundModel, h: Heuristic | None = None, cut: GoalChain | None = None
     ) -> None:
         """Take a grounded model (and the heuristic and goal-chain cut
         another search built on it, to share their caches)."""
@@ -100,7 +101,7 @@ class BestFirst:
         self.lifo = interleaves(model) if self.ties is None else self.ties == "lifo"
 
     # ------------------------------------------------------------ search
-    def plans(self, timeout: Optional[float] = None) -> Generator[Optional[Plan], None, None]:
+    def plans(self, timeout: float | None = None) -> Generator[Plan | None, None, None]:
         """Plans as they are found (see the module docstring); ``timeout``
         is wall-clock time since the start, like the depth-first search's."""
         stats = self.stats

@@ -22,7 +22,7 @@ ones: they only cut method instances that have no plan below them.
 
 from __future__ import annotations
 
-from typing import Optional, cast
+from typing import cast
 
 from htn.jshop.language import syntax as S
 from htn.jshop.language.terms import subst, variables
@@ -191,7 +191,7 @@ class _Grounder:
             env: list = [None] * op.nvars
             if not unify(args, env):
                 continue
-            witness: Optional[list]
+            witness: list | None
             if self._bound_by_head(op):  # the common case: no exists to enumerate
                 witness = env
                 pre = compile_residual(self.formulas.ground(op.pre.expr, env))

@@ -24,7 +24,7 @@ a ``StackOverflowError`` or an ``OutOfMemoryError``):
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Optional
+from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from .network import Task
@@ -93,7 +93,7 @@ class SearchBound:
 
     __slots__ = ("limit", "task")
 
-    def __init__(self, limit: int, task: Optional[Task]):
+    def __init__(self, limit: int, task: Task | None):
         self.limit = limit
         self.task = task
 

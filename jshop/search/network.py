@@ -15,8 +15,6 @@ backtracking, and which of its tasks may be done next.
 
 from __future__ import annotations
 
-from typing import Optional
-
 from htn.jshop.language import syntax as S
 from htn.jshop.language.syntax import PartialOrder
 from htn.jshop.language.terms import atom_str, subst
@@ -83,7 +81,7 @@ def bind_tasks(tl: S.TaskList, env: list) -> Node:
     )
 
 
-def first_tasks(root: Node, trail: Optional[list] = None, path: Optional[list] = None) -> list:
+def first_tasks(root: Node, trail: list | None = None, path: list | None = None) -> list:
     """JSHOP2's ``TaskList.getFirst``, without recursion.
 
     An ordered list contributes the first tasks of its first non-empty member;
@@ -109,8 +107,8 @@ def first_tasks(root: Node, trail: Optional[list] = None, path: Optional[list] =
 
 
 def first_in_order(
-    root: Node, trail: list, path: Optional[list] = None, at: Optional[tuple] = None
-) -> Optional[list]:
+    root: Node, trail: list, path: list | None = None, at: tuple | None = None
+) -> list | None:
     """:func:`first_tasks` while every list met is ordered (the common case,
     and all of HDDL): one walk down to the first task left; None when an
     unordered list is met (the caller then takes the general way).
@@ -152,7 +150,7 @@ def first_in_order(
             i += 1
 
 
-def _first_tasks(root: Node, trail: Optional[list]) -> list:
+def _first_tasks(root: Node, trail: list | None) -> list:
     res: list = []
     # (list, next member, len(res) on entry, open members) of each ancestor;
     # ``open_`` is the set of unfinished members of a partially ordered list
@@ -224,7 +222,7 @@ def undo_marks(trail: list, mark: int, loops=None) -> None:
                 loops.reopened(entry)
 
 
-def deepest_task(root: Node, req: Node) -> Optional[Task]:
+def deepest_task(root: Node, req: Node) -> Task | None:
     """The task to name when the search is too deep: the one just reduced, or
     else the deepest reduced compound task of the network."""
     if req.task is not None and not req.task.primitive:

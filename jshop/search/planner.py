@@ -39,7 +39,7 @@ from __future__ import annotations
 
 import gc
 import time
-from typing import Generator, Optional
+from collections.abc import Generator
 
 from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import PlanningError
@@ -71,9 +71,9 @@ class Planner:
         record_trees: bool = False,
         jshop2_compat: bool = False,
         max_depth: int = DEFAULT_MAX_DEPTH,
-        loop_check: Optional[bool] = None,
+        loop_check: bool | None = None,
         explain=None,
-        max_memory: Optional[int] = None,
+        max_memory: int | None = None,
         tree_paths: bool = True,
     ):
         self.domain = domain
@@ -95,8 +95,8 @@ class Planner:
         self.logic = Logic(domain, self.state, functions)
         self.operators = Operators(self.state, self.logic)
         self._apply = self.operators.apply
-        self._goal: Optional[tuple] = None  # (precondition, its number of variables)
-        self.guard: Optional[GoalGuard] = None
+        self._goal: tuple | None = None  # (precondition, its number of variables)
+        self.guard: GoalGuard | None = None
         if instance.goal is not None:
             self._goal = (self.logic.precondition(instance.goal), instance.goal_nvars)
             self.guard = GoalGuard(domain, instance.goal) or None
@@ -127,10 +127,10 @@ class Planner:
         self._trail: list = []  # nodes marked done, see first_tasks
         self._cursor: list = []  # where the last walk found its task, see _first
         self._cursor_ok = False
-        self.slice_s: Optional[float] = None  # CPU s between pauses: see plans()
+        self.slice_s: float | None = None  # CPU s between pauses: see plans()
 
     # ------------------------------------------------------------ driver
-    def plans(self, timeout: Optional[float] = None) -> Generator[Optional[Plan], None, None]:
+    def plans(self, timeout: float | None = None) -> Generator[Plan | None, None, None]:
         """Stream plans in JSHOP2's order until exhausted or ``timeout``.
 
         ``stats.elapsed`` counts search time only, not the time the consumer
@@ -146,7 +146,7 @@ class Planner:
         # consumer runs.
         gc_was_enabled = gc.isenabled()
         gc.disable()
-        t0: Optional[float]
+        t0: float | None
         t0 = stats.started = clock()
         spent = 0.0
         frame = self._frame
@@ -372,7 +372,7 @@ class Planner:
     @classmethod
     def for_state(
         cls, domain: S.Domain, state, functions=None, goal=None, goal_nvars: int = 0
-    ) -> "Planner":
+    ) -> Planner:
         """A planner with no tasks, used as the operator model of a world:
         its state is a copy of ``state`` (the atoms of an initial or an
         observed state), changed by :meth:`apply_step`. The executor's
@@ -402,7 +402,7 @@ class Planner:
         under ``env``, evaluated in the current state (protections left out)."""
         return self.operators.effects(op, env)
 
-    def apply(self, op: S.Operator, env: list) -> Optional[Change]:
+    def apply(self, op: S.Operator, env: list) -> Change | None:
         """Apply an operator to the state (manual 5.2.1); the change, to undo
         it, or None (state unchanged) if it would delete a protected atom."""
         change, ok = self._apply(op, env)

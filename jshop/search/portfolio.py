@@ -24,7 +24,8 @@ or the heuristic search stops at a bound, depth-first search goes on alone.
 from __future__ import annotations
 
 import time
-from typing import TYPE_CHECKING, Generator, Optional, Union
+from collections.abc import Generator
+from typing import TYPE_CHECKING
 
 from htn.jshop.language import syntax as S
 
@@ -60,7 +61,7 @@ class Portfolio:
         domain: S.Domain,
         instance: S.ProblemInstance,
         functions=None,
-        max_memory: Optional[int] = None,
+        max_memory: int | None = None,
         tree_paths: bool = True,
         **options,
     ):
@@ -97,9 +98,9 @@ class Portfolio:
         self.started = 2  # searches started: dfs, gbfs, then those on its model
         self.ended: list = []  # the searches that ended, in order
 
-    def plans(self, timeout: Optional[float] = None) -> Generator[Plan, None, None]:
-        searches: list[Union[Planner, BestFirst]] = [self.dfs, self.gbfs]
-        streams: dict[int, Optional[Generator[Optional[Plan], None, None]]]
+    def plans(self, timeout: float | None = None) -> Generator[Plan, None, None]:
+        searches: list[Planner | BestFirst] = [self.dfs, self.gbfs]
+        streams: dict[int, Generator[Plan | None, None, None] | None]
         streams = {id(s): None for s in searches}
         live = list(searches)
         slice_s = FIRST_SLICE

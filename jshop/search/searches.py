@@ -18,7 +18,8 @@ Kept free of heavy imports: the command line reads the names for ``--help``.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Callable, Generator, Optional, Protocol
+from collections.abc import Callable, Generator
+from typing import TYPE_CHECKING, Protocol
 
 if TYPE_CHECKING:
     from htn.jshop.plans.plan import Plan
@@ -33,10 +34,10 @@ class Search(Protocol):
     stream has ended (``stats.loop_cuts``: reductions a loop check refused;
     0 for a search without one)."""
 
-    stats: "Stats"
+    stats: Stats
 
     # None only between slices of CPU time, where ``slice_s`` is set (the portfolio's turns)
-    def plans(self, timeout: Optional[float] = None) -> Generator[Optional["Plan"], None, None]: ...
+    def plans(self, timeout: float | None = None) -> Generator[Plan | None, None, None]: ...
 
 
 SEARCHES = {

@@ -6,7 +6,8 @@ time limit, their searches' statistics summed: the loop under ``htn plan``
 from __future__ import annotations
 
 import time
-from typing import TYPE_CHECKING, Callable, Generator, Iterator, Optional
+from collections.abc import Callable, Generator, Iterator
+from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from htn.jshop.plans.plan import Plan
@@ -48,11 +49,11 @@ class SearchStream:
     def __init__(
         self,
         instances,
-        make: Callable[[int, object], "Search"],
+        make: Callable[[int, object], Search],
         *,
         started: float,
-        timeout: Optional[float],
-        limit: Optional[int],
+        timeout: float | None,
+        limit: int | None,
     ):
         self.instances, self.make = instances, make
         self.started, self.timeout, self.limit = started, timeout, limit
@@ -60,23 +61,23 @@ class SearchStream:
         self.bound = None
         self._plans = self._search()
 
-    def __iter__(self) -> Iterator["Plan"]:
+    def __iter__(self) -> Iterator[Plan]:
         return self._plans
 
-    def __next__(self) -> "Plan":
+    def __next__(self) -> Plan:
         return next(self._plans)
 
     def close(self) -> None:
         """End the search now (its statistics are then final)."""
         self._plans.close()
 
-    def __enter__(self) -> "SearchStream":
+    def __enter__(self) -> SearchStream:
         return self
 
     def __exit__(self, *exc) -> None:
         self.close()
 
-    def _search(self) -> Generator["Plan", None, None]:
+    def _search(self) -> Generator[Plan, None, None]:
         stats = self.stats
         try:
             for k, inst in enumerate(self.instances):
@@ -91,7 +92,8 @@ class SearchStream:
                 try:
                     for p in found:
                         assert p is not None  # slice_s is not set: the search never pauses
-                        setattr(p, "instance", k)  # the Plan's instance index, read with getattr
+                        # the Plan's instance index, not a field of Plan: read with getattr
+                        setattr(p, "instance", k)  # noqa: B010
                         stats["plans_found"] += 1
                         if stats["shortest_plan"] is None or len(p.steps) < stats["shortest_plan"]:
                             stats["shortest_plan"] = len(p.steps)

@@ -106,7 +106,7 @@ def check_ipc_decomposition(
         m = methods[mname]
         binding: dict = {}
 
-        def match(pattern, values):
+        def match(pattern, values, binding=binding):
             assert len(pattern) == len(values)
             for p, v in zip(pattern, values):
                 p = p.name if hasattr(p, "name") else p

@@ -246,7 +246,7 @@ def test_infinite_plan_space_streams_with_a_timeout():
     prob = parse_text("(defproblem p d () ((m)))")
     planner = Planner(dom, prob.instances[0])
     found = 0
-    for found, _ in enumerate(planner.plans(timeout=1.0), 1):
+    for found, _ in enumerate(planner.plans(timeout=1.0), 1):  # noqa: B007 (counted)
         pass
     assert planner.stats.timed_out and found > 10
 

@@ -352,7 +352,7 @@ def test_a_recorded_goal_is_the_nodes_log_and_a_killed_recorder_keeps_what_it_wr
     try:
         for proc, err in recorders:
             wait_until(
-                lambda: "record: /htn/events: 1 publisher\n" in err.read_text(),
+                lambda err=err: "record: /htn/events: 1 publisher\n" in err.read_text(),
                 "the recorder finds the node's events",
                 proc,
                 timeout=60,
@@ -384,7 +384,9 @@ def test_a_recorded_goal_is_the_nodes_log_and_a_killed_recorder_keeps_what_it_wr
                 return False
 
         for proc, err in recorders:
-            wait_until(lambda: committed(tmp_path / err.stem), "the summary in the bag", proc)
+            wait_until(
+                lambda err=err: committed(tmp_path / err.stem), "the summary in the bag", proc
+            )
         stopped, killed = (proc for proc, _ in recorders)
         stopped.send_signal(signal.SIGINT)
         killed.kill()
