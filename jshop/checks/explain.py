@@ -177,7 +177,7 @@ class Explainer:
     def _methods(self, planner, task) -> list:
         out = []
         methods = planner._methods.get(task.name, ())
-        for m, unify_head, branches in methods:
+        for m, unify_head, branches, _index in methods:
             env = [None] * m.nvars
             if not unify_head(task.args, env):
                 out.append(

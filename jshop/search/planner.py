@@ -54,10 +54,18 @@ from .ancestry import loop_check_for
 from .goals import GoalGuard
 from .limits import DEFAULT_MAX_DEPTH, DepthLimit, MemoryGuard, MemoryLimit
 from .network import Node, bind_tasks, deepest_task, first_in_order, first_tasks, undo_marks
+from .prune import dead_methods
 from .stats import Stats
 from .steps import method_entry, operator_entry
 
 _PLAN = object()
+
+
+def _indexed(entry: list, index: int) -> list:
+    """A method's entry with its place among its task's methods (the entry
+    itself: warming replaces its head unifier in place)."""
+    entry.append(index)
+    return entry
 
 
 class Planner:
@@ -75,6 +83,7 @@ class Planner:
         explain=None,
         max_memory: int | None = None,
         tree_paths: bool = True,
+        prune: bool = True,
     ):
         self.domain = domain
         self.explain = explain  # an explain.Explainer collecting dead ends, or None
@@ -105,9 +114,17 @@ class Planner:
             name: [operator_entry(self.logic, op) for op in ops]
             for name, ops in domain.operators.items()
         }
-        # (method, head unifier, [(precondition, body, body is ordered)] per branch)
+        # (method, head unifier, [(precondition, body, body is ordered)] per branch,
+        # its place among its task's methods); HDDL methods that cannot apply
+        # from this initial state are left out (see prune.py), unless explained
+        dead = dead_methods(domain, instance) if prune and explain is None else set()
+        self.pruned = len(dead)
         self._methods = {
-            name: [method_entry(self.logic, m, jshop2_compat) for m in ms]
+            name: [
+                _indexed(method_entry(self.logic, m, jshop2_compat), i)
+                for i, m in enumerate(ms)
+                if (name, i) not in dead
+            ]
             for name, ms in domain.methods.items()
         }
         self.stats = Stats()
@@ -118,7 +135,7 @@ class Planner:
         )
         if instance.top is not None:  # HDDL: a root task binds the network's parameters
             m = S.root_method(instance)
-            self._methods[m.name] = [method_entry(self.logic, m, False)]  # its own order
+            self._methods[m.name] = [_indexed(method_entry(self.logic, m, False), 0)]
             self.root = bind_tasks(S.TaskList([m.head]), [])
         else:
             self.root = bind_tasks(instance.tasks, [None] * nvars)
@@ -301,7 +318,7 @@ class Planner:
                     if key in loops.active and loops.is_loop(node, key):  # see loops.py
                         loops.cut += 1
                         methods = ()
-                for index, (m, unify_head, branches) in enumerate(methods):
+                for m, unify_head, branches, index in methods:
                     env = [None] * m.nvars
                     if not unify_head(task.args, env):
                         continue
