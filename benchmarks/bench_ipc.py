@@ -15,6 +15,17 @@ For every instance of the shared samples ``ipc2020-to``, ``ipc2020-to-hard``,
   search in a fresh process (``Planner.plans``, the public API), otherwise
   the ``search_ms`` that ``htn plan -f json --search S`` reports.
 
+With ``--hypertension DIR`` (a copy of github.com/Maumagnaguagno/HyperTensioN;
+``ruby`` on the PATH) HyperTensioN runs beside htn on every instance, as at
+the IPC (``ruby --disable=all Hype.rb DOMAIN PROBLEM typredicate pullup dejavu
+run``, ``RUBY_THREAD_VM_STACK_SIZE=536870912``), under the same CPU limit,
+which of the two goes first alternating from one instance to the next; the
+report adds both planners' whole-process CPU time (user + system) and htn's
+over HyperTensioN's on the instances both solve (geometric mean, the worst,
+how many over 4). htn's bytecode is compiled before the first run, as pip
+does when it installs a package: a run never pays for compiling htn's
+modules (``PYTHONDONTWRITEBYTECODE`` would otherwise make every run do so).
+
 ``--search`` is passed through to ``htn plan --search``; an ``htn`` without
 that option runs ``dfs`` (its only search) without the flag, and reports the
 other searches as not available. Per sample it prints solved, median and max
@@ -23,6 +34,8 @@ CPU time (of the solved instances), and for ``ipc2020-to`` the ratios::
     python benchmarks/bench_ipc.py                      # all four samples, dfs
     python benchmarks/bench_ipc.py --sample ipc2020-to --runs 3
     python benchmarks/bench_ipc.py --search gbfs --json
+    python benchmarks/bench_ipc.py --sample ipc2020-to --sample ipc2020-to-slow \
+        --hypertension ~/HyperTensioN --runs 3 --pin 1
 """
 
 from __future__ import annotations
@@ -42,9 +55,10 @@ import click
 
 ROOT = Path(__file__).resolve().parent.parent
 SHARED = Path(os.environ.get("HTN_SHARED", ROOT.parent / "shared"))
-SAMPLES = ("ipc2020-to", "ipc2020-to-hard", "ipc2023-to", "ipc-po")
+SAMPLES = ("ipc2020-to", "ipc2020-to-slow", "ipc2020-to-hard", "ipc2023-to", "ipc-po")
 SEARCHES = ("dfs", "gbfs", "auto")
 WALL_GUARD = 40
+MEASURED: list = []  # the instances measured so far (who goes first alternates)
 
 # the search alone, in a fresh process (dfs: the planner's public API)
 SEARCH_CPU = """
@@ -90,7 +104,7 @@ def hypertension(sample: Path) -> dict:
     return rows
 
 
-def run_limited(argv: list, limit: float, pin=None) -> dict:
+def run_limited(argv: list, limit: float, pin=None, cwd=ROOT, env=None) -> dict:
     """Run ``argv`` under ``RLIMIT_CPU`` = ``limit`` s; its CPU time, exit
     status (negative: the signal), stdout and stderr. A wall-clock guard
     (``WALL_GUARD`` times the limit: the machine may be shared) kills a
@@ -103,7 +117,9 @@ def run_limited(argv: list, limit: float, pin=None) -> dict:
         resource.setrlimit(resource.RLIMIT_CPU, (soft, soft + 1))
 
     with tempfile.TemporaryFile("w+") as out, tempfile.TemporaryFile("w+") as err:
-        proc = subprocess.Popen(argv, stdout=out, stderr=err, cwd=ROOT, preexec_fn=cap, text=True)
+        proc = subprocess.Popen(
+            argv, stdout=out, stderr=err, cwd=cwd, env=env, preexec_fn=cap, text=True
+        )
         fired: list = []
 
         def kill():
@@ -126,6 +142,25 @@ def run_limited(argv: list, limit: float, pin=None) -> dict:
             "stderr": err.read(),
             "guard": bool(fired),
         }
+
+
+def run_hypertension(ht: Path, domain: Path, problem: Path, limit: float, pin) -> dict:
+    """HyperTensioN on one instance, as at the IPC: its CPU time and whether
+    it printed a plan."""
+    env = {**os.environ, "RUBY_THREAD_VM_STACK_SIZE": "536870912"}
+    argv = ["ruby", "--disable=all", "Hype.rb", str(domain), str(problem)]
+    r = run_limited([*argv, "typredicate", "pullup", "dejavu", "run"], limit, pin, ht, env)
+    r["solved"] = r["rc"] == 0 and "-Plan-" in r["stdout"]
+    return r
+
+
+def precompile() -> None:
+    """Write the bytecode of htn's modules, as pip does at install."""
+    import compileall
+
+    import htn as package
+
+    compileall.compile_dir(Path(package.__file__).parent, quiet=1, workers=1)
 
 
 def htn(*args) -> list:
@@ -182,11 +217,18 @@ def outcome(run: dict, limit: float) -> str:
     return f"error: {first[:160]}"
 
 
-def measure(dname, domain, problem, search, flag, limit, runs, verifier, pin, ref) -> dict:
+def measure(dname, domain, problem, search, flag, limit, runs, verifier, pin, ref, ht) -> dict:
     argv = htn(
         "plan", domain, problem, "-f", "ipc", "--quiet", *(["--search", search] if flag else [])
     )
-    done = [run_limited(argv, limit, pin) for _ in range(runs)]
+    done, theirs = [], []
+    for k in range(runs):  # HyperTensioN first on every other instance and run
+        if ht is not None and (k + len(MEASURED)) % 2 == 0:
+            theirs.append(run_hypertension(ht, domain, problem, limit, pin))
+        done.append(run_limited(argv, limit, pin))
+        if ht is not None and len(theirs) <= k:
+            theirs.append(run_hypertension(ht, domain, problem, limit, pin))
+    MEASURED.append(problem)
     first = done[0]
     cpus = [r["cpu_s"] for r in done]
     row = {
@@ -204,6 +246,13 @@ def measure(dname, domain, problem, search, flag, limit, runs, verifier, pin, re
         )
         row.update(verify(domain, problem, first["stdout"], verifier))
     row["solved"] = row["result"] == "plan" and row["htn_validate"] and row.get("pandapi", True)
+    if theirs:
+        row["ht_cpu_median_s"] = round(statistics.median(r["cpu_s"] for r in theirs), 3)
+        row["ht_solved"] = all(r["solved"] for r in theirs)
+        if row["solved"] and row["ht_solved"]:
+            row["cpu_ratio"] = round(
+                statistics.median(r["cpu_s"] for r in done) / row["ht_cpu_median_s"], 2
+            )
     if ref is not None and row["solved"]:
         row["search_ms"] = search_time(domain, problem, search, flag, limit, runs, pin)
         row["ht_plan_ms"] = ht = ref.get((dname, problem.stem))
@@ -249,6 +298,16 @@ def summary(rows: list, sample: str) -> dict:
         "cpu_median_s": round(statistics.median(cpus), 3) if cpus else None,
         "cpu_max_s": round(max(cpus), 3) if cpus else None,
     }
+    both = [r for r in rows if "cpu_ratio" in r]
+    if both:
+        worst = max(both, key=lambda r: r["cpu_ratio"])
+        out["ht_solved"] = sum(r.get("ht_solved", False) for r in rows)
+        out["cpu_ratio_geomean"] = round(
+            math.exp(sum(math.log(r["cpu_ratio"]) for r in both) / len(both)), 2
+        )
+        out["cpu_ratio_worst"] = f"{worst['cpu_ratio']} ({worst['domain']} {worst['instance']})"
+        out["cpu_ratio_over_4"] = sum(r["cpu_ratio"] > 4 for r in both)
+        out["htn_cpu_median_s"] = round(statistics.median(r["cpu_median_s"] for r in both), 3)
     ratios = [r["search_ratio"] for r in rows if "search_ratio" in r]
     if ratios:
         slow = [r["search_ratio"] for r in rows if "search_ratio" in r and r["ht_plan_ms"] > 10]
@@ -285,9 +344,19 @@ def summary(rows: list, sample: str) -> dict:
     help="Runs per instance (median and max CPU time).",
 )
 @click.option("--pin", type=int, metavar="CPU", help="Pin every run to this core (taskset).")
+@click.option(
+    "--hypertension",
+    "ht",
+    type=click.Path(file_okay=False, exists=True, path_type=Path),
+    metavar="DIR",
+    help="A HyperTensioN checkout (Hype.rb) to run beside htn on every instance.",
+)
 @click.option("--json", "as_json", is_flag=True, help="Print JSON instead of tables.")
-def main(samples, search, only, limit, runs, pin, as_json):
+def main(samples, search, only, limit, runs, pin, ht, as_json):
     """Solve the IPC samples under a CPU limit; every plan verified twice."""
+    if ht is not None and not (ht / "Hype.rb").is_file():
+        raise click.ClickException(f"{ht}: no Hype.rb (a HyperTensioN checkout?)")
+    precompile()
     flag = has_search_option()
     if not flag and search != "dfs":
         message = (
@@ -315,12 +384,13 @@ def main(samples, search, only, limit, runs, pin, as_json):
         ref = hypertension(folder) if name == "ipc2020-to" else None
         rows = []
         for dname, domain, problem in instances(folder, only):
-            row = measure(dname, domain, problem, search, flag, limit, runs, verifier, pin, ref)
+            row = measure(dname, domain, problem, search, flag, limit, runs, verifier, pin, ref, ht)
             rows.append(row)
             click.echo(
                 f"{name} {dname} {problem.name}: "  # progress
                 f"{'solved' if row['solved'] else row['result']} "
-                f"{row['cpu_median_s']:.2f} s CPU",
+                f"{row['cpu_median_s']:.2f} s CPU"
+                + (f", HyperTensioN {row['ht_cpu_median_s']:.2f} s" if ht else ""),
                 err=True,
             )
         report["samples"].append({"summary": summary(rows, name), "instances": rows})
@@ -370,8 +440,18 @@ def _print(report: dict) -> None:
         )
     console.print(t)
     for s in report["samples"]:
+        m = s["summary"]
+        if "cpu_ratio_geomean" in m:
+            console.print(
+                f"{m['sample']}: HyperTensioN solves {m['ht_solved']} of {m['instances']}; "
+                f"htn/HyperTensioN whole-process CPU on the instances both solve: geometric "
+                f"mean {m['cpu_ratio_geomean']}, worst {m['cpu_ratio_worst']}, "
+                f"{m['cpu_ratio_over_4']} over 4; htn's median {m['htn_cpu_median_s']} s"
+            )
+    for s in report["samples"]:
         d = Table(title=s["summary"]["sample"])
-        for col in ("domain", "instance", "result", "CPU s", "search ms", "HT plan ms", "ratio"):
+        cols = ("domain", "instance", "result", "CPU s", "HT CPU s", "CPU ratio")
+        for col in (*cols, "search ms", "HT plan ms", "ratio"):
             d.add_column(
                 col, justify="left" if col in ("domain", "instance", "result") else "right"
             )
@@ -386,6 +466,8 @@ def _print(report: dict) -> None:
                 r["instance"],
                 result,
                 f"{r['cpu_median_s']:.2f}",
+                _fmt(r.get("ht_cpu_median_s")),
+                _fmt(r.get("cpu_ratio")),
                 _fmt(r.get("search_ms")),
                 _fmt(r.get("ht_plan_ms")),
                 _fmt(r.get("search_ratio")),
