@@ -66,7 +66,6 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 from htn.jshop.language.errors import HtnError
-from htn.jshop.readers.jshop2 import parse_step
 from htn.jshop.readers.source import decode_source
 
 from .plan import Plan, Step
@@ -179,6 +178,9 @@ class PlanFile:
 def read_plan_file(path: str) -> PlanFile:
     """Read a plan file (the file is opened once: its text, lines and
     SHA-256 are kept on the :class:`PlanFile`)."""
+    # the JSHOP2 reader (and lark) only where a plan file is read, not by htn plan
+    from htn.jshop.readers.jshop2 import parse_step
+
     if not os.path.isfile(path):
         raise HtnError("no such plan file", path)
     try:

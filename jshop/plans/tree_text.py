@@ -16,7 +16,6 @@ from typing import TYPE_CHECKING, Any
 
 from htn.jshop.language.errors import HtnError
 from htn.jshop.language.terms import Var, term_str
-from htn.jshop.readers.jshop2 import parse_step
 
 from .tree import TaskTree
 
@@ -144,6 +143,8 @@ class _TreeReader:
         return TaskTree(name=step.name, args=tuple(step.args), step=expected)
 
     def task_node(self, n: int, text: str, rest: str) -> TaskTree:
+        from htn.jshop.readers.jshop2 import parse_step  # lark: only to read a tree
+
         end = _atom_end(rest)
         if end is None:
             raise self.error("expected 'step N' or a task '(name args...)'", n, text, rest)

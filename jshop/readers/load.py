@@ -1,9 +1,11 @@
 """Load domains and problems: the reader is chosen by content, JSHOP2 or HDDL.
 
 HDDL text (``(define (domain ...`` or ``(define (problem ...``) is read by
-:mod:`htn.jshop.readers.hddl` and turned into the same syntax objects as
-JSHOP2 text (:mod:`htn.jshop.readers.hddl_domain`); the HDDL grammar is
-loaded only for HDDL input.
+:mod:`htn.jshop.readers.hddl_fast` (or, where that reader is not sure of the
+text, by the lark grammar of :mod:`htn.jshop.readers.hddl`, which locates the
+error) and turned into the same syntax objects as JSHOP2 text
+(:mod:`htn.jshop.readers.hddl_domain`). Each reader is imported only for its
+input: lark is not loaded for well-formed HDDL.
 """
 
 from __future__ import annotations
@@ -17,7 +19,6 @@ from htn.jshop.language.errors import HtnError
 from htn.jshop.language.functions import FunctionTable
 
 from .checks import check_domain_name, check_inputs
-from .jshop2 import parse_jshop2
 from .source import check_nesting, check_not_empty, decode_source, read_bytes
 
 _HDDL_HEAD = re.compile(r"\A(?:\s|;[^\n]*\n)*\(\s*define\s*\(\s*(domain|problem)\b", re.I)
@@ -40,10 +41,17 @@ def parse_text(
     check_not_empty(text, file, expect)
     check_nesting(text, file)
     if is_hddl(text):
-        from . import hddl, hddl_domain
+        from . import hddl_domain, hddl_fast
 
-        model = hddl.parse_model(text, file)
+        try:
+            model = hddl_fast.parse_model(text, file)
+        except hddl_fast.Fallback:  # not plainly well-formed: lark's reader says where
+            from . import hddl
+
+            model = hddl.parse_model(text, file)
         return hddl_domain.from_model(model)
+    from .jshop2 import parse_jshop2
+
     return parse_jshop2(text, file, functions or FunctionTable())
 
 
