@@ -1,0 +1,126 @@
+"""Benchmark: what a small HDDL instance costs, whole process, and where it goes.
+
+Each figure is the CPU time (user + system, from ``wait4``) of a fresh
+process, median of ``--runs``: the interpreter alone (``python -c pass``),
+``htn --help``, ``htn plan --help``, and ``htn plan DOMAIN PROBLEM -f ipc`` on
+small instances (Towers pfile_05 and Childsnack p05 of the shared IPC 2020
+sample, and the bundled JSHOP2 domestic problem). Every run is cold: a new
+process, nothing kept from an earlier run but htn's bytecode, which is
+compiled first, as pip compiles it when it installs htn. Then
+``python -X importtime`` of the Towers run lists the modules that cost most
+to import (their own time, in ms, as importtime reports it) and cProfile the
+top functions by cumulative time. Run::
+
+    python benchmarks/bench_startup.py             # 9 runs each
+    python benchmarks/bench_startup.py --runs 21 --pin 1
+    python benchmarks/bench_startup.py --json
+
+Target (issue 38): a small HDDL instance in at most 0.06 s of CPU.
+"""
+
+from __future__ import annotations
+
+import compileall
+import json
+import os
+import statistics
+import subprocess
+import sys
+from pathlib import Path
+
+import click
+
+ROOT = Path(__file__).resolve().parent.parent
+SHARED = Path(os.environ.get("HTN_SHARED", ROOT.parent / "shared"))
+IPC = SHARED / "corpus" / "ipc2020-to"
+PY = sys.executable
+
+
+def cases() -> dict[str, list[str]]:
+    out = {
+        "python -c pass": [PY, "-c", "pass"],
+        "htn --help": [PY, "-m", "htn", "--help"],
+        "htn plan --help": [PY, "-m", "htn", "plan", "--help"],
+        "htn plan domestic bring_object (JSHOP2)": [
+            *(PY, "-m", "htn", "plan"),
+            str(ROOT / "domains" / "domestic.jshop"),
+            str(ROOT / "problems" / "bring_object.jshop"),
+        ],
+    }
+    for name, domain, problem in (
+        ("Towers pfile_05", "Towers/domain.hddl", "Towers/pfile_05.hddl"),
+        ("Childsnack p05", "Childsnack/domain.hddl", "Childsnack/p05.hddl"),
+    ):
+        if (IPC / domain).is_file():
+            out[f"htn plan {name} -f ipc"] = [
+                *(PY, "-m", "htn", "plan", str(IPC / domain), str(IPC / problem), "-f", "ipc"),
+            ]
+    return out
+
+
+def cpu(argv: list[str], pin: int | None) -> float:
+    if pin is not None:
+        argv = ["taskset", "-c", str(pin), *argv]
+    proc = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    _, status, usage = os.wait4(proc.pid, 0)
+    if os.waitstatus_to_exitcode(status) != 0:
+        raise click.ClickException(f"{' '.join(argv)} failed")
+    return usage.ru_utime + usage.ru_stime
+
+
+def imports(argv: list[str], top: int) -> list[tuple[str, float]]:
+    r = subprocess.run([PY, "-X", "importtime", *argv[1:]], capture_output=True, text=True)
+    own = []
+    for line in r.stderr.splitlines():
+        if line.startswith("import time:") and "|" in line:
+            parts = [p.strip() for p in line[len("import time:") :].split("|")]
+            if parts[0].isdigit():
+                own.append((parts[2].strip(), int(parts[0]) / 1000))
+    return sorted(own, key=lambda x: -x[1])[:top]
+
+
+@click.command()
+@click.option("--runs", default=9, show_default=True, type=click.IntRange(min=1))
+@click.option("--pin", type=int, metavar="CPU", help="Pin every run to this core (taskset).")
+@click.option("--top", default=15, show_default=True, help="Modules listed by import time.")
+@click.option("--json", "as_json", is_flag=True, help="Print JSON instead of a table.")
+def main(runs, pin, top, as_json):
+    """Whole-process CPU time of htn on small instances, cold."""
+    import htn
+
+    compileall.compile_dir(Path(htn.__file__).parent, quiet=1, workers=1)
+    figures = {}
+    for name, argv in cases().items():
+        times = [cpu(argv, pin) for _ in range(runs)]
+        figures[name] = {"median_s": round(statistics.median(times), 4), "min_s": min(times)}
+        click.echo(f"{name}: {figures[name]['median_s']:.3f} s", err=True)
+    towers = [a for n, a in cases().items() if n.startswith("htn plan Towers")]
+    report = {
+        "runs": runs,
+        "figures": figures,
+        "imports": imports(towers[0], top) if towers else [],
+    }
+    if as_json:
+        click.echo(json.dumps(report, indent=1))
+        return
+    from rich.console import Console
+    from rich.table import Table
+
+    t = Table(title=f"whole-process CPU, median of {runs} cold runs")
+    t.add_column("command")
+    t.add_column("CPU s", justify="right")
+    t.add_column("min s", justify="right")
+    for name, f in figures.items():
+        t.add_row(name, f"{f['median_s']:.3f}", f"{f['min_s']:.3f}")
+    Console().print(t)
+    if report["imports"]:
+        m = Table(title="htn plan Towers pfile_05: the costliest imports (own time)")
+        m.add_column("module")
+        m.add_column("ms", justify="right")
+        for name, ms in report["imports"]:
+            m.add_row(name, f"{ms:.1f}")
+        Console().print(m)
+
+
+if __name__ == "__main__":
+    main()
