@@ -29,8 +29,6 @@ The bundled example domains and problems are in :data:`EXAMPLES`; the
 install extras and the modules each brings are in :data:`EXTRAS`.
 """
 
-from .installation import EXAMPLES, EXTRAS, missing_modules
-
 __all__ = [
     "EXAMPLES",
     "EXTRAS",
@@ -65,6 +63,10 @@ def __getattr__(name):
         value = _use_case(name)
         globals()[name] = value
         return value
+    if name in ("EXAMPLES", "EXTRAS", "missing_modules"):  # pathlib only when asked for
+        from . import installation
+
+        return getattr(installation, name)
     # the version is read from the installed metadata only when asked for
     if name == "__version__":
         from .installation import version
@@ -74,4 +76,4 @@ def __getattr__(name):
 
 
 def __dir__():
-    return sorted({*globals(), *USE_CASES})
+    return sorted({*globals(), *USE_CASES, "EXAMPLES", "EXTRAS", "missing_modules"})

@@ -20,7 +20,6 @@ import atexit
 import os
 import re
 import stat
-import tempfile
 import threading
 from collections.abc import Iterable
 from contextlib import contextmanager
@@ -168,6 +167,8 @@ def _probe(folder: str, path: str, option: str | None) -> None:
     """Can files be created in ``folder``? (Asked by creating one: permission
     bits say nothing to root, read-only file systems say it only then.)"""
     try:
+        import tempfile  # only where a file is written: htn plan to stdout does not
+
         tempfile.TemporaryFile(dir=folder, prefix=TEMP_PREFIX).close()
     except OSError as exc:
         raise _refused(path, option, f"cannot write in {folder}: {exc.strerror or exc}") from None
@@ -201,6 +202,8 @@ class AtomicFile:
         self.target = os.path.realpath(path)
         remove_stale_temporaries(directory)
         try:
+            import tempfile
+
             fd, self.tmp = tempfile.mkstemp(prefix=f"{TEMP_PREFIX}{os.getpid()}-", dir=directory)
         except OSError as exc:
             raise _refused(

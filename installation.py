@@ -9,10 +9,25 @@ the package itself, so that ``htn/__init__.py`` may import the use cases
 
 from __future__ import annotations
 
-from pathlib import Path
+import os
+from typing import TYPE_CHECKING
 
-EXAMPLES = Path(__file__).resolve().parent
-"""Folder holding the bundled ``domains/`` and ``problems/``."""
+if TYPE_CHECKING:
+    from pathlib import Path
+
+EXAMPLES_DIR = os.path.dirname(os.path.realpath(__file__))
+"""Folder holding the bundled ``domains/`` and ``problems/``, as text."""
+
+
+def __getattr__(name: str) -> Path:
+    # EXAMPLES, the same folder as a Path: pathlib is imported when it is
+    # asked for, not by htn plan (its import costs a tenth of a small plan)
+    if name == "EXAMPLES":
+        from pathlib import Path
+
+        return Path(EXAMPLES_DIR)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
 
 EXTRAS = {
     "sim": ("pybullet", "numpy", "PIL"),  # PyBullet robots, snapshots

@@ -20,7 +20,7 @@ import re
 from dataclasses import dataclass, field
 from typing import TypeGuard, cast
 
-from htn.installation import EXAMPLES
+from htn.installation import EXAMPLES_DIR
 from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import HtnError
 from htn.jshop.language.functions import FunctionTable, Guard
@@ -119,7 +119,12 @@ def domain_for(problem: ProblemInput) -> str:
     # the places as the user wrote the problem's path (a message shows the
     # path they gave), each looked in once
     here = os.path.dirname(problem.file or "")
-    places = [here, os.path.join(here, "..", "domains"), "domains", str(EXAMPLES / "domains")]
+    places = [
+        here,
+        os.path.join(here, "..", "domains"),
+        "domains",
+        os.path.join(EXAMPLES_DIR, "domains"),
+    ]
     looked: list[str] = []
     for base in places:
         base = os.path.normpath(base)

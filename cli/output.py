@@ -4,9 +4,8 @@ files replaced only whole are :mod:`htn.files`, which the use cases share.)"""
 
 from __future__ import annotations
 
+import re
 import sys
-
-import click
 
 MESSAGE_LIMIT = 1000  # characters: each quoted term is cut to 200 already
 
@@ -19,14 +18,37 @@ def fail(exc) -> None:
     if len(text) > MESSAGE_LIMIT:
         half = MESSAGE_LIMIT // 2
         text = f"{text[:half]} ... {text[-half:]}"
-    click.echo(text, err=True)
+    _echo(text)
     src = exc.source_line() if hasattr(exc, "source_line") else None
     if src:
-        click.echo(src, err=True)
+        _echo(src)
 
 
 def warn(message: str) -> None:
-    click.echo(str(message), err=True)
+    _echo(str(message))
+
+
+_ANSI = re.compile(r"\033\[[;?0-9]*[a-zA-Z]")  # click's pattern of a colour code
+
+
+def _echo(line: str) -> None:
+    """A line on stderr as ``click.echo(line, err=True)`` writes it (colour
+    codes left out where stderr is no terminal), without importing click:
+    ``htn plan`` runs without it (:mod:`.fast`)."""
+    stream = sys.stderr
+    if stream is None:
+        return
+    if not _isatty(stream):
+        line = _ANSI.sub("", line)
+    stream.write(line + "\n")
+    stream.flush()
+
+
+def _isatty(stream) -> bool:
+    try:
+        return stream.isatty()
+    except (AttributeError, ValueError):
+        return False
 
 
 def console(**kwargs):

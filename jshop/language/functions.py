@@ -25,7 +25,6 @@ names what runs).
 
 from __future__ import annotations
 
-import hashlib
 import inspect
 import math
 import operator
@@ -34,6 +33,7 @@ import types
 from collections.abc import Callable, Container
 from typing import TYPE_CHECKING, Any
 
+from .digest import sha256_hex
 from .errors import HtnError, is_stop
 from .terms import NIL, Dotted, shown_term
 
@@ -387,7 +387,7 @@ class FunctionTable:
                 data = fh.read()
         except OSError as exc:
             raise HtnError(f"cannot read: {exc.strerror}", path) from None
-        digest = hashlib.sha256(data).hexdigest()
+        digest = sha256_hex(data)
         if check is not None:
             check(digest)
         module = types.ModuleType("_htn_user_functions")

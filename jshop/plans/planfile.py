@@ -59,12 +59,12 @@ is a plan file too; its domain and problem are then given on the command line.
 
 from __future__ import annotations
 
-import hashlib
 import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
+from htn.jshop.language.digest import sha256_hex
 from htn.jshop.language.errors import HtnError
 from htn.jshop.readers.source import decode_source
 
@@ -190,7 +190,7 @@ def read_plan_file(path: str) -> PlanFile:
         raise HtnError(f"cannot read: {exc.strerror}", path) from exc
     lines = decode_source(data, path).splitlines()  # UTF-8, BOM or not; bad bytes at line:col
     base = os.path.dirname(os.path.abspath(path))
-    pf = PlanFile(path, lines=lines, sha256=hashlib.sha256(data).hexdigest())
+    pf = PlanFile(path, lines=lines, sha256=sha256_hex(data))
     steps: list[Step] = []
     cost: float | None = None
     cost_line = 0

@@ -10,11 +10,11 @@ input: lark is not loaded for well-formed HDDL.
 
 from __future__ import annotations
 
-import hashlib
 import os
 import re
 
 from htn.jshop.language import syntax as S
+from htn.jshop.language.digest import sha256_hex
 from htn.jshop.language.errors import HtnError
 from htn.jshop.language.functions import FunctionTable
 
@@ -64,7 +64,7 @@ def parse_file(path: str, functions: FunctionTable | None = None, expect: str | 
     # bytes is what a log's header records of it
     data = read_bytes(path)
     parsed = parse_text(decode_source(data, path), path, functions, expect)
-    parsed.sha256 = hashlib.sha256(data).hexdigest()
+    parsed.sha256 = sha256_hex(data)
     return parsed
 
 
