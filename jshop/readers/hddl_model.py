@@ -1,132 +1,210 @@
 """The HDDL model as read (Höller et al., AAAI 2020): tasks, methods, actions,
 their task networks, and problems, before they are turned into the planner's
-syntax objects (:mod:`htn.jshop.readers.hddl_domain`)."""
+syntax objects (:mod:`htn.jshop.readers.hddl_domain`).
+
+Plain classes with ``__slots__`` rather than dataclasses: making a dataclass
+runs generated code for each class at import, and these thirteen cost 4 ms
+of CPU, a fifteenth of planning a small problem (``htn plan`` imports them
+for every HDDL input). :class:`Record` gives them what dataclasses gave:
+keyword or positional construction (each class's ``__init__``), ``repr`` and
+``==`` over the fields in order.
+"""
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
 
-from htn.jshop.language import syntax as S
+if TYPE_CHECKING:
+    from htn.jshop.language import syntax as S
 
 # An initial task network with parameters is the body of this task's one
 # method, which binds them (the IPC 2020 plan format's artificial root)
 TOP, TOP_METHOD = "__top", "__top_method"
 
 
-@dataclass
-class Param:
+class Record:
+    """Fields in ``__slots__`` order: ``repr`` and ``==`` as a dataclass's."""
+
+    __slots__: tuple[str, ...] = ()
+    __hash__ = None  # type: ignore[assignment]  # mutable, as a dataclass with eq
+
+    def __repr__(self) -> str:
+        fields = ", ".join(f"{k}={getattr(self, k)!r}" for k in self.__slots__)
+        return f"{type(self).__name__}({fields})"
+
+    def __eq__(self, other: object) -> bool:
+        if type(other) is not type(self):
+            return NotImplemented
+        return all(getattr(self, k) == getattr(other, k) for k in self.__slots__)
+
+
+class Param(Record):
     """A typed variable or object; ``types`` has several names for ``either``."""
 
-    name: str
-    types: tuple
-    pos: S.Pos | None = None
-    type_pos: S.Pos | None = None  # where its type is written
+    __slots__ = ("name", "types", "pos", "type_pos")
+
+    def __init__(
+        self, name: str, types: tuple, pos: S.Pos | None = None, type_pos: S.Pos | None = None
+    ):
+        self.name, self.types, self.pos = name, types, pos
+        self.type_pos = type_pos  # where its type is written
 
 
-@dataclass
-class TaskDef:
-    name: str
-    params: list
-    pos: S.Pos | None = None
+class TaskDef(Record):
+    __slots__ = ("name", "params", "pos")
+
+    def __init__(self, name: str, params: list, pos: S.Pos | None = None):
+        self.name, self.params, self.pos = name, params, pos
 
 
-@dataclass
-class Subtask:
-    label: str | None
-    name: str
-    args: tuple
-    pos: S.Pos | None = None
+class Subtask(Record):
+    __slots__ = ("label", "name", "args", "pos")
+
+    def __init__(self, label: str | None, name: str, args: tuple, pos: S.Pos | None = None):
+        self.label, self.name, self.args, self.pos = label, name, args, pos
 
 
-@dataclass
-class Network:
+class Network(Record):
     """A task network: subtasks, ``<`` constraints between labels, and
     whether it was written ``:ordered-subtasks``."""
 
-    subtasks: list = field(default_factory=list)
-    ordered: bool = False
-    ordering: list = field(default_factory=list)  # [(before, after, pos)]
-    constraints: object = None
-    pos: S.Pos | None = None
+    __slots__ = ("subtasks", "ordered", "ordering", "constraints", "pos")
+
+    def __init__(
+        self,
+        subtasks: list | None = None,
+        ordered: bool = False,
+        ordering: list | None = None,  # [(before, after, pos)]
+        constraints: object = None,
+        pos: S.Pos | None = None,
+    ):
+        self.subtasks = [] if subtasks is None else subtasks
+        self.ordered = ordered
+        self.ordering = [] if ordering is None else ordering
+        self.constraints, self.pos = constraints, pos
 
 
-@dataclass
-class MethodDef:
-    name: str
-    params: list
-    task: Subtask
-    pre: object  # a syntax expression or None
-    network: Network
-    pos: S.Pos | None = None
+class MethodDef(Record):
+    __slots__ = ("name", "params", "task", "pre", "network", "pos")
+
+    def __init__(
+        self,
+        name: str,
+        params: list,
+        task: Subtask,
+        pre: object,  # a syntax expression or None
+        network: Network,
+        pos: S.Pos | None = None,
+    ):
+        self.name, self.params, self.task, self.pre = name, params, task, pre
+        self.network, self.pos = network, pos
 
 
-@dataclass
-class ActionDef:
-    name: str
-    params: list
-    pre: object
-    effect: object  # a nested effect structure, see Effect*
-    pos: S.Pos | None = None
+class ActionDef(Record):
+    __slots__ = ("name", "params", "pre", "effect", "pos")
+
+    def __init__(
+        self,
+        name: str,
+        params: list,
+        pre: object,
+        effect: object,  # a nested effect structure, see Effect*
+        pos: S.Pos | None = None,
+    ):
+        self.name, self.params, self.pre, self.effect, self.pos = name, params, pre, effect, pos
 
 
-@dataclass
-class Exists:
+class Exists(Record):
     """``(exists (typed vars) formula)``; becomes a conjunction with type
     conditions when translated (its variables renamed apart)."""
 
-    vars: list
-    expr: object
-    pos: S.Pos | None = None
+    __slots__ = ("vars", "expr", "pos")
+
+    def __init__(self, vars: list, expr: object, pos: S.Pos | None = None):
+        self.vars, self.expr, self.pos = vars, expr, pos
 
 
-@dataclass
-class EffectWhen:
-    vars: list  # [Param] of enclosing foralls
-    cond: object
-    effect: object
-    pos: S.Pos | None = None
+class EffectWhen(Record):
+    __slots__ = ("vars", "cond", "effect", "pos")
+
+    def __init__(self, vars: list, cond: object, effect: object, pos: S.Pos | None = None):
+        self.vars = vars  # [Param] of enclosing foralls
+        self.cond, self.effect, self.pos = cond, effect, pos
 
 
-@dataclass
-class EffectForall:
-    vars: list
-    effect: object
-    pos: S.Pos | None = None
+class EffectForall(Record):
+    __slots__ = ("vars", "effect", "pos")
+
+    def __init__(self, vars: list, effect: object, pos: S.Pos | None = None):
+        self.vars, self.effect, self.pos = vars, effect, pos
 
 
-@dataclass
-class EffectCost:
-    amount: object  # a number
-    pos: S.Pos | None = None
+class EffectCost(Record):
+    __slots__ = ("amount", "pos")
+
+    def __init__(self, amount: object, pos: S.Pos | None = None):
+        self.amount, self.pos = amount, pos  # a number
 
 
-@dataclass
-class HDomain:
-    name: str
-    types: dict = field(default_factory=dict)  # type -> [parent types]
-    type_pos: dict = field(default_factory=dict)  # type -> where it is first declared
-    constants: list = field(default_factory=list)  # [Param]
-    predicates: dict = field(default_factory=dict)  # name -> [Param]
-    tasks: dict = field(default_factory=dict)  # name -> TaskDef
-    methods: list = field(default_factory=list)
-    actions: dict = field(default_factory=dict)  # name -> ActionDef
-    spelling: dict = field(default_factory=dict)
-    file: str = ""
-    pos: S.Pos | None = None
+class HDomain(Record):
+    __slots__ = (
+        "name",
+        "types",
+        "type_pos",
+        "constants",
+        "predicates",
+        "tasks",
+        "methods",
+        "actions",
+        "spelling",
+        "file",
+        "pos",
+    )
+
+    def __init__(self, name: str, file: str = "", pos: S.Pos | None = None, **given: Any):
+        self.name = name
+        self.types: dict = given.pop("types", {})  # type -> [parent types]
+        self.type_pos: dict = given.pop("type_pos", {})  # type -> where first declared
+        self.constants: list = given.pop("constants", [])  # [Param]
+        self.predicates: dict = given.pop("predicates", {})  # name -> [Param]
+        self.tasks: dict = given.pop("tasks", {})  # name -> TaskDef
+        self.methods: list = given.pop("methods", [])
+        self.actions: dict = given.pop("actions", {})  # name -> ActionDef
+        self.spelling: dict = given.pop("spelling", {})
+        self.file, self.pos = file, pos
+        if given:
+            raise TypeError(f"HDomain() got unexpected fields {sorted(given)}")
 
 
-@dataclass
-class HProblem:
-    name: str
-    domain_name: str
-    objects: list = field(default_factory=list)
-    params: list = field(default_factory=list)
-    network: Network | None = None
-    init: list = field(default_factory=list)  # [S.Atom]
-    goal: object = None
-    spelling: dict = field(default_factory=dict)
-    file: str = ""
-    pos: S.Pos | None = None
+class HProblem(Record):
+    __slots__ = (
+        "name",
+        "domain_name",
+        "objects",
+        "params",
+        "network",
+        "init",
+        "goal",
+        "spelling",
+        "file",
+        "pos",
+    )
 
-
-# ------------------------------------------------------------------ builder
+    def __init__(
+        self,
+        name: str,
+        domain_name: str,
+        file: str = "",
+        pos: S.Pos | None = None,
+        **given: Any,
+    ):
+        self.name, self.domain_name = name, domain_name
+        self.objects: list = given.pop("objects", [])
+        self.params: list = given.pop("params", [])
+        self.network: Network | None = given.pop("network", None)
+        self.init: list = given.pop("init", [])  # [S.Atom]
+        self.goal: object = given.pop("goal", None)
+        self.spelling: dict = given.pop("spelling", {})
+        self.file, self.pos = file, pos
+        if given:
+            raise TypeError(f"HProblem() got unexpected fields {sorted(given)}")
