@@ -65,7 +65,4 @@ def console(**kwargs):
 
 
 def stdout_is_terminal() -> bool:
-    try:
-        return sys.stdout.isatty()
-    except (AttributeError, ValueError):
-        return False
+    return _isatty(sys.stdout)

@@ -30,27 +30,21 @@ from htn.jshop.language import syntax as S
 from htn.jshop.language.terms import Var
 
 
-def _effect_atoms(effects: S.Effects) -> Iterator[Any]:
-    for item in effects.items:
-        if isinstance(item, S.EffectForAll):
-            yield from item.atoms
-        else:
-            yield item
-
-
 def _changed(domain: S.Domain) -> set[str] | None:
-    """The predicates some operator adds or deletes; None when an effect's
-    predicate is not known before the search (an atom in a variable)."""
-    changed: set[str] = set()
+    """The predicates some operator adds or deletes
+    (:meth:`~htn.jshop.language.syntax.Domain.dynamic_predicates`); None when
+    an effect's predicate is not known before the search (an atom in a
+    variable, or an effect list in one)."""
     for ops in domain.operators.values():
         for op in ops:
             if op.add.var is not None or op.delete.var is not None:
                 return None
-            for atom in (*_effect_atoms(op.add), *_effect_atoms(op.delete)):
-                if not isinstance(atom, S.Atom):
-                    return None
-                changed.add(atom.pred)
-    return changed
+            for effects in (op.add, op.delete):
+                for item in effects.items:
+                    atoms = item.atoms if isinstance(item, S.EffectForAll) else [item]
+                    if any(isinstance(a, S.VarAtom) for a in atoms):
+                        return None
+    return domain.dynamic_predicates()
 
 
 def _required(expr: Any) -> Iterator[S.Atom]:
