@@ -155,11 +155,16 @@ def run_hypertension(ht: Path, domain: Path, problem: Path, limit: float, pin) -
 
 
 def precompile() -> None:
-    """Write the bytecode of htn's modules, as pip does at install."""
+    """Write the bytecode of htn's modules, as pip does at install: into a
+    cache folder of its own (``PYTHONPYCACHEPREFIX``, which the runs inherit),
+    not beside the sources, where a wheel built from the checkout would take
+    it in."""
     import compileall
 
     import htn as package
 
+    prefix = os.path.join(tempfile.gettempdir(), "htn-bench-pycache")
+    sys.pycache_prefix = os.environ["PYTHONPYCACHEPREFIX"] = prefix
     compileall.compile_dir(Path(package.__file__).parent, quiet=1, workers=1)
 
 

@@ -104,9 +104,10 @@ def main(runs, pin, top, here, as_json):
     import tempfile
 
     with tempfile.TemporaryDirectory() as tmp:
-        if here:
+        if here:  # its bytecode in a folder of its own, as bench_ipc.py writes it
             import htn
 
+            sys.pycache_prefix = os.environ["PYTHONPYCACHEPREFIX"] = str(Path(tmp) / "pycache")
             compileall.compile_dir(Path(htn.__file__).parent, quiet=1, workers=1)
             py = sys.executable
         else:

@@ -2,17 +2,16 @@
 their task networks, and problems, before they are turned into the planner's
 syntax objects (:mod:`htn.jshop.readers.hddl_domain`).
 
-Plain classes with ``__slots__`` rather than dataclasses: making a dataclass
-runs generated code for each class at import, and these thirteen cost 4 ms
-of CPU, a fifteenth of planning a small problem (``htn plan`` imports them
-for every HDDL input). :class:`Record` gives them what dataclasses gave:
-keyword or positional construction (each class's ``__init__``), ``repr`` and
-``==`` over the fields in order.
+Plain classes with ``__slots__`` rather than dataclasses
+(:mod:`htn.jshop.language.record`: making these thirteen dataclasses cost 4
+ms of CPU at import, for every HDDL input).
 """
 
 from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
+
+from htn.jshop.language.record import Record
 
 if TYPE_CHECKING:
     from htn.jshop.language import syntax as S
@@ -20,22 +19,6 @@ if TYPE_CHECKING:
 # An initial task network with parameters is the body of this task's one
 # method, which binds them (the IPC 2020 plan format's artificial root)
 TOP, TOP_METHOD = "__top", "__top_method"
-
-
-class Record:
-    """Fields in ``__slots__`` order: ``repr`` and ``==`` as a dataclass's."""
-
-    __slots__: tuple[str, ...] = ()
-    __hash__ = None  # type: ignore[assignment]  # mutable, as a dataclass with eq
-
-    def __repr__(self) -> str:
-        fields = ", ".join(f"{k}={getattr(self, k)!r}" for k in self.__slots__)
-        return f"{type(self).__name__}({fields})"
-
-    def __eq__(self, other: object) -> bool:
-        if type(other) is not type(self):
-            return NotImplemented
-        return all(getattr(self, k) == getattr(other, k) for k in self.__slots__)
 
 
 class Param(Record):
