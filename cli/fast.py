@@ -16,6 +16,7 @@ from __future__ import annotations
 import os
 from typing import Any
 
+# htn plan -f: the one list (plan_cmd and plan_run take it from here)
 FORMATS = ("text", "jshop", "json", "ipc")
 _VALUED = {"-f": "fmt", "--format": "fmt", "--search": "search_name"}
 _FLAGS = {"-q": "quiet", "--quiet": "quiet"}

@@ -6,8 +6,9 @@ import click
 
 from htn.api.plan import DEFAULT_MAX_DEPTH, SEARCHES
 
+from .fast import FORMATS
 from .options import TIMEOUT_HELP, Count, Timeout, current_stops, memory_mb
-from .plan_run import FORMATS, run_plan
+from .plan_run import run_plan
 
 
 @click.command("plan")
@@ -33,7 +34,7 @@ from .plan_run import FORMATS, run_plan
     "-f",
     "--format",
     "fmt",
-    type=click.Choice(FORMATS),
+    type=click.Choice(list(FORMATS)),
     help="Output format [default: text on a terminal, else jshop]. 'jshop' prints "
     "exactly what JSHOP2 prints; 'json' is JSON Lines: one object per plan "
     "(steps, cost, task tree), then one with the statistics; 'ipc' the IPC "

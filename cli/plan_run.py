@@ -19,8 +19,6 @@ from htn.process import DeadlineExceeded, Stops, deadline
 from .output import console, stdout_is_terminal, warn
 from .progress import Phase
 
-FORMATS = ["text", "jshop", "json", "ipc"]
-
 
 def run_plan(
     stops: Stops, domain, problem, fmt, output, timeout, functions, show_tree, dot, quiet, **flags
