@@ -49,6 +49,7 @@ import subprocess
 import sys
 import tempfile
 import threading
+from contextlib import contextmanager
 from pathlib import Path
 
 import click
@@ -154,18 +155,26 @@ def run_hypertension(ht: Path, domain: Path, problem: Path, limit: float, pin) -
     return r
 
 
-def precompile() -> None:
-    """Write the bytecode of htn's modules, as pip does at install: into a
-    cache folder of its own (``PYTHONPYCACHEPREFIX``, which the runs inherit),
-    not beside the sources, where a wheel built from the checkout would take
-    it in."""
+@contextmanager
+def precompiled():
+    """htn's modules with their bytecode beside them, as pip writes it at
+    install, while the block runs; the ``__pycache__`` folders made here are
+    removed after it (a wheel built from the checkout would take them in).
+    A cache folder of their own (``PYTHONPYCACHEPREFIX``) would leave every
+    other module without bytecode."""
     import compileall
+    import shutil
 
     import htn as package
 
-    prefix = os.path.join(tempfile.gettempdir(), "htn-bench-pycache")
-    sys.pycache_prefix = os.environ["PYTHONPYCACHEPREFIX"] = prefix
-    compileall.compile_dir(Path(package.__file__).parent, quiet=1, workers=1)
+    root = Path(package.__file__).parent
+    before = set(root.rglob("__pycache__"))
+    compileall.compile_dir(root, quiet=1, workers=1)
+    try:
+        yield
+    finally:
+        for folder in set(root.rglob("__pycache__")) - before:
+            shutil.rmtree(folder, ignore_errors=True)
 
 
 def htn(*args) -> list:
@@ -361,7 +370,11 @@ def main(samples, search, only, limit, runs, pin, ht, as_json):
     """Solve the IPC samples under a CPU limit; every plan verified twice."""
     if ht is not None and not (ht / "Hype.rb").is_file():
         raise click.ClickException(f"{ht}: no Hype.rb (a HyperTensioN checkout?)")
-    precompile()
+    with precompiled():
+        _run(samples, search, only, limit, runs, pin, ht, as_json)
+
+
+def _run(samples, search, only, limit, runs, pin, ht, as_json) -> None:
     flag = has_search_option()
     if not flag and search != "dfs":
         message = (

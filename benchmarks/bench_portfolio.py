@@ -27,6 +27,9 @@ from pathlib import Path
 
 import click
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_ipc import run_limited  # noqa: E402
+
 ROOT = Path(__file__).resolve().parent.parent
 SHARED = Path(os.environ.get("HTN_SHARED", ROOT.parent / "shared"))
 DEFAULT = [
@@ -37,17 +40,16 @@ DEFAULT = [
     ),
 ]
 HOG = "while True: pass"
+LIMIT = 300  # CPU seconds a run may take
 
 
 def run(domain: str, problem: str) -> dict:
     argv = [sys.executable, "-m", "htn", "plan", domain, problem, "--search", "auto", "-f", "json"]
-    proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
-    out = proc.stdout.read() if proc.stdout else ""
-    _, status, usage = os.wait4(proc.pid, 0)
-    stats = json.loads(out.splitlines()[-1]) if out else {}
+    r = run_limited(argv, LIMIT)
+    stats = json.loads(r["stdout"].splitlines()[-1]) if r["stdout"] else {}
     return {
-        "cpu_s": round(usage.ru_utime + usage.ru_stime, 3),
-        "exit": os.waitstatus_to_exitcode(status),
+        "cpu_s": round(r["cpu_s"], 3),
+        "exit": r["rc"],
         "expansions": stats.get("expansions"),
         "found_by": stats.get("found_by"),
     }

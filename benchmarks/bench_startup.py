@@ -25,7 +25,6 @@ Target (issue 38): a small HDDL instance in at most 0.06 s of CPU.
 
 from __future__ import annotations
 
-import compileall
 import json
 import os
 import statistics
@@ -34,6 +33,9 @@ import sys
 from pathlib import Path
 
 import click
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_ipc import precompiled, run_limited  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 SHARED = Path(os.environ.get("HTN_SHARED", ROOT.parent / "shared"))
@@ -73,13 +75,10 @@ def cases(py: str) -> dict[str, list[str]]:
 
 
 def cpu(argv: list[str], pin: int | None) -> float:
-    if pin is not None:
-        argv = ["taskset", "-c", str(pin), *argv]
-    proc = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    _, status, usage = os.wait4(proc.pid, 0)
-    if os.waitstatus_to_exitcode(status) != 0:
-        raise click.ClickException(f"{' '.join(argv)} failed")
-    return usage.ru_utime + usage.ru_stime
+    r = run_limited(argv, 60, pin)
+    if r["rc"] != 0:
+        raise click.ClickException(f"{' '.join(argv)} failed: {r['stderr'][-300:]}")
+    return float(r["cpu_s"])
 
 
 def imports(argv: list[str], top: int) -> list[tuple[str, float]]:
@@ -102,13 +101,11 @@ def imports(argv: list[str], top: int) -> list[tuple[str, float]]:
 def main(runs, pin, top, here, as_json):
     """Whole-process CPU time of htn on small instances, cold."""
     import tempfile
+    from contextlib import ExitStack
 
-    with tempfile.TemporaryDirectory() as tmp:
-        if here:  # its bytecode in a folder of its own, as bench_ipc.py writes it
-            import htn
-
-            sys.pycache_prefix = os.environ["PYTHONPYCACHEPREFIX"] = str(Path(tmp) / "pycache")
-            compileall.compile_dir(Path(htn.__file__).parent, quiet=1, workers=1)
+    with tempfile.TemporaryDirectory() as tmp, ExitStack() as stack:
+        if here:  # with its bytecode, as bench_ipc.py measures it
+            stack.enter_context(precompiled())
             py = sys.executable
         else:
             click.echo("installing htn into a new virtualenv ...", err=True)
