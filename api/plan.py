@@ -86,7 +86,7 @@ def plan(
     table = function_table(functions, stops)
     inputs = read_inputs(domain, problem, table)
     dom, prob, warnings = inputs.domain, inputs.problem, list(inputs.warnings)
-    why = refusal(search, dom, plans is None)
+    why = refusal(search, dom, plans is None, prob, jshop2_compat)
     if why:
         raise UnsupportedSearch(why)
     if jshop2_compat:

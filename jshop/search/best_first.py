@@ -262,7 +262,7 @@ class BestFirst:
                     node.method_index = next(
                         (j for j, x in enumerate(self.domain.methods.get(m.name, ())) if x is m), 0
                     )
-                    node.branch = m.branches[0].label
+                    node.branch = m.branches[gm.branch].label
                     work.append((node, sub, path))
                 parent.children.append(node)
         return root

@@ -22,14 +22,21 @@ ones: they only cut method instances that have no plan below them.
 
 from __future__ import annotations
 
-from typing import cast
-
 from htn.jshop.language import syntax as S
 from htn.jshop.language.terms import subst, variables
 from htn.jshop.logic.caches import IdentityCache
 from htn.jshop.logic.compile import head_unifier
 
-from .ground_formulas import COMPILE_AFTER, FormulaGrounder, NotGroundable, compile_residual, disj
+from .ground_formulas import (
+    COMPILE_AFTER,
+    FormulaGrounder,
+    NotGroundable,
+    compile_residual,
+    conj,
+    disj,
+    negate,
+)
+from .jshop2_input import checked_instance, flat_tasks
 from .reachability import reachable
 from .residual_code import compile_body
 
@@ -50,14 +57,15 @@ class GroundAction:
 
 
 class GroundMethod:
-    __slots__ = ("task", "method", "pre", "body", "order")
+    __slots__ = ("task", "method", "pre", "body", "order", "branch")
 
-    def __init__(self, task, method, pre, body, order):
+    def __init__(self, task, method, pre, body, order, branch=0):
         self.task = task  # the task id it decomposes
         self.method = method  # the S.Method
         self.pre = pre
         self.body = body  # subtask ids, in the method's (topological) order
         self.order = order  # True, False or a PartialOrder
+        self.branch = branch  # the index of the method's branch (JSHOP2's if-then-else)
 
 
 class GroundModel:
@@ -114,9 +122,10 @@ class _Grounder:
                     raise NotGroundable(f"the cost of {op.name} is not a number")
                 if op.add.var is not None or op.delete.var is not None:
                     raise NotGroundable(f"{op.name} has a variable effect list")
+        if domain.language != "hddl":
+            instance = self.instance = checked_instance(domain, instance)
         self.methods = {name: list(ms) for name, ms in domain.methods.items()}
-        self.roots = list(instance.tasks.items)
-        self.root_order = instance.tasks.order_flag
+        self.roots, self.root_order = flat_tasks(instance.tasks)
         if instance.top is not None:
             m = S.root_method(instance)
             self.methods[m.name] = [m]
@@ -154,7 +163,7 @@ class _Grounder:
         }
         self.executable: dict = {}  # (name, args) -> GroundAction or None
         self.head_bound: dict = {}
-        self.bodies = IdentityCache(global_=False)  # method -> [uses, compiled body or None]
+        self.bodies = IdentityCache(global_=False)  # branch -> see _body_code
         todo, seen = list(roots), set(roots)
         while todo:
             yield
@@ -242,16 +251,26 @@ class _Grounder:
         return masks[0], masks[1], tuple(effects)
 
     def _methods(self, t: int, m: S.Method, unify, args: tuple):
-        model = self.model
         env = [None] * m.nvars
         if not unify(args, env):
             return
-        branch = m.branches[0]
-        if any(isinstance(x, S.TaskList) for x in branch.tasks.items):
-            raise NotGroundable(f"method {m.name}: a nested task list")
-        items = cast("list[S.TaskAtom]", branch.tasks.items)  # no nested list: checked above
+        earlier: list = []  # the residuals of the earlier branches' preconditions
+        last = len(m.branches) - 1
+        for k, branch in enumerate(m.branches):
+            # JSHOP2's if-then-else: branch k applies where no earlier one does
+            unless = negate(disj(earlier)) if earlier else True
+            if unless is False:
+                return
+            yield from self._branch(t, m, k, env, unless)
+            if k < last:
+                earlier.append(self._residual(branch.pre.expr, env))
+
+    def _branch(self, t: int, m: S.Method, k: int, env: list, unless):
+        model = self.model
+        branch = m.branches[k]
+        code = self._body_code(branch)
+        items, order = code[2], code[3]
         groups: dict = {}
-        code = self._body_code(m)
         for nb in self.formulas.satisfiers(branch.pre.expr, env):
             residual = self.formulas.ground(branch.pre.expr, nb)
             if residual is False:
@@ -284,18 +303,22 @@ class _Grounder:
         for body, residuals in groups.items():
             if residuals is None:
                 continue
-            pre = compile_residual(disj(residuals))
+            pre = compile_residual(conj([disj(residuals), unless]))
             if pre is not None:
                 ids = tuple(model.task_id(name, args) for name, args in body)
-                yield GroundMethod(t, m, pre, ids, branch.tasks.order_flag)
+                yield GroundMethod(t, m, pre, ids, order, k)
 
-    def _body_code(self, m: S.Method) -> list:
-        """``[uses, compiled subtask list or None]``: a method's body is
+    def _body_code(self, branch: S.Branch) -> list:
+        """``[uses, compiled subtask list or None, subtasks, order]``: a
+        branch's body (its nested lists flattened, :func:`flat_tasks`) is
         compiled (:func:`compile_body`) once it has been instantiated
         ``COMPILE_AFTER`` times, unless its arguments are not all variables
         and constants."""
-        hit = self.bodies.get(m)
-        return hit if hit is not None else self.bodies.put(m, [0, None])
+        hit = self.bodies.get(branch)
+        if hit is None:
+            items, order = flat_tasks(branch.tasks)
+            hit = self.bodies.put(branch, [0, None, items, order])
+        return hit
 
     def _executable(self, name: str, args: tuple) -> bool:
         """Whether the ground action can apply in some reachable state (kept

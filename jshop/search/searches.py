@@ -3,7 +3,8 @@ command line and the library, as pyperplan keeps its searches).
 
 * ``dfs`` -- JSHOP2's depth-first search in the written order
   (:mod:`htn.jshop.search.planner`): the default, and the only one for
-  JSHOP2 input and for enumerating plans (``--all``);
+  enumerating plans (``--all``) and for JSHOP2 input that cannot be
+  grounded (:mod:`htn.jshop.search.jshop2_input`);
 * ``gbfs`` -- greedy best-first progression search on the grounded problem
   with the relaxed composition heuristic (:mod:`htn.jshop.search.best_first`,
   :mod:`htn.jshop.search.heuristics`), cutting nodes that cannot reach
@@ -42,9 +43,9 @@ class Search(Protocol):
 
 SEARCHES = {
     "dfs": "depth-first, JSHOP2's order",
-    "gbfs": "greedy best-first, relaxed composition heuristic (HDDL)",
-    "wastar": "weighted A* (w = 2), same heuristic (HDDL)",
-    "auto": "dfs, gbfs and wastar interleaved, the first plan wins (HDDL)",
+    "gbfs": "greedy best-first, relaxed composition heuristic (grounded)",
+    "wastar": "weighted A* (w = 2), same heuristic (grounded)",
+    "auto": "dfs, gbfs and wastar interleaved, the first plan wins",
 }
 
 
@@ -93,15 +94,27 @@ def make_search(name: str, domain, instance, functions=None, **options) -> Searc
     return factory(domain, instance, functions, **options)
 
 
-def refusal(name: str, domain, all_plans: bool):
-    """Why a search cannot run on this input, or None."""
+def refusal(name: str, domain, all_plans: bool, problem=None, jshop2_compat: bool = False):
+    """Why a search cannot run on this input, or None. A JSHOP2 domain is
+    planned by the grounded searches where it can be grounded
+    (:mod:`htn.jshop.search.jshop2_input`); ``auto`` then runs depth-first
+    search alone where it cannot, ``gbfs`` and ``wastar`` refuse it."""
     if name == "dfs":
         return None
     if all_plans:
         return f"--search {name} finds plans one at a time; --all needs --search dfs"
-    if domain.language != "hddl":
-        return (
-            f"--search {name} reads HDDL; JSHOP2 domains are planned depth-first "
-            "under the manual's semantics (--search dfs)"
-        )
+    if domain.language == "hddl":
+        return None
+    if jshop2_compat:
+        return "--jshop2-compat is JSHOP2 1.0.3's depth-first order; it needs --search dfs"
+    if name == "auto" or problem is None:
+        return None
+    from .ground_formulas import NotGroundable
+    from .jshop2_input import check
+
+    try:
+        for instance in problem.instances:
+            check(domain, instance)
+    except NotGroundable as e:
+        return f"--search {name} plans JSHOP2 input it can ground; {e} (--search dfs plans it)"
     return None

@@ -135,19 +135,12 @@ def test_auto_says_which_search_found_the_plan(tmp_path):
     assert stats["found_by"] in ("dfs", "gbfs")
 
 
-def test_heuristic_search_refuses_jshop2_and_all(tmp_path):
+def test_heuristic_search_refuses_all(tmp_path):
     d, p = tmp_path / "d.hddl", tmp_path / "p.hddl"
     d.write_text(PROBE)
     p.write_text(PROBE_PROBLEM)
     result = run_htn("plan", d, p, "--search", "gbfs", "--all")
     assert result.returncode == 2 and "--all needs --search dfs" in result.stderr
-    jd, jp = (
-        SHARED / "corpus" / "jshop2" / "basic" / "basic",
-        SHARED / "corpus" / "jshop2" / "basic" / "problem",
-    )
-    if jd.is_file():
-        result = run_htn("plan", jd, jp, "--search", "auto")
-        assert result.returncode == 2 and "reads HDDL" in result.stderr
 
 
 @pytest.mark.corpus
