@@ -17,7 +17,12 @@ was reached before (with no smaller ``g``) is dropped (duplicate
 detection), and so is one whose network cannot make the goal's chain true
 in its order (:mod:`htn.jshop.search.goal_chain`). When a task that may be
 done next has only methods that test nothing, it is decomposed as the only
-move (:func:`committed`).
+move (:func:`committed`). With ``serial``, a move into a member of an
+unordered group (other than such a decomposition) first orders that member
+before the group's others (:func:`~.task_networks.serialize`): a started
+member is finished before another starts. That search is not complete (a
+plan may need an interleaving), and the portfolio runs it beside the
+others.
 
 :meth:`BestFirst.plans` is a stream like :meth:`Planner.plans
 <htn.jshop.search.planner.Planner.plans>`; with ``slice_s`` set it also
@@ -42,7 +47,7 @@ from .grounding import UNREACHABLE_GOAL, ground, grounding_steps
 from .heuristics import HEURISTICS, INF
 from .limits import MemoryGuard, MemoryLimit
 from .stats import Stats
-from .task_networks import body_items, firsts, item_at, replace
+from .task_networks import body_items, firsts, item_at, replace, serialize
 
 if TYPE_CHECKING:
     from .grounding import GroundModel
@@ -65,6 +70,7 @@ class BestFirst:
         label: str = "gbfs",
         commit: bool = True,
         ties: str | None = None,
+        serial: bool = False,
         **_ignored,
     ):
         self.domain, self.instance = domain, instance
@@ -82,6 +88,7 @@ class BestFirst:
         self.commit = commit  # the rule of committed() (False: every move)
         self.ties = ties  # "fifo", "lifo", None: see interleaves()
         self.lifo = False
+        self.serial = serial  # a started member of a group is finished before the others
 
     def prepare(self) -> None:
         """Ground the problem and build the heuristic (the first call of
@@ -127,7 +134,7 @@ class BestFirst:
         assert model is not None and h is not None  # set by _prepared
         actions, methods_of = model.actions, model.methods_of
         net0 = body_items(model.roots, model.root_order)
-        cut, free = self.cut, self.free
+        cut, free, serial = self.cut, self.free, self.serial
         if model.goal == UNREACHABLE_GOAL:
             h0 = INF
         else:
@@ -154,19 +161,22 @@ class BestFirst:
                 stats.expansions += 1
                 ticks += 1
                 for path, t in committed(firsts(net), free):
+                    at, where = net, path
+                    if serial and path and t not in free:
+                        at, where = serialize(net, path)
                     a = actions.get(t)
                     if a is not None:
                         if not satisfied(a.pre, s):
                             continue
                         s2 = _apply(a, s)
                         stats.operator_applications += 1
-                        self._push(nodes, heap, seen, s2, replace(net, path, ()), k, (path, a), g)
+                        self._push(nodes, heap, seen, s2, replace(at, where, ()), k, (path, a), g)
                         continue
                     for gm in methods_of.get(t, ()):
                         if satisfied(gm.pre, s):
                             new = body_items(gm.body, gm.order)
                             self._push(
-                                nodes, heap, seen, s, replace(net, path, new), k, (path, gm), g
+                                nodes, heap, seen, s, replace(at, where, new), k, (path, gm), g
                             )
                 if not ticks & 63:
                     if timeout is not None and time.perf_counter() - stats.started > timeout:
@@ -221,8 +231,11 @@ class BestFirst:
         net = body_items(tuple(range(len(inst))), model.root_order)
         how: dict = {}  # instance -> step index or (method, children)
         steps: list[Step] = []
+        free = self.free
         for path, what in moves:
             i = item_at(net, path)
+            if self.serial and path and inst[i] not in free:
+                net, path = serialize(net, path)
             if hasattr(what, "op"):
                 how[i] = len(steps)
                 steps.append(Step(what.name, what.args, what.cost))

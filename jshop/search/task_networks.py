@@ -75,6 +75,24 @@ def replace(seq: tuple, path: tuple, new: tuple, k: int = 0) -> tuple:
     return ((members, preds),) + seq[1:]
 
 
+def serialize(seq: tuple, path: tuple, k: int = 0) -> tuple:
+    """``(network, path)``: the network with the member that ``path`` enters
+    in each group on its way taken out in front of the group's other
+    members (finished before any of them starts), and the task's path in
+    it (``()``: the task is first). See ``BestFirst``'s ``serial``."""
+    head = seq[0]
+    if type(head) is int:
+        return seq, ()
+    members, preds = head
+    i = path[k]
+    inner, _ = serialize(members[i], path, k + 1)
+    others = members[:i] + members[i + 1 :]
+    low = (1 << i) - 1
+    rest = tuple((m & low) | ((m >> (i + 1)) << i) for j, m in enumerate(preds) if j != i)
+    tail = others[0] if len(others) == 1 else ((others, rest),)
+    return inner + tail + seq[1:], ()
+
+
 def tasks(seq: tuple):
     """Every task id of the network (with repetitions)."""
     stack = [seq]
