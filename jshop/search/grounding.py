@@ -303,7 +303,8 @@ class _Grounder:
         for body, residuals in groups.items():
             if residuals is None:
                 continue
-            pre = compile_residual(conj([disj(residuals), unless]))
+            pre = disj(residuals)
+            pre = compile_residual(pre if unless is True else conj([pre, unless]))
             if pre is not None:
                 ids = tuple(model.task_id(name, args) for name, args in body)
                 yield GroundMethod(t, m, pre, ids, order, k)
