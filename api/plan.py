@@ -78,8 +78,10 @@ def plan(
     deepest; see :meth:`PlanStream.explain`). ``trees``: record each plan's
     task tree (``Plan.tree``); ``tree_paths``: with node paths. ``search``:
     one of :data:`htn.jshop.search.searches.SEARCHES` (``dfs``, the default,
-    is JSHOP2's depth-first search; the others read HDDL and find plans one
-    at a time, :class:`UnsupportedSearch` otherwise). ``stops``: the
+    is JSHOP2's depth-first search; the others find plans one at a time, on
+    HDDL and on JSHOP2 input that can be grounded, see
+    :mod:`htn.jshop.search.jshop2_input`; :class:`UnsupportedSearch`
+    otherwise, where ``auto`` runs depth-first search alone). ``stops``: the
     command's :class:`htn.process.Stops` (the user functions run under them).
     """
     started = time.perf_counter()
@@ -123,7 +125,8 @@ def ipc_text(plan: Plan, spelling: dict[str, str] | None = None) -> str:
 
 class UnsupportedSearch(HtnError):
     """The search asked for cannot run on this input (``--search gbfs`` on
-    JSHOP2 input, or with every plan asked for)."""
+    JSHOP2 input that cannot be grounded, with ``--jshop2-compat``, or with
+    every plan asked for)."""
 
 
 class PlanStream:
