@@ -17,13 +17,13 @@ from __future__ import annotations
 
 import os
 import re
-from dataclasses import dataclass, field
 from typing import TypeGuard, cast
 
 from htn.installation import EXAMPLES_DIR
 from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import HtnError
 from htn.jshop.language.functions import FunctionTable, Guard
+from htn.jshop.language.record import Record
 from htn.jshop.readers.checks import check_inputs
 from htn.jshop.readers.load import load_domain, load_problem, paired
 
@@ -63,14 +63,17 @@ def function_table(functions: FunctionsInput, stops: Guard | None = None) -> Fun
     return table
 
 
-@dataclass
-class Inputs:
+class Inputs(Record):
     """A domain and a problem for it, read and checked; ``warnings`` are the
     check's located warnings (``file:line:col: warning: ...``)."""
 
-    domain: S.Domain
-    problem: S.Problem
-    warnings: list[str] = field(default_factory=list)
+    __slots__ = ("domain", "problem", "warnings")
+
+    def __init__(
+        self, domain: S.Domain, problem: S.Problem, warnings: list[str] | None = None
+    ) -> None:
+        self.domain, self.problem = domain, problem
+        self.warnings: list[str] = [] if warnings is None else warnings
 
 
 def domain_and_problem(

@@ -25,7 +25,6 @@ names what runs).
 
 from __future__ import annotations
 
-import inspect
 import math
 import operator
 import os
@@ -419,7 +418,7 @@ class FunctionTable:
             raise stop
         self.source, self.sha256 = path, digest
         for name, fn in vars(module).items():
-            if name.startswith("_") or not inspect.isfunction(fn):
+            if name.startswith("_") or not isinstance(fn, types.FunctionType):
                 continue
             if fn.__module__ != module.__name__:
                 continue  # imported helpers are not the file's own functions

@@ -16,19 +16,24 @@ from typing import Any
 
 
 class Record:
-    """Fields in ``__slots__`` order: ``repr`` and ``==`` as a dataclass's."""
+    """Fields in ``__slots__`` order: ``repr`` and ``==`` as a dataclass's.
+    ``_fields``, where a class sets it, names the slots that are fields (the
+    others, such as a plan's ``instance``, are neither shown nor compared)."""
 
     __slots__: tuple[str, ...] = ()
+    _fields: tuple[str, ...] | None = None
     __hash__ = None  # type: ignore[assignment]  # mutable, as a dataclass with eq
 
     def __repr__(self) -> str:
-        fields = ", ".join(f"{k}={getattr(self, k)!r}" for k in self.__slots__)
+        names = self._fields or self.__slots__
+        fields = ", ".join(f"{k}={getattr(self, k)!r}" for k in names)
         return f"{type(self).__name__}({fields})"
 
     def __eq__(self, other: object) -> bool:
         if type(other) is not type(self):
             return NotImplemented
-        return all(getattr(self, k) == getattr(other, k) for k in self.__slots__)
+        names = self._fields or self.__slots__
+        return all(getattr(self, k) == getattr(other, k) for k in names)
 
 
 class FrozenRecord(Record):

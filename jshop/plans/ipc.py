@@ -27,10 +27,10 @@ from __future__ import annotations
 
 import re
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from htn.jshop.language.errors import HtnError
+from htn.jshop.language.record import Record
 from htn.jshop.language.terms import term_str
 
 if TYPE_CHECKING:
@@ -76,40 +76,79 @@ def ipc_text(plan: Plan, spelling: Mapping[str, str]) -> str:
 # ------------------------------------------------------------------ reading
 
 
-@dataclass
-class IpcLine:
+class IpcLine(Record):
     """One line of an IPC plan: an action (``method`` None) or a
     decomposition. Names are lower-cased (HDDL names are case-insensitive);
     ``cols`` are the 1-based columns of the name and of each argument."""
 
-    id: int
-    name: str
-    args: tuple[str, ...]
-    line: int
-    col: int  # column of the id
-    cols: tuple[int, ...]  # columns of the name and the arguments
-    method: str | None = None
-    method_col: int = 0
-    children: tuple[int, ...] = ()
-    child_cols: tuple[int, ...] = ()
+    __slots__ = (
+        "id",
+        "name",
+        "args",
+        "line",
+        "col",
+        "cols",
+        "method",
+        "method_col",
+        "children",
+        "child_cols",
+    )
+
+    def __init__(
+        self,
+        id: int,
+        name: str,
+        args: tuple[str, ...],
+        line: int,
+        col: int,
+        cols: tuple[int, ...],
+        method: str | None = None,
+        method_col: int = 0,
+        children: tuple[int, ...] = (),
+        child_cols: tuple[int, ...] = (),
+    ) -> None:
+        self.id, self.name, self.args, self.line = id, name, args, line
+        self.col = col  # column of the id
+        self.cols = cols  # columns of the name and the arguments
+        self.method, self.method_col = method, method_col
+        self.children, self.child_cols = children, child_cols
 
     @property
     def text(self) -> str:
         return " ".join((self.name, *self.args))
 
 
-@dataclass
-class IpcPlan:
+class IpcPlan(Record):
     """One ``==>`` ... ``<==`` block of a plan file."""
 
-    actions: list[IpcLine] = field(default_factory=list)  # in execution order
-    root: tuple[int, ...] = ()
-    root_cols: tuple[int, ...] = ()
-    root_line: int = 0
-    decompositions: list[IpcLine] = field(default_factory=list)
-    line: int = 0  # the line of its ``==>``
-    end_line: int = 0  # the line of its ``<==``
-    index: int = 0
+    __slots__ = (
+        "actions",
+        "root",
+        "root_cols",
+        "root_line",
+        "decompositions",
+        "line",
+        "end_line",
+        "index",
+    )
+
+    def __init__(
+        self,
+        actions: list[IpcLine] | None = None,
+        root: tuple[int, ...] = (),
+        root_cols: tuple[int, ...] = (),
+        root_line: int = 0,
+        decompositions: list[IpcLine] | None = None,
+        line: int = 0,
+        end_line: int = 0,
+        index: int = 0,
+    ) -> None:
+        self.actions: list[IpcLine] = [] if actions is None else actions  # in execution order
+        self.root, self.root_cols, self.root_line = root, root_cols, root_line
+        self.decompositions: list[IpcLine] = [] if decompositions is None else decompositions
+        self.line = line  # the line of its ``==>``
+        self.end_line = end_line  # the line of its ``<==``
+        self.index = index
 
 
 _TOKEN = re.compile(r"[^\s()]+")  # parentheses separate, as in the verifier's reader

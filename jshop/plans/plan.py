@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
+from htn.jshop.language.record import Record
 from htn.jshop.language.terms import atom_str, java_double
 
 if TYPE_CHECKING:
@@ -13,14 +13,14 @@ if TYPE_CHECKING:
 SEPARATOR = "--------------------"
 
 
-@dataclass
-class Step:
+class Step(Record):
     """One operator instance in a plan; ``internal`` for ``!!`` operators."""
 
-    name: str
-    args: tuple[Any, ...]
-    cost: float = 1.0
-    line: int = 0  # line in a plan file it was read from (0: not read)
+    __slots__ = ("name", "args", "cost", "line")
+
+    def __init__(self, name: str, args: tuple[Any, ...], cost: float = 1.0, line: int = 0) -> None:
+        self.name, self.args, self.cost = name, args, cost
+        self.line = line  # line in a plan file it was read from (0: not read)
 
     @property
     def internal(self) -> bool:
@@ -30,13 +30,26 @@ class Step:
         return atom_str(self.name, self.args)
 
 
-@dataclass
-class Plan:
-    steps: list[Step]
-    cost: float
-    tree: TaskTree | None = None  # when recorded
-    index: int = 0  # 0-based position in the planner's stream
-    line: int = 0  # line of its 'Plan cost:' in a plan file it was read from
+class Plan(Record):
+    """A plan: its steps and their cost. ``instance``, set by the search's
+    stream, is the problem instance's index (not a field: not compared)."""
+
+    __slots__ = ("steps", "cost", "tree", "index", "line", "instance")
+    _fields = ("steps", "cost", "tree", "index", "line")
+
+    def __init__(
+        self,
+        steps: list[Step],
+        cost: float,
+        tree: TaskTree | None = None,
+        index: int = 0,
+        line: int = 0,
+    ) -> None:
+        self.steps, self.cost = steps, cost
+        self.tree = tree  # when recorded
+        self.index = index  # 0-based position in the planner's stream
+        self.line = line  # line of its 'Plan cost:' in a plan file it was read from
+        self.instance = 0
 
     def __len__(self) -> int:
         return len(self.steps)

@@ -61,11 +61,11 @@ from __future__ import annotations
 
 import os
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 from htn.jshop.language.digest import sha256_hex
 from htn.jshop.language.errors import HtnError
+from htn.jshop.language.record import Record
 from htn.jshop.readers.source import decode_source
 
 from .plan import Plan, Step
@@ -110,18 +110,29 @@ def plan_text(plan: Plan) -> str:
     return (tree_text(plan.tree) if plan.tree is not None else "") + plan.to_jshop()
 
 
-@dataclass
-class PlanFile:
-    path: str
-    plans: list[Plan] = field(default_factory=list)
-    # "domain" -> [(candidate path, line)]
-    named: dict[str, list[tuple[str, int]]] = field(default_factory=dict)
-    # other "; key: value" lines -> (value, line)
-    notes: dict[str, tuple[str, int]] = field(default_factory=dict)
-    lines: list[str] = field(default_factory=list)  # the file's text, line by line
-    sha256: str = ""  # of the file's bytes, as read
-    # per plan: its tree's [(line, text)] or None
-    trees: list[list[tuple[int, str]] | None] = field(default_factory=list)
+class PlanFile(Record):
+    __slots__ = ("path", "plans", "named", "notes", "lines", "sha256", "trees")
+
+    def __init__(
+        self,
+        path: str,
+        plans: list[Plan] | None = None,
+        named: dict[str, list[tuple[str, int]]] | None = None,
+        notes: dict[str, tuple[str, int]] | None = None,
+        lines: list[str] | None = None,
+        sha256: str = "",
+        trees: list[list[tuple[int, str]] | None] | None = None,
+    ) -> None:
+        self.path = path
+        self.plans: list[Plan] = [] if plans is None else plans
+        # "domain" -> [(candidate path, line)]
+        self.named: dict[str, list[tuple[str, int]]] = {} if named is None else named
+        # other "; key: value" lines -> (value, line)
+        self.notes: dict[str, tuple[str, int]] = {} if notes is None else notes
+        self.lines: list[str] = [] if lines is None else lines  # the file's text, line by line
+        self.sha256 = sha256  # of the file's bytes, as read
+        # per plan: its tree's [(line, text)] or None
+        self.trees: list[list[tuple[int, str]] | None] = [] if trees is None else trees
 
     def file(self, kind: str) -> str | None:
         """The ``kind`` ("domain", "problem", "functions") file the header

@@ -16,26 +16,49 @@ from __future__ import annotations
 
 from collections import Counter
 from collections.abc import Iterator, Mapping, Sequence
-from dataclasses import dataclass, field
 from typing import Any
 
+from htn.jshop.language.record import Record
 from htn.jshop.language.terms import atom_str, term_str
 
 
-@dataclass
-class TaskTree:
+class TaskTree(Record):
     """One node of a task tree; the root is the problem's task list."""
 
-    name: str
-    args: tuple[Any, ...] = ()
-    path: str = ""
-    method: str | None = None  # method head name that decomposed it
-    method_index: int | None = None  # which of the methods for that task (0-based)
-    branch: str | None = None  # that method's branch label
-    step: int | None = None  # index in the plan, for primitive tasks
-    children: list[TaskTree] = field(default_factory=list)
-    outcome: str | None = None  # after an execution or projection (annotate())
-    code_replacement: list[str] | None = None  # what a transformation put in its place
+    __slots__ = (
+        "name",
+        "args",
+        "path",
+        "method",
+        "method_index",
+        "branch",
+        "step",
+        "children",
+        "outcome",
+        "code_replacement",
+    )
+
+    def __init__(
+        self,
+        name: str,
+        args: tuple[Any, ...] = (),
+        path: str = "",
+        method: str | None = None,
+        method_index: int | None = None,
+        branch: str | None = None,
+        step: int | None = None,
+        children: list[TaskTree] | None = None,
+        outcome: str | None = None,
+        code_replacement: list[str] | None = None,
+    ) -> None:
+        self.name, self.args, self.path = name, args, path
+        self.method = method  # method head name that decomposed it
+        self.method_index = method_index  # which of the methods for that task (0-based)
+        self.branch = branch  # that method's branch label
+        self.step = step  # index in the plan, for primitive tasks
+        self.children: list[TaskTree] = [] if children is None else children
+        self.outcome = outcome  # after an execution or projection (annotate())
+        self.code_replacement = code_replacement  # what a transformation put in its place
 
     @property
     def primitive(self) -> bool:

@@ -21,18 +21,19 @@ manual 5.1.2; such an atom would carry an unbound variable into the state).
 from __future__ import annotations
 
 from collections import Counter
-from dataclasses import dataclass
 
 from htn.jshop.language import syntax as S
 from htn.jshop.language.errors import HtnError
+from htn.jshop.language.record import Record
 from htn.jshop.language.terms import source_atom, variables
 from htn.jshop.language.walk import walk_expr, walk_term
 
 
-@dataclass
-class Warning_:
-    pos: S.Pos | None
-    message: str
+class Warning_(Record):
+    __slots__ = ("pos", "message")
+
+    def __init__(self, pos: S.Pos | None, message: str) -> None:
+        self.pos, self.message = pos, message
 
     def __str__(self) -> str:
         return f"{self.pos}: warning: {self.message}" if self.pos else f"warning: {self.message}"
@@ -332,11 +333,13 @@ def _why_unbound(op: S.Operator, name: str, open_: dict) -> str:
     return "neither its head nor its precondition binds it"
 
 
-@dataclass
-class _Source:
+class _Source(Record):
     """A task (as written, and where) that may pass an unbound variable on."""
 
-    task: S.TaskAtom
+    __slots__ = ("task",)
+
+    def __init__(self, task: S.TaskAtom) -> None:
+        self.task = task
 
     @property
     def message(self) -> str:

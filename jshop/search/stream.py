@@ -92,8 +92,7 @@ class SearchStream:
                 try:
                     for p in found:
                         assert p is not None  # slice_s is not set: the search never pauses
-                        # the Plan's instance index, not a field of Plan: read with getattr
-                        setattr(p, "instance", k)  # noqa: B010
+                        p.instance = k  # the problem instance's index (not a field)
                         stats["plans_found"] += 1
                         if stats["shortest_plan"] is None or len(p.steps) < stats["shortest_plan"]:
                             stats["shortest_plan"] = len(p.steps)
