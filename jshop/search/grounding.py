@@ -113,6 +113,8 @@ def grounding_steps(domain: S.Domain, instance: S.ProblemInstance):
 
 class _Grounder:
     def __init__(self, domain: S.Domain, instance: S.ProblemInstance):
+        if domain.language != "hddl":  # what of JSHOP2's language grounding takes, located
+            instance = checked_instance(domain, instance)
         self.domain, self.instance = domain, instance
         self.model = GroundModel()
         self.dynamic = domain.dynamic_predicates()
@@ -122,8 +124,6 @@ class _Grounder:
                     raise NotGroundable(f"the cost of {op.name} is not a number")
                 if op.add.var is not None or op.delete.var is not None:
                     raise NotGroundable(f"{op.name} has a variable effect list")
-        if domain.language != "hddl":
-            instance = self.instance = checked_instance(domain, instance)
         self.methods = {name: list(ms) for name, ms in domain.methods.items()}
         self.roots, self.root_order = flat_tasks(instance.tasks)
         if instance.top is not None:
