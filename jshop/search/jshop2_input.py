@@ -16,7 +16,8 @@ what grounding can decide before the search:
 
 Refused, with the place and the reason (:class:`NotGroundable`; ``auto``
 then runs depth-first search alone, ``gbfs`` and ``wastar`` say why):
-axioms, external calls (``call``, ``assign``, call terms), ``:first``
+axioms, an operator defined more than once, external calls (``call``,
+``assign``, call terms), ``:first``
 preconditions (which take one satisfier where grounding keeps all),
 ``:immediate`` tasks, protections, variable effect lists, costs that are no
 number, a negation or a ``forall`` over a variable nothing bound before it
@@ -61,6 +62,8 @@ def check(domain: S.Domain, instance: S.ProblemInstance) -> None:
             _refuse(ax.pos, f"axiom {ax.head.pred}: axioms (derived predicates)")
     _tasks(instance.tasks, "the problem's task list")
     for ops in domain.operators.values():
+        if len(ops) > 1:  # JSHOP2 tries each; the grounder keeps one action per head
+            _refuse(ops[1].pos, f"operator {ops[1].name} is defined {len(ops)} times")
         for op in ops:
             _operator(op)
     for ms in domain.methods.values():
