@@ -4,8 +4,10 @@ HDDL text (``(define (domain ...`` or ``(define (problem ...``) is read by
 :mod:`htn.jshop.readers.hddl_fast` (or, where that reader is not sure of the
 text, by the lark grammar of :mod:`htn.jshop.readers.hddl`, which locates the
 error) and turned into the same syntax objects as JSHOP2 text
-(:mod:`htn.jshop.readers.hddl_domain`). Each reader is imported only for its
-input: lark is not loaded for well-formed HDDL.
+(:mod:`htn.jshop.readers.hddl_domain`); JSHOP2 text the same way, by
+:mod:`htn.jshop.readers.jshop2_fast` or else :mod:`htn.jshop.readers.jshop2`.
+Each reader is imported only for its input: lark is not loaded for
+well-formed input.
 """
 
 from __future__ import annotations
@@ -50,9 +52,14 @@ def parse_text(
 
             model = hddl.parse_model(text, file)
         return hddl_domain.from_model(model)
-    from .jshop2 import parse_jshop2
+    from . import jshop2_fast
 
-    return parse_jshop2(text, file, functions or FunctionTable())
+    try:
+        return jshop2_fast.parse_jshop2(text, file, functions)
+    except jshop2_fast.Fallback:  # not plainly well-formed: lark's reader says where
+        from .jshop2 import parse_jshop2
+
+        return parse_jshop2(text, file, functions or FunctionTable())
 
 
 def parse_file(path: str, functions: FunctionTable | None = None, expect: str | None = None):
