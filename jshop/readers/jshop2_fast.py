@@ -21,6 +21,7 @@ give equal models on every JSHOP2 file here and on mutants of them.
 from __future__ import annotations
 
 import re
+from functools import partial
 from typing import Any
 
 from htn.jshop.language import syntax as S
@@ -432,8 +433,7 @@ class _Reader:
                 if isinstance(a, S.VarAtom) or variables(a.args, []):
                     raise Fallback("a variable in an initial state")
             tl = self.tasklist(tasks)
-            scope: dict = {}
-            walk_tasks(tl, lambda v, scope=scope: index_var(scope, v))
+            walk_tasks(tl, partial(index_var, {}))  # variables numbered per instance
             instances.append(S.ProblemInstance(state, tl, self.pos(state_item)))
         return S.Problem(
             self.name(x[1]),
