@@ -73,6 +73,7 @@ from .tree import TaskTree
 from .tree_text import TREE_HEAD, TREE_NODE, read_tree, tree_text
 
 if TYPE_CHECKING:
+    from htn.jshop.language import syntax as S
     from htn.jshop.language.syntax import Method
 
 NAMED = ("domain", "problem", "functions")
@@ -189,8 +190,18 @@ class PlanFile(Record):
 def read_plan_file(path: str) -> PlanFile:
     """Read a plan file (the file is opened once: its text, lines and
     SHA-256 are kept on the :class:`PlanFile`)."""
-    # the JSHOP2 reader (and lark) only where a plan file is read, not by htn plan
-    from htn.jshop.readers.jshop2 import parse_step
+    # the JSHOP2 reader only where a plan file is read, not by htn plan
+    from htn.jshop.readers.jshop2_fast import Fallback
+    from htn.jshop.readers.jshop2_fast import parse_step as fast_step
+
+    def parse_step(text: str, path: str, n: int) -> S.TaskAtom:
+        try:
+            return fast_step(text, path, n)
+        except Fallback:  # not plainly one step: lark's reader, which says where
+            from htn.jshop.readers.jshop2 import parse_step as step
+
+            atom: S.TaskAtom = step(text, path, n)
+            return atom
 
     if not os.path.isfile(path):
         raise HtnError("no such plan file", path)

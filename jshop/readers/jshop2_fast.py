@@ -80,6 +80,14 @@ _TOKEN = re.compile(r"([ \t\f\r\n]+|;[^\n\r]*)|(\()|(\))|([^ \t\f\r\n();]+)")
 _SEPARATORS = frozenset(" \t\f\r\n)")
 
 
+def parse_step(text: str, file: str = "<plan>", line: int = 1) -> S.TaskAtom:
+    """One plan step such as ``(!move_base jenny home kitchen)``, as
+    :func:`htn.jshop.readers.jshop2.parse_step` reads it (positions on the
+    step's own line 1); raises :class:`Fallback` where that must read it."""
+    top = lists(text)
+    return _Reader(file, FunctionTable()).task_atom(top)
+
+
 def lists(text: str) -> Lst:
     """The one top-level list of ``text``; every chunk of it must be exactly
     one token of the grammar (else lark would cut it otherwise)."""

@@ -125,3 +125,29 @@ def test_plain_planning_does_not_import_lark():
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
     assert out.stdout.strip() == "False", out.stderr
+
+
+def test_plan_steps_read_the_same_with_both_readers():
+    lines = {
+        line.strip()
+        for f in CORPUS.glob("*/plans-first*.txt")
+        for line in f.read_text().splitlines()
+        if line.startswith("(")
+    }
+    lines |= {"(!a 1.5 -2 nil (x y . z))", "(:immediate !go ?x)", "(!t (call + 1 2))"}
+    rng = random.Random(3)
+    mutants = [_mutant(t, rng) for t in sorted(lines) for _ in range(3)]
+    seen = {"same": 0, "fallback": 0}
+    for text in sorted(lines) + mutants:
+        try:
+            want = repr(jshop2.parse_step(text, "p.txt", 7))
+        except HtnError as e:
+            want = str(e)
+        try:
+            got = repr(jshop2_fast.parse_step(text, "p.txt", 7))
+        except jshop2_fast.Fallback:
+            seen["fallback"] += 1
+            continue
+        assert got == want, text
+        seen["same"] += 1
+    assert seen["same"] > len(lines) and seen["fallback"] > 10, seen
