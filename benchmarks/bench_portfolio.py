@@ -1,8 +1,9 @@
 """Benchmark: ``htn plan --search auto`` costs the same CPU on every run.
 
-The portfolio's turns are measured in work (``htn.jshop.search.work``), not
-in time, so every run expands the same nodes; what is left to vary is the
-machine. For each instance this runs ``htn plan DOMAIN PROBLEM --search auto
+The portfolio's turns are slices of this process's CPU time (not of wall
+time), so another job on the machine delays a run without changing what it
+does in its CPU time; the expansions may still differ a little from run to
+run (a slice ends between two expansions). For each instance this runs ``htn plan DOMAIN PROBLEM --search auto
 -f json`` ``--runs`` times as fresh processes, every other run while a busy
 loop runs on each core (``--load``, on by default: the loaded runs share the
 CPU with it), and reports each run's whole-process CPU time (user + system,
