@@ -231,9 +231,17 @@ class PlanStream:
         if not self.explanations:
             from htn.jshop.checks.explain import explain_search
 
+            left = None  # what is left of ``timeout``, which bounds the explanation too
+            if self.timeout is not None:
+                left = max(0.0, self.timeout - (time.perf_counter() - self.started))
             self.explanations = [
                 explain_search(
-                    self.domain, inst, self.functions, keep_all=self.explain_all, **self.options
+                    self.domain,
+                    inst,
+                    self.functions,
+                    keep_all=self.explain_all,
+                    timeout=left,
+                    **self.options,
                 )
                 for inst in self.problem.instances
             ]

@@ -19,6 +19,8 @@ from htn.process import DeadlineExceeded, Stops, deadline
 from .output import console, stdout_is_terminal, warn
 from .progress import Phase
 
+EXPLAIN_GRACE = 0.25  # s after --timeout for the explaining search to stop itself
+
 
 def run_plan(
     stops: Stops, domain, problem, fmt, output, timeout, functions, show_tree, dot, quiet, **flags
@@ -110,7 +112,14 @@ def _finish(plans, files, render, stop, stops, quiet, explain_all, timeout) -> N
         and not totals["depth_limit_reached"]
         and not totals["memory_limit_reached"]
     ):
-        plans.explain()
+        # bounded by --timeout: the API stops the search that explains in time and
+        # keeps the dead ends it met; the deadline, a moment later, stops the rest
+        late = None if timeout is None else timeout + EXPLAIN_GRACE
+        try:
+            with deadline(stops, late, stops.started):
+                plans.explain()
+        except DeadlineExceeded:
+            warn(f"explain: --timeout {timeout:g} s ended the search that explains")
     if plans.explanations:
         totals["explain"] = [e.to_dict(full=explain_all) for e in plans.explanations]
         if render.fmt != "json":

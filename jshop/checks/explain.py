@@ -84,6 +84,7 @@ class Explainer:
 
     def __init__(self, keep_all: bool = False):
         self.keep_all = keep_all
+        self.cut_short = False  # the search ended at its time limit
         self.deepest: DeadEnd | None = None
         self.all: list = []
         self.count = 0
@@ -216,6 +217,10 @@ class Explainer:
 
     # ------------------------------------------------------------ output
     def lines(self, full: bool = False) -> list:
+        short = ["explain: the time limit ended the search, these are the dead ends met by then"]
+        return (short if self.cut_short else []) + self._lines(full)
+
+    def _lines(self, full: bool) -> list:
         if self.deepest is None:
             return ["explain: the search met no dead end"]
         if full:
@@ -232,6 +237,7 @@ class Explainer:
         d: dict = {
             "dead_ends": self.count,
             "deepest": self.deepest.to_dict() if self.deepest else None,
+            "cut_short": self.cut_short,
         }
         if full:
             d["all"] = [x.to_dict() for x in self.all]
@@ -239,14 +245,23 @@ class Explainer:
 
 
 def explain_search(
-    domain, instance, functions=None, keep_all: bool = False, **options
+    domain,
+    instance,
+    functions=None,
+    keep_all: bool = False,
+    timeout: float | None = None,
+    **options,
 ) -> Explainer:
-    """Run a whole search of ``instance`` recording its dead ends."""
+    """Run a whole search of ``instance`` recording its dead ends, for at
+    most ``timeout`` seconds (then ``cut_short`` is set: the dead ends are
+    those met so far)."""
     from htn.jshop.search.planner import Planner
 
     explainer = Explainer(keep_all=keep_all)
-    for _ in Planner(domain, instance, functions, explain=explainer, **options).plans():
+    planner = Planner(domain, instance, functions, explain=explainer, **options)
+    for _ in planner.plans(timeout):
         pass
+    explainer.cut_short = planner.stats.timed_out
     return explainer
 
 

@@ -162,3 +162,25 @@ def test_transform_ends_with_its_timeout_and_keeps_the_output(tmp_path):
     assert r.returncode == 1 and "timed out after 5 s" in r.stderr, r.stderr
     assert took < 10, took
     assert out.read_text() == "earlier\n" and list(tmp_path.iterdir()) == [out]
+
+
+ROVER = SHARED / "corpus" / "ipc-po" / "Rover"
+
+
+@pytest.mark.skipif(not (ROVER / "pfile01.hddl").is_file(), reason="no ipc-po corpus")
+def test_the_explanation_of_no_plan_ends_with_the_timeout_too(tmp_path):
+    """Without its lander, Rover pfile01 has no plan: the search (which
+    leaves out the methods that cannot apply) says so at once, and the
+    search that explains it (which does not) would run for a minute and
+    more. --timeout ends it with the dead ends met by then (found by the
+    long fuzz run: --timeout 0.5 took 137 s)."""
+    problem = tmp_path / "p.hddl"
+    problem.write_text(
+        (ROVER / "pfile01.hddl").read_text().replace("(at_lander general waypoint0)", "")
+    )
+    began = time.monotonic()
+    r = run_htn_process("plan", ROVER / "domain.hddl", problem, "--timeout", "1", timeout=120)
+    took = time.monotonic() - began
+    assert r.returncode == 1 and "the time limit ended the search" in r.stderr, r.stderr
+    assert "got deepest at this dead end" in r.stderr
+    assert took < 5, took
