@@ -66,6 +66,8 @@ def compile_conjunction(
         lits = [Literal(x, logic.domain.axioms) for x in items]
         hit = _LITERALS.put(e, (items, lits, sorted(set().union(*(lit.vars for lit in lits)))))
     items, lits, names = hit
+    if not items:  # only empty conjunctions, nested: true once, as (and)
+        return logic.expr(S.And([]))
     general = [logic.expr(x) for x in items]
     gen = conjunction(general) if len(general) > 1 else general[0]
     sized = tuple(lit.sized(logic.arities) for lit in lits)

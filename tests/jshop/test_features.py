@@ -284,3 +284,12 @@ def test_a_list_with_unbound_variables_passed_down_binds_nothing():
         ["(!o (a b))"],
         ["(!o c)"],
     ]
+
+
+def test_a_precondition_of_nested_empty_conjunctions_is_true():
+    """(() ((()))) flattens to no literal at all: true once, as (), not a
+    traceback (found by the long fuzz run, in a mutant of the domestic domain)."""
+    domain = (
+        "(defdomain d ((:operator (!a ?x) (() ((()))) () ()) (:method (t) (() (())) ((!a b)))))"
+    )
+    assert plans(domain, "(defproblem p d () ((t)))") == [["(!a b)"]]
