@@ -17,6 +17,7 @@ mutants of them.
 from __future__ import annotations
 
 import re
+from collections.abc import Callable
 from typing import Any
 
 from htn.jshop.language import syntax as S
@@ -70,8 +71,12 @@ class Lst(list):  # type: ignore[type-arg]
     col: int
 
 
-def lists(text: str) -> Lst:
-    """The one top-level list of ``text``."""
+def lists(text: str, tokens: Callable[[str, int, int, str], list[Tok]] | None = None) -> Lst:
+    """The one top-level list of ``text``. ``tokens(chunk, line, col,
+    after)``: the tokens a chunk of text between spaces, parentheses and
+    comments is (``after``: the character that follows it); HDDL's by
+    default."""
+    split = tokens or _hddl_tokens
     stack: list[Lst] = [Lst()]
     line, start = 1, 0  # start: the offset of the line's first character
     for m in _TOKEN.finditer(text):
@@ -93,14 +98,20 @@ def lists(text: str) -> Lst:
                 raise Fallback("unbalanced")
             stack.pop()
         else:
-            col = m.start() - start + 1
-            while atom[0] == "-" and len(atom) > 1:  # "-t" is "-" then t, as lark lexes it
-                stack[-1].append(Tok("-", line, col))
-                atom, col = atom[1:], col + 1
-            stack[-1].append(Tok(atom, line, col))
+            after = text[m.end() : m.end() + 1]
+            stack[-1].extend(split(atom, line, m.start() - start + 1, after))
     if len(stack) != 1 or len(stack[0]) != 1 or not isinstance(stack[0][0], Lst):
         raise Fallback("not one list")
     return stack[0][0]
+
+
+def _hddl_tokens(atom: str, line: int, col: int, after: str) -> list[Tok]:
+    out = []
+    while atom[0] == "-" and len(atom) > 1:  # "-t" is "-" then t, as lark lexes it
+        out.append(Tok("-", line, col))
+        atom, col = atom[1:], col + 1
+    out.append(Tok(atom, line, col))
+    return out
 
 
 def _kw(x: Any) -> str | None:

@@ -29,7 +29,8 @@ from htn.jshop.language.functions import STDLIB_JAVA_NAMES, FunctionTable, arity
 from htn.jshop.language.terms import NIL, CallTerm, Var, make_list, variables
 from htn.jshop.language.walk import walk_tasks
 
-from .hddl_fast import MAX_DEPTH, Fallback, Lst, Tok
+from .hddl_fast import Fallback, Lst, Tok, _kw
+from .hddl_fast import lists as _lists
 from .numbering import index_var, number_axiom, number_method, number_operator
 
 _NAME = re.compile(r"[a-z_][a-z0-9\-_?!]*\Z", re.I)
@@ -76,7 +77,6 @@ def parse_jshop2(text: str, file: str = "<string>", functions: FunctionTable | N
     raise Fallback("not a domain or a problem")
 
 
-_TOKEN = re.compile(r"([ \t\f\r\n]+|;[^\n\r]*)|(\()|(\))|([^ \t\f\r\n();]+)")
 _SEPARATORS = frozenset(" \t\f\r\n)")
 
 
@@ -84,43 +84,22 @@ def parse_step(text: str, file: str = "<plan>", line: int = 1) -> S.TaskAtom:
     """One plan step such as ``(!move_base jenny home kitchen)``, as
     :func:`htn.jshop.readers.jshop2.parse_step` reads it (positions on the
     step's own line 1); raises :class:`Fallback` where that must read it."""
-    top = lists(text)
-    return _Reader(file, FunctionTable()).task_atom(top)
+    return _Reader(file, FunctionTable()).task_atom(lists(text))
 
 
 def lists(text: str) -> Lst:
     """The one top-level list of ``text``; every chunk of it must be exactly
     one token of the grammar (else lark would cut it otherwise)."""
-    stack: list[Lst] = [Lst()]
-    line, start = 1, 0  # start: the offset of the line's first character
-    for m in _TOKEN.finditer(text):
-        space, open_, close, chunk = m.groups()
-        if space is not None:
-            n = space.count("\n")
-            if n:
-                line += n
-                start = m.start() + space.rindex("\n") + 1
-        elif open_ is not None:
-            lst = Lst()
-            lst.line, lst.col = line, m.start() - start + 1
-            stack[-1].append(lst)
-            stack.append(lst)
-            if len(stack) > MAX_DEPTH:
-                raise Fallback("nested too deep")
-        elif close is not None:
-            if len(stack) == 1:
-                raise Fallback("unbalanced")
-            stack.pop()
-        else:
-            if chunk in ("-", "+"):  # a function only before a space or ")"
-                if text[m.end() : m.end() + 1] not in _SEPARATORS:
-                    raise Fallback("a sign")
-            elif not _one_token(chunk):
-                raise Fallback("not one token")
-            stack[-1].append(Tok(chunk, line, m.start() - start + 1))
-    if len(stack) != 1 or len(stack[0]) != 1 or not isinstance(stack[0][0], Lst):
-        raise Fallback("not one list")
-    return stack[0][0]
+    return _lists(text, _tokens)
+
+
+def _tokens(chunk: str, line: int, col: int, after: str) -> list[Tok]:
+    if chunk in ("-", "+"):  # a function only before a space or ")"
+        if after not in _SEPARATORS:
+            raise Fallback("a sign")
+    elif not _one_token(chunk):
+        raise Fallback("not one token")
+    return [Tok(chunk, line, col)]
 
 
 def _one_token(chunk: str) -> bool:
@@ -132,11 +111,6 @@ def _one_token(chunk: str) -> bool:
         or _VAR.match(chunk) is not None
         or _NUM.match(chunk) is not None
     )
-
-
-def _kw(x: Any) -> str | None:
-    """The lower-cased text of a token, None for a list."""
-    return x.text.lower() if isinstance(x, Tok) else None
 
 
 def _is_name(x: Any) -> bool:
