@@ -21,8 +21,10 @@ axioms, an operator defined more than once, external calls (``call``,
 preconditions (which take one satisfier where grounding keeps all),
 ``:immediate`` tasks, protections, variable effect lists, costs that are no
 number, a negation or a ``forall`` over a variable nothing bound before it
-(JSHOP2 reads it as "no binding satisfies", grounding would bind it), and an
-operator whose effects use a variable its head does not bind.
+(JSHOP2 reads it as "no binding satisfies", grounding would bind it), an
+operator whose effects use a variable its head does not bind, and a
+``forall`` effect whose condition reads a predicate the operator deletes
+before JSHOP2 evaluates it (the grounder evaluates it before the operator).
 """
 
 from __future__ import annotations
@@ -205,6 +207,7 @@ def _operator(op: S.Operator) -> None:
     _precondition(op.pre, set(head), what)
     if type(op.cost) is not float:
         _refuse(op.pos, f"{what}: a cost that is not a number")
+    _forall_order(op, what)
     for eff in (op.delete, op.add):
         if eff.var is not None:
             _refuse(op.pos, f"{what}: a variable effect list")
@@ -231,6 +234,54 @@ def _operator(op: S.Operator) -> None:
                 )
 
 
+def _forall_order(op: S.Operator, what: str) -> None:
+    """JSHOP2 evaluates a delete list's ``forall`` after the atoms before it
+    are deleted, an add list's after every deletion (manual 5.2.1); the
+    grounder evaluates every condition before the operator, as PDDL does.
+    The two agree unless a condition reads a predicate deleted before it."""
+    deleted: set[str] = set()
+    for eff, before_all in ((op.delete, False), (op.add, True)):
+        if before_all:
+            deleted = _effect_preds(op.delete.items)
+        for item in eff.items:
+            if isinstance(item, S.EffectForAll):
+                read = {a.pred for a in _atoms_of(item.cond)}
+                if read & deleted:
+                    _refuse(
+                        item.pos,
+                        f"{what}: a forall whose condition reads {sorted(read & deleted)[0]}, "
+                        "which the operator deletes before JSHOP2 evaluates it",
+                    )
+            if not before_all:
+                deleted |= _effect_preds([item])
+
+
+def _effect_preds(items: list) -> set[str]:
+    out: set[str] = set()
+    for item in items:
+        if isinstance(item, S.Atom):
+            out.add(item.pred)
+        elif isinstance(item, S.EffectForAll):
+            out.update(a.pred for a in item.atoms if isinstance(a, S.Atom))
+    return out
+
+
+def _atoms_of(e) -> list:
+    """The atoms of a formula, negated ones and those under forall included."""
+    out, stack = [], [e]
+    while stack:
+        x = stack.pop()
+        if isinstance(x, S.Atom):
+            out.append(x)
+        elif isinstance(x, (S.And, S.Or)):
+            stack.extend(x.items)
+        elif isinstance(x, S.Not):
+            stack.append(x.expr)
+        elif isinstance(x, S.ForAll):
+            stack.extend((x.cond, x.then))
+    return out
+
+
 def _atoms(element):
     """The atoms of a domain element's conditions, effects and tasks (for
     the constants written in it)."""
@@ -248,17 +299,8 @@ def _atoms(element):
         for b in element.branches:
             pres.append(b.pre.expr)
             yield from S.task_atoms(b.tasks)
-    stack = pres
-    while stack:
-        e = stack.pop()
-        if isinstance(e, S.Atom):
-            yield e
-        elif isinstance(e, (S.And, S.Or)):
-            stack.extend(e.items)
-        elif isinstance(e, S.Not):
-            stack.append(e.expr)
-        elif isinstance(e, S.ForAll):
-            stack.extend((e.cond, e.then))
+    for e in pres:
+        yield from _atoms_of(e)
 
 
 def _constants(args: tuple, out: dict) -> None:

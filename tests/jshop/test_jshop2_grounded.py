@@ -162,6 +162,11 @@ def test_nested_task_lists_keep_their_order(tmp_path):
         ("(:method (t) ((f ?x)) ((!o ?x))) (:- (f ?x) ((g ?x)))", "axiom f"),
         ("(:method (t) (:first (f ?x)) ((!o ?x)))", "a :first precondition"),
         ("(:operator (!o ?x) ((f ?x)) () ()) (:method (t) () ((!o a)))", "defined 2 times"),
+        (
+            "(:operator (!p ?x) () ((f ?x) (forall (?y) ((f ?y)) ((g ?y)))) ()) "
+            "(:method (t) () ((!p a)))",
+            "reads f, which the operator deletes",
+        ),
         ("(:method (t) ((f ?x)) ((:immediate !o ?x)))", "an :immediate task"),
         ("(:method (t) ((not (f ?x))) ((!o a)))", "a negation over ?x"),
         ("(:method (t) ((f ?x) (assign ?y 1)) ((!o ?x)))", "an assign"),
