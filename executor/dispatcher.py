@@ -101,7 +101,10 @@ class TaskDispatcher:
         self._halt: str | None = None
         self._halt_as = INTERRUPTED  # what the summary of a halted run says
         self._halt_later: tuple[str, str] | None = None  # (why, as): at the next action
-        self._lock = threading.Lock()  # running and the belief, as another thread sees them
+        # running and the belief, as another thread sees them; reentrant, since a
+        # signal handler's halt() may run in the thread that holds it (the long
+        # fuzz run of issue 34 met htn run's deadline while report() held it)
+        self._lock = threading.RLock()
         self._in_tick = False
         self.summary_extra: dict[str, Any] = {}  # more fields for the summary event
         # (action, attempt) -> what it carries

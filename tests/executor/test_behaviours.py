@@ -466,6 +466,29 @@ def test_a_halt_during_a_tick_takes_effect_before_the_next(model):
     assert d.log.events[-2]["detail"] == "stopped by the user; the robot holds its pose"
 
 
+def test_a_halt_while_the_outcome_is_being_recorded_does_not_deadlock(model):
+    """A signal handler's halt() runs in the main thread, whatever it holds:
+    here while report() applies the verified step to the belief, under the
+    dispatcher's lock (the deadline of htn run arriving there hung the long
+    fuzz run). The run ends interrupted instead of waiting for itself."""
+    import threading
+
+    robot = ScriptedRobot()
+    d = dispatcher(model, robot)
+    apply_step = d.belief.apply_step
+
+    def interrupted_apply(*args):
+        d.halt()  # as the signal handler would, mid-update
+        return apply_step(*args)
+
+    d.belief.apply_step = interrupted_apply  # type: ignore[method-assign]
+    out: list = []
+    t = threading.Thread(target=lambda: out.append(d.run()), daemon=True)
+    t.start()
+    t.join(30)
+    assert out and out[0].result == "interrupted", "the run waited for its own lock"
+
+
 def test_a_halt_before_the_first_tick_starts_nothing(model):
     robot = ScriptedRobot()
     d = dispatcher(model, robot)
