@@ -222,3 +222,27 @@ def _balanced_mutation(text: str):
         st.tuples(span, span).map(replace),
         st.tuples(span, st.sampled_from(words), st.sampled_from(words + TOKENS)).map(reword),
     )
+
+
+def text_mutant(text: str, rng, inserts: list[str]) -> str:
+    """One random slip of ``text`` (``rng``: a :class:`random.Random`), for
+    the fast readers' tests: a character less, one of ``inserts`` more, a
+    word in the other case, a list or a stretch taken out, a stretch copied
+    elsewhere."""
+    k = rng.randrange(len(text))
+    kind = rng.randrange(5)
+    if kind == 0:  # a character less
+        return text[:k] + text[k + 1 :]
+    if kind == 1:  # something more
+        return text[:k] + rng.choice(inserts) + text[k:]
+    if kind == 2:  # a word in other case
+        j = k
+        while j < len(text) and text[j].isalnum():
+            j += 1
+        return text[:k] + text[k:j].swapcase() + text[j:]
+    if kind == 3:  # a list taken out whole, or a stretch of text
+        j = text.find(")", k)
+        return text[:k] + text[j + 1 :] if j >= 0 else text[:k]
+    i = rng.randrange(len(text))  # a stretch copied elsewhere
+    a, b = sorted((k, i))
+    return text[:b] + text[a : a + rng.randrange(1, 12)] + text[b:]

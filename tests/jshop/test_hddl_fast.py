@@ -18,6 +18,7 @@ from htn.jshop.readers import hddl, hddl_fast
 from htn.jshop.readers.source import decode_source
 
 from conftest import ROOT, SHARED
+from fuzz_mutations import text_mutant
 
 CORPUS = SHARED / "corpus"
 
@@ -68,24 +69,7 @@ INSERTS = ["(", ")", "-", "?", ";", "\n", " ", "x", "-x", "?x", "and", ":task", 
 
 
 def _mutant(text: str, rng: random.Random) -> str:
-    k = rng.randrange(len(text))
-    kind = rng.randrange(5)
-    if kind == 0:  # a character less
-        return text[:k] + text[k + 1 :]
-    if kind == 1:  # something more
-        return text[:k] + rng.choice(INSERTS) + text[k:]
-    if kind == 2:  # a word in other case
-        j = k
-        while j < len(text) and text[j].isalnum():
-            j += 1
-        return text[:k] + text[k:j].swapcase() + text[j:]
-    if kind == 3:  # a list taken out whole, or a stretch of text
-        j = text.find(")", k)
-        return text[:k] + text[j + 1 :] if j >= 0 else text[:k]
-    i = rng.randrange(len(text))  # a stretch moved elsewhere
-    a, b = sorted((k, i))
-    piece = text[a : a + rng.randrange(1, 12)]
-    return text[:b] + piece + text[b:]
+    return text_mutant(text, rng, INSERTS)
 
 
 SMALL = [

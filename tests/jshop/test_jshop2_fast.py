@@ -18,6 +18,7 @@ from htn.jshop.readers import jshop2, jshop2_fast, load
 from htn.jshop.readers.source import decode_source
 
 from conftest import ROOT, SHARED
+from fuzz_mutations import text_mutant
 
 CORPUS = SHARED / "corpus" / "jshop2"
 
@@ -65,18 +66,7 @@ INSERTS = ["(", ")", "?", "!", ";", "\n", " ", "x", "-", "+", "nil", "and", ":un
 
 
 def _mutant(text: str, rng: random.Random) -> str:
-    k = rng.randrange(len(text))
-    kind = rng.randrange(4)
-    if kind == 0:  # a character less
-        return text[:k] + text[k + 1 :]
-    if kind == 1:  # something more
-        return text[:k] + rng.choice(INSERTS) + text[k:]
-    if kind == 2:  # a list taken out whole, or a stretch of text
-        j = text.find(")", k)
-        return text[:k] + text[j + 1 :] if j >= 0 else text[:k]
-    i = rng.randrange(len(text))  # a stretch copied elsewhere
-    a, b = sorted((k, i))
-    return text[:b] + text[a : a + rng.randrange(1, 12)] + text[b:]
+    return text_mutant(text, rng, INSERTS)
 
 
 @pytest.mark.parametrize(
