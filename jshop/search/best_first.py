@@ -46,6 +46,7 @@ from .ground_formulas import holds, satisfied
 from .grounding import UNREACHABLE_GOAL, ground, grounding_steps
 from .heuristics import HEURISTICS, INF
 from .limits import MemoryGuard, MemoryLimit
+from .splitting import hidden
 from .stats import Stats
 from .task_networks import body_items, firsts, item_at, replace, serialize
 
@@ -71,6 +72,7 @@ class BestFirst:
         commit: bool = True,
         ties: str | None = None,
         serial: bool = False,
+        split: bool = True,
         **_ignored,
     ):
         self.domain, self.instance = domain, instance
@@ -89,12 +91,13 @@ class BestFirst:
         self.ties = ties  # "fifo", "lifo", None: see interleaves()
         self.lifo = False
         self.serial = serial  # a started member of a group is finished before the others
+        self.split = split  # ground with parameter splitting (splitting.py)
 
     def prepare(self) -> None:
         """Ground the problem and build the heuristic (the first call of
         :meth:`plans` does it otherwise)."""
         if self.model is None:
-            self._prepared(ground(self.domain, self.instance))
+            self._prepared(ground(self.domain, self.instance, self.split))
 
     def _prepared(
         self, model: GroundModel, h: Heuristic | None = None, cut: GoalChain | None = None
@@ -116,7 +119,7 @@ class BestFirst:
         cpu = time.process_time
         pause_at = cpu() + self.slice_s if self.slice_s is not None else None
         if self.model is None:  # grounding pauses and times out like the search
-            steps = grounding_steps(self.domain, self.instance)
+            steps = grounding_steps(self.domain, self.instance, self.split)
             while True:
                 try:
                     next(steps)
@@ -178,7 +181,7 @@ class BestFirst:
                             self._push(
                                 nodes, heap, seen, s, replace(at, where, new), k, (path, gm), g
                             )
-                if not ticks & 63:
+                if not ticks & 7:  # an RC-add pass can take 50 ms: check often
                     if timeout is not None and time.perf_counter() - stats.started > timeout:
                         stats.timed_out = True
                         return
@@ -256,6 +259,7 @@ class BestFirst:
         work = [(root, tuple(range(nroots)), "")]
         while work:
             parent, kids, prefix = work.pop()
+            kids = self._spliced(kids, inst, how)
             names = [tasks[inst[i]][0] for i in kids]
             seen: dict = {}
             for i, name in zip(kids, names):
@@ -279,6 +283,21 @@ class BestFirst:
                     work.append((node, sub, path))
                 parent.children.append(node)
         return root
+
+    def _spliced(self, kids: tuple, inst: list, how: dict) -> tuple:
+        """The children of a tree node, each task that parameter splitting
+        made (:mod:`.splitting`) replaced by its own children."""
+        assert self.model is not None  # a plan is found after grounding
+        tasks = self.model.tasks
+        if not any(hidden(tasks[inst[i]][0]) for i in kids):
+            return kids
+        out: list = []
+        for i in kids:
+            if hidden(tasks[inst[i]][0]):
+                out += self._spliced(how[i][1], inst, how)
+            else:
+                out.append(i)
+        return tuple(out)
 
 
 def free_tasks(model) -> frozenset:

@@ -39,6 +39,7 @@ from .ground_formulas import (
 from .jshop2_input import checked_instance, flat_tasks
 from .reachability import reachable
 from .residual_code import compile_body
+from .splitting import split_methods, totally_ordered
 
 # the goal of a model where grounding found it false in every reachable state
 # (no fact has every bit: no state satisfies it)
@@ -94,10 +95,11 @@ class GroundModel:
         return i
 
 
-def ground(domain: S.Domain, instance: S.ProblemInstance) -> GroundModel:
+def ground(domain: S.Domain, instance: S.ProblemInstance, split: bool = True) -> GroundModel:
     """The grounded problem (see the module docstring); raises
-    :class:`NotGroundable` for what this search does not handle."""
-    steps = grounding_steps(domain, instance)
+    :class:`NotGroundable` for what this search does not handle. ``split``:
+    with parameter splitting (:mod:`.splitting`) where it applies."""
+    steps = grounding_steps(domain, instance, split)
     while True:
         try:
             next(steps)
@@ -105,14 +107,14 @@ def ground(domain: S.Domain, instance: S.ProblemInstance) -> GroundModel:
             return done.value
 
 
-def grounding_steps(domain: S.Domain, instance: S.ProblemInstance):
+def grounding_steps(domain: S.Domain, instance: S.ProblemInstance, split: bool = True):
     """:func:`ground` as a generator that yields None between small steps
     (so that a portfolio can pause it) and returns the model."""
-    return _Grounder(domain, instance).run()
+    return _Grounder(domain, instance, split).run()
 
 
 class _Grounder:
-    def __init__(self, domain: S.Domain, instance: S.ProblemInstance):
+    def __init__(self, domain: S.Domain, instance: S.ProblemInstance, split: bool = True):
         if domain.language != "hddl":  # what of JSHOP2's language grounding takes, located
             instance = checked_instance(domain, instance)
         self.domain, self.instance = domain, instance
@@ -130,6 +132,9 @@ class _Grounder:
             m = S.root_method(instance)
             self.methods[m.name] = [m]
             self.roots, self.root_order = [m.head], True
+        self.origin: dict = {}  # id(a split method) -> the method as written
+        if split and totally_ordered(self.methods, self.root_order):
+            self.methods, self.origin = split_methods(self.methods)
 
     # ------------------------------------------------------------ 1. facts
     def reachable_facts(self):
@@ -307,7 +312,7 @@ class _Grounder:
             pre = compile_residual(pre if unless is True else conj([pre, unless]))
             if pre is not None:
                 ids = tuple(model.task_id(name, args) for name, args in body)
-                yield GroundMethod(t, m, pre, ids, order, k)
+                yield GroundMethod(t, self.origin.get(id(m), m), pre, ids, order, k)
 
     def _body_code(self, branch: S.Branch) -> list:
         """``[uses, compiled subtask list or None, subtasks, order]``: a
