@@ -1,28 +1,30 @@
 """``--search auto``: depth-first and heuristic search as a portfolio.
 
 The searches of :mod:`htn.jshop.search.searches` run in turns in one
-process, each for a slice of CPU time (depth-first search half a second
-at first, doubling to at most four, the greedy heuristic search three times
-as long, and once that has grounded the problem a weighted A* on the same
-model as long as depth-first search, where some network is partially
-ordered a GBFS that finishes a started member of an unordered group before
-the others (as long as depth-first search, for 2 s of CPU in all; it
-leaves out plans that need an interleaving, so its running out of moves
-proves nothing), and where the goal has a
-chain (:mod:`.goal_chain`) a GBFS with TDG_m as long as the first GBFS),
-so that together they stay within
-the time limit: JSHOP2's
-depth-first search is fast where the written method order leads to a plan
-(most IPC total-order domains: within a second on the shared sample, so it
-goes first), the greedy best-first search with the relaxed composition
-heuristic where depth-first search is stuck, and it needs the time to
-ground the problem first. The first
-plan found wins and ``stats.found_by`` says by which. Depth-first search
-with its loop check may give up; the heuristic search, with duplicate
-detection on a finite grounded space, says "no plan" only when there is
-none, so that answer is taken from it (or from both). When the problem
-cannot be grounded (:class:`~htn.jshop.search.ground_formulas.NotGroundable`)
-or the heuristic search stops at a bound, depth-first search goes on alone.
+process, and share its CPU time by fixed shares (stride scheduling: each
+turn, half a second per share, goes to the search that has used the least
+CPU time for its share): depth-first search 1, the greedy heuristic search
+3 (grounding the problem included), and once that has grounded the
+problem, on the same model, a weighted A* 1, a GBFS with TDG_m 1 (3 where
+the goal has a chain, :mod:`.goal_chain`, whose cut it uses), and where some
+network is partially ordered a GBFS that finishes a started member of an
+unordered group before the others 1 (for 2 s of CPU in all; it leaves out
+plans that need an interleaving, so its running out of moves proves
+nothing). A search started late joins at the pace of the others, so its
+first turn comes at once. JSHOP2's depth-first search is fast where the
+written method order leads to a plan (most IPC total-order domains:
+within a second on the shared sample, so it goes first), the greedy
+best-first search with the relaxed composition heuristic where
+depth-first search is stuck, and it needs the time to ground the problem
+first. The first plan found wins and ``stats.found_by`` says by which.
+Depth-first search with its loop check may give up; the heuristic search,
+with duplicate detection on a finite grounded space, says "no plan" only
+when there is none, so that answer is taken from it (or from both). When
+the problem cannot be grounded
+(:class:`~htn.jshop.search.ground_formulas.NotGroundable`) or the heuristic
+search stops at a bound, depth-first search goes on alone. Every turn is
+measured in CPU time of this process, so that what a run costs does not
+depend on the machine's load.
 """
 
 from __future__ import annotations
@@ -41,8 +43,8 @@ from .stats import Stats
 if TYPE_CHECKING:
     from htn.jshop.plans.plan import Plan
 
-FIRST_SLICE, LAST_SLICE = 0.5, 4.0
-# CPU slices per depth-first slice: gbfs, and weighted A* once gbfs has
+SLICE = 0.5  # CPU seconds per turn and share
+# shares of CPU time against depth-first search: gbfs, and weighted A* once gbfs has
 # grounded the problem (the two share the grounded model and the heuristic's
 # costs); weighted A* solves what greedy search gets lost in (ipc-po
 # Transport pfile04: 27k expansions, where GBFS made 477k without a plan)
@@ -65,6 +67,12 @@ SHARES = {"dfs": 1, "gbfs": 3, "wastar": 1, "gbfs-tdg": 3, "gbfs-serial": 1}
 # Transport pfile04, found by weighted A*: 2.47 s of CPU without it, 4.85 s
 # with it unbounded)
 SERIAL_BUDGET = 2.0
+# GBFS with TDG_m where the goal has no chain: a cheap second opinion,
+# blind to the state but fast per node, for models so large that an RC-add
+# pass per state costs tens of milliseconds (IPC 2023 Snake, 4 slots, split
+# (splitting.py): 176k actions; GBFS with RC-add made 512 expansions in
+# 30 s, GBFS with TDG_m found a plan after 43k expansions, 1 s)
+TDG_SHARE_NO_CUT = 1
 
 
 class Portfolio:
@@ -122,29 +130,36 @@ class Portfolio:
         self.grounded = False
         self.started = 2  # searches started: dfs, gbfs, then those on its model
         self.ended: list = []  # the searches that ended, in order
-        self.serial_cpu = 0.0  # CPU seconds the serial GBFS has used
+        self.spent: dict = {}  # id(search) -> CPU seconds it has used
 
     def plans(self, timeout: float | None = None) -> Generator[Plan, None, None]:
         searches: list[Planner | BestFirst] = [self.dfs, self.gbfs]
         streams: dict[int, Generator[Plan | None, None, None] | None]
         streams = {id(s): None for s in searches}
         live = list(searches)
-        slice_s = FIRST_SLICE
-        turn = 0
+        # CPU seconds each search has used; the next turn goes to the live
+        # search that has used the least for its share (stride scheduling),
+        # so that one started late, on GBFS's model, joins at once and at
+        # the others' pace rather than after their long slices
+        used = {id(s): 0.0 for s in searches}  # what it used, or had when it joined
+        self.spent = {id(s): 0.0 for s in searches}
         self.stats.started = time.perf_counter()
         try:
             while live:
                 if not self.grounded and self.gbfs.h is not None:
+                    pace = min(used[id(s)] / self._share(s) for s in live)
                     for s in self._on_model():
                         live.append(s)
                         searches.append(s)
                         streams[id(s)] = None
-                search = live[turn % len(live)]
-                search.slice_s = slice_s * SHARES[self.labels[id(search)]]
+                        used[id(s)] = pace * self._share(s)
+                        self.spent[id(s)] = 0.0
+                search = min(live, key=lambda s: used[id(s)] / self._share(s))
+                search.slice_s = SLICE * self._share(search)
                 stream = streams[id(search)]
                 if stream is None:
                     stream = streams[id(search)] = search.plans(timeout)
-                if search is self.serial and self.serial_cpu >= SERIAL_BUDGET:
+                if search is self.serial and self.spent[id(search)] >= SERIAL_BUDGET:
                     stream.close()  # its budget is spent: the others go on
                     live.remove(search)
                     self.ended.append(search)
@@ -170,13 +185,11 @@ class Portfolio:
                     self.ended.append(search)
                     continue
                 finally:
-                    if search is self.serial:
-                        self.serial_cpu += time.process_time() - began
+                    cpu = time.process_time() - began
+                    used[id(search)] += cpu
+                    self.spent[id(search)] += cpu
                     self._sum()
-                if plan is None:  # its slice is over: the other one's turn
-                    turn += 1
-                    if turn % len(live) == 0:
-                        slice_s = min(2 * slice_s, LAST_SLICE)
+                if plan is None:  # its slice is over: the next one's turn
                     continue
                 self.stats.found_by = self.labels[id(search)]
                 self.stats.plans_found += 1
@@ -187,6 +200,11 @@ class Portfolio:
                 if stream is not None:
                     stream.close()
             self._sum()
+
+    def _share(self, search) -> float:
+        if search is self.tdg and search.cut is None:
+            return TDG_SHARE_NO_CUT
+        return SHARES[self.labels[id(search)]]
 
     def _on_model(self) -> list:
         """The searches to start once GBFS has grounded the problem, on its
@@ -200,9 +218,8 @@ class Portfolio:
             more.append(self.serial)
         self.wastar._prepared(g.model, g.h, g.cut)
         more.append(self.wastar)
-        if g.cut is not None:
-            self.tdg._prepared(g.model, None, g.cut)
-            more.append(self.tdg)
+        self.tdg._prepared(g.model, None, g.cut)
+        more.append(self.tdg)
         self.started += len(more)
         return more
 

@@ -155,11 +155,15 @@ def test_no_node_of_a_plan_found_without_the_cut_is_cut(domain, problem, monkeyp
             "ipc-po/PCP/p-pcp11.hddl",
             ["gbfs-serial", "wastar", "gbfs-tdg"],  # partially ordered: the serial GBFS too
         ),
-        ("ipc2020-to/Childsnack/domain.hddl", "ipc2020-to/Childsnack/p05.hddl", ["wastar"]),
+        (
+            "ipc2020-to/Childsnack/domain.hddl",
+            "ipc2020-to/Childsnack/p05.hddl",
+            ["wastar", "gbfs-tdg"],  # TDG_m without the cut, at a third of the share
+        ),
     ],
     ids=["goal-chain", "no-goal"],
 )
-def test_auto_adds_a_tdg_search_where_the_goal_has_a_chain(domain, problem, arms):
+def test_auto_adds_a_tdg_search_with_the_cut_where_the_goal_has_a_chain(domain, problem, arms):
     if not (CORPUS / domain).is_file():
         pytest.skip(f"{CORPUS / domain} not found")
     from htn.jshop.search.portfolio import Portfolio
@@ -172,7 +176,32 @@ def test_auto_adds_a_tdg_search_where_the_goal_has_a_chain(domain, problem, arms
     for s in more:
         assert s.model is auto.gbfs.model and s.cut is auto.gbfs.cut
     assert auto.wastar.h is auto.gbfs.h
-    if "gbfs-tdg" in arms:
-        assert auto.tdg.heuristic_name == "tdg" and auto.tdg.cut is not None
+    assert auto.tdg.heuristic_name == "tdg"
+    assert auto._share(auto.tdg) == (3 if auto.tdg.cut is not None else 1)
+    if "gbfs-serial" in arms:
+        assert auto.tdg.cut is not None
         plan = next(p for p in auto.tdg.plans(timeout=60) if p is not None)
         assert plan.steps
+
+
+@pytest.mark.corpus
+def test_auto_shares_cpu_by_the_shares_and_a_late_search_joins_at_once():
+    # Factories-simple pfile13: depth-first search is stuck and grounding
+    # takes a tenth of a second, so every search runs for the whole limit
+    domain = SHARED / "corpus" / "ipc2020-to-hard" / "Factories-simple"
+    if not (domain / "pfile13.hddl").is_file():
+        pytest.skip(f"{domain} not found")
+    from htn.jshop.search.portfolio import SLICE, Portfolio
+
+    dom, prob = load_inputs(str(domain / "domain.hddl"), str(domain / "pfile13.hddl"))
+    auto = Portfolio(dom, prob.instances[0])
+    assert next(auto.plans(timeout=6), None) is None
+    members = (auto.dfs, auto.gbfs, auto.wastar, auto.tdg)
+    assert set(auto.spent) == {id(s) for s in members}
+    # CPU seconds per share: each turn adds SLICE to one of them
+    pace = {auto.labels[id(s)]: auto.spent[id(s)] / auto._share(s) for s in members}
+    # the late ones joined once GBFS had grounded (after its first turn),
+    # and from then on all kept pace
+    late = ("wastar", "gbfs-tdg")
+    assert all(pace["dfs"] - pace[x] < 2 * SLICE for x in late), pace
+    assert max(pace.values()) - min(pace.values()) < 3 * SLICE, pace
