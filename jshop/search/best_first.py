@@ -46,7 +46,6 @@ from .ground_formulas import holds, satisfied
 from .grounding import UNREACHABLE_GOAL, ground, grounding_steps
 from .heuristics import HEURISTICS, INF
 from .limits import MemoryGuard, MemoryLimit
-from .splitting import hidden
 from .stats import Stats
 from .task_networks import body_items, firsts, item_at, replace, serialize
 
@@ -288,12 +287,12 @@ class BestFirst:
         """The children of a tree node, each task that parameter splitting
         made (:mod:`.splitting`) replaced by its own children."""
         assert self.model is not None  # a plan is found after grounding
-        tasks = self.model.tasks
-        if not any(hidden(tasks[inst[i]][0]) for i in kids):
+        tasks, hidden = self.model.tasks, self.model.hidden
+        if not hidden or not any(tasks[inst[i]][0] in hidden for i in kids):
             return kids
         out: list = []
         for i in kids:
-            if hidden(tasks[inst[i]][0]):
+            if tasks[inst[i]][0] in hidden:
                 out += self._spliced(how[i][1], inst, how)
             else:
                 out.append(i)

@@ -85,6 +85,7 @@ class GroundModel:
         self.roots: tuple = ()  # initial task ids
         self.root_order: object = True  # True, False or a PartialOrder
         self.goal: tuple | None = None  # (pos, neg, rest) or None
+        self.hidden: frozenset = frozenset()  # the task names parameter splitting made
 
     def task_id(self, name: str, args: tuple) -> int:
         key = (name, args)
@@ -134,7 +135,7 @@ class _Grounder:
             self.roots, self.root_order = [m.head], True
         self.origin: dict = {}  # id(a split method) -> the method as written
         if split and totally_ordered(self.methods, self.root_order):
-            self.methods, self.origin = split_methods(self.methods)
+            self.methods, self.origin, self.model.hidden = split_methods(self.methods)
 
     # ------------------------------------------------------------ 1. facts
     def reachable_facts(self):

@@ -28,8 +28,8 @@ the network once the method is applied, so it is decomposed next, in the
 same state; the moved conjuncts are tested where the method's precondition
 was. (In a partially ordered network another task could go first and
 change the state in between.) The searches splice the new tasks out of
-the task trees they return (:func:`hidden`): the plans and trees are those
-of the domain as written.
+the task trees they return (``GroundModel.hidden``): the plans and trees
+are those of the domain as written.
 """
 
 from __future__ import annotations
@@ -42,11 +42,6 @@ from .jshop2_input import flat_tasks
 PREFIX = "split:"  # no HDDL or JSHOP2 name has a colon
 
 
-def hidden(name: str) -> bool:
-    """Whether a task name is one that splitting made (spliced out of trees)."""
-    return name.startswith(PREFIX)
-
-
 def totally_ordered(methods: dict[str, list[S.Method]], root_order: object) -> bool:
     """Whether every task list of the problem is totally ordered."""
     if root_order is not True:
@@ -56,12 +51,14 @@ def totally_ordered(methods: dict[str, list[S.Method]], root_order: object) -> b
     )
 
 
-def split_methods(methods: dict[str, list[S.Method]]) -> tuple[dict, dict]:
-    """``(methods, origin)``: the methods with each splittable one replaced
-    by its two halves (see the module docstring), and for each replacing
-    method (by ``id``) the method it stands for."""
+def split_methods(methods: dict[str, list[S.Method]]) -> tuple[dict, dict, frozenset]:
+    """``(methods, origin, made)``: the methods with each splittable one
+    replaced by its two halves (see the module docstring), for each
+    replacing method (by ``id``) the method it stands for, and the names of
+    the tasks made."""
     out: dict[str, list[S.Method]] = {}
     origin: dict[int, S.Method] = {}
+    made: set[str] = set()
     for name, ms in methods.items():
         kept = out.setdefault(name, [])
         for m in ms:
@@ -73,7 +70,8 @@ def split_methods(methods: dict[str, list[S.Method]]) -> tuple[dict, dict]:
             kept.append(outer)
             origin[id(outer)] = m
             out.setdefault(inner.name, []).append(inner)
-    return out, origin
+            made.add(inner.name)
+    return out, origin, frozenset(made)
 
 
 def _split(m: S.Method) -> tuple[S.Method, S.Method] | None:

@@ -20,7 +20,7 @@ from htn.api.inputs import function_table, read_inputs
 from htn.jshop.language import syntax as S
 from htn.jshop.search.best_first import BestFirst
 from htn.jshop.search.grounding import ground
-from htn.jshop.search.splitting import hidden, split_methods, totally_ordered
+from htn.jshop.search.splitting import PREFIX, split_methods, totally_ordered
 
 from conftest import SHARED
 
@@ -42,7 +42,8 @@ def test_snake_move_long_splits_into_the_body_cells_and_the_rest():
     inputs = read_inputs(
         SNAKE / "domain.hddl", SNAKE / "pb-3slots-seed1.snake.hddl", function_table(None)
     )
-    methods, origin = split_methods(inputs.domain.methods)
+    methods, origin, made = split_methods(inputs.domain.methods)
+    assert made == {"split:move-long-snake", "split:hunt_all"}
     (outer,) = [m for m in methods["move"] if m.branches[0].label == "move-long-snake"]
     assert origin[id(outer)].branches[0].label == "move-long-snake"
     assert _names(outer) == [
@@ -92,7 +93,8 @@ def test_the_ground_model_shrinks_and_the_plan_is_the_domain_as_written(tmp_path
     # about half here (one goal cell); the product grows with the goals:
     # 206k against more than 1.7 GB unfinished on the 4-slot IPC problem
     assert n_split * 3 < n_whole * 2, (n_split, n_whole)
-    assert any(hidden(name) for name, _args in split.tasks)
+    assert split.hidden == {"split:move-long-snake", "split:hunt_all"}
+    assert any(name in split.hidden for name, _args in split.tasks)
     for heuristic in ("tdg", "rc"):
         search = BestFirst(inputs.domain, instance, heuristic=heuristic)
         plan = next(p for p in search.plans(timeout=60) if p is not None)
@@ -102,7 +104,7 @@ def test_the_ground_model_shrinks_and_the_plan_is_the_domain_as_written(tmp_path
             node = stack.pop()
             names.append(node.name)
             stack.extend(node.children)
-        assert "move" in names and not any(hidden(n) for n in names)
+        assert "move" in names and not any(n.startswith(PREFIX) for n in names)
         _check_plan(tmp_path, inputs.domain, inputs.problem, plan, search)
 
 
@@ -129,13 +131,14 @@ def test_only_a_first_subtasks_own_variables_with_their_own_conjuncts_move(tmp_p
     problem = """(define (problem p) (:domain d) (:objects k l - o)
       (:htn :parameters () :ordered-subtasks (and (t k))) (:init (q k l)))"""
     inputs, instance = _read(tmp_path, LEFT_ALONE, problem)
-    methods, origin = split_methods(inputs.domain.methods)
+    _methods, origin, made = split_methods(inputs.domain.methods)
+    assert made == {"split:split"}
     assert [m.branches[0].label for m in origin.values()] == ["split"]
     assert totally_ordered(inputs.domain.methods, True)
     unordered = problem.replace(":ordered-subtasks (and (t k))", ":subtasks (and (t k) (t l))")
     inputs, instance = _read(tmp_path, LEFT_ALONE, unordered)
     model = ground(inputs.domain, instance)
-    assert not any(hidden(name) for name, _args in model.tasks)
+    assert not model.hidden and not any(n.startswith(PREFIX) for n, _args in model.tasks)
 
 
 OBJECTS = ["k", "l", "m"]
