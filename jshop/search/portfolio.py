@@ -44,6 +44,7 @@ if TYPE_CHECKING:
     from htn.jshop.plans.plan import Plan
 
 SLICE = 0.5  # CPU seconds per turn and share
+TIE = SLICE / 4  # CPU seconds per share within which searches count as even
 # shares of CPU time against depth-first search: gbfs, and weighted A* once gbfs has
 # grounded the problem (the two share the grounded model and the heuristic's
 # costs); weighted A* solves what greedy search gets lost in (ipc-po
@@ -154,7 +155,9 @@ class Portfolio:
                         streams[id(s)] = None
                         used[id(s)] = pace * self._share(s)
                         self.spent[id(s)] = 0.0
-                search = min(live, key=lambda s: used[id(s)] / self._share(s))
+                # in quarter turns, so that a slice's overshoot of a few
+                # milliseconds does not decide a tie: the earlier search goes
+                search = min(live, key=lambda s: int(used[id(s)] / self._share(s) / TIE))
                 search.slice_s = SLICE * self._share(search)
                 stream = streams[id(search)]
                 if stream is None:
