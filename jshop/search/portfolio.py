@@ -10,8 +10,8 @@ the goal has a chain, :mod:`.goal_chain`, whose cut it uses), and where some
 network is partially ordered a GBFS that finishes a started member of an
 unordered group before the others 1 (for 2 s of CPU in all; it leaves out
 plans that need an interleaving, so its running out of moves proves
-nothing). A search started late joins at the pace of the others, so its
-first turn comes at once. JSHOP2's depth-first search is fast where the
+nothing). A search started late joins a turn behind the others, so that
+its first turn comes at once, and then keeps their pace. JSHOP2's depth-first search is fast where the
 written method order leads to a plan (most IPC total-order domains:
 within a second on the shared sample, so it goes first), the greedy
 best-first search with the relaxed composition heuristic where
@@ -132,6 +132,7 @@ class Portfolio:
         self.started = 2  # searches started: dfs, gbfs, then those on its model
         self.ended: list = []  # the searches that ended, in order
         self.spent: dict = {}  # id(search) -> CPU seconds it has used
+        self.turns: list[str] = []  # who had each turn, in order
 
     def plans(self, timeout: float | None = None) -> Generator[Plan, None, None]:
         searches: list[Planner | BestFirst] = [self.dfs, self.gbfs]
@@ -148,7 +149,8 @@ class Portfolio:
         try:
             while live:
                 if not self.grounded and self.gbfs.h is not None:
-                    pace = min(used[id(s)] / self._share(s) for s in live)
+                    # a turn behind the slowest: each has its first turn at once
+                    pace = min(used[id(s)] / self._share(s) for s in live) - SLICE
                     for s in self._on_model():
                         live.append(s)
                         searches.append(s)
@@ -167,6 +169,7 @@ class Portfolio:
                     live.remove(search)
                     self.ended.append(search)
                     continue
+                self.turns.append(self.labels[id(search)])
                 began = time.process_time()
                 try:
                     plan = next(stream)
