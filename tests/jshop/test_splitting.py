@@ -14,7 +14,7 @@ from pathlib import Path
 
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from test_commit_rule import _check_plan
+from test_commit_rule import _check_plan, _conj
 
 from htn.api.inputs import function_table, read_inputs
 from htn.jshop.language import syntax as S
@@ -150,10 +150,6 @@ def _atom(draw, params: list, negative: bool = True) -> str:
     args = " ".join(draw(st.sampled_from(params)) for _ in range(PREDS[pred]))
     atom = f"({pred} {args})"
     return f"(not {atom})" if negative and draw(st.booleans()) else atom
-
-
-def _conj(items: list) -> str:
-    return "()" if not items else items[0] if len(items) == 1 else f"(and {' '.join(items)})"
 
 
 @st.composite
