@@ -11,12 +11,12 @@ network is partially ordered a GBFS that finishes a started member of an
 unordered group before the others 1 (for 2 s of CPU in all; it leaves out
 plans that need an interleaving, so its running out of moves proves
 nothing). A search started late joins a turn behind the others, so that
-its first turn comes at once, and then keeps their pace. JSHOP2's depth-first search is fast where the
-written method order leads to a plan (most IPC total-order domains:
-within a second on the shared sample, so it goes first), the greedy
-best-first search with the relaxed composition heuristic where
-depth-first search is stuck, and it needs the time to ground the problem
-first. The first plan found wins and ``stats.found_by`` says by which.
+its first turn comes at once, and then keeps their pace. JSHOP2's
+depth-first search is fast where the written method order leads to a plan
+(most IPC total-order domains: within a second on the shared sample, so it
+goes first), the greedy best-first search with the relaxed composition
+heuristic where depth-first search is stuck, and it needs the time to
+ground the problem first. The first plan found wins and ``stats.found_by`` says by which.
 Depth-first search with its loop check may give up; the heuristic search,
 with duplicate detection on a finite grounded space, says "no plan" only
 when there is none, so that answer is taken from it (or from both). When

@@ -39,7 +39,7 @@ from htn.jshop.language.terms import variables
 
 from .jshop2_input import flat_tasks
 
-PREFIX = "split:"  # no HDDL or JSHOP2 name has a colon
+PREFIX = "split:"  # the new tasks' names: the split method's label after it
 
 
 def totally_ordered(methods: dict[str, list[S.Method]], root_order: object) -> bool:
@@ -62,7 +62,16 @@ def split_methods(methods: dict[str, list[S.Method]]) -> tuple[dict, dict, froze
     for name, ms in methods.items():
         kept = out.setdefault(name, [])
         for m in ms:
-            halves = _split(m)
+            if len(m.branches) != 1:  # JSHOP2's if-then-else: as written
+                kept.append(m)
+                continue
+            # a name of its own: JSHOP2 may repeat a label, or name a task so
+            new = PREFIX + m.branches[0].label
+            k = 1
+            while new in methods or new in made:
+                k += 1
+                new = f"{PREFIX}{m.branches[0].label}#{k}"
+            halves = _split(m, new)
             if halves is None:
                 kept.append(m)
                 continue
@@ -74,7 +83,7 @@ def split_methods(methods: dict[str, list[S.Method]]) -> tuple[dict, dict, froze
     return out, origin, frozenset(made)
 
 
-def _split(m: S.Method) -> tuple[S.Method, S.Method] | None:
+def _split(m: S.Method, new: str) -> tuple[S.Method, S.Method] | None:
     if len(m.branches) != 1:
         return None
     b = m.branches[0]
@@ -107,7 +116,7 @@ def _split(m: S.Method) -> tuple[S.Method, S.Method] | None:
     params = sorted((own | {v for c in moved for v in _formula_vars(c) or ()}) - moved_vars)
     var_of = _var_objects(m)
     label = b.label
-    task = S.TaskAtom(PREFIX + label, tuple(var_of[i] for i in params), pos=first.pos)
+    task = S.TaskAtom(new, tuple(var_of[i] for i in params), pos=first.pos)
     inner = S.Method(
         task,
         [

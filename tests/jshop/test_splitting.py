@@ -225,3 +225,27 @@ def test_splitting_loses_no_plan_and_adds_none(case):
         assert (split is None) == (whole is None), domain_text + problem_text
         if split is not None:
             _check_plan(folder, inputs.domain, inputs.problem, split, search)
+
+
+# JSHOP2 may give two methods the same label: each split gets a task of its
+# own, or one method's new task could be decomposed by the other's half
+REPEATED = """(defdomain d (
+  (:operator (!a ?x) () () ((p ?x)))
+  (:operator (!b ?x ?y) () () ((q ?x ?y)))
+  (:method (t ?x) lbl ((r ?x ?y)) ((!b ?x ?y) (!a ?x)))
+  (:method (u ?x) lbl ((r ?y ?x)) ((!b ?y ?x) (!a ?x)))
+))
+"""
+
+
+def test_two_methods_of_one_label_get_a_task_each(tmp_path):
+    (tmp_path / "d.jshop").write_text(REPEATED)
+    (tmp_path / "p.jshop").write_text("(defproblem p d ((r k l) (r l k)) ((t k) (u k)))\n")
+    inputs = read_inputs(tmp_path / "d.jshop", tmp_path / "p.jshop", function_table(None))
+    _methods, _origin, made = split_methods(inputs.domain.methods)
+    assert made == {"split:lbl", "split:lbl#2"}
+    search = BestFirst(inputs.domain, inputs.problem.instances[0])
+    plan = next(p for p in search.plans(timeout=60) if p is not None)
+    steps = [(s.name, *s.args) for s in plan.steps]
+    assert steps == [("!b", "k", "l"), ("!a", "k"), ("!b", "l", "k"), ("!a", "k")]
+    assert [n.name for n in plan.tree.children] == ["t", "u"]
