@@ -19,12 +19,16 @@ CORPUS = SHARED / "corpus"
 # instances that depth-first search in the written method order does not
 # solve within seconds (Lamps: the recursive play method comes first, so the
 # search explores sequences of moves before it ever ends a game; Snake: the
-# snake's walk to each mouse is a blind search over the grid)
+# snake's walk to each mouse is a blind search over the grid): planned with
+# --search auto, which solves the first two (Lamps pfile04 in 0.7 s of CPU;
+# Snake 4 slots in 13 s, by GBFS with TDG_m on the split grounding), and
+# the third not within 30 s, so that one is tried for a few seconds only
 SEARCH_BOUND = {
     "Lamps/pfile04.pddl",
     "Snake/pb-4slots-seed1.snake.hddl",
     "Snake/pb-5slots-seed1.snake.hddl",
 }
+UNSOLVED = {"Snake/pb-5slots-seed1.snake.hddl"}
 
 
 def _pairs(sample: str, slow: frozenset = frozenset()) -> list:
@@ -78,12 +82,15 @@ def test_every_instance_is_read_or_refused_at_a_place(domain, problem):
 @pytest.mark.parametrize("domain,problem", _pairs("ipc2023-to", frozenset(SEARCH_BOUND)))
 def test_total_order_instances_plan_and_verify(tmp_path, ipc_oracle, domain, problem):
     name = f"{problem.parent.name}/{problem.name}"
-    limit = "5" if name in SEARCH_BOUND else "60"
-    result = run_htn("plan", domain, problem, "-f", "ipc", "--timeout", limit, "--quiet")
+    limit = "5" if name in UNSOLVED else "90"
+    search = "auto" if name in SEARCH_BOUND else "dfs"
+    result = run_htn(
+        "plan", domain, problem, "-f", "ipc", "--timeout", limit, "--quiet", "--search", search
+    )
     assert "Traceback" not in result.stderr
-    if name in SEARCH_BOUND and result.returncode == 1:
+    if name in UNSOLVED and result.returncode == 1:
         assert "timed out" in result.stderr, result.stderr
-        pytest.skip(f"{name}: no plan within {limit} s (depth-first search)")
+        pytest.skip(f"{name}: no plan within {limit} s")
     assert result.returncode == 0, result.stderr
     (tmp_path / "plan.ipc").write_text(result.stdout)
     ipc_oracle.check(domain, problem, tmp_path / "plan.ipc")
