@@ -114,7 +114,7 @@ def _split(m: S.Method, new: str) -> tuple[S.Method, S.Method] | None:
         else:
             left.append(c)
     params = sorted((own | {v for c in moved for v in _formula_vars(c) or ()}) - moved_vars)
-    var_of = _var_objects(m)
+    var_of = _var_objects(items, m.head)
     label = b.label
     task = S.TaskAtom(new, tuple(var_of[i] for i in params), pos=first.pos)
     inner = S.Method(
@@ -193,12 +193,12 @@ def _mentions(x, slots: set[int]) -> bool:
     return False
 
 
-def _var_objects(m: S.Method) -> dict:
-    """Slot -> a Var object of the method (its name as written)."""
+def _var_objects(items: list, head: S.TaskAtom) -> dict:
+    """Slot -> a Var object of a method's subtasks and head (its name as written)."""
     out: dict = {}
-    for x in flat_tasks(m.branches[0].tasks)[0]:
+    for x in items:
         for v in variables(x.args, []):
             out.setdefault(v.index, v)
-    for v in variables(m.head.args, []):
+    for v in variables(head.args, []):
         out.setdefault(v.index, v)
     return out
