@@ -53,10 +53,12 @@ from htn.jshop.plans.tree import snapshot
 from .ancestry import loop_check_for
 from .goals import GoalGuard
 from .limits import DEFAULT_MAX_DEPTH, DepthLimit, MemoryGuard, MemoryLimit
+from .needs import NeedGuard
 from .network import Node, bind_tasks, deepest_task, first_in_order, first_tasks, undo_marks
 from .prune import dead_methods
 from .stats import Stats
 from .steps import method_entry, operator_entry
+from .threats import ThreatOrder
 
 _PLAN = object()
 
@@ -109,6 +111,21 @@ class Planner:
         if instance.goal is not None:
             self._goal = (self.logic.precondition(instance.goal), instance.goal_nvars)
             self.guard = GoalGuard(domain, instance.goal) or None
+        # HDDL: cut once a task left needs an atom no action can add back (needs.py)
+        self.needs = (NeedGuard(domain) or None) if loop_check else None
+        # HDDL: a method's bindings that take what a later action needs go last (threats.py)
+        threats = (ThreatOrder(domain) or None) if loop_check else None
+        self.threats = threats
+        self._threatening = (
+            {
+                m.name
+                for ms in domain.methods.values()
+                for m in ms
+                if any(t.name in threats.dels for b in m.branches for t in S.task_atoms(b.tasks))
+            }
+            if threats is not None
+            else set()
+        )
         # (operator, head unifier, precondition, head substituter, constant cost or None)
         self._ops = {
             name: [operator_entry(self.logic, op) for op in ops]
@@ -271,7 +288,7 @@ class Planner:
             tried = False  # did any operator or method apply?
             if task.primitive:
                 node.subtasks = []
-                steps, apply, guard = self._steps, self._apply, self.guard
+                steps, apply, guard, needs = self._steps, self._apply, self.guard, self.needs
                 for op, unify_head, pre, bind_head, cost in self._ops.get(task.name, ()):
                     env = [None] * op.nvars
                     if not unify_head(task.args, env):
@@ -282,6 +299,15 @@ class Planner:
                             ok
                             and guard is not None
                             and guard.broken(
+                                change, state, root, self._cursor if self._cursor_ok else None
+                            )
+                        ):
+                            ok = False
+                        if (
+                            ok
+                            and needs is not None
+                            and change.deleted
+                            and needs.broken(
                                 change, state, root, self._cursor if self._cursor_ok else None
                             )
                         ):
@@ -312,6 +338,7 @@ class Planner:
                 node.how = None
             else:
                 methods = self._methods.get(task.name, ())
+                needs, threats = self.needs, self.threats
                 key = None
                 if loops is not None:
                     key = loops.key(task)
@@ -324,8 +351,15 @@ class Planner:
                         continue
                     for k, (sat, reduce, ordered) in enumerate(branches):
                         found = False
-                        for nb in sat(env):
+                        bindings = sat(env)
+                        if threats is not None and m.name in self._threatening:
+                            bindings = threats.order(bindings, reduce, state, root)
+                        for nb in bindings:
                             node.subtasks = reduce(nb)
+                            if needs is not None and needs.refused(node.subtasks, state, root):
+                                node.subtasks = None
+                                found = True  # the branch applied: no later one is tried
+                                continue
                             node.ordered = ordered
                             node.how = (m, k, index)
                             if key is not None and node.subtasks:
