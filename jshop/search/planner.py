@@ -86,6 +86,7 @@ class Planner:
         max_memory: int | None = None,
         tree_paths: bool = True,
         prune: bool = True,
+        guards: bool = True,
     ):
         self.domain = domain
         self.explain = explain  # an explain.Explainer collecting dead ends, or None
@@ -111,10 +112,12 @@ class Planner:
         if instance.goal is not None:
             self._goal = (self.logic.precondition(instance.goal), instance.goal_nvars)
             self.guard = GoalGuard(domain, instance.goal) or None
-        # HDDL: cut once a task left needs an atom no action can add back (needs.py)
-        self.needs = (NeedGuard(domain) or None) if loop_check else None
-        # HDDL: a method's bindings that take what a later action needs go last (threats.py)
-        threats = (ThreatOrder(domain) or None) if loop_check else None
+        # HDDL (with ``guards``): cut once a task left needs an atom no action
+        # can add back (needs.py); a method's bindings that take what a later
+        # action needs go last (threats.py)
+        guards = guards and loop_check
+        self.needs = (NeedGuard(domain) or None) if guards else None
+        threats = (ThreatOrder(domain) or None) if guards else None
         self.threats = threats
         self._threatening = (
             {

@@ -21,6 +21,8 @@ conjunction and its unconditional delete list.
 
 from __future__ import annotations
 
+from itertools import chain
+
 from htn.jshop.language import syntax as S
 from htn.jshop.language.terms import Var
 
@@ -34,14 +36,12 @@ class ThreatOrder:
     def __init__(self, domain: S.Domain):
         self.needs: dict = {}
         self.dels: dict = {}
+        deleted = set()
         for name, ops in domain.operators.items():
             if len(ops) != 1:
                 continue
             op = ops[0]
             slots = {a.index: i for i, a in enumerate(op.head.args) if type(a) is Var}
-            needs = tuple(_conjuncts(op.pre, _AllPreds(), slots))
-            if needs:
-                self.needs[name] = needs
             dels = tuple(
                 (a.pred, pattern)
                 for a in op.delete.items
@@ -50,51 +50,64 @@ class ThreatOrder:
             )
             if dels:
                 self.dels[name] = dels
+                deleted.update(pred for pred, _pattern in dels)
+        # only atoms some action deletes can be threatened
+        for name, ops in domain.operators.items():
+            if len(ops) == 1:
+                op = ops[0]
+                slots = {a.index: i for i, a in enumerate(op.head.args) if type(a) is Var}
+                needs = tuple(_conjuncts(op.pre, deleted, slots))
+                if needs:
+                    self.needs[name] = needs
 
     def __bool__(self) -> bool:
         return bool(self.needs and self.dels)
 
-    def order(self, bindings, reduce, state, root) -> list:
-        """The bindings (copied) in threat order."""
-        found = [nb[:] for nb in bindings]
-        if len(found) < 2:
-            return found
+    def order(self, bindings, reduce, state, root):
+        """The bindings in threat order, lazily: a binding that threatens
+        nothing is passed on as it comes, the others (copied) after the
+        last one."""
+        bindings = iter(bindings)
+        first = next(bindings, None)
+        if first is None:
+            return
+        first = first[:]  # the satisfier may reuse its list for the next one
+        second = next(bindings, None)
+        if second is None:  # one binding: nothing to reorder
+            yield first
+            return
         dels = self.dels
-        taken = []  # per binding: atoms its actions delete that hold now
-        for nb in found:
-            atoms = set()
+        wanted: dict = {}  # atom -> whether a primitive task left in the network needs it
+        later = []
+        for nb in chain((first, second), bindings):
+            taken = []
             for sub in reduce(nb):
                 task = sub.task
                 if task is not None and task.name in dels:
                     for pred, pattern in dels[task.name]:
                         args = _fixed(pattern, task.args)
                         if args is not None and state.has(pred, args):
-                            atoms.add((pred, args))
-            taken.append(atoms)
-        if not any(taken):
-            return found
-        wanted = self._needed(root, set().union(*taken))
-        if not wanted:
-            return found
-        safe = [nb for nb, atoms in zip(found, taken) if not (atoms & wanted)]
-        if len(safe) in (0, len(found)):
-            return found
-        return safe + [nb for nb, atoms in zip(found, taken) if atoms & wanted]
+                            taken.append((pred, args))
+            if taken:
+                unknown = [atom for atom in taken if atom not in wanted]
+                if unknown:
+                    self._look_up(root, unknown, wanted)
+            if any(wanted[atom] for atom in taken):
+                later.append(nb[:])
+            else:
+                yield nb
+        yield from later
 
-    def _needed(self, root, atoms: set) -> set:
-        """Which of ``atoms`` a primitive task left in the network needs."""
+    def _look_up(self, root, atoms: list, wanted: dict) -> None:
+        """Record in ``wanted`` whether a primitive task left in the network
+        needs each of ``atoms``."""
+        for atom in atoms:
+            wanted[atom] = False
+        preds = {pred for pred, _args in atoms}
         needs = self.needs
-        out = set()
         for task in _pending_tasks(root):
             for pred, pattern in needs.get(task.name, ()):
-                atom = (pred, _fixed(pattern, task.args))
-                if atom in atoms:
-                    out.add(atom)
-        return out
-
-
-class _AllPreds:
-    """Every predicate (for :func:`needs._conjuncts`)."""
-
-    def __contains__(self, pred) -> bool:
-        return True
+                if pred in preds:
+                    atom = (pred, _fixed(pattern, task.args))
+                    if atom in wanted:
+                        wanted[atom] = True
