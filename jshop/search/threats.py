@@ -36,7 +36,7 @@ class ThreatOrder:
     def __init__(self, domain: S.Domain):
         self.needs: dict = {}
         self.dels: dict = {}
-        deleted = set()
+        deleted: set[str] = set()
         for name, ops in domain.operators.items():
             if len(ops) != 1:
                 continue

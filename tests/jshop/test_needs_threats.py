@@ -16,6 +16,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from test_commit_rule import _check_plan, _conj
+from test_splitting import ordered_methods
 
 from htn.api.inputs import function_table, read_inputs
 from htn.jshop.search.needs import NeedGuard
@@ -151,25 +152,10 @@ def problems(draw):
         "  (:predicates (p ?a - o) (q ?a ?b - o) (free ?a - o))",
     ]
     ntasks = draw(st.integers(1, 3))
-    out += [f"  (:task t{i} :parameters (?x - o))" for i in range(ntasks)]
     actions = {"a0": 1, "a1": 2, "a2": 2}
-    for i in range(ntasks):
-        for k in range(draw(st.integers(1, 2))):
-            params = ["?x"] + [f"?v{j}" for j in range(draw(st.integers(0, 2)))]
-            pre = _conj([_atom(draw, params, reads, True) for _ in range(draw(st.integers(0, 2)))])
-            subtasks = []
-            for s in range(draw(st.integers(1, 3))):
-                name = draw(
-                    st.sampled_from(sorted(actions) + [f"t{j}" for j in range(i + 1, ntasks)])
-                )
-                arity = actions.get(name, 1)
-                args = " ".join(draw(st.sampled_from(params)) for _ in range(arity))
-                subtasks.append(f"(s{s} ({name} {args}))")
-            decl = " ".join(params) + " - o"
-            out.append(
-                f"  (:method m{i}_{k} :parameters ({decl}) :task (t{i} ?x)"
-                f" :precondition {pre} :ordered-subtasks (and {' '.join(subtasks)}))"
-            )
+    out += ordered_methods(
+        draw, ntasks, actions, (0, 2), lambda ps: _atom(draw, ps, reads, True), 2
+    )
     for name, arity in actions.items():
         params = ["?y", "?z"][:arity]
         decl = " ".join(params) + " - o"

@@ -152,25 +152,16 @@ def _atom(draw, params: list, negative: bool = True) -> str:
     return f"(not {atom})" if negative and draw(st.booleans()) else atom
 
 
-@st.composite
-def problems(draw):
-    """A totally ordered domain on three objects: actions of one or two
-    parameters, tasks of one parameter whose methods have one to three
-    more, in preconditions and subtasks (task i decomposes into actions
-    and tasks after it, so the space is finite)."""
-    out = [
-        "(define (domain rnd)",
-        "  (:requirements :hierarchy :typing :negative-preconditions :method-preconditions)",
-        "  (:types o)",
-        "  (:predicates (p ?a - o) (q ?a ?b - o))",
-    ]
-    ntasks = draw(st.integers(1, 3))
-    out += [f"  (:task t{i} :parameters (?x - o))" for i in range(ntasks)]
-    actions = {"a0": 1, "a1": 2, "a2": 2}
+def ordered_methods(draw, ntasks: int, actions: dict, extra: tuple, atom, most: int) -> list:
+    """Lines of ``ntasks`` tasks of one parameter and their totally ordered
+    methods: ``extra`` (least, most) more parameters each, up to ``most``
+    literals ``atom(params)`` in the precondition, one to three subtasks
+    among the actions (name -> arity) and the tasks after it."""
+    out = [f"  (:task t{i} :parameters (?x - o))" for i in range(ntasks)]
     for i in range(ntasks):
         for k in range(draw(st.integers(1, 2))):
-            params = ["?x"] + [f"?v{j}" for j in range(draw(st.integers(1, 3)))]
-            pre = _conj([_atom(draw, params) for _ in range(draw(st.integers(0, 3)))])
+            params = ["?x"] + [f"?v{j}" for j in range(draw(st.integers(*extra)))]
+            pre = _conj([atom(params) for _ in range(draw(st.integers(0, most)))])
             subtasks = []
             for s in range(draw(st.integers(1, 3))):
                 name = draw(
@@ -184,6 +175,24 @@ def problems(draw):
                 f"  (:method m{i}_{k} :parameters ({decl}) :task (t{i} ?x)"
                 f" :precondition {pre} :ordered-subtasks (and {' '.join(subtasks)}))"
             )
+    return out
+
+
+@st.composite
+def problems(draw):
+    """A totally ordered domain on three objects: actions of one or two
+    parameters, tasks of one parameter whose methods have one to three
+    more, in preconditions and subtasks (task i decomposes into actions
+    and tasks after it, so the space is finite)."""
+    out = [
+        "(define (domain rnd)",
+        "  (:requirements :hierarchy :typing :negative-preconditions :method-preconditions)",
+        "  (:types o)",
+        "  (:predicates (p ?a - o) (q ?a ?b - o))",
+    ]
+    ntasks = draw(st.integers(1, 3))
+    actions = {"a0": 1, "a1": 2, "a2": 2}
+    out += ordered_methods(draw, ntasks, actions, (1, 3), lambda ps: _atom(draw, ps), 3)
     for name, arity in actions.items():
         params = ["?y", "?z"][:arity]
         decl = " ".join(params) + " - o"
