@@ -19,7 +19,7 @@ top as bit masks of a state (an ``int``), the rest as trees for
 from __future__ import annotations
 
 from htn.jshop.language import syntax as S
-from htn.jshop.language.terms import subst
+from htn.jshop.language.terms import subst, variables
 from htn.jshop.logic.caches import IdentityCache
 
 from .residual_code import compile_formula
@@ -44,6 +44,35 @@ def relax(e):
     if isinstance(e, (S.Not, S.ForAll)):
         return S.And([])
     raise NotGroundable(f"{type(e).__name__} in a precondition")
+
+
+def mentions(x, slots: set[int]) -> bool:
+    """Whether a formula mentions any of the variable slots, anywhere
+    (anything it does not know is taken to)."""
+    stack = [x]
+    while stack:
+        y = stack.pop()
+        if isinstance(y, (S.And, S.Or)):
+            stack.extend(y.items)
+        elif isinstance(y, S.Not):
+            stack.append(y.expr)
+        elif isinstance(y, S.ForAll):
+            stack += [y.cond, y.then]
+            if {v.index for v in y.vars} & slots:
+                return True
+        elif isinstance(y, S.Atom):
+            if _indices(y.args) & slots:
+                return True
+        elif isinstance(y, S.Equal):
+            if _indices((y.left, y.right)) & slots:
+                return True
+        else:
+            return True
+    return False
+
+
+def _indices(args: tuple) -> set[int]:
+    return {v.index for v in variables(args, [])}
 
 
 def flat_and(items: list) -> S.And:

@@ -135,7 +135,7 @@ class _Grounder:
             self.roots, self.root_order = [m.head], True
         self.origin: dict = {}  # id(a split method) -> the method as written
         if split and totally_ordered(self.methods, self.root_order):
-            self.methods, self.origin, self.model.hidden = split_methods(self.methods)
+            self.methods, self.origin, self.model.hidden = split_methods(self.methods, self.dynamic)
 
     # ------------------------------------------------------------ 1. facts
     def reachable_facts(self):

@@ -37,6 +37,7 @@ from __future__ import annotations
 from htn.jshop.language import syntax as S
 from htn.jshop.language.terms import variables
 
+from .ground_formulas import mentions
 from .jshop2_input import flat_tasks
 
 PREFIX = "split:"  # the new tasks' names: the split method's label after it
@@ -51,40 +52,47 @@ def totally_ordered(methods: dict[str, list[S.Method]], root_order: object) -> b
     )
 
 
-def split_methods(methods: dict[str, list[S.Method]]) -> tuple[dict, dict, frozenset]:
+def split_methods(
+    methods: dict[str, list[S.Method]], dynamic: set[str] | None = None
+) -> tuple[dict, dict, frozenset]:
     """``(methods, origin, made)``: the methods with each splittable one
-    replaced by its two halves (see the module docstring), for each
-    replacing method (by ``id``) the method it stands for, and the names of
-    the tasks made."""
+    replaced by its parts (see the module docstring), for each replacing
+    method (by ``id``) the method it stands for, and the names of the tasks
+    made. With ``dynamic`` (the predicates some action changes), a later
+    subtask's own variables are split off too where the conjuncts about
+    them are static."""
     out: dict[str, list[S.Method]] = {}
     origin: dict[int, S.Method] = {}
     made: set[str] = set()
+
+    def name_for(label: str, k: int) -> str:
+        # a name of its own: JSHOP2 may repeat a label, or name a task so
+        base = PREFIX + label + (f"@{k + 1}" if k else "")
+        new, n = base, 1
+        while new in methods or new in made:
+            n += 1
+            new = f"{base}#{n}"
+        made.add(new)
+        return new
+
     for name, ms in methods.items():
         kept = out.setdefault(name, [])
         for m in ms:
-            if len(m.branches) != 1:  # JSHOP2's if-then-else: as written
+            parts = _split(m, name_for, dynamic)
+            if parts is None:
                 kept.append(m)
                 continue
-            # a name of its own: JSHOP2 may repeat a label, or name a task so
-            new = PREFIX + m.branches[0].label
-            k = 1
-            while new in methods or new in made:
-                k += 1
-                new = f"{PREFIX}{m.branches[0].label}#{k}"
-            halves = _split(m, new)
-            if halves is None:
-                kept.append(m)
-                continue
-            outer, inner = halves
+            outer, inners = parts
             kept.append(outer)
             origin[id(outer)] = m
-            out.setdefault(inner.name, []).append(inner)
-            made.add(inner.name)
+            for inner in inners:
+                out.setdefault(inner.name, []).append(inner)
     return out, origin, frozenset(made)
 
 
-def _split(m: S.Method, new: str) -> tuple[S.Method, S.Method] | None:
-    if len(m.branches) != 1:
+def _split(m: S.Method, name_for, dynamic: set[str] | None):
+    """``(outer, inners)`` or None where nothing splits."""
+    if len(m.branches) != 1:  # JSHOP2's if-then-else: as written
         return None
     b = m.branches[0]
     if b.pre.first or b.pre.sort_var is not None or not b.tasks.ordered:
@@ -92,52 +100,52 @@ def _split(m: S.Method, new: str) -> tuple[S.Method, S.Method] | None:
     items, order = flat_tasks(b.tasks)
     if order is not True or len(items) < 2 or any(x.immediate for x in items):
         return None
-    first, rest = items[0], items[1:]
     head = _indices(m.head.args)
-    own = _indices(first.args)
-    moved_vars = own - head - set().union(*(_indices(x.args) for x in rest))
-    if not moved_vars:
-        return None
     expr = b.pre.expr
-    conjuncts = list(expr.items) if isinstance(expr, S.And) else [expr]
-    moved, left = [], []
-    for c in conjuncts:
-        vs = _formula_vars(c)
-        if vs is None:  # something this does not look into
-            if _mentions(c, moved_vars):
-                return None
-            left.append(c)
-        elif vs & moved_vars:
-            if not _literal(c) or not vs <= own | head:
-                return None
-            moved.append(c)
-        else:
-            left.append(c)
-    params = sorted((own | {v for c in moved for v in _formula_vars(c) or ()}) - moved_vars)
+    left = list(expr.items) if isinstance(expr, S.And) else [expr]
     var_of = _var_objects(items, m.head)
-    label = b.label
-    task = S.TaskAtom(new, tuple(var_of[i] for i in params), pos=first.pos)
-    inner = S.Method(
-        task,
-        [
-            S.Branch(
-                label,
-                S.Precondition(S.And(moved)),
-                S.TaskList([first], True, b.tasks.pos),
-                b.pos,
+    tasks: list[S.TaskAtom | S.TaskList] = list(items)
+    inners = []
+    for k, sub in enumerate(items):
+        if k and dynamic is None:
+            break
+        own = _indices(sub.args)
+        others = set().union(*(_indices(x.args) for j, x in enumerate(items) if j != k))
+        private = own - head - others
+        if not private:
+            continue
+        moved, rest = _moved(left, private, own | head, None if k == 0 else dynamic)
+        if moved is None:
+            continue
+        left = rest
+        params = sorted((own | {v for c in moved for v in _formula_vars(c) or ()}) - private)
+        task = S.TaskAtom(name_for(b.label, k), tuple(var_of[i] for i in params), pos=sub.pos)
+        inners.append(
+            S.Method(
+                task,
+                [
+                    S.Branch(
+                        b.label,
+                        S.Precondition(S.And(moved)),
+                        S.TaskList([sub], True, b.tasks.pos),
+                        b.pos,
+                    )
+                ],
+                m.nvars,
+                m.index,
+                m.pos,
             )
-        ],
-        m.nvars,
-        m.index,
-        m.pos,
-    )
+        )
+        tasks[k] = task
+    if not inners:
+        return None
     outer = S.Method(
         m.head,
         [
             S.Branch(
-                label,
+                b.label,
                 S.Precondition(S.And(left), pos=b.pre.pos),
-                S.TaskList([task, *rest], True, b.tasks.pos),
+                S.TaskList(tasks, True, b.tasks.pos),
                 b.pos,
             )
         ],
@@ -145,7 +153,38 @@ def _split(m: S.Method, new: str) -> tuple[S.Method, S.Method] | None:
         m.index,
         m.pos,
     )
-    return outer, inner
+    return outer, inners
+
+
+def _moved(conjuncts: list, private: set[int], allowed: set[int], dynamic: set[str] | None):
+    """``(moved, left)``: the conjuncts about ``private`` variables and the
+    rest, or ``(None, None)`` if one of them cannot move: it is not a
+    literal, mentions a variable outside ``allowed``, or (where ``dynamic``
+    is given: a later subtask, tested later than the method) reads a
+    predicate an action changes."""
+    moved, left = [], []
+    for c in conjuncts:
+        vs = _formula_vars(c)
+        if vs is None:  # something this does not look into
+            if mentions(c, private):
+                return None, None
+            left.append(c)
+        elif vs & private:
+            if not _literal(c) or not vs <= allowed:
+                return None, None
+            if dynamic is not None and _predicate(c) in dynamic:
+                return None, None
+            moved.append(c)
+        else:
+            left.append(c)
+    return moved, left
+
+
+def _predicate(c) -> str | None:
+    """A literal's predicate (None for an equality)."""
+    if isinstance(c, S.Not):
+        c = c.expr
+    return c.pred if isinstance(c, S.Atom) else None
 
 
 def _indices(args: tuple) -> set[int]:
@@ -167,30 +206,6 @@ def _formula_vars(c) -> set[int] | None:
     if isinstance(c, S.Equal):
         return _indices((c.left, c.right))
     return None
-
-
-def _mentions(x, slots: set[int]) -> bool:
-    """Whether a formula mentions any of the variable slots, anywhere."""
-    stack = [x]
-    while stack:
-        y = stack.pop()
-        if isinstance(y, (S.And, S.Or)):
-            stack.extend(y.items)
-        elif isinstance(y, S.Not):
-            stack.append(y.expr)
-        elif isinstance(y, S.ForAll):
-            stack += [y.cond, y.then]
-            if {v.index for v in y.vars} & slots:
-                return True
-        elif isinstance(y, S.Atom):
-            if _indices(y.args) & slots:
-                return True
-        elif isinstance(y, S.Equal):
-            if _indices((y.left, y.right)) & slots:
-                return True
-        else:
-            return True  # unknown: assume it does
-    return False
 
 
 def _var_objects(items: list, head: S.TaskAtom) -> dict:

@@ -1,6 +1,9 @@
 """The reachable facts of grounding (:mod:`htn.jshop.search.reachability`):
 the semi-naive fixpoint reaches exactly the facts of enumerating every
-binding of every action at every turn, on IPC instances of both orders."""
+binding of every action at every turn, on IPC instances of both orders, and
+leaving out the parameters that only a type condition reads (each added
+atom taking every object of their types) reaches exactly the facts of
+binding them."""
 
 from __future__ import annotations
 
@@ -27,8 +30,8 @@ INSTANCES = [  # (domain, problem) under the corpus: conditional effects, types,
 ]
 
 
-def _facts(domain, instance, semi_naive):
-    steps = reachable(domain, instance, semi_naive)
+def _facts(domain, instance, semi_naive, factor=True):
+    steps = reachable(domain, instance, semi_naive, factor)
     try:
         while True:
             next(steps)
@@ -47,3 +50,35 @@ def test_the_semi_naive_fixpoint_reaches_the_facts_of_the_naive_one(domain, prob
     fast = _facts(dom, instance, True)
     assert fast == _facts(dom, instance, False)
     assert len(fast) > len(instance.state)  # the actions added some
+
+
+FACTORED = [  # Ultralight-Cockpit: 19 actions with a parameter only their effects name
+    *INSTANCES,
+    ("ipc-po/Ultralight-Cockpit/UL_domain.hddl", "ipc-po/Ultralight-Cockpit/pfile02.hddl"),
+]
+
+
+@pytest.mark.corpus
+@pytest.mark.parametrize("domain, problem", FACTORED, ids=[p.split("/")[1] for _, p in FACTORED])
+def test_leaving_out_only_typed_parameters_reaches_the_same_facts(domain, problem):
+    if not (CORPUS / domain).is_file():
+        pytest.skip(f"{CORPUS / domain} not found")
+    dom, prob = load_inputs(str(CORPUS / domain), str(CORPUS / problem))
+    instance = prob.instances[0]
+    assert _facts(dom, instance, True) == _facts(dom, instance, True, factor=False)
+
+
+def test_childsnacks_move_tray_leaves_its_destination_out():
+    domain = CORPUS / "ipc2020-to" / "Childsnack" / "domain.hddl"
+    if not domain.is_file():
+        pytest.skip(f"{domain} not found")
+    from htn.jshop.logic.engine import Logic
+    from htn.jshop.logic.state import State
+    from htn.jshop.search.reachability import _Program
+
+    dom, _prob = load_inputs(str(domain), str(domain.parent / "p05.hddl"))
+    (op,) = dom.operators["!move_tray"]
+    program = _Program(op, Logic(dom, State()), every=False)
+    # (at ?t ?p2): the tray goes anywhere; bound, it multiplied the bindings
+    assert [op.head.args[i].name for i in program.types] == ["?p2"]
+    assert _Program(op, Logic(dom, State()), every=False, factor=False).types == {}

@@ -141,6 +141,46 @@ def test_only_a_first_subtasks_own_variables_with_their_own_conjuncts_move(tmp_p
     assert not model.hidden and not any(n.startswith(PREFIX) for n, _args in model.tasks)
 
 
+LATER = """(define (domain d) (:requirements :hierarchy :typing :method-preconditions)
+  (:types o)
+  (:predicates (p ?x - o) (s ?x - o))
+  (:task t :parameters (?x - o))
+  (:method static :parameters (?x ?z - o) :task (t ?x)
+    :precondition (s ?z) :ordered-subtasks (and (a ?x) (c ?z)))
+  (:method changing :parameters (?x ?z - o) :task (t ?x)
+    :precondition (p ?z) :ordered-subtasks (and (a ?x) (c ?z)))
+  (:action a :parameters (?x - o) :precondition () :effect (p ?x))
+  (:action c :parameters (?x - o) :precondition () :effect ()))
+"""
+
+
+def test_a_later_subtasks_own_variables_split_off_where_only_static_facts_read_them(
+    tmp_path,
+):
+    # (s ?z) holds or not for the whole plan, so it may be tested when (c ?z)
+    # is decomposed; (p ?z) may be made true by (a ?x) in between: it stays
+    problem = """(define (problem p) (:domain d) (:objects k l - o)
+      (:htn :parameters () :ordered-subtasks (and (t k))) (:init (s l)))"""
+    inputs, instance = _read(tmp_path, LATER, problem)
+    dynamic = inputs.domain.dynamic_predicates()
+    assert split_methods(inputs.domain.methods)[2] == frozenset()  # first subtasks only
+    methods, origin, made = split_methods(inputs.domain.methods, dynamic)
+    assert made == {"split:static@2"}
+    assert [m.branches[0].label for m in origin.values()] == ["static"]
+    (inner,) = methods["split:static@2"]
+    assert inner.head.args == () and _names(inner) == [("!c", ["?z"])]
+    assert {c.pred for c in inner.branches[0].pre.expr.items} == {"s", "type:o"}
+    (outer,) = [m for m in methods["t"] if m.branches[0].label == "static"]
+    assert {c.pred for c in outer.branches[0].pre.expr.items} == {"type:o"}  # ?x's
+    search = BestFirst(inputs.domain, instance)
+    plan = next(p for p in search.plans(timeout=60) if p is not None)
+    assert [(x.name, *x.args) for x in plan.steps] in (
+        [("!a", "k"), ("!c", "l")],
+        [("!a", "k"), ("!c", "k")],
+    )
+    _check_plan(tmp_path, inputs.domain, inputs.problem, plan, search)
+
+
 OBJECTS = ["k", "l", "m"]
 PREDS = {"p": 1, "q": 2}
 
