@@ -135,7 +135,9 @@ class _Grounder:
             self.roots, self.root_order = [m.head], True
         self.origin: dict = {}  # id(a split method) -> the method as written
         if split and totally_ordered(self.methods, self.root_order):
-            self.methods, self.origin, self.model.hidden = split_methods(self.methods, self.dynamic)
+            # a derived predicate may change with the state: not static
+            changing = self.dynamic | set(domain.axioms)
+            self.methods, self.origin, self.model.hidden = split_methods(self.methods, changing)
 
     # ------------------------------------------------------------ 1. facts
     def reachable_facts(self):
