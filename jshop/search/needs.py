@@ -77,23 +77,21 @@ class NeedGuard:
         return False
 
     def _used(self, root, task, pred: str, args: tuple) -> bool:
-        uses = self.uses
-        for other in _pending_tasks(root):
-            if other is task:
-                continue
-            for upred, pattern in uses.get(other.name, ()):
-                if upred == pred and _fixed(pattern, other.args) == args:
-                    return True
-        return False
+        others = (t for t in _pending_tasks(root) if t is not task)
+        return _any_task(others, self.uses, pred, args)
 
     def _needed(self, root, cursor, pred: str, args: tuple) -> bool:
-        needs = self.needs
         tasks = _after(cursor) if cursor else _pending_tasks(root)
-        for task in tasks:
-            for npred, pattern in needs.get(task.name, ()):
-                if npred == pred and _fixed(pattern, task.args) == args:
-                    return True
-        return False
+        return _any_task(tasks, self.needs, pred, args)
+
+
+def _any_task(tasks, table: dict, pred: str, args: tuple) -> bool:
+    """Whether one of ``tasks`` has, in ``table``, a pattern giving the atom."""
+    for task in tasks:
+        for tpred, pattern in table.get(task.name, ()):
+            if tpred == pred and _fixed(pattern, task.args) == args:
+                return True
+    return False
 
 
 def _fixed(pattern: tuple, task_args: tuple):
@@ -185,17 +183,22 @@ def _uses(domain: S.Domain, needs: dict) -> dict:
     for name, ops in domain.operators.items():
         if len(ops) != 1 or name not in needs:
             continue
-        op = ops[0]
-        slots = {a.index: i for i, a in enumerate(op.head.args) if type(a) is Var}
-        deleted = {
-            (a.pred, tuple(_position(x, slots) for x in a.args))
-            for a in op.delete.items
-            if isinstance(a, S.Atom)
-        }
+        deleted = set(delete_patterns(ops[0]))
         mine = tuple(p for p in needs[name] if p in deleted)
         if mine:
             uses[name] = mine
     return uses
+
+
+def delete_patterns(op: S.Operator):
+    """``(pred, pattern)`` of each atom of an action's plain delete list whose
+    arguments are all its parameters or constants."""
+    slots = {a.index: i for i, a in enumerate(op.head.args) if type(a) is Var}
+    for a in op.delete.items:
+        if isinstance(a, S.Atom):
+            pattern = tuple(_position(x, slots) for x in a.args)
+            if None not in pattern:
+                yield a.pred, pattern
 
 
 def _lift(p, call_args: tuple, slots: dict):

@@ -27,7 +27,7 @@ from htn.jshop.language import syntax as S
 from htn.jshop.language.terms import Var
 
 from .goals import _pending_tasks
-from .needs import _conjuncts, _fixed, _position
+from .needs import _conjuncts, _fixed, delete_patterns
 
 
 class ThreatOrder:
@@ -40,14 +40,7 @@ class ThreatOrder:
         for name, ops in domain.operators.items():
             if len(ops) != 1:
                 continue
-            op = ops[0]
-            slots = {a.index: i for i, a in enumerate(op.head.args) if type(a) is Var}
-            dels = tuple(
-                (a.pred, pattern)
-                for a in op.delete.items
-                if isinstance(a, S.Atom)
-                and None not in (pattern := tuple(_position(x, slots) for x in a.args))
-            )
+            dels = tuple(delete_patterns(ops[0]))
             if dels:
                 self.dels[name] = dels
                 deleted.update(pred for pred, _pattern in dels)
