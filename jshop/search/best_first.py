@@ -35,13 +35,14 @@ from __future__ import annotations
 import heapq
 import time
 from collections.abc import Generator
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Protocol
 
 from htn.jshop.language import syntax as S
 from htn.jshop.plans.plan import Plan, Step
 from htn.jshop.plans.tree import TaskTree
 
 from .goal_chain import GoalChain
+from .goal_reach import GoalReach
 from .ground_formulas import holds, satisfied
 from .grounding import UNREACHABLE_GOAL, ground, grounding_steps
 from .heuristics import HEURISTICS, INF
@@ -84,7 +85,7 @@ class BestFirst:
         self.slice_s: float | None = None  # CPU seconds between pauses, see plans()
         self.model: GroundModel | None = None
         self.h: Heuristic | None = None  # the heuristic, once grounded
-        self.cut: GoalChain | None = None  # the goal-chain cut (None: off), once grounded
+        self.cut: Cut | None = None  # the goal cuts (None: off), once grounded
         self.generated = 0
         self.commit = commit  # the rule of committed() (False: every move)
         self.ties = ties  # "fifo", "lifo", None: see interleaves()
@@ -99,7 +100,7 @@ class BestFirst:
             self._prepared(ground(self.domain, self.instance, self.split))
 
     def _prepared(
-        self, model: GroundModel, h: Heuristic | None = None, cut: GoalChain | None = None
+        self, model: GroundModel, h: Heuristic | None = None, cut: Cut | None = None
     ) -> None:
         """Take a grounded model (and the heuristic and goal-chain cut
         another search built on it, to share their caches)."""
@@ -356,12 +357,37 @@ def interleaves(model) -> bool:
     return any(partial(gm.body, gm.order) for ms in model.methods_of.values() for gm in ms)
 
 
-def _cut(model):
-    """The goal-chain cut (:mod:`.goal_chain`) where the goal has a chain."""
+class Cut(Protocol):
+    def ok(self, state: int, net: tuple) -> bool: ...
+
+
+class _Both:
+    """Two cuts: a node is kept where each keeps it."""
+
+    def __init__(self, first: Cut, second: Cut):
+        self.first, self.second = first, second
+
+    def ok(self, state: int, net: tuple) -> bool:
+        return self.first.ok(state, net) and self.second.ok(state, net)
+
+
+def chained(cut: Cut | None) -> bool:
+    """Whether the goal-chain cut is one of ``cut``'s (the portfolio's share
+    for GBFS with TDG_m depends on it)."""
+    return isinstance(cut, GoalChain) or (
+        isinstance(cut, _Both) and isinstance(cut.second, GoalChain)
+    )
+
+
+def _cut(model) -> Cut | None:
+    """The goal's cuts: the goal-chain cut (:mod:`.goal_chain`) where the
+    goal has a chain, and the goal-reachability cut (:mod:`.goal_reach`)."""
     if model.goal is None or model.goal == UNREACHABLE_GOAL:
         return None
-    cut = GoalChain(model)
-    return cut if cut.active else None
+    cuts = [c for c in (GoalReach(model), GoalChain(model)) if c.active]
+    if len(cuts) == 2:
+        return _Both(*cuts)
+    return cuts[0] if cuts else None
 
 
 def _apply(a, s: int) -> int:

@@ -35,7 +35,7 @@ from typing import TYPE_CHECKING
 
 from htn.jshop.language import syntax as S
 
-from .best_first import WASTAR_WEIGHT, BestFirst, interleaves
+from .best_first import WASTAR_WEIGHT, BestFirst, chained, interleaves
 from .ground_formulas import NotGroundable
 from .planner import Planner
 from .stats import Stats
@@ -214,7 +214,7 @@ class Portfolio:
             self._sum()
 
     def _share(self, search) -> float:
-        if search is self.tdg and search.cut is None:
+        if search is self.tdg and not chained(search.cut):
             return TDG_SHARE_NO_CUT
         return SHARES[self.labels[id(search)]]
 

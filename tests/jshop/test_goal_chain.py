@@ -1,6 +1,7 @@
 """The goal-chain cut of the heuristic search (:mod:`htn.jshop.search.goal_chain`):
 it cuts a network whose refinements cannot make the goal's chain true in their
-order, and never a node on a plan's path."""
+order; neither it nor the goal-reachability cut (:mod:`htn.jshop.search.goal_reach`)
+cuts a node on a plan's path."""
 
 from __future__ import annotations
 
@@ -12,6 +13,7 @@ from htn.jshop.readers.load import load_inputs
 from htn.jshop.search import best_first, grounding
 from htn.jshop.search.best_first import BestFirst
 from htn.jshop.search.goal_chain import GoalChain
+from htn.jshop.search.goal_reach import GoalReach
 from htn.jshop.search.task_networks import body_items, replace
 
 from conftest import SHARED
@@ -116,10 +118,11 @@ SOUND = [
 
 
 @pytest.mark.corpus
+@pytest.mark.parametrize("make", [GoalChain, GoalReach], ids=["chain", "reach"])
 @pytest.mark.parametrize(
     "domain,problem", SOUND, ids=["-".join(p.split("/")[1:]).rsplit(".", 1)[0] for _, p in SOUND]
 )
-def test_no_node_of_a_plan_found_without_the_cut_is_cut(domain, problem, monkeypatch):
+def test_no_node_of_a_plan_found_without_the_cut_is_cut(domain, problem, make, monkeypatch):
     if not (CORPUS / domain).is_file():
         pytest.skip(f"{CORPUS / domain} not found")
     dom, prob = load_inputs(str(CORPUS / domain), str(CORPUS / problem))
@@ -129,7 +132,7 @@ def test_no_node_of_a_plan_found_without_the_cut_is_cut(domain, problem, monkeyp
     search = _Moves(dom, inst)
     search._prepared(model)
     plan = next(p for p in search.plans(timeout=60) if p is not None)
-    cut = GoalChain(model)
+    cut = make(model)
     assert cut.active
     # replay the plan's moves from the root, as the search made them
     net = body_items(model.roots, model.root_order)
@@ -158,7 +161,7 @@ def test_no_node_of_a_plan_found_without_the_cut_is_cut(domain, problem, monkeyp
         (
             "ipc2020-to/Childsnack/domain.hddl",
             "ipc2020-to/Childsnack/p05.hddl",
-            ["wastar", "gbfs-tdg"],  # TDG_m without the cut, at a third of the share
+            ["wastar", "gbfs-tdg"],  # TDG_m without a goal chain, at a third of the share
         ),
     ],
     ids=["goal-chain", "no-goal"],
@@ -177,9 +180,11 @@ def test_auto_adds_a_tdg_search_with_the_cut_where_the_goal_has_a_chain(domain, 
         assert s.model is auto.gbfs.model and s.cut is auto.gbfs.cut
     assert auto.wastar.h is auto.gbfs.h
     assert auto.tdg.heuristic_name == "tdg"
-    assert auto._share(auto.tdg) == (3 if auto.tdg.cut is not None else 1)
+    assert auto._share(auto.tdg) == (3 if best_first.chained(auto.tdg.cut) else 1)
     if "gbfs-serial" in arms:
-        assert auto.tdg.cut is not None
+        assert best_first.chained(auto.tdg.cut)
+    else:
+        assert not best_first.chained(auto.tdg.cut) and auto._share(auto.tdg) == 1
         plan = next(p for p in auto.tdg.plans(timeout=60) if p is not None)
         assert plan.steps
 
