@@ -8,7 +8,12 @@ bindings that use a fact new since its last turn are enumerated, by binding
 one of its precondition's atoms to each new fact in turn (a binding that
 uses old facts only was found before). Where that does not hold (derived
 predicates; a disjunction or a conditional effect reading a predicate that
-has gained facts) the action's bindings are all enumerated again.
+has gained facts) the action's bindings are all enumerated again. Bindings
+that agree on the parameters the added atoms read add the same facts, so
+an action adds them for the first such binding only (Woodworking's
+grinding reads a part's surface, colour and treatment and adds others:
+instance 18's 241,920 bindings of it have 15 keys, one per part, and its
+fixpoint takes 2.8 s instead of 10.4 s).
 """
 
 from __future__ import annotations
@@ -54,6 +59,13 @@ class _Program:
         self.reads = None if every else predicates([op.pre.expr, *(i.cond for i in raw)])
         self.others = predicates(others + [i.cond for i in raw])
         self.seen = -1  # the log's length at this action's last turn
+        # the parameters the added atoms read: bindings that agree on them add
+        # the same facts (None where a conditional effect reads the binding)
+        self.key: list | None = None
+        read = _vars(tuple(args for _p, args in self.adds))
+        if not self.foralls and read is not None:
+            self.key = sorted(read - set(self.types))
+        self.done: set = set()  # the keys added already
 
     def bindings(self, log: list):
         """The bindings to apply now, given the facts added so far (``log``)."""
@@ -79,6 +91,11 @@ class _Program:
                     yield from self.sat(env)
 
     def added(self, env: list) -> list:
+        if self.key is not None:
+            key = tuple([env[i] for i in self.key])
+            if key in self.done:
+                return []
+            self.done.add(key)
         if not self.types:
             out = [(pred, subst(args, env)) for pred, args in self.adds]
         else:
@@ -110,6 +127,21 @@ class _Program:
                 sets = [{args[0] for args in self.state.bucket(pred)} for pred in preds]
                 self.objects[index] = sorted(set.intersection(*sets))
         return self.objects
+
+
+def _vars(terms: tuple) -> set | None:
+    """The indices of the variables in ``terms`` (nested lists too); None
+    where a call or a dotted list could read more."""
+    out, stack = set(), list(terms)
+    while stack:
+        a = stack.pop()
+        if type(a) is Var:
+            out.add(a.index)
+        elif type(a) is tuple:
+            stack.extend(a)
+        elif type(a) is not str and type(a) is not float:
+            return None
+    return out
 
 
 def _only_typed(op: S.Operator, items: list, foralls: list) -> dict:

@@ -3,13 +3,15 @@ the semi-naive fixpoint reaches exactly the facts of enumerating every
 binding of every action at every turn, on IPC instances of both orders, and
 leaving out the parameters that only a type condition reads (each added
 atom taking every object of their types) reaches exactly the facts of
-binding them."""
+binding them, and so does adding the facts of bindings that agree on the
+parameters the added atoms read only once."""
 
 from __future__ import annotations
 
 import pytest
 
 from htn.jshop.readers.load import load_inputs
+from htn.jshop.search import reachability
 from htn.jshop.search.reachability import reachable
 
 from conftest import SHARED
@@ -66,6 +68,42 @@ def test_leaving_out_only_typed_parameters_reaches_the_same_facts(domain, proble
     dom, prob = load_inputs(str(CORPUS / domain), str(CORPUS / problem))
     instance = prob.instances[0]
     assert _facts(dom, instance, True) == _facts(dom, instance, True, factor=False)
+
+
+ONCE = [  # Woodworking: grinding reads a part's surface, colour and treatment, adds new ones
+    *FACTORED,
+    ("ipc-po/Woodworking/domain.hddl", "ipc-po/Woodworking/04--p02-part3.hddl"),
+]
+
+
+@pytest.mark.corpus
+@pytest.mark.parametrize("domain, problem", ONCE, ids=[p.split("/")[1] for _, p in ONCE])
+def test_bindings_that_add_the_same_atoms_are_added_once(domain, problem, monkeypatch):
+    if not (CORPUS / domain).is_file():
+        pytest.skip(f"{CORPUS / domain} not found")
+    dom, prob = load_inputs(str(CORPUS / domain), str(CORPUS / problem))
+    instance = prob.instances[0]
+    once = _facts(dom, instance, True)
+    monkeypatch.setattr(reachability, "_vars", lambda terms: None)  # no key: every binding
+    assert once == _facts(dom, instance, True)
+
+
+def test_the_key_of_grinding_leaves_out_what_it_only_reads():
+    domain = CORPUS / "ipc-po" / "Woodworking" / "domain.hddl"
+    if not domain.is_file():
+        pytest.skip(f"{domain} not found")
+    from htn.jshop.logic.engine import Logic
+    from htn.jshop.logic.state import State
+    from htn.jshop.search.reachability import _Program
+
+    dom, _prob = load_inputs(str(domain), str(domain.parent / "01--p01-complete.hddl"))
+    (op,) = dom.operators["!do_grind"]
+    program = _Program(op, Logic(dom, State()), every=False)
+    assert program.key is not None
+    left_out = {op.head.args[i].name for i in range(len(op.head.args))} - {
+        op.head.args[i].name for i in [*program.key, *program.types]
+    }
+    assert left_out == {"?do_grind_oldsurface", "?do_grind_oldcolour", "?do_grind_oldtreatment"}
 
 
 def test_childsnacks_move_tray_leaves_its_destination_out():
