@@ -15,7 +15,8 @@ in, first out, or last in, first out where some network of the problem is
 partially ordered (:func:`interleaves`); a node whose ``(state, network)``
 was reached before (with no smaller ``g``) is dropped (duplicate
 detection), and so is one whose network cannot make the goal's chain true
-in its order (:mod:`htn.jshop.search.goal_chain`). When a task that may be
+in its order (:mod:`htn.jshop.search.goal_chain`) or cannot bring in an
+action that adds a missing goal fact (:mod:`htn.jshop.search.goal_reach`). When a task that may be
 done next has only methods that test nothing, it is decomposed as the only
 move (:func:`committed`). With ``serial``, a move into a member of an
 unordered group (other than such a decomposition) first orders that member
@@ -35,14 +36,13 @@ from __future__ import annotations
 import heapq
 import time
 from collections.abc import Generator
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING
 
 from htn.jshop.language import syntax as S
 from htn.jshop.plans.plan import Plan, Step
 from htn.jshop.plans.tree import TaskTree
 
-from .goal_chain import GoalChain
-from .goal_reach import GoalReach
+from .goal_cuts import Cut, goal_cuts
 from .ground_formulas import holds, satisfied
 from .grounding import UNREACHABLE_GOAL, ground, grounding_steps
 from .heuristics import HEURISTICS, INF
@@ -106,7 +106,7 @@ class BestFirst:
         another search built on it, to share their caches)."""
         self.model = model
         self.h = h if h is not None else HEURISTICS[self.heuristic_name](model)
-        self.cut = cut if cut is not None else _cut(model)
+        self.cut = cut if cut is not None else goal_cuts(model)
         self.free = free_tasks(model) if self.commit else frozenset()
         self.lifo = interleaves(model) if self.ties is None else self.ties == "lifo"
 
@@ -355,39 +355,6 @@ def interleaves(model) -> bool:
     if partial(model.roots, model.root_order):
         return True
     return any(partial(gm.body, gm.order) for ms in model.methods_of.values() for gm in ms)
-
-
-class Cut(Protocol):
-    def ok(self, state: int, net: tuple) -> bool: ...
-
-
-class _Both:
-    """Two cuts: a node is kept where each keeps it."""
-
-    def __init__(self, first: Cut, second: Cut):
-        self.first, self.second = first, second
-
-    def ok(self, state: int, net: tuple) -> bool:
-        return self.first.ok(state, net) and self.second.ok(state, net)
-
-
-def chained(cut: Cut | None) -> bool:
-    """Whether the goal-chain cut is one of ``cut``'s (the portfolio's share
-    for GBFS with TDG_m depends on it)."""
-    return isinstance(cut, GoalChain) or (
-        isinstance(cut, _Both) and isinstance(cut.second, GoalChain)
-    )
-
-
-def _cut(model) -> Cut | None:
-    """The goal's cuts: the goal-chain cut (:mod:`.goal_chain`) where the
-    goal has a chain, and the goal-reachability cut (:mod:`.goal_reach`)."""
-    if model.goal is None or model.goal == UNREACHABLE_GOAL:
-        return None
-    cuts = [c for c in (GoalReach(model), GoalChain(model)) if c.active]
-    if len(cuts) == 2:
-        return _Both(*cuts)
-    return cuts[0] if cuts else None
 
 
 def _apply(a, s: int) -> int:

@@ -35,7 +35,8 @@ from typing import TYPE_CHECKING
 
 from htn.jshop.language import syntax as S
 
-from .best_first import WASTAR_WEIGHT, BestFirst, chained, interleaves
+from .best_first import WASTAR_WEIGHT, BestFirst, interleaves
+from .goal_cuts import chained
 from .ground_formulas import NotGroundable
 from .planner import Planner
 from .stats import Stats

@@ -13,6 +13,7 @@ from htn.jshop.readers.load import load_inputs
 from htn.jshop.search import best_first, grounding
 from htn.jshop.search.best_first import BestFirst
 from htn.jshop.search.goal_chain import GoalChain
+from htn.jshop.search.goal_cuts import chained
 from htn.jshop.search.goal_reach import GoalReach
 from htn.jshop.search.task_networks import body_items, replace
 
@@ -128,7 +129,7 @@ def test_no_node_of_a_plan_found_without_the_cut_is_cut(domain, problem, make, m
     dom, prob = load_inputs(str(CORPUS / domain), str(CORPUS / problem))
     inst = prob.instances[0]
     model = grounding.ground(dom, inst)
-    monkeypatch.setattr(best_first, "_cut", lambda m: None)
+    monkeypatch.setattr(best_first, "goal_cuts", lambda m: None)
     search = _Moves(dom, inst)
     search._prepared(model)
     plan = next(p for p in search.plans(timeout=60) if p is not None)
@@ -180,11 +181,11 @@ def test_auto_adds_a_tdg_search_with_the_cut_where_the_goal_has_a_chain(domain, 
         assert s.model is auto.gbfs.model and s.cut is auto.gbfs.cut
     assert auto.wastar.h is auto.gbfs.h
     assert auto.tdg.heuristic_name == "tdg"
-    assert auto._share(auto.tdg) == (3 if best_first.chained(auto.tdg.cut) else 1)
+    assert auto._share(auto.tdg) == (3 if chained(auto.tdg.cut) else 1)
     if "gbfs-serial" in arms:
-        assert best_first.chained(auto.tdg.cut)
+        assert chained(auto.tdg.cut)
     else:
-        assert not best_first.chained(auto.tdg.cut) and auto._share(auto.tdg) == 1
+        assert not chained(auto.tdg.cut) and auto._share(auto.tdg) == 1
         plan = next(p for p in auto.tdg.plans(timeout=60) if p is not None)
         assert plan.steps
 
