@@ -37,6 +37,7 @@ stronger than a reachability test (which RC-add already makes).
 
 from __future__ import annotations
 
+from .ground_formulas import bits
 from .task_networks import tasks
 
 FEW = 2  # a precondition with at most this many adders joins the chain
@@ -56,14 +57,14 @@ class GoalChain:
             adds = a.adds
             for _c, _d, more in a.effects:
                 adds |= more
-            for b in _bits(adds):
+            for b in bits(adds):
                 adders.setdefault(b, []).append(t)
-        chain, work, acts = set(_bits(goal)), list(_bits(goal)), {}
+        chain, work, acts = set(bits(goal)), list(bits(goal)), {}
         while work and len(chain) <= MAX_CHAIN:
             for t in adders.get(work.pop(), ()):
                 if t not in acts:
                     acts[t] = None
-                    for p in _bits(model.actions[t].pre[0]):
+                    for p in bits(model.actions[t].pre[0]):
                         if p not in chain and len(adders.get(p, ())) <= FEW:
                             chain.add(p)
                             work.append(p)
@@ -87,7 +88,7 @@ class GoalChain:
 
     def _small(self, mask: int) -> int:
         bit_of, out = self.bit_of, 0
-        for b in _bits(mask):
+        for b in bits(mask):
             i = bit_of.get(b)
             if i is not None:
                 out |= 1 << i
@@ -169,7 +170,7 @@ class GoalChain:
         return self._closure(below, s)
 
     def _closure(self, below: int, s: int) -> int:
-        acts = [self.act_list[i] for i in _bits(below)]
+        acts = [self.act_list[i] for i in bits(below)]
         grown = True
         while grown:
             grown, rest = False, []
@@ -215,12 +216,3 @@ class GoalChain:
                 self.active = False
                 self.value, self.readers, self._work = {}, {}, []
                 return
-
-
-def _bits(mask: int) -> list:
-    out = []
-    while mask:
-        low = mask & -mask
-        out.append(low.bit_length() - 1)
-        mask ^= low
-    return out

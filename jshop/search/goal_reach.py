@@ -38,6 +38,7 @@ build there, and Multiarm's search is as fast as without the cut.)
 
 from __future__ import annotations
 
+from .ground_formulas import bits
 from .task_networks import tasks
 
 MAX_BITS = 200_000_000  # relevant facts x tasks with a mask, at most: else off
@@ -60,13 +61,13 @@ class GoalReach:
                 adds |= more
             adds_of[t] = adds
         # per goal fact, the positive preconditions of the actions adding it
-        self.pres: dict = {g: [] for g in _bits(goal)}
+        self.pres: dict = {g: [] for g in bits(goal)}
         relevant = goal  # the goal's facts and their adders' preconditions
         for t, adds in adds_of.items():
             if adds & goal:
                 pre = model.actions[t].pre[0]
                 relevant |= pre
-                for g in _bits(adds & goal):
+                for g in bits(adds & goal):
                     self.pres[g].append(pre)
         below = _below(model, adds_of, relevant, MAX_BITS)
         if below is None:
@@ -84,7 +85,7 @@ class GoalReach:
         if missing & ~can:
             return False  # a goal fact no action below the network adds
         pres = self.pres
-        for g in _bits(missing):
+        for g in bits(missing):
             for pre in pres[g]:
                 if not pre & ~state & ~can:
                     break  # each precondition holds or is added below
@@ -119,12 +120,3 @@ def _below(model, adds_of: dict, relevant: int, max_bits: int):
                 below[u] = m | old
                 work.append(u)
     return below
-
-
-def _bits(mask: int) -> list:
-    out = []
-    while mask:
-        low = mask & -mask
-        out.append(low.bit_length() - 1)
-        mask ^= low
-    return out

@@ -252,3 +252,13 @@ def positive_bits(tree) -> list:
     if tree[0] == "and":
         return [b for x in tree[1] for b in positive_bits(x)]
     return []
+
+
+def bits(mask: int) -> list:
+    """The indices of the bits set in ``mask``, lowest first."""
+    out = []
+    while mask:
+        low = mask & -mask
+        out.append(low.bit_length() - 1)
+        mask ^= low
+    return out

@@ -29,7 +29,7 @@ from __future__ import annotations
 import heapq
 from collections.abc import Callable
 
-from .ground_formulas import positive_bits
+from .ground_formulas import bits, positive_bits
 from .task_networks import tasks
 
 INF = float("inf")
@@ -49,20 +49,20 @@ class _Relaxation:
         for t, a in model.actions.items():
             pre = []
             if with_state:
-                pre = _bits(a.pre[0]) + [b for tree in a.pre[2] for b in positive_bits(tree)]
+                pre = bits(a.pre[0]) + [b for tree in a.pre[2] for b in positive_bits(tree)]
             eff = [nfacts + t]
             if with_state:
                 adds = a.adds
                 for _cond, _dels, more in a.effects:
                     adds |= more
-                eff += _bits(adds)
+                eff += bits(adds)
             pres.append(pre)
             effs.append(eff)
         for t, ms in model.methods_of.items():
             for gm in ms:
                 pre = [nfacts + s for s in gm.body]
                 if with_state:
-                    pre += _bits(gm.pre[0]) + [b for tree in gm.pre[2] for b in positive_bits(tree)]
+                    pre += bits(gm.pre[0]) + [b for tree in gm.pre[2] for b in positive_bits(tree)]
                 pres.append(pre)
                 effs.append([nfacts + t])
         self.npre = [len(p) for p in pres]
@@ -142,15 +142,6 @@ class _Pass:
         self.acc = self.left = None  # finished: only the costs are kept
 
 
-def _bits(mask: int) -> list:
-    out = []
-    while mask:
-        low = mask & -mask
-        out.append(low.bit_length() - 1)
-        mask ^= low
-    return out
-
-
 class RelaxedComposition:
     """RC-add (see the module docstring): ``h(state, network)``, INF for a
     dead end."""
@@ -159,7 +150,7 @@ class RelaxedComposition:
 
     def __init__(self, model):
         self.relaxation = r = _Relaxation(model)
-        self.goal = _bits(model.goal[0]) if model.goal is not None and model.goal[0] > 0 else []
+        self.goal = bits(model.goal[0]) if model.goal is not None and model.goal[0] > 0 else []
         self._passes: dict = {}  # state -> its _Pass, for the latest states
         # an unfinished pass holds two lists as long as the operators
         self.cached = max(8, min(CACHED_STATES, CACHE_ENTRIES // (2 * len(r.npre) + r.nodes + 1)))
@@ -173,7 +164,7 @@ class RelaxedComposition:
         if p is None:
             if len(self._passes) >= self.cached:
                 self._passes.pop(next(iter(self._passes)))
-            p = self._passes[state] = _Pass(self.relaxation, _bits(state))
+            p = self._passes[state] = _Pass(self.relaxation, bits(state))
         nfacts = self.relaxation.nfacts
         nodes = self.goal + [nfacts + t for t in tasks(net)]
         if not p.done:

@@ -12,7 +12,8 @@ import pytest
 from htn.jshop.readers.load import load_inputs
 from htn.jshop.search import ground_formulas, grounding
 from htn.jshop.search.best_first import BestFirst
-from htn.jshop.search.heuristics import INF, _bits
+from htn.jshop.search.ground_formulas import bits
+from htn.jshop.search.heuristics import INF
 from htn.jshop.search.task_networks import tasks
 
 from conftest import SHARED
@@ -91,7 +92,7 @@ def test_resumed_h_add_passes_give_the_costs_of_complete_ones(domain, problem):
         value = h(state, net)
         if len(checked) >= 300:
             return value
-        full = relaxation.costs(_bits(state))
+        full = relaxation.costs(bits(state))
         need = h.goal + [relaxation.nfacts + t for t in tasks(net)]
         costs = [full[n] for n in need]
         assert value == (INF if None in costs else sum(costs))

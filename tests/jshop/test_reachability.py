@@ -88,35 +88,34 @@ def test_bindings_that_add_the_same_atoms_are_added_once(domain, problem, monkey
     assert once == _facts(dom, instance, True)
 
 
-def test_the_key_of_grinding_leaves_out_what_it_only_reads():
-    domain = CORPUS / "ipc-po" / "Woodworking" / "domain.hddl"
-    if not domain.is_file():
-        pytest.skip(f"{domain} not found")
+def _program(domain: str, problem: str, action: str, **options):
+    """The reachability program of ``action`` (a corpus domain's only
+    operator of that name), and the operator."""
+    path = CORPUS / domain
+    if not path.is_file():
+        pytest.skip(f"{path} not found")
     from htn.jshop.logic.engine import Logic
     from htn.jshop.logic.state import State
     from htn.jshop.search.reachability import _Program
 
-    dom, _prob = load_inputs(str(domain), str(domain.parent / "01--p01-complete.hddl"))
-    (op,) = dom.operators["!do_grind"]
-    program = _Program(op, Logic(dom, State()), every=False)
+    dom, _prob = load_inputs(str(path), str(path.parent / problem))
+    (op,) = dom.operators[action]
+    return op, _Program(op, Logic(dom, State()), every=False, **options)
+
+
+def test_the_key_of_grinding_leaves_out_what_it_only_reads():
+    op, program = _program("ipc-po/Woodworking/domain.hddl", "01--p01-complete.hddl", "!do_grind")
     assert program.key is not None
-    left_out = {op.head.args[i].name for i in range(len(op.head.args))} - {
-        op.head.args[i].name for i in [*program.key, *program.types]
-    }
+    names = [a.name for a in op.head.args]
+    left_out = set(names) - {names[i] for i in [*program.key, *program.types]}
     assert left_out == {"?do_grind_oldsurface", "?do_grind_oldcolour", "?do_grind_oldtreatment"}
 
 
 def test_childsnacks_move_tray_leaves_its_destination_out():
-    domain = CORPUS / "ipc2020-to" / "Childsnack" / "domain.hddl"
-    if not domain.is_file():
-        pytest.skip(f"{domain} not found")
-    from htn.jshop.logic.engine import Logic
-    from htn.jshop.logic.state import State
-    from htn.jshop.search.reachability import _Program
-
-    dom, _prob = load_inputs(str(domain), str(domain.parent / "p05.hddl"))
-    (op,) = dom.operators["!move_tray"]
-    program = _Program(op, Logic(dom, State()), every=False)
+    op, program = _program("ipc2020-to/Childsnack/domain.hddl", "p05.hddl", "!move_tray")
     # (at ?t ?p2): the tray goes anywhere; bound, it multiplied the bindings
     assert [op.head.args[i].name for i in program.types] == ["?p2"]
-    assert _Program(op, Logic(dom, State()), every=False, factor=False).types == {}
+    _op, bound = _program(
+        "ipc2020-to/Childsnack/domain.hddl", "p05.hddl", "!move_tray", factor=False
+    )
+    assert bound.types == {}
