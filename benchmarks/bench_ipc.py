@@ -36,6 +36,15 @@ CPU time (of the solved instances), and for ``ipc2020-to`` the ratios::
     python benchmarks/bench_ipc.py --search gbfs --json
     python benchmarks/bench_ipc.py --sample ipc2020-to --sample ipc2020-to-slow \
         --hypertension ~/HyperTensioN --runs 3 --pin 1
+    python benchmarks/bench_ipc.py --folder ipc2020-domains/total-order \
+        --per-domain 8 --search auto --pin 0   # 192 of IPC 2020's instances
+
+``--folder`` measures any folder of domain folders laid out like the samples
+(the competition's repository, github.com/panda-planner-dev/ipc2020-domains),
+``--per-domain N`` N problems of each, evenly spaced from the first to the
+last in natural order. pandaPIparser may take longer than the plan on plans of
+100k actions; after ``--verify-limit`` seconds (600) its check is left out
+(``pandapi_unfinished``) and ``htn validate``'s decides.
 """
 
 from __future__ import annotations
@@ -43,6 +52,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import re
 import resource
 import statistics
 import subprocess
@@ -59,6 +69,7 @@ SHARED = Path(os.environ.get("HTN_SHARED", ROOT.parent / "shared"))
 SAMPLES = ("ipc2020-to", "ipc2020-to-slow", "ipc2020-to-hard", "ipc2023-to", "ipc-po")
 SEARCHES = ("dfs", "gbfs", "auto")
 WALL_GUARD = 40
+VERIFY_LIMIT = 600  # seconds pandaPIparser may take on one plan (Towers pfile_15: more)
 MEASURED: list = []  # the instances measured so far (who goes first alternates)
 
 # the search alone, in a fresh process (dfs: the planner's public API)
@@ -76,22 +87,34 @@ print(json.dumps({"search_ms": (time.process_time() - t) * 1000, "init_ms": (t -
 """
 
 
-def instances(sample: Path, only) -> list:
+def instances(sample: Path, only, per_domain: int | None = None) -> list:
     """(domain folder, domain file, problem file) of each instance: the
     folder's ``domain.hddl`` (or its one other ``*domain*.hddl``), or the
-    problem's own ``<problem>-domain.hddl`` where each has one."""
+    problem's own ``<problem>-domain.hddl`` where each has one. With
+    ``per_domain``, that many problems of each folder, evenly spaced in
+    natural order from the first to the last."""
     out = []
     for folder in sorted(p for p in sample.iterdir() if p.is_dir()):
         if only and folder.name not in only:
             continue
-        files = sorted(p for p in folder.iterdir() if p.suffix in (".hddl", ".pddl"))
+        files = sorted((p for p in folder.iterdir() if p.suffix in (".hddl", ".pddl")), key=natural)
         domains = [f for f in files if "domain" in f.name.lower()]
-        for problem in (f for f in files if f not in domains):
+        problems = [f for f in files if f not in domains]
+        if per_domain is not None and len(problems) > per_domain:
+            last = len(problems) - 1
+            picks = sorted({round(i * last / max(1, per_domain - 1)) for i in range(per_domain)})
+            problems = [problems[k] for k in picks]
+        for problem in problems:
             stem = problem.name.rsplit(".", 1)[0]
             own = [d for d in domains if d.name == f"{stem}-domain.hddl"]
             if own or domains:
                 out.append((folder.name, (own or domains)[0], problem))
     return out
+
+
+def natural(path: Path) -> list:
+    """A sort key: the name's digit runs compared as numbers (p2 before p10)."""
+    return [int(x) if x.isdigit() else x for x in re.split(r"(\d+)", path.name)]
 
 
 def hypertension(sample: Path) -> dict:
@@ -204,12 +227,16 @@ def verify(domain: Path, problem: Path, text: str, verifier) -> dict:
             "htn_validate_message": (ours.stderr.splitlines() or [""])[0],
         }
         if verifier is not None:
-            theirs = subprocess.run(
-                [str(verifier), "-C", "--verify", str(domain), str(problem), fh.name],
-                capture_output=True,
-                text=True,
-                timeout=600,
-            )
+            try:
+                theirs = subprocess.run(
+                    [str(verifier), "-C", "--verify", str(domain), str(problem), fh.name],
+                    capture_output=True,
+                    text=True,
+                    timeout=VERIFY_LIMIT,
+                )
+            except subprocess.TimeoutExpired:  # a plan of 100k actions: htn validate decides
+                out["pandapi_unfinished"] = True
+                return out
             out["pandapi"] = (
                 theirs.returncode == 0 and "Plan verification result: true" in theirs.stdout
             )
@@ -309,6 +336,7 @@ def summary(rows: list, sample: str) -> dict:
         "instances": len(rows),
         "solved": len(solved),
         "plan_rejected": sum(r["result"] == "plan" and not r["solved"] for r in rows),
+        "pandapi_unfinished": sum(r.get("pandapi_unfinished", False) for r in rows),
         "cpu_median_s": round(statistics.median(cpus), 3) if cpus else None,
         "cpu_max_s": round(max(cpus), 3) if cpus else None,
     }
@@ -348,6 +376,26 @@ def summary(rows: list, sample: str) -> dict:
     show_default=True,
     help="Passed to 'htn plan --search'.",
 )
+@click.option(
+    "--folder",
+    type=click.Path(file_okay=False, exists=True, path_type=Path),
+    metavar="DIR",
+    help="Measure this folder of domain folders (such as the IPC 2020 repository's "
+    "total-order/) instead of the samples.",
+)
+@click.option(
+    "--per-domain",
+    type=click.IntRange(min=1),
+    metavar="N",
+    help="Only N problems per domain folder, evenly spaced in natural order.",
+)
+@click.option(
+    "--verify-limit",
+    default=VERIFY_LIMIT,
+    show_default=True,
+    metavar="SECONDS",
+    help="Wall-clock seconds pandaPIparser may take on one plan; beyond, htn validate decides.",
+)
 @click.option("--only", multiple=True, metavar="DOMAIN", help="Only these domain folders.")
 @click.option("--limit", default=30.0, show_default=True, help="CPU seconds per run.")
 @click.option(
@@ -366,15 +414,17 @@ def summary(rows: list, sample: str) -> dict:
     help="A HyperTensioN checkout (Hype.rb) to run beside htn on every instance.",
 )
 @click.option("--json", "as_json", is_flag=True, help="Print JSON instead of tables.")
-def main(samples, search, only, limit, runs, pin, ht, as_json):
+def main(samples, search, folder, per_domain, verify_limit, only, limit, runs, pin, ht, as_json):
     """Solve the IPC samples under a CPU limit; every plan verified twice."""
     if ht is not None and not (ht / "Hype.rb").is_file():
         raise click.ClickException(f"{ht}: no Hype.rb (a HyperTensioN checkout?)")
+    global VERIFY_LIMIT
+    VERIFY_LIMIT = verify_limit
     with precompiled():
-        _run(samples, search, only, limit, runs, pin, ht, as_json)
+        _run(samples, search, folder, per_domain, only, limit, runs, pin, ht, as_json)
 
 
-def _run(samples, search, only, limit, runs, pin, ht, as_json) -> None:
+def _run(samples, search, folder, per_domain, only, limit, runs, pin, ht, as_json) -> None:
     flag = has_search_option()
     if not flag and search != "dfs":
         message = (
@@ -395,13 +445,15 @@ def _run(samples, search, only, limit, runs, pin, ht, as_json) -> None:
         "pandapiparser": str(verifier) if verifier else None,
         "samples": [],
     }
-    for name in samples or SAMPLES:
-        folder = SHARED / "corpus" / name
-        if not folder.is_dir():
-            raise click.ClickException(f"no sample at {folder} (set HTN_SHARED)")
-        ref = hypertension(folder) if name == "ipc2020-to" else None
+    folders = [(folder.name, folder)] if folder is not None else []
+    for name in samples or (() if folders else SAMPLES):
+        folders.append((name, SHARED / "corpus" / name))
+    for name, where in folders:
+        if not where.is_dir():
+            raise click.ClickException(f"no sample at {where} (set HTN_SHARED)")
+        ref = hypertension(where) if name == "ipc2020-to" else None
         rows = []
-        for dname, domain, problem in instances(folder, only):
+        for dname, domain, problem in instances(where, only, per_domain):
             row = measure(dname, domain, problem, search, flag, limit, runs, verifier, pin, ref, ht)
             rows.append(row)
             click.echo(
