@@ -42,13 +42,18 @@ def _facts(domain, instance, semi_naive, factor=True):
     return {(pred, args) for pred, args in state.facts()}
 
 
-@pytest.mark.corpus
-@pytest.mark.parametrize("domain, problem", INSTANCES, ids=[p.split("/")[1] for _, p in INSTANCES])
-def test_the_semi_naive_fixpoint_reaches_the_facts_of_the_naive_one(domain, problem):
+def _load(domain: str, problem: str):
+    """The domain and the problem's instance, from the corpus (skipped without it)."""
     if not (CORPUS / domain).is_file():
         pytest.skip(f"{CORPUS / domain} not found")
     dom, prob = load_inputs(str(CORPUS / domain), str(CORPUS / problem))
-    instance = prob.instances[0]
+    return dom, prob.instances[0]
+
+
+@pytest.mark.corpus
+@pytest.mark.parametrize("domain, problem", INSTANCES, ids=[p.split("/")[1] for _, p in INSTANCES])
+def test_the_semi_naive_fixpoint_reaches_the_facts_of_the_naive_one(domain, problem):
+    dom, instance = _load(domain, problem)
     fast = _facts(dom, instance, True)
     assert fast == _facts(dom, instance, False)
     assert len(fast) > len(instance.state)  # the actions added some
@@ -63,10 +68,7 @@ FACTORED = [  # Ultralight-Cockpit: 19 actions with a parameter only their effec
 @pytest.mark.corpus
 @pytest.mark.parametrize("domain, problem", FACTORED, ids=[p.split("/")[1] for _, p in FACTORED])
 def test_leaving_out_only_typed_parameters_reaches_the_same_facts(domain, problem):
-    if not (CORPUS / domain).is_file():
-        pytest.skip(f"{CORPUS / domain} not found")
-    dom, prob = load_inputs(str(CORPUS / domain), str(CORPUS / problem))
-    instance = prob.instances[0]
+    dom, instance = _load(domain, problem)
     assert _facts(dom, instance, True) == _facts(dom, instance, True, factor=False)
 
 
@@ -79,10 +81,7 @@ ONCE = [  # Woodworking: grinding reads a part's surface, colour and treatment, 
 @pytest.mark.corpus
 @pytest.mark.parametrize("domain, problem", ONCE, ids=[p.split("/")[1] for _, p in ONCE])
 def test_bindings_that_add_the_same_atoms_are_added_once(domain, problem, monkeypatch):
-    if not (CORPUS / domain).is_file():
-        pytest.skip(f"{CORPUS / domain} not found")
-    dom, prob = load_inputs(str(CORPUS / domain), str(CORPUS / problem))
-    instance = prob.instances[0]
+    dom, instance = _load(domain, problem)
     once = _facts(dom, instance, True)
     monkeypatch.setattr(reachability, "_vars", lambda terms: None)  # no key: every binding
     assert once == _facts(dom, instance, True)
