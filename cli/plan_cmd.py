@@ -121,11 +121,12 @@ from .plan_run import run_plan
     + ". See docs/hddl.md.",
 )
 def plan(domain, problem, fmt, output, timeout, functions, show_tree, dot, quiet, **flags):
-    """Find plans for PROBLEM in DOMAIN (JSHOP2 files).
+    """Find plans for PROBLEM in DOMAIN (JSHOP2 or HDDL files).
 
     \b
     Examples:
       htn plan domains/domestic.jshop problems/bring_object.jshop
+      htn plan domain.hddl p01.hddl -f ipc --search auto
       htn plan DOMAIN PROBLEM --all --format jshop
       htn plan DOMAIN PROBLEM -o plan.txt && htn run plan.txt --sim
     """
