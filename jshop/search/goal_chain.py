@@ -54,10 +54,7 @@ class GoalChain:
         goal = model.goal[0] if model.goal is not None else 0
         adders: dict = {}
         for t, a in model.actions.items():
-            adds = a.adds
-            for _c, _d, more in a.effects:
-                adds |= more
-            for b in bits(adds):
+            for b in bits(a.possible_adds()):
                 adders.setdefault(b, []).append(t)
         chain, work, acts = set(bits(goal)), list(bits(goal)), {}
         while work and len(chain) <= MAX_CHAIN:
@@ -76,10 +73,7 @@ class GoalChain:
         self.acts = {}  # chain action -> (chain preconditions, chain adds)
         for t in acts:
             a = model.actions[t]
-            adds = a.adds
-            for _c, _d, more in a.effects:
-                adds |= more
-            self.acts[t] = (self._small(a.pre[0]), self._small(adds))
+            self.acts[t] = (self._small(a.pre[0]), self._small(a.possible_adds()))
         self.relevant, self.below = self._relevant(model)
         self.act_list = list(self.acts.values())
         self.value: dict = {}  # (task, set) -> set or None, at the fixpoint
@@ -97,11 +91,7 @@ class GoalChain:
     def _relevant(self, model):
         """The compound tasks with a chain action below them, and per task
         the chain actions below it (a mask over ``act_list``)."""
-        users: dict = {}
-        for t, ms in model.methods_of.items():
-            for gm in ms:
-                for s in gm.body:
-                    users.setdefault(s, set()).add(t)
+        users = model.parents()
         below: dict = {}
         for i, a in enumerate(self.acts):
             bit, work = 1 << i, [a]

@@ -54,12 +54,7 @@ class GoalReach:
         self.active = False
         if goal <= 0:
             return
-        adds_of = {}
-        for t, a in model.actions.items():
-            adds = a.adds
-            for _c, _d, more in a.effects:
-                adds |= more
-            adds_of[t] = adds
+        adds_of = {t: a.possible_adds() for t, a in model.actions.items()}
         # per goal fact, the positive preconditions of the actions adding it
         self.pres: dict = {g: [] for g in bits(goal)}
         relevant = goal  # the goal's facts and their adders' preconditions
@@ -98,11 +93,7 @@ def _below(model, adds_of: dict, relevant: int, max_bits: int):
     """Per task, the relevant facts that actions below it add (for an
     action, its own), for the tasks with any; None where the masks would
     hold more than ``max_bits`` bits in all."""
-    users: dict = {}
-    for t, ms in model.methods_of.items():
-        for gm in ms:
-            for s in gm.body:
-                users.setdefault(s, set()).add(t)
+    users = model.parents()
     below = {t: adds & relevant for t, adds in adds_of.items() if adds & relevant}
     work = list(below)
     budget = max_bits // max(1, relevant.bit_count())  # tasks with a mask, at most

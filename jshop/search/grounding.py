@@ -56,6 +56,14 @@ class GroundAction:
         self.effects = effects  # ((condition, dels, adds), ...) conditional
         self.cost = cost
 
+    def possible_adds(self) -> int:
+        """The facts some effect of the action may add (the mask), its
+        conditional effects' as if their conditions held."""
+        adds = self.adds
+        for _cond, _dels, more in self.effects:
+            adds |= more
+        return adds
+
 
 class GroundMethod:
     __slots__ = ("task", "method", "pre", "body", "order", "branch")
@@ -86,6 +94,16 @@ class GroundModel:
         self.root_order: object = True  # True, False or a PartialOrder
         self.goal: tuple | None = None  # (pos, neg, rest) or None
         self.hidden: frozenset = frozenset()  # the task names parameter splitting made
+
+    def parents(self) -> dict:
+        """Per task, the compound tasks with a method that has it as a
+        subtask (the task decomposition graph, bottom up)."""
+        out: dict = {}
+        for t, ms in self.methods_of.items():
+            for gm in ms:
+                for s in gm.body:
+                    out.setdefault(s, set()).add(t)
+        return out
 
     def task_id(self, name: str, args: tuple) -> int:
         key = (name, args)

@@ -52,10 +52,7 @@ class _Relaxation:
                 pre = bits(a.pre[0]) + [b for tree in a.pre[2] for b in positive_bits(tree)]
             eff = [nfacts + t]
             if with_state:
-                adds = a.adds
-                for _cond, _dels, more in a.effects:
-                    adds |= more
-                eff += bits(adds)
+                eff += bits(a.possible_adds())
             pres.append(pre)
             effs.append(eff)
         for t, ms in model.methods_of.items():
