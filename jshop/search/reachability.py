@@ -21,7 +21,7 @@ from __future__ import annotations
 from itertools import product
 
 from htn.jshop.language import syntax as S
-from htn.jshop.language.terms import Var, subst
+from htn.jshop.language.terms import Var, subst, variables
 from htn.jshop.logic.compile import head_unifier
 from htn.jshop.logic.engine import Logic
 from htn.jshop.logic.state import State
@@ -40,7 +40,9 @@ class _Program:
     bindings before). The facts reached are the same (``factor=False``
     binds them all, as the tests compare)."""
 
-    def __init__(self, op: S.Operator, logic: Logic, every: bool, factor: bool = True):
+    def __init__(
+        self, op: S.Operator, logic: Logic, every: bool, factor: bool = True, once: bool = True
+    ):
         # a parameter of type object has no type condition: bind it too
         typed = [S.Atom("type:object", (v,)) for v in op.head.args if type(v) is Var]
         items = flat_and([relax(op.pre.expr), *typed]).items
@@ -60,10 +62,11 @@ class _Program:
         self.others = predicates(others + [i.cond for i in raw])
         self.seen = -1  # the log's length at this action's last turn
         # the parameters the added atoms read: bindings that agree on them add
-        # the same facts (None where a conditional effect reads the binding)
+        # the same facts (None where a conditional effect reads the binding;
+        # call terms, which could read more, are refused before grounding)
         self.key: list | None = None
-        read = _vars(tuple(args for _p, args in self.adds))
-        if not self.foralls and read is not None:
+        if once and not self.foralls:
+            read = {v.index for _p, args in self.adds for v in variables(args, [])}
             self.key = sorted(read - set(self.types))
         self.done: set = set()  # the keys added already
 
@@ -129,21 +132,6 @@ class _Program:
         return self.objects
 
 
-def _vars(terms: tuple) -> set | None:
-    """The indices of the variables in ``terms`` (nested lists too); None
-    where a call or a dotted list could read more."""
-    out, stack = set(), list(terms)
-    while stack:
-        a = stack.pop()
-        if type(a) is Var:
-            out.add(a.index)
-        elif type(a) is tuple:
-            stack.extend(a)
-        elif type(a) is not str and type(a) is not float:
-            return None
-    return out
-
-
 def _only_typed(op: S.Operator, items: list, foralls: list) -> dict:
     """Parameter index -> its type predicates, for the parameters that the
     relaxed precondition ``items`` only types and no conditional effect reads."""
@@ -180,14 +168,19 @@ def _types_of(x, types: dict) -> bool:
 
 
 def reachable(
-    domain: S.Domain, instance: S.ProblemInstance, semi_naive: bool = True, factor: bool = True
+    domain: S.Domain,
+    instance: S.ProblemInstance,
+    semi_naive: bool = True,
+    factor: bool = True,
+    once: bool = True,
 ):
     """A generator (it yields between actions' turns, for the caller's
     deadline) that returns ``(state, initial facts, logic)``: the reachable
     facts, the initial state's, and the engine on the growing state.
     ``semi_naive=False`` enumerates every binding at every turn (the
     reference the tests compare with); ``factor=False`` binds every
-    parameter, as :class:`_Program` says."""
+    parameter, as :class:`_Program` says; ``once=False`` adds the facts of
+    every binding (the module docstring)."""
     state = State()
     implied = domain.implied
     for atom in (*domain.facts, *instance.state):
@@ -198,7 +191,7 @@ def reachable(
     logic = Logic(domain, state)
     every = bool(domain.axioms)  # a derived predicate could depend on any
     programs = [
-        _Program(op, logic, every, factor) for ops in domain.operators.values() for op in ops
+        _Program(op, logic, every, factor, once) for ops in domain.operators.values() for op in ops
     ]
     log: list = []  # the facts added, in order
     changed = True
