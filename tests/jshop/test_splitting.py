@@ -181,6 +181,40 @@ def test_a_later_subtasks_own_variables_split_off_where_only_static_facts_read_t
     _check_plan(tmp_path, inputs.domain, inputs.problem, plan, search)
 
 
+# IPC 2020 Minecraft-Player's find-way methods in small: `stop` walks the
+# player from wherever it stands (?p, its only subtask's own variable) to
+# ?x; `same` names no variable the head does not
+ONE = """(define (domain d) (:requirements :hierarchy :typing :method-preconditions)
+  (:types o)
+  (:predicates (at ?x - o) (link ?x ?y - o))
+  (:task go :parameters (?x ?y - o))
+  (:method stop :parameters (?x ?y ?p - o) :task (go ?x ?y)
+    :precondition (and (link ?x ?y) (at ?p)) :ordered-subtasks (and (walk ?p ?x)))
+  (:method same :parameters (?x ?y ?n - o) :task (go ?x ?y)
+    :precondition (link ?x ?n) :ordered-subtasks (and (go ?n ?y)))
+  (:action walk :parameters (?p ?x - o) :precondition (at ?p)
+    :effect (and (not (at ?p)) (at ?x))))
+"""
+
+
+def test_a_method_of_one_subtask_splits_where_the_head_names_more(tmp_path):
+    problem = """(define (problem p) (:domain d) (:objects a b c - o)
+      (:htn :parameters () :ordered-subtasks (and (go b c))) (:init (at a) (link b c)))"""
+    inputs, instance = _read(tmp_path, ONE, problem)
+    methods, origin, made = split_methods(inputs.domain.methods)
+    # `stop`: the walk from ?p to ?x, once per ?x and not per (?x, ?y);
+    # `same`: its new task would take ?x and ?y, as many as the method
+    assert made == {"split:stop"}
+    (inner,) = methods["split:stop"]
+    assert [v.name for v in inner.head.args] == ["?x"]
+    assert {c.pred for c in inner.branches[0].pre.expr.items} >= {"at"}
+    search = BestFirst(inputs.domain, instance)
+    plan = next(p for p in search.plans(timeout=60) if p is not None)
+    assert [(x.name, *x.args) for x in plan.steps] == [("!walk", "a", "b")]
+    assert [n.name for n in plan.tree.children[0].children] == ["!walk"]  # spliced out
+    _check_plan(tmp_path, inputs.domain, inputs.problem, plan, search)
+
+
 OBJECTS = ["k", "l", "m"]
 PREDS = {"p": 1, "q": 2}
 
