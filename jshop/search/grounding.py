@@ -12,6 +12,10 @@ Problems", AAAI 2020, in a simpler form).
 3. **Bottom-up**: a ground action is kept if its precondition can hold in a
    reachable state; a ground compound task if some method has every
    subtask kept, to a fixpoint (PANDA's task decomposition graph pruning).
+4. **Hierarchical reachability** (:mod:`.task_reach`), during step 2 and
+   after step 3: a method's subtasks are only instantiated once the method
+   is reached, with the facts the actions reached before it can add; what
+   is not reached is dropped, and step 3 runs again, to a fixpoint.
 
 What is left is numbered: dynamic facts are bits of an ``int`` state,
 tasks and methods indices; preconditions are compiled residuals
@@ -40,6 +44,7 @@ from .jshop2_input import checked_instance, flat_tasks
 from .reachability import reachable
 from .residual_code import compile_body
 from .splitting import split_methods, totally_ordered
+from .task_reach import Reach, reached
 
 # the goal of a model where grounding found it false in every reachable state
 # (no fact has every bit: no state satisfies it)
@@ -114,11 +119,14 @@ class GroundModel:
         return i
 
 
-def ground(domain: S.Domain, instance: S.ProblemInstance, split: bool = True) -> GroundModel:
+def ground(
+    domain: S.Domain, instance: S.ProblemInstance, split: bool = True, reach: bool = True
+) -> GroundModel:
     """The grounded problem (see the module docstring); raises
     :class:`NotGroundable` for what this search does not handle. ``split``:
-    with parameter splitting (:mod:`.splitting`) where it applies."""
-    steps = grounding_steps(domain, instance, split)
+    with parameter splitting (:mod:`.splitting`) where it applies; ``reach``:
+    with step 4 (the tests compare)."""
+    steps = grounding_steps(domain, instance, split, reach)
     while True:
         try:
             next(steps)
@@ -126,14 +134,19 @@ def ground(domain: S.Domain, instance: S.ProblemInstance, split: bool = True) ->
             return done.value
 
 
-def grounding_steps(domain: S.Domain, instance: S.ProblemInstance, split: bool = True):
+def grounding_steps(
+    domain: S.Domain, instance: S.ProblemInstance, split: bool = True, reach: bool = True
+):
     """:func:`ground` as a generator that yields None between small steps
     (so that a portfolio can pause it) and returns the model."""
-    return _Grounder(domain, instance, split).run()
+    return _Grounder(domain, instance, split, reach).run()
 
 
 class _Grounder:
-    def __init__(self, domain: S.Domain, instance: S.ProblemInstance, split: bool = True):
+    def __init__(
+        self, domain: S.Domain, instance: S.ProblemInstance, split: bool = True, reach: bool = True
+    ):
+        self.reach = reach
         if domain.language != "hddl":  # what of JSHOP2's language grounding takes, located
             instance = checked_instance(domain, instance)
         self.domain, self.instance = domain, instance
@@ -190,29 +203,46 @@ class _Grounder:
         self.executable: dict = {}  # (name, args) -> GroundAction or None
         self.head_bound: dict = {}
         self.bodies = IdentityCache(global_=False)  # branch -> see _body_code
+        r = Reach(model.init) if self.reach else None
         todo, seen = list(roots), set(roots)
         while todo:
-            yield
-            t = todo.pop()
-            name, args = model.tasks[t]
-            if name.startswith("!"):
-                a = self.executable.get((name, args)) or self._action(name, args)
-                if a is not None:
-                    model.actions[t] = a
-                continue
-            found = model.methods_of[t] = []
-            for m, unify in self.heads.get(name, ()):
-                for gm in self._methods(t, m, unify, args):
-                    found.append(gm)
-                    for s in gm.body:
-                        if s not in seen:
-                            seen.add(s)
-                            todo.append(s)
-        self._prune()
+            for t in todo:
+                yield
+                name, args = model.tasks[t]
+                if name.startswith("!"):
+                    a = self.executable.get((name, args)) or self._action(name, args)
+                    if a is not None:
+                        model.actions[t] = a
+                        if r is not None:
+                            r.action(t, a)
+                    continue
+                found = model.methods_of[t] = []
+                for m, unify in self.heads.get(name, ()):
+                    found += self._methods(t, m, unify, args)
+                if r is not None:
+                    r.methods_of(t, found)
+            # next the subtasks of the methods reached (of every method without step 4)
+            subtasks = (
+                r.take()
+                if r is not None
+                else [s for t in todo for gm in model.methods_of.get(t, ()) for s in gm.body]
+            )
+            todo = []
+            for s in subtasks:
+                if s not in seen:
+                    seen.add(s)
+                    todo.append(s)
         model.roots, model.root_order = tuple(roots), self.root_order
+        if r is None:
+            self._prune()
+            facts = -1
+        else:
+            facts = self._reach(r)
         if self.instance.goal is not None:
             goal = self._residual(self.instance.goal.expr, [None] * self.instance.goal_nvars)
             model.goal = compile_residual(goal) or UNREACHABLE_GOAL
+            if model.goal[0] & ~facts:  # a goal fact no reached action adds
+                model.goal = UNREACHABLE_GOAL
         return model
 
     def _residual(self, expr, env: list):
@@ -356,7 +386,28 @@ class _Grounder:
         return self.executable[key] is not None
 
     # ------------------------------------------------------------ 3. bottom up
-    def _prune(self) -> None:
+    def _reach(self, r: Reach | None = None) -> int:
+        """Step 4 after step 3: drop the methods and actions that the task
+        hierarchy did not reach (``r``, else computed on the model), prune,
+        and again until pruning removes nothing (a method pruned can leave an
+        action out of reach); the reached facts."""
+        model = self.model
+        if r is None:  # on a model ground without it (the tests compare)
+            facts, methods, actions = reached(model)
+        else:
+            facts, methods, actions = r.facts, r.methods, r.actions
+        while True:
+            for t in [t for t in model.actions if t not in actions]:
+                del model.actions[t]
+            for ms in model.methods_of.values():
+                if any(id(gm) not in methods for gm in ms):
+                    ms[:] = [gm for gm in ms if id(gm) in methods]
+            if not self._prune():
+                return facts
+            facts, methods, actions = reached(model)
+
+    def _prune(self) -> int:
+        """The methods removed."""
         model = self.model
         alive = set(model.actions)
         changed = True
@@ -366,9 +417,13 @@ class _Grounder:
                 if t not in alive and any(all(s in alive for s in gm.body) for gm in ms):
                     alive.add(t)
                     changed = True
+        removed = 0
         for t, ms in model.methods_of.items():
+            n = len(ms)
             ms[:] = [gm for gm in ms if all(s in alive for s in gm.body)] if t in alive else []
+            removed += n - len(ms)
         self.alive = alive
+        return removed
 
 
 def _top_variables(e) -> set:

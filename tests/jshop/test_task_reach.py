@@ -1,0 +1,176 @@
+"""Hierarchical reachability (:mod:`htn.jshop.search.task_reach`): grounding
+drops what no decomposition of the initial network can reach with the facts
+its own actions add. Checked on a hand-made domain where every action can
+reach a fact the methods never can, on random problems (no plan lost, none
+added) and on corpus instances (a depth-first plan only uses what is kept)."""
+
+from __future__ import annotations
+
+import tempfile
+from pathlib import Path
+
+import pytest
+from hypothesis import HealthCheck, given, settings
+from test_commit_rule import _check_plan
+from test_splitting import _read, problems
+
+from htn.jshop.readers.load import load_inputs
+from htn.jshop.search import grounding
+from htn.jshop.search.best_first import BestFirst
+from htn.jshop.search.grounding import ground
+from htn.jshop.search.planner import Planner
+from htn.jshop.search.task_reach import reached
+
+from conftest import SHARED
+
+# `walk` takes the walker to any free cell; the methods only walk it along
+# `next` links from where it stands (a - b - c), and `d` is free but off
+# the line: the delete relaxation of the actions reaches (at d), the
+# hierarchy does not
+WALKER = """(define (domain walker)
+  (:requirements :hierarchy :typing :method-preconditions)
+  (:types cell)
+  (:predicates (at ?c - cell) (free ?c - cell) (next ?a ?b - cell) (seen ?c - cell))
+  (:task visit :parameters (?c - cell))
+  (:task goto :parameters (?c - cell))
+  (:method visit_it :parameters (?c - cell) :task (visit ?c)
+    :ordered-subtasks (and (goto ?c) (look ?c)))
+  (:method there :parameters (?c - cell) :task (goto ?c) :precondition (at ?c)
+    :ordered-subtasks (and))
+  (:method step :parameters (?c ?p ?n - cell) :task (goto ?c)
+    :precondition (and (at ?p) (next ?p ?n))
+    :ordered-subtasks (and (walk ?p ?n) (goto ?c)))
+  (:action walk :parameters (?p ?n - cell) :precondition (and (at ?p) (free ?n))
+    :effect (and (at ?n) (not (at ?p))))
+  (:action look :parameters (?c - cell) :precondition (at ?c) :effect (seen ?c)))
+"""
+
+
+def _walker(tmp_path, target: str):
+    (tmp_path / "d.hddl").write_text(WALKER)
+    (tmp_path / "p.hddl").write_text(
+        "(define (problem w) (:domain walker) (:objects a b c d - cell)\n"
+        f"  (:htn :ordered-subtasks (and (visit {target})))\n"
+        "  (:init (at a) (free a) (free b) (free c) (free d) (next a b) (next b c)))\n"
+    )
+    dom, prob = load_inputs(str(tmp_path / "d.hddl"), str(tmp_path / "p.hddl"))
+    return dom, prob.instances[0]
+
+
+def test_what_only_the_relaxed_actions_reach_is_dropped(tmp_path):
+    dom, inst = _walker(tmp_path, "d")
+    whole = ground(dom, inst, reach=False)
+    model = ground(dom, inst)
+    look_d = ("!look", ("d",))
+    assert look_d in {(a.name, a.args) for a in whole.actions.values()}
+    assert look_d not in {(a.name, a.args) for a in model.actions.values()}
+    # the walker only walks the line from a
+    facts, _methods, actions = reached(whole)
+    walks = {whole.actions[t].args for t in actions if whole.actions[t].name == "!walk"}
+    assert walks == {("a", "b"), ("b", "c")}
+    at = {whole.facts[b][1] for b in range(len(whole.facts)) if facts >> b & 1}
+    assert {("a",), ("b",), ("c",)} <= at and ("d",) not in at
+    # so the root task has no method left, and nothing below it is kept
+    (root,) = model.roots
+    assert model.methods_of[root] == [] and whole.methods_of[root]
+    assert not model.actions
+    search = BestFirst(dom, inst)
+    assert next(search.plans(timeout=30), None) is None
+    assert search.stats.expansions == 0
+    # depth-first search agrees: it walks the line and finds no way to d
+    assert next(Planner(dom, inst).plans(), None) is None
+
+
+def test_what_the_hierarchy_reaches_is_kept(tmp_path):
+    dom, inst = _walker(tmp_path, "c")
+    plan = next(p for p in BestFirst(dom, inst).plans(timeout=30) if p is not None)
+    assert [(s.name, s.args) for s in plan.steps] == [
+        ("!walk", ("a", "b")),
+        ("!walk", ("b", "c")),
+        ("!look", ("c",)),
+    ]
+
+
+def _first(domain, instance, reach: bool):
+    search = BestFirst(domain, instance)
+    search._prepared(ground(domain, instance, reach=reach))
+    return next((p for p in search.plans() if p is not None), None), search
+
+
+@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(problems())
+def test_reachability_loses_no_plan_and_adds_none(case):
+    domain_text, problem_text = case
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp)
+        inputs, instance = _read(folder, domain_text, problem_text)
+        kept, search = _first(inputs.domain, instance, True)
+        whole, _ = _first(inputs.domain, instance, False)
+        assert (kept is None) == (whole is None), domain_text + problem_text
+        if kept is not None:
+            _check_plan(folder, inputs.domain, inputs.problem, kept, search)
+
+
+CORPUS = SHARED / "corpus" / "ipc2020-to"
+
+
+@pytest.mark.skipif(not CORPUS.is_dir(), reason="needs ../shared/corpus")
+@pytest.mark.parametrize(
+    "folder, problem, shrinks",
+    [
+        ("Blocksworld-GTOHP", "p05.hddl", True),  # 566 methods, 139 kept
+        ("Depots", "p05.hddl", True),  # 2,617, 567 kept
+        ("Rover-GTOHP", "p05.hddl", False),
+        ("Transport", "pfile05.hddl", True),  # 113, 73 kept
+    ],
+)
+def test_a_depth_first_plan_uses_only_what_is_kept(folder, problem, shrinks):
+    dom, prob = load_inputs(str(CORPUS / folder / "domain.hddl"), str(CORPUS / folder / problem))
+    inst = prob.instances[0]
+    whole, model = ground(dom, inst, reach=False), ground(dom, inst)
+    count = sum(len(ms) for ms in model.methods_of.values())
+    assert (count < sum(len(ms) for ms in whole.methods_of.values())) is shrinks
+    plan = next(Planner(dom, inst).plans())
+    kept = {(a.name, a.args) for a in model.actions.values()}
+    assert all((s.name, tuple(s.args)) in kept for s in plan.steps)
+
+
+def _signature(model) -> tuple[set, set]:
+    """The model's methods (task, method, subtasks) and actions, by name."""
+    name = model.tasks
+    methods = {
+        (name[t], gm.method.name, tuple(name[s] for s in gm.body))
+        for t, ms in model.methods_of.items()
+        for gm in ms
+    }
+    return methods, {(a.name, a.args) for a in model.actions.values()}
+
+
+@pytest.mark.skipif(not CORPUS.is_dir(), reason="needs ../shared/corpus")
+@pytest.mark.parametrize(
+    "domain, problem",
+    [
+        ("ipc2020-to/Depots/domain.hddl", "ipc2020-to/Depots/p05.hddl"),
+        ("ipc2020-to/Childsnack/domain.hddl", "ipc2020-to/Childsnack/p05.hddl"),
+        (
+            "ipc2020-to-slow/Minecraft-Regular/domain.hddl",
+            "ipc2020-to-slow/Minecraft-Regular/p-004-005-004-005.hddl",
+        ),
+        ("ipc-po/Transport/domain.hddl", "ipc-po/Transport/pfile02.hddl"),
+    ],
+)
+def test_grounding_only_what_is_reached_gives_the_model_pruned_afterwards(domain, problem):
+    corpus = SHARED / "corpus"
+    dom, prob = load_inputs(str(corpus / domain), str(corpus / problem))
+    inst = prob.instances[0]
+    # the whole model, with step 4 run on it only at the end
+    g = grounding._Grounder(dom, inst, True, False)
+    steps = g.run()
+    while True:
+        try:
+            next(steps)
+        except StopIteration as done:
+            whole = done.value
+            break
+    g._reach()
+    assert _signature(ground(dom, inst)) == _signature(whole)
