@@ -43,6 +43,9 @@ __all__ = [
     "DEFAULT_MAX_DEPTH",
 ]
 
+# seconds the explanation of "no plan" may take at least (see PlanStream.explain)
+EXPLAIN_MIN = 1.0
+
 
 def plan(
     domain: DomainInput,
@@ -232,8 +235,14 @@ class PlanStream:
             from htn.jshop.checks.explain import explain_search
 
             left = None  # what is left of ``timeout``, which bounds the explanation too
+            spent = time.perf_counter() - self.started
             if self.timeout is not None:
-                left = max(0.0, self.timeout - (time.perf_counter() - self.started))
+                left = max(0.0, self.timeout - spent)
+            # asked for after the answer, it takes no longer than the search did (at
+            # least a second): a grounded search can prove in 16 s that a problem has
+            # no plan where depth-first search runs on (IPC 2020 Minecraft-Player)
+            budget = max(EXPLAIN_MIN, spent)
+            left = budget if left is None else min(left, budget)
             self.explanations = [
                 explain_search(
                     self.domain,
