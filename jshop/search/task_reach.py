@@ -20,16 +20,19 @@ its parts does), so every method and action on the way to a plan is
 reached: a progression search applies its moves one after another, each in
 a state of the initial facts and of what earlier actions added, each
 decomposing a task of the initial network or of an earlier method's body
-(totally or partially ordered alike). What is not reached can be dropped.
+(totally or partially ordered alike).
 
-Grounding runs it while it instantiates (:class:`Reach`): a method's
-subtasks are only instantiated once the method is reached, so that what
-the hierarchy never reaches is never grounded. This is what decides IPC
+Grounding runs it while it instantiates (:class:`Reach`): the subtasks of
+the methods reached are instantiated first, so that a problem whose initial
+network is out of reach is decided before the rest is grounded (see
+``SKIPPED`` in :mod:`.grounding`). This is what decides IPC
 2020's Minecraft-Player: the delete relaxation of ``walk`` puts the player
 on every empty cell of every level, and grounding made a ``findway`` task
 for each of them (386k tasks in 40 s on ``p-006-006-006-006``), but the
 methods only walk it along ``neighbour`` cells of its own level, so the
 roofs of houses higher than 4 are out of reach and the problem has no plan.
+What is not reached can be dropped, but grounding keeps it where a plan is
+possible: see :mod:`.grounding`.
 """
 
 from __future__ import annotations

@@ -1,8 +1,10 @@
-"""Hierarchical reachability (:mod:`htn.jshop.search.task_reach`): grounding
-drops what no decomposition of the initial network can reach with the facts
-its own actions add. Checked on a hand-made domain where every action can
-reach a fact the methods never can, on random problems (no plan lost, none
-added) and on corpus instances (a depth-first plan only uses what is kept)."""
+"""Hierarchical reachability (:mod:`htn.jshop.search.task_reach`): what no
+decomposition of the initial network can reach with the facts its own
+actions add. Grounding uses it to prove that a problem has no plan, and
+otherwise gives the searches the model it gave before. Checked on a
+hand-made domain where every action can reach a fact the methods never can,
+on random problems (no plan lost, none added) and on corpus instances (a
+depth-first plan only uses what is reached; the model is unchanged)."""
 
 from __future__ import annotations
 
@@ -15,7 +17,6 @@ from test_commit_rule import _check_plan
 from test_splitting import _read, problems
 
 from htn.jshop.readers.load import load_inputs
-from htn.jshop.search import grounding
 from htn.jshop.search.best_first import BestFirst
 from htn.jshop.search.grounding import ground
 from htn.jshop.search.planner import Planner
@@ -57,23 +58,22 @@ def _walker(tmp_path, target: str):
     return dom, prob.instances[0]
 
 
-def test_what_only_the_relaxed_actions_reach_is_dropped(tmp_path):
+def test_what_only_the_relaxed_actions_reach_is_not_reached(tmp_path):
     dom, inst = _walker(tmp_path, "d")
     whole = ground(dom, inst, reach=False)
-    model = ground(dom, inst)
     look_d = ("!look", ("d",))
     assert look_d in {(a.name, a.args) for a in whole.actions.values()}
-    assert look_d not in {(a.name, a.args) for a in model.actions.values()}
     # the walker only walks the line from a
     facts, _methods, actions = reached(whole)
     walks = {whole.actions[t].args for t in actions if whole.actions[t].name == "!walk"}
     assert walks == {("a", "b"), ("b", "c")}
     at = {whole.facts[b][1] for b in range(len(whole.facts)) if facts >> b & 1}
     assert {("a",), ("b",), ("c",)} <= at and ("d",) not in at
-    # so the root task has no method left, and nothing below it is kept
+    assert look_d not in {(whole.actions[t].name, whole.actions[t].args) for t in actions}
+    # so the root task has no method left: there is no plan, and no search
+    model = ground(dom, inst)
     (root,) = model.roots
     assert model.methods_of[root] == [] and whole.methods_of[root]
-    assert not model.actions
     search = BestFirst(dom, inst)
     assert next(search.plans(timeout=30), None) is None
     assert search.stats.expansions == 0
@@ -118,20 +118,21 @@ CORPUS = SHARED / "corpus" / "ipc2020-to"
 @pytest.mark.parametrize(
     "folder, problem, shrinks",
     [
-        ("Blocksworld-GTOHP", "p05.hddl", True),  # 566 methods, 139 kept
-        ("Depots", "p05.hddl", True),  # 2,617, 567 kept
+        ("Blocksworld-GTOHP", "p05.hddl", True),  # 566 methods, 139 reached
+        ("Depots", "p05.hddl", True),  # 2,617, 567 reached
         ("Rover-GTOHP", "p05.hddl", False),
-        ("Transport", "pfile05.hddl", True),  # 113, 73 kept
+        ("Transport", "pfile05.hddl", True),  # 113, 73 reached
     ],
 )
-def test_a_depth_first_plan_uses_only_what_is_kept(folder, problem, shrinks):
+def test_a_depth_first_plan_uses_only_what_is_reached(folder, problem, shrinks):
     dom, prob = load_inputs(str(CORPUS / folder / "domain.hddl"), str(CORPUS / folder / problem))
     inst = prob.instances[0]
-    whole, model = ground(dom, inst, reach=False), ground(dom, inst)
+    model = ground(dom, inst)
+    _facts, methods, actions = reached(model)
     count = sum(len(ms) for ms in model.methods_of.values())
-    assert (count < sum(len(ms) for ms in whole.methods_of.values())) is shrinks
+    assert (len(methods) < count) is shrinks
     plan = next(Planner(dom, inst).plans())
-    kept = {(a.name, a.args) for a in model.actions.values()}
+    kept = {(model.actions[t].name, model.actions[t].args) for t in actions}
     assert all((s.name, tuple(s.args)) in kept for s in plan.steps)
 
 
@@ -159,18 +160,8 @@ def _signature(model) -> tuple[set, set]:
         ("ipc-po/Transport/domain.hddl", "ipc-po/Transport/pfile02.hddl"),
     ],
 )
-def test_grounding_only_what_is_reached_gives_the_model_pruned_afterwards(domain, problem):
+def test_where_a_plan_is_possible_the_searches_get_the_model_as_before(domain, problem):
     corpus = SHARED / "corpus"
     dom, prob = load_inputs(str(corpus / domain), str(corpus / problem))
     inst = prob.instances[0]
-    # the whole model, with step 4 run on it only at the end
-    g = grounding._Grounder(dom, inst, True, False)
-    steps = g.run()
-    while True:
-        try:
-            next(steps)
-        except StopIteration as done:
-            whole = done.value
-            break
-    g._reach()
-    assert _signature(ground(dom, inst)) == _signature(whole)
+    assert _signature(ground(dom, inst)) == _signature(ground(dom, inst, reach=False))
