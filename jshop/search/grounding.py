@@ -47,15 +47,15 @@ from .residual_code import compile_body
 from .splitting import split_methods, totally_ordered
 from .task_reach import Reach, reached
 
-# step 4 is run on the part of the model the hierarchy reaches (to prove that
+# step 4 runs on the part of the model the hierarchy reaches (to prove that
 # there is no plan) where that part has at most SMALL methods or the tasks it
-# left out are at least 1/SKIPPED of all (IPC 2020 Minecraft-Player
-# p-006-006-006-006 leaves out 115k tasks of 148k; on Woodworking 18's 147k
-# methods it would cost 2 s for nothing); where it finds a plan possible, the
-# rest is ground as without it,
-# so that the searches see the same model (one without what the hierarchy
-# cannot reach made GBFS take 5 times longer per node on Woodworking 14 and 17:
-# its relaxed composition then proves dead ends by settling whole passes)
+# left out are at least 1/SKIPPED of all: IPC 2020 Minecraft-Player
+# p-006-006-006-006 leaves out 115k tasks of 148k, and on Woodworking 18's
+# 147k methods it would cost 2 s for nothing. Where it finds a plan possible,
+# the rest is ground as without it and the searches see the same model: one
+# without what the hierarchy cannot reach made GBFS five times slower per
+# node on Woodworking 14 and 17 (its relaxed composition then proves dead
+# ends by settling whole passes)
 SKIPPED = 3
 SMALL = 20_000
 # the goal of a model where grounding found it false in every reachable state
@@ -275,13 +275,12 @@ class _Grounder:
         """Whether step 4 leaves a task of the initial network without a
         method: then the model is left so (no plan), else as it was."""
         model = self.model
-        kept = {t: list(ms) for t, ms in model.methods_of.items()}, dict(model.actions)
+        methods_of = {t: list(ms) for t, ms in model.methods_of.items()}
+        actions = dict(model.actions)
         self._reach(r)
         if any(t not in self.alive for t in model.roots):
             return True
-        for t, ms in kept[0].items():
-            model.methods_of[t] = ms
-        model.actions = kept[1]
+        model.methods_of, model.actions = methods_of, actions
         return False
 
     def _residual(self, expr, env: list):
@@ -425,18 +424,14 @@ class _Grounder:
         return self.executable[key] is not None
 
     # ------------------------------------------------------------ 3. bottom up
-    def _reach(self, r: Reach | None = None) -> int:
+    def _reach(self, r: Reach) -> None:
         """Step 4 after step 3: drop the methods and actions that the task
-        hierarchy did not reach (``r``, else computed on the model), prune,
-        and again until pruning removes nothing: a method pruned can leave
-        actions out of reach (Monroe-Fully-Observable pfile05: everything is
-        reached before pruning, 56,983 of 63,747 methods after); the reached
-        facts."""
+        hierarchy did not reach (``r``), prune, and again until pruning
+        removes nothing: a method pruned can leave actions out of reach
+        (Monroe-Fully-Observable pfile05: everything is reached before
+        pruning, 56,983 of 63,747 methods after)."""
         model = self.model
-        if r is None:  # on a model ground without it (the tests compare)
-            facts, methods, actions = reached(model)
-        else:
-            facts, methods, actions = r.facts, r.methods, r.actions
+        methods, actions = r.methods, r.actions
         while True:
             for t in [t for t in model.actions if t not in actions]:
                 del model.actions[t]
@@ -444,8 +439,8 @@ class _Grounder:
                 if any(id(gm) not in methods for gm in ms):
                     ms[:] = [gm for gm in ms if id(gm) in methods]
             if not self._prune():
-                return facts
-            facts, methods, actions = reached(model)
+                return
+            _facts, methods, actions = reached(model)
 
     def _prune(self) -> int:
         """The methods removed."""
