@@ -42,9 +42,9 @@ from .ground_formulas import bits
 
 class Reach:
     """The fixpoint, grown as the caller offers what it grounds: each
-    compound task's methods (:meth:`methods`), each reached action task's
-    action (:meth:`action`); :meth:`take` gives the subtasks of the methods
-    reached since, which the caller grounds next."""
+    compound task's methods (:meth:`methods_of`), each action task's action
+    (:meth:`action`); :meth:`take` gives the subtasks of the methods reached
+    since, which the caller grounds next."""
 
     def __init__(self, init: int):
         self.facts = init  # the reached facts (a mask)

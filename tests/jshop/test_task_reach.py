@@ -8,13 +8,9 @@ depth-first plan only uses what is reached; the model is unchanged)."""
 
 from __future__ import annotations
 
-import tempfile
-from pathlib import Path
-
 import pytest
 from hypothesis import HealthCheck, given, settings
-from test_commit_rule import _check_plan
-from test_splitting import _read, problems
+from test_splitting import problems, same_answer
 
 from htn.jshop.readers.load import load_inputs
 from htn.jshop.search.best_first import BestFirst
@@ -91,24 +87,10 @@ def test_what_the_hierarchy_reaches_is_kept(tmp_path):
     ]
 
 
-def _first(domain, instance, reach: bool):
-    search = BestFirst(domain, instance)
-    search._prepared(ground(domain, instance, reach=reach))
-    return next((p for p in search.plans() if p is not None), None), search
-
-
 @settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(problems())
 def test_reachability_loses_no_plan_and_adds_none(case):
-    domain_text, problem_text = case
-    with tempfile.TemporaryDirectory() as tmp:
-        folder = Path(tmp)
-        inputs, instance = _read(folder, domain_text, problem_text)
-        kept, search = _first(inputs.domain, instance, True)
-        whole, _ = _first(inputs.domain, instance, False)
-        assert (kept is None) == (whole is None), domain_text + problem_text
-        if kept is not None:
-            _check_plan(folder, inputs.domain, inputs.problem, kept, search)
+    same_answer(case, "reach")
 
 
 CORPUS = SHARED / "corpus" / "ipc2020-to"
