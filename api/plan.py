@@ -242,6 +242,7 @@ class PlanStream:
             # least a second): a grounded search can prove in 16 s that a problem has
             # no plan where depth-first search runs on (IPC 2020 Minecraft-Player)
             budget = max(EXPLAIN_MIN, spent)
+            bounded = left is None or budget < left  # the budget, not --timeout, bounds it
             left = budget if left is None else min(left, budget)
             self.explanations = [
                 explain_search(
@@ -254,4 +255,7 @@ class PlanStream:
                 )
                 for inst in self.problem.instances
             ]
+            if bounded:
+                for e in self.explanations:
+                    e.after = budget if e.cut_short else None
         return self.explanations

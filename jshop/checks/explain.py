@@ -85,6 +85,7 @@ class Explainer:
     def __init__(self, keep_all: bool = False):
         self.keep_all = keep_all
         self.cut_short = False  # the search ended at its time limit
+        self.after: float | None = None  # or, replayed after the answer, at this bound (s)
         self.deepest: DeadEnd | None = None
         self.all: list = []
         self.count = 0
@@ -218,6 +219,11 @@ class Explainer:
     # ------------------------------------------------------------ output
     def lines(self, full: bool = False) -> list:
         short = ["explain: the time limit ended the search, these are the dead ends met by then"]
+        if self.after is not None:
+            short = [
+                f"explain: depth-first search, replayed to explain the answer, was stopped "
+                f"after {self.after:.1f} s (as long as the search took); the dead ends met by then"
+            ]
         return (short if self.cut_short else []) + self._lines(full)
 
     def _lines(self, full: bool) -> list:

@@ -184,3 +184,21 @@ def test_the_explanation_of_no_plan_ends_with_the_timeout_too(tmp_path):
     assert r.returncode == 1 and "the time limit ended the search" in r.stderr, r.stderr
     assert "got deepest at this dead end" in r.stderr
     assert took < 5, took
+
+
+@pytest.mark.skipif(not (ROVER / "pfile01.hddl").is_file(), reason="no ipc-po corpus")
+def test_the_explanation_of_no_plan_takes_no_longer_than_the_search(tmp_path):
+    """The same problem without --timeout: the explanation, asked for after
+    the answer, stops when it has taken as long as the search did (at least
+    a second), and says so; it ran on for a minute and more before (and
+    forever after a grounded search's 'no plan' on IPC 2020 Minecraft-Player)."""
+    problem = tmp_path / "p.hddl"
+    problem.write_text(
+        (ROVER / "pfile01.hddl").read_text().replace("(at_lander general waypoint0)", "")
+    )
+    began = time.monotonic()
+    r = run_htn_process("plan", ROVER / "domain.hddl", problem, timeout=120)
+    took = time.monotonic() - began
+    assert r.returncode == 1 and "replayed to explain the answer" in r.stderr, r.stderr
+    assert "got deepest at this dead end" in r.stderr
+    assert took < 10, took
