@@ -222,7 +222,8 @@ class Explainer:
         if self.after is not None:
             short = [
                 f"explain: depth-first search, replayed to explain the answer, was stopped "
-                f"after {self.after:.1f} s (as long as the search took); the dead ends met by then"
+                f"after {self.after:.1f} s (the time the search took, at least 1 s); the dead "
+                "ends met by then"
             ]
         return (short if self.cut_short else []) + self._lines(full)
 
