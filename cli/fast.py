@@ -4,7 +4,7 @@ Importing click costs a small problem's planning time twice over (about 30
 ms of CPU here), so a command line that needs none of click's work runs the
 plan command directly (:func:`htn.cli.plan_run.run_plan`): two file names
 and, at most, the options ``-f``/``--format`` with one of the formats,
-``-q``/``--quiet`` and ``--search dfs``, each given once. Anything else (any
+``-q``/``--quiet`` and ``--search dfs`` or ``auto``, each given once. Anything else (any
 other option, ``--help``, a value click would refuse or convert, a name
 that starts with ``-`` or is a folder) is left to click, which gives the
 same defaults and its own messages: the options here mean exactly what they
@@ -40,8 +40,12 @@ def plain_plan(args: list[str]) -> dict[str, Any] | None:
             files.append(arg)
     if len(files) != 2 or given.get("fmt", "text") not in FORMATS:
         return None
-    if given.get("search_name", "dfs") != "dfs":
-        return None  # another search may refuse the input: click says so
+    search = given.get("search_name", "dfs")
+    if search not in ("dfs", "auto"):
+        # gbfs and wastar may refuse JSHOP2 input, a usage error click shows;
+        # dfs and auto refuse only with --all or --jshop2-compat
+        # (htn.jshop.search.searches.refusal), which the fast path leaves to click
+        return None
     from htn.api.plan import DEFAULT_MAX_DEPTH  # the use case, which runs next anyway
 
     return {
@@ -62,5 +66,5 @@ def plain_plan(args: list[str]) -> dict[str, Any] | None:
         "max_memory": None,
         "explain": False,
         "explain_all": False,
-        "search_name": "dfs",
+        "search_name": search,
     }

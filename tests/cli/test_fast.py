@@ -36,7 +36,14 @@ def _both(*args):
 
 @pytest.mark.parametrize(
     "options",
-    [(), ("-f", "jshop"), ("--format", "json"), ("-f", "text", "-q"), ("--search", "dfs")],
+    [
+        (),
+        ("-f", "jshop"),
+        ("--format", "json"),
+        ("-f", "text", "-q"),
+        ("--search", "dfs"),
+        ("--search", "auto", "-f", "jshop"),
+    ],
 )
 def test_the_fast_path_prints_what_click_s_path_prints(options):
     fast, slow = _both(*DOMESTIC, *options)
@@ -53,6 +60,11 @@ def test_an_hddl_instance_in_the_ipc_format_alike():
     fast, slow = _both(TOWERS / "domain.hddl", TOWERS / "pfile_05.hddl", "-f", "ipc")
     assert fast.returncode == slow.returncode == 0
     assert fast.stdout == slow.stdout and fast.stdout.startswith("==>")
+    # --search auto (the IPC's usual command line) runs without click too
+    fast, slow = _both(TOWERS / "domain.hddl", TOWERS / "pfile_05.hddl", "--search", "auto", "-q")
+    assert fast.returncode == slow.returncode == 0
+    assert _untimed(fast.stdout) == _untimed(slow.stdout) and fast.stderr == slow.stderr
+    assert "(!move" in fast.stdout
 
 
 def test_errors_and_no_plan_end_alike(tmp_path):
@@ -76,7 +88,9 @@ def test_errors_and_no_plan_end_alike(tmp_path):
         ["plan", "d", "p", "--format=ipc"],
         ["plan", "d", "p", "-f", "yaml"],
         ["plan", "d", "p", "-f"],
-        ["plan", "d", "p", "--search", "auto"],
+        ["plan", "d", "p", "--search", "gbfs"],
+        ["plan", "d", "p", "--search", "wastar"],
+        ["plan", "d", "p", "--search", "AUTO"],
         ["plan", "d", "p", "-q", "-q"],
         ["plan", "d", "p", "--help"],
         ["plan", "d"],
