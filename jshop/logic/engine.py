@@ -67,11 +67,41 @@ class Logic:
         self.state = state
         self.functions = functions
         self.arities = arities(domain, state)
+        # (pred, length, positions) -> {values there: atoms}, once the state
+        # is frozen (see freeze); None while it may change
+        self.indexes: dict | None = None
         # axiom bodies refer to axioms (their own predicate too): every list
         # exists before any body is compiled, and is filled in place
         self._axioms: dict[str, list] = {pred: [] for pred in domain.axioms}
         for pred, axs in domain.axioms.items():
             self._axioms[pred][:] = self._segments(axs)
+
+    def freeze(self) -> None:
+        """Promise that the state will not change any more: conjunctions
+        compiled from now on find the atoms that agree with their bound
+        arguments through an index (:meth:`index`) instead of scanning the
+        predicate's atoms. Grounding's reachable facts are such a state."""
+        if self.indexes is None:
+            self.indexes = {}
+
+    def index(self, pred: str, length: int, positions: tuple) -> dict:
+        """The frozen state's atoms of ``pred`` with ``length`` arguments by
+        their values at ``positions``, each list in the state's order (so a
+        lookup gives the atoms a scan would match, in the scan's order)."""
+        assert self.indexes is not None, "index of a state that may change"
+        key = (pred, length, positions)
+        found = self.indexes.get(key)
+        if found is None:
+            found = self.indexes[key] = {}
+            for t in self.state.bucket(pred):
+                if len(t) == length:
+                    v = tuple([t[p] for p in positions])
+                    lst = found.get(v)
+                    if lst is None:
+                        found[v] = [t]
+                    else:
+                        lst.append(t)
+        return found
 
     def _segments(self, axs: list) -> list:
         """A predicate's axioms, in definition order, as segments: a run of

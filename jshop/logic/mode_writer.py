@@ -29,9 +29,11 @@ from .conjuncts import (
 class CodeWriter:
     """Writes the generator of one conjunction under one mode."""
 
-    def __init__(self, lits: list, known: set, sized: tuple):
+    def __init__(self, lits: list, known: set, sized: tuple, indexed: bool = False):
         self.lits = lits
         self.sized = sized
+        self.indexed = indexed  # a frozen state: look atoms up by their bound arguments
+        self.pre: list = []  # lines of ``make``, run once when the code is bound
         self.entry = set(known)
         self.known = set(known)
         self.ns: dict = {
@@ -113,9 +115,10 @@ class CodeWriter:
             return None
         params = []
         for k in range(len(lits)):
-            params += [f"L{k}", f"M{k}", f"H{k}", f"G{k}", f"R{k}"]
+            params += [f"L{k}", f"M{k}", f"H{k}", f"G{k}", f"R{k}", f"X{k}"]
         src = [
             f"def make({', '.join(params)}):",
+            *("    " + line for line in self.pre),
             "    def run(env):",
             *self.lines,
             "    return run",
@@ -201,7 +204,15 @@ class CodeWriter:
         conds = [f"len(t) == {len(args)}"] if self.sized[k] else []
         binds: list = []
         first: dict = {}  # variable -> where it is first met in ``t``
+        source = f"chain(L{k}, H{k}[0])" if lit.facts else f"L{k}"
+        at = self.index_places(lit)
+        if at:  # the atoms that agree at the bound places, in the state's order
+            conds = []
+            self.pre.append(f"I{k} = X{k}({len(args)}, {tuple(at)!r})")
+            source = f"I{k}.get({self.term(tuple(args[i] for i in at))}, ())"
         for i, a in enumerate(args):
+            if i in at:
+                continue
             if type(a) is tuple and a and not term_vars(a, set()) <= self.known:
                 # a list with a free variable: its shape, then element by element
                 conds.append(f"type(t[{i}]) is tuple and len(t[{i}]) == {len(a)}")
@@ -209,7 +220,6 @@ class CodeWriter:
                     self.match(f"t[{i}][{j}]", x, conds, binds, first)
             else:
                 self.match(f"t[{i}]", a, conds, binds, first)
-        source = f"chain(L{k}, H{k}[0])" if lit.facts else f"L{k}"
         cond = " and ".join(conds) or "True"
         if negated:
             self.emit(f"ok{k} = True")
@@ -231,6 +241,17 @@ class CodeWriter:
             self.emit(b)
         self.known |= set(first)
         self.local |= set(first)
+
+    def index_places(self, lit: Literal) -> list:
+        """The places of ``lit``'s bound arguments, where the state is frozen
+        and every argument is a symbol, a number or a variable (else [],
+        and the atoms are scanned)."""
+        if not self.indexed or lit.facts:
+            return []
+        args = lit.args
+        if not all(type(a) in (str, float, Var) for a in args):
+            return []
+        return [i for i, a in enumerate(args) if type(a) is not Var or a.index in self.known]
 
     def match(self, place: str, a, conds: list, binds: list, first: dict) -> None:
         """Match the pattern term ``a`` (flat) with ``place`` of an atom, as

@@ -79,7 +79,8 @@ def compile_conjunction(
         return gen
     state = logic.state
     modes: dict = {}
-    constants = _constants(logic, lits, general)
+    indexed = logic.indexes is not None
+    constants = _constants(logic, lits, general, indexed)
     test = _tester(logic, lits) if len(names) == len(hit[2]) else None
     full = (1 << len(names)) - 1
 
@@ -88,16 +89,18 @@ def compile_conjunction(
         compiled when it is met the ``WARM``-th time in the process (see
         :mod:`~htn.jshop.logic.warming`), or at once if an earlier planner of
         the domain compiled it already."""
-        key = (id(e), mode, sized, entry)
+        key = (id(e), mode, sized, entry, indexed)
         factory = _CODE.get(e, key, _NONE)
         if factory is _NONE:
-            met = warming.calls(e, (mode, sized, entry))
+            met = warming.calls(e, (mode, sized, entry, indexed))
             met[1] += 1
             if met[1] < warming.WARM:
                 return test if mode == full else None
             known = {v for j, v in enumerate(names) if mode >> j & 1}
             factory = _CODE.put(
-                e, CodeWriter(lits, known, sized).factory(_mode_name(what, e, known, lits)), key
+                e,
+                CodeWriter(lits, known, sized, indexed).factory(_mode_name(what, e, known, lits)),
+                key,
             )
         f = gen if factory is None else factory(*constants)
         modes[mode] = f
@@ -136,11 +139,12 @@ def _tester(logic, lits: list):
     return test
 
 
-def _constants(logic, lits: list, general: list) -> list:
+def _constants(logic, lits: list, general: list, indexed: bool) -> list:
     """What the generated code of ``lits`` reads from this planner: per
     conjunct, its atoms list and set, its fact axioms ``(heads, counts)``,
-    its general satisfier, and the general conjunction of the conjuncts
-    after it."""
+    its general satisfier, the general conjunction of the conjuncts after
+    it, and on a frozen state its atoms' index by bound positions
+    (``index(length, positions)``, :meth:`~htn.jshop.logic.engine.Logic.index`)."""
     state = logic.state
     out = []
     for k, lit in enumerate(lits):
@@ -155,6 +159,11 @@ def _constants(logic, lits: list, general: list) -> list:
             out += [None, None, None]
         out.append(general[k])
         out.append(_rest(general, k + 1))
+        out.append(
+            (lambda n, pos, pred=lit.pred: logic.index(pred, n, pos))
+            if indexed and lit.kind in (ATOM, NOT_ATOM)
+            else None
+        )
     return out
 
 

@@ -185,6 +185,7 @@ class _Grounder:
     # ------------------------------------------------------------ 1. facts
     def reachable_facts(self):
         state, self.initial, self.logic = yield from reachable(self.domain, self.instance)
+        self.logic.freeze()  # the reachable facts are final: atoms looked up, not scanned
         return state
 
     # ------------------------------------------------------------ 2. top down
