@@ -106,9 +106,13 @@ class CallExpr(Record):
 
 
 class Precondition(Record):
-    """A logical precondition (3.5): plain, ``:first`` or ``:sort-by``."""
+    """A logical precondition (3.5): plain, ``:first`` or ``:sort-by``.
+    ``pulled``: the conjuncts of ``expr`` (the objects themselves) that the
+    HDDL reader pulled up from the method's subtasks
+    (:mod:`htn.jshop.readers.pullup`); not a field (neither shown nor compared)."""
 
-    __slots__ = ("expr", "first", "sort_var", "comparator", "pos")
+    __slots__ = ("expr", "first", "sort_var", "comparator", "pos", "pulled")
+    _fields = ("expr", "first", "sort_var", "comparator", "pos")
 
     def __init__(
         self,
@@ -117,10 +121,12 @@ class Precondition(Record):
         sort_var: Var | None = None,
         comparator: str | None = None,
         pos: Pos | None = None,
+        pulled: tuple = (),
     ) -> None:
         self.expr, self.first, self.sort_var = expr, first, sort_var
         self.comparator = comparator  # '<', '>' or a user function name
         self.pos = pos
+        self.pulled = pulled
 
 
 # ------------------------------------------------------ operator effects

@@ -133,7 +133,8 @@ class _Domain:
         head = tuple(f.term(x, names, m.task.pos) for x in m.task.args)
         conds, types = f.conjuncts(m.pre, names)
         more, more_types = f.conjuncts(m.network.constraints, names)
-        conds += more + [f.expr(e, names) for e in pulled]
+        pulled_up = [f.expr(e, names) for e in pulled]
+        conds += more + pulled_up
         types += more_types + [type_condition(v, p.types, p.pos) for v, p in zip(params, m.params)]
         bound = {v.index for v in variables(head, [])}
         pre = order_conjuncts(conds, types, bound, f.outer)
@@ -146,7 +147,7 @@ class _Domain:
         ]
         branch = S.Branch(
             m.name,
-            S.Precondition(_and(pre), pos=m.pos),
+            S.Precondition(_and(pre), pos=m.pos, pulled=tuple(pulled_up)),
             _task_list(items, order, m.network.pos),
             m.pos,
         )

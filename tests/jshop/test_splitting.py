@@ -181,6 +181,46 @@ def test_a_later_subtasks_own_variables_split_off_where_only_static_facts_read_t
     _check_plan(tmp_path, inputs.domain, inputs.problem, plan, search)
 
 
+# IPC 2020 Woodworking's `process` methods in small: the last subtask
+# colours a part of its own, and the reader pulls that action's `(r ?z)`
+# up into the method (no earlier subtask adds an r atom)
+PULLED = """(define (domain d) (:requirements :hierarchy :typing :method-preconditions)
+  (:types o)
+  (:predicates (p ?x - o) (r ?x - o))
+  (:task t :parameters (?x - o))
+  (:method pulled :parameters (?x ?z - o) :task (t ?x)
+    :ordered-subtasks (and (a ?x) (c ?z)))
+  (:action a :parameters (?x - o) :precondition () :effect (p ?x))
+  (:action c :parameters (?x - o) :precondition (r ?x) :effect (not (r ?x)))
+  (:action d :parameters (?x - o) :precondition () :effect (r ?x)))
+"""
+
+
+def test_a_later_subtasks_condition_pulled_up_into_the_method_moves_back_with_it(tmp_path):
+    # (r ?z) is dynamic, but the method holds it only because (c ?z) needs
+    # it, and (a ?x) cannot add it: tested when (c ?z) comes, it decides the
+    # same plans, and ?z no longer multiplies the method's instances
+    problem = """(define (problem p) (:domain d) (:objects k l m - o)
+      (:htn :parameters () :ordered-subtasks (and (t k))) (:init (r l)))"""
+    inputs, instance = _read(tmp_path, PULLED, problem)
+    (written,) = inputs.domain.methods["t"]
+    assert [c.pred for c in written.branches[0].pre.pulled] == ["r"]
+    methods, _origin, made = split_methods(
+        inputs.domain.methods, inputs.domain.dynamic_predicates()
+    )
+    assert made == {"split:pulled@2"}
+    (inner,) = methods["split:pulled@2"]
+    assert "r" in {c.pred for c in inner.branches[0].pre.expr.items}
+    (outer,) = methods["t"]
+    assert "r" not in {c.pred for c in outer.branches[0].pre.expr.items}
+    model = ground(inputs.domain, instance)
+    assert len(model.methods_of[model.task_ids[("t", ("k",))]]) == 1  # not one per ?z
+    search = BestFirst(inputs.domain, instance)
+    plan = next(p for p in search.plans(timeout=60) if p is not None)
+    assert [(x.name, *x.args) for x in plan.steps] == [("!a", "k"), ("!c", "l")]
+    _check_plan(tmp_path, inputs.domain, inputs.problem, plan, search)
+
+
 # IPC 2020 Minecraft-Player's find-way methods in small: `stop` walks the
 # player from wherever it stands (?p, its only subtask's own variable) to
 # ?x; `same` names no variable the head does not

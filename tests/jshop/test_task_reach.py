@@ -102,7 +102,7 @@ CORPUS = SHARED / "corpus" / "ipc2020-to"
     [
         ("Blocksworld-GTOHP", "p05.hddl", True),  # 566 methods, 139 reached
         ("Depots", "p05.hddl", True),  # 2,617, 567 reached
-        ("Rover-GTOHP", "p05.hddl", False),
+        ("Rover-GTOHP", "p05.hddl", True),  # 759, 738 reached
         ("Transport", "pfile05.hddl", True),  # 113, 73 reached
     ],
 )
