@@ -70,6 +70,9 @@ class Logic:
         # (pred, length, positions) -> {values there: atoms}, once the state
         # is frozen (see freeze); None while it may change
         self.indexes: dict | None = None
+        # compile a conjunction's binding mode at its first call, without
+        # warming (grounding: every call is a join over the whole state)
+        self.hot = False
         # axiom bodies refer to axioms (their own predicate too): every list
         # exists before any body is compiled, and is filled in place
         self._axioms: dict[str, list] = {pred: [] for pred in domain.axioms}

@@ -107,6 +107,9 @@ class CodeWriter:
         for v in sorted(self.entry & set().union(*(lit.vars for lit in lits))):
             self.emit(f"x{v} = env[{v}]")
         for k in range(len(lits)):
+            if k and self.loops >= NESTED_CONJUNCTS:
+                self.hand_off(k)  # Python nests at most 20 loops
+                break
             if not self.literal(k):
                 break
         else:
@@ -125,6 +128,18 @@ class CodeWriter:
         ]
         define("\n".join(src), what, self.ns)
         return self.ns["make"]
+
+    def hand_off(self, k: int) -> None:
+        """Conjuncts ``k..`` asked of the rest's own conjunction (``R{k-1}``,
+        compiled per binding mode in its turn), with the binding so far."""
+        if self.local:
+            self.emit(f"e{k} = {self.base}[:]")
+            for v in sorted(self.local):
+                self.emit(f"e{k}[{v}] = x{v}")
+            arg = f"e{k}"
+        else:
+            arg = self.base
+        self.emit(f"yield from R{k - 1}({arg})")
 
     def finish(self) -> None:
         if self.local:

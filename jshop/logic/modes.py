@@ -50,6 +50,7 @@ MAX_VARS = 60  # a mode is a bit mask over the conjunction's variables
 
 _CODE = cache()  # (id(conjunction), mode, sized, entry) -> factory or None
 _LITERALS = cache()  # id(conjunction) -> (conjunctions, _Literals, variables)
+_TAILS = cache()  # (id(conjunction), k) -> the conjunction of its conjuncts from k on
 _NONE = object()
 
 
@@ -80,7 +81,8 @@ def compile_conjunction(
     state = logic.state
     modes: dict = {}
     indexed = logic.indexes is not None
-    constants = _constants(logic, lits, general, indexed)
+    hot = logic.hot
+    constants = _constants(logic, lits, general, indexed, e, items)
     test = _tester(logic, lits) if len(names) == len(hit[2]) else None
     full = (1 << len(names)) - 1
 
@@ -88,13 +90,13 @@ def compile_conjunction(
         """This mode's code, or None for the general path: a mode is
         compiled when it is met the ``WARM``-th time in the process (see
         :mod:`~htn.jshop.logic.warming`), or at once if an earlier planner of
-        the domain compiled it already."""
+        the domain compiled it already, or on a ``hot`` engine."""
         key = (id(e), mode, sized, entry, indexed)
         factory = _CODE.get(e, key, _NONE)
         if factory is _NONE:
             met = warming.calls(e, (mode, sized, entry, indexed))
             met[1] += 1
-            if met[1] < warming.WARM:
+            if met[1] < warming.WARM and not hot:
                 return test if mode == full else None
             known = {v for j, v in enumerate(names) if mode >> j & 1}
             factory = _CODE.put(
@@ -139,7 +141,7 @@ def _tester(logic, lits: list):
     return test
 
 
-def _constants(logic, lits: list, general: list, indexed: bool) -> list:
+def _constants(logic, lits: list, general: list, indexed: bool, e: S.And, items: list) -> list:
     """What the generated code of ``lits`` reads from this planner: per
     conjunct, its atoms list and set, its fact axioms ``(heads, counts)``,
     its general satisfier, the general conjunction of the conjuncts after
@@ -158,7 +160,7 @@ def _constants(logic, lits: list, general: list, indexed: bool) -> list:
         else:
             out += [None, None, None]
         out.append(general[k])
-        out.append(_rest(general, k + 1))
+        out.append(_rest(logic, e, items, general, k + 1))
         out.append(
             (lambda n, pos, pred=lit.pred: logic.index(pred, n, pos))
             if indexed and lit.kind in (ATOM, NOT_ATOM)
@@ -167,16 +169,22 @@ def _constants(logic, lits: list, general: list, indexed: bool) -> list:
     return out
 
 
-def _rest(general: list, k: int) -> Callable:
-    """The general conjunction of ``general[k:]``, made on first use (the
-    compiled code needs it only when a conjunct binds a variable to a term
-    with variables in it)."""
+def _rest(logic, e: S.And, items: list, general: list, k: int) -> Callable:
+    """The conjunction of conjuncts ``k..``, made on first use: the compiled
+    code hands it the binding where a conjunct binds a variable to a term
+    with variables in it, or where Python's limit on nested loops is near
+    (an action of IPC 2020 Woodworking types eleven parameters). It is
+    compiled per binding mode in its turn (the tail's conjunction object is
+    kept per conjunction, so every planner shares its code)."""
     made: list = []
 
     def rest(env):
         if not made:
-            tail = general[k:]
-            made.append(conjunction(tail) if len(tail) > 1 else tail[0])
+            if len(general) - k > 1:
+                tail = _TAILS.make(e, lambda: S.And(items[k:]), k)
+                made.append(compile_conjunction(logic, tail))
+            else:
+                made.append(general[k])
         return made[0](env)
 
     return rest

@@ -189,6 +189,7 @@ def reachable(
             state.add(pred, atom.args)
     initial = [(p, a) for p, a in state.facts()]
     logic = Logic(domain, state)
+    logic.hot = True  # few calls, each a join over the growing facts: compiled at once
     every = bool(domain.axioms)  # a derived predicate could depend on any
     programs = [
         _Program(op, logic, every, factor, once) for ops in domain.operators.values() for op in ops
