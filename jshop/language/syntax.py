@@ -121,7 +121,7 @@ class Precondition(Record):
         sort_var: Var | None = None,
         comparator: str | None = None,
         pos: Pos | None = None,
-        pulled: tuple = (),
+        pulled: tuple[Any, ...] = (),
     ) -> None:
         self.expr, self.first, self.sort_var = expr, first, sort_var
         self.comparator = comparator  # '<', '>' or a user function name
