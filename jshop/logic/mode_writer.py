@@ -132,14 +132,17 @@ class CodeWriter:
     def hand_off(self, k: int) -> None:
         """Conjuncts ``k..`` asked of the rest's own conjunction (``R{k-1}``,
         compiled per binding mode in its turn), with the binding so far."""
-        if self.local:
-            self.emit(f"e{k} = {self.base}[:]")
-            for v in sorted(self.local):
-                self.emit(f"e{k}[{v}] = x{v}")
-            arg = f"e{k}"
-        else:
-            arg = self.base
-        self.emit(f"yield from R{k - 1}({arg})")
+        self.emit(f"yield from R{k - 1}({self.binding(k)})")
+
+    def binding(self, k: int) -> str:
+        """The binding list so far, as of conjunct ``k``: ``base``, or a copy
+        of it named ``e{k}`` with the variables held in locals written in."""
+        if not self.local:
+            return self.base
+        self.emit(f"e{k} = {self.base}[:]")
+        for v in sorted(self.local):
+            self.emit(f"e{k}[{v}] = x{v}")
+        return f"e{k}"
 
     def finish(self) -> None:
         if self.local:
@@ -298,13 +301,7 @@ class CodeWriter:
         """Conjunct ``k`` asked of the general engine (``call`` names the
         satisfier, ``{}`` standing for the binding list)."""
         call = call.replace("{k}", str(k))
-        if self.local:
-            self.emit(f"e{k} = {self.base}[:]")
-            for v in sorted(self.local):
-                self.emit(f"e{k}[{v}] = x{v}")
-            arg = f"e{k}"
-        else:
-            arg = self.base
+        arg = self.binding(k)
         last = k == len(self.lits) - 1
         if last:
             self.emit(f"yield from {call.format(arg)}")
