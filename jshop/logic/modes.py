@@ -48,7 +48,7 @@ from .mode_writer import CodeWriter
 MAX_LITERALS = 40  # longer conjunctions stay on the general path (indentation)
 MAX_VARS = 60  # a mode is a bit mask over the conjunction's variables
 
-_CODE = cache()  # (id(conjunction), mode, sized, entry) -> factory or None
+_CODE = cache()  # (id(conjunction), mode, sized, entry, indexed) -> factory or None
 _LITERALS = cache()  # id(conjunction) -> (conjunctions, _Literals, variables)
 _TAILS = cache()  # (id(conjunction), k) -> the conjunction of its conjuncts from k on
 _NONE = object()
@@ -144,8 +144,8 @@ def _tester(logic, lits: list):
 def _constants(logic, lits: list, general: list, indexed: bool, e: S.And, items: list) -> list:
     """What the generated code of ``lits`` reads from this planner: per
     conjunct, its atoms list and set, its fact axioms ``(heads, counts)``,
-    its general satisfier, the general conjunction of the conjuncts after
-    it, and on a frozen state its atoms' index by bound positions
+    its general satisfier, the conjunction of the conjuncts after it
+    (:func:`_rest`), and on a frozen state its atoms' index by bound positions
     (``index(length, positions)``, :meth:`~htn.jshop.logic.engine.Logic.index`)."""
     state = logic.state
     out = []

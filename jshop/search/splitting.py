@@ -161,7 +161,11 @@ def _split(m: S.Method, name_for, dynamic: set[str] | None):
         [
             S.Branch(
                 b.label,
-                S.Precondition(S.And(left), pos=b.pre.pos, pulled=b.pre.pulled),
+                S.Precondition(
+                    S.And(left),
+                    pos=b.pre.pos,
+                    pulled=tuple(p for p in b.pre.pulled if _among(p, tuple(left))),
+                ),
                 S.TaskList(tasks, True, b.tasks.pos),
                 b.pos,
             )
