@@ -181,7 +181,7 @@ def _rest(logic, e: S.And, items: list, general: list, k: int) -> Callable:
     def rest(env):
         if not made:
             if len(general) - k > 1:
-                tail = _TAILS.make(e, lambda: S.And(items[k:]), k)
+                tail = _TAILS.make(e, lambda: S.And(items[k:]), (id(e), k))
                 made.append(compile_conjunction(logic, tail))
             else:
                 made.append(general[k])

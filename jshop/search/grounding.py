@@ -219,7 +219,8 @@ class _Grounder:
         model.roots, model.root_order = tuple(roots), self.root_order
         seen = set(roots)
         r = Reach(model.init) if self.reach else None
-        yield from self._top_down(list(roots), seen, r)
+        # a task the initial network names twice is grounded once
+        yield from self._top_down(list(dict.fromkeys(roots)), seen, r)
         if r is not None:
             # what the hierarchy did not reach, grounded as before unless it
             # proves the problem has no plan (see SKIPPED)
@@ -437,8 +438,8 @@ class _Grounder:
             for t in [t for t in model.actions if t not in actions]:
                 del model.actions[t]
             for ms in model.methods_of.values():
-                if any(id(gm) not in methods for gm in ms):
-                    ms[:] = [gm for gm in ms if id(gm) in methods]
+                if any(gm not in methods for gm in ms):
+                    ms[:] = [gm for gm in ms if gm in methods]
             if not self._prune():
                 return
             _facts, methods, actions = reached(model)

@@ -48,10 +48,12 @@ class Reach:
 
     def __init__(self, init: int):
         self.facts = init  # the reached facts (a mask)
-        self.methods: set = set()  # id of each reached method
+        # each reached method (the objects: an id could be given again to a
+        # new method once a list of methods that was replaced is freed)
+        self.methods: set = set()
         self.actions: set = set()  # task id of each reached action
         self.waiting: dict = {}  # fact bit -> the (task, method or action) that wait for it
-        self.on_trees: set = set()  # id of those that wait for every fact of their trees
+        self.on_trees: set = set()  # those that wait for every fact of their trees
         self.offered: list = []  # (task, method or action) to look at
         self.subtasks: list = []  # of the methods reached, not taken yet
 
@@ -71,8 +73,8 @@ class Reach:
                 if pos & ~self.facts or not all(_relaxed(tree, self.facts) for tree in rest):
                     self._wait(t, item)
                 elif hasattr(item, "body"):  # a method
-                    if id(item) not in self.methods:
-                        self.methods.add(id(item))
+                    if item not in self.methods:
+                        self.methods.add(item)
                         self.subtasks += item.body
                 elif t not in self.actions:
                     self.actions.add(t)
@@ -92,8 +94,8 @@ class Reach:
         if missing:
             low = (missing & -missing).bit_length() - 1
             self.waiting.setdefault(low, []).append((t, item))
-        elif id(item) not in self.on_trees:
-            self.on_trees.add(id(item))
+        elif item not in self.on_trees:
+            self.on_trees.add(item)
             for tree in item.pre[2]:
                 for b in _positive(tree):
                     if not self.facts >> b & 1:
@@ -102,7 +104,7 @@ class Reach:
 
 def reached(model) -> tuple[int, set, set]:
     """``(facts, methods, actions)`` of a grounded model: the reached facts
-    (a mask), and the reached methods (by ``id``) and actions (by task id)."""
+    (a mask), and the reached methods and actions (by task id)."""
     r = Reach(model.init)
     todo, seen = list(model.roots), set(model.roots)
     while todo:

@@ -147,3 +147,38 @@ def test_where_a_plan_is_possible_the_searches_get_the_model_as_before(domain, p
     dom, prob = load_inputs(str(corpus / domain), str(corpus / problem))
     inst = prob.instances[0]
     assert _signature(ground(dom, inst)) == _signature(ground(dom, inst, reach=False))
+
+
+# found by test_commit_rule's random problems: the initial network names
+# (t1) twice, and t2's method must bring in !a2, which adds p2
+TWICE = """(define (domain rnd) (:requirements :hierarchy :negative-preconditions)
+  (:predicates (p0) (p1) (p2) (p3))
+  (:task t1 :parameters ()) (:task t2 :parameters ())
+  (:method m1_0 :parameters () :task (t1) :precondition (not (p2)) :subtasks (and (s0 (t2))))
+  (:method m1_1 :parameters () :task (t1) :precondition (p3) :subtasks (and (s0 (t2))))
+  (:method m2_0 :parameters () :task (t2) :precondition () :subtasks (and (s0 (a2))))
+  (:method m2_1 :parameters () :task (t2) :precondition (p0) :subtasks (and (s0 (a2))))
+  (:action a0 :parameters () :precondition () :effect ())
+  (:action a2 :parameters () :precondition (and (p3) (p1)) :effect (p2)))
+"""
+TWICE_PROBLEM = """(define (problem r1) (:domain rnd)
+  (:htn :parameters () :subtasks (and (s0 (t1)) (s1 (a0)) (s2 (t1))))
+  (:init (p0) (p1) (p2) (p3)))
+"""
+
+
+def test_a_task_named_twice_in_the_initial_network_keeps_its_plan(tmp_path):
+    # the reachability kept the reached methods by id: grounding (t1) a
+    # second time freed the first list of its methods, a method made later
+    # could get one of their ids and pass as reached, and its subtask was
+    # never grounded, so that "no plan" was answered now and then
+    (tmp_path / "d.hddl").write_text(TWICE)
+    (tmp_path / "p.hddl").write_text(TWICE_PROBLEM)
+    dom, prob = load_inputs(str(tmp_path / "d.hddl"), str(tmp_path / "p.hddl"))
+    inst = prob.instances[0]
+    for _ in range(20):
+        model = ground(dom, inst)
+        assert sorted(a.name for a in model.actions.values()) == ["!a0", "!a2"]
+        assert all(model.methods_of[t] for t in model.roots if t not in model.actions)
+    plan = next(p for p in BestFirst(dom, inst).plans() if p is not None)
+    assert [s.name for s in plan.steps] == ["!a2", "!a0", "!a2"]
