@@ -26,23 +26,30 @@ class AncestorLoopCheck(LoopCheck):
 
     def __init__(self, state):
         super().__init__(state)
-        self.chains: dict = {}  # id(node) -> (key, parent's chain) of its ancestors
+        # id(node) -> (node, chain): the chain (key, parent's chain) of its
+        # ancestors, beside the node itself, so that an id Python gives again
+        # to a new node never finds the chain of one that was freed
+        self.chains: dict = {}
 
     def is_loop(self, node, key) -> bool:
         """Whether an ancestor of ``node`` was reduced with ``key`` (a key
         known to be active)."""
-        chain = self.chains.get(id(node))
+        chain = self._chain(node)
         while chain is not None:
             if chain[0] == key:
                 return True
             chain = chain[1]
         return False
 
+    def _chain(self, node):
+        hit = self.chains.get(id(node))
+        return hit[1] if hit is not None and hit[0] is node else None
+
     def enter(self, node, key) -> None:
         super().enter(node, key)
-        chain = (key, self.chains.get(id(node)))
+        chain = (key, self._chain(node))
         for child in node.subtasks:
-            self.chains[id(child)] = chain
+            self.chains[id(child)] = (child, chain)
 
     def leave(self, node) -> None:
         super().leave(node)
