@@ -27,13 +27,13 @@ import time
 
 import rclpy
 from action_msgs.msg import GoalStatus
-from rclpy.action import ActionClient
 from rclpy.executors import SingleThreadedExecutor
 
 from htn.jshop.language.errors import HtnError
 from htn.robot.interface import Check, Robot, SkillResult
 
 from . import mapping as mapping_file
+from .action_client import OrderedActionClient
 from .interfaces import InterfaceBuildError, import_interfaces, import_type
 
 TICK = 0.005  # s a tick waits for a result before the executor goes on
@@ -81,7 +81,7 @@ class RosRobot(Robot):
             rclpy.init()
         self.node = rclpy.create_node(node_name)
         self._lock = threading.Lock()
-        self._actions: dict[str, ActionClient] = {}
+        self._actions: dict[str, OrderedActionClient] = {}
         self._services: dict = {}
         self._topics: dict = {}  # topic check name -> last message
         self._goals: dict = {}  # id -> a goal's sending future, until it ends
@@ -123,11 +123,11 @@ class RosRobot(Robot):
     def sim_time(self, value: float) -> None:
         self._clock = value
 
-    def _action(self, call) -> ActionClient:
+    def _action(self, call) -> OrderedActionClient:
         with self._lock:
             client = self._actions.get(call.name)
             if client is None:
-                client = ActionClient(self.node, import_type(call.type), call.name)
+                client = OrderedActionClient(self.node, import_type(call.type), call.name)
                 self._actions[call.name] = client
             return client
 

@@ -14,7 +14,13 @@ from importlib.util import find_spec
 import pytest
 
 # each module's offset, so that two modules on the same worker never share a domain
-OFFSETS = {"test_interfaces": 0, "test_record": 25, "test_node": 50, "test_robot": 75}
+OFFSETS = {
+    "test_interfaces": 0,
+    "test_record": 25,
+    "test_node": 50,
+    "test_robot": 75,
+    "test_action_client": 95,
+}
 
 
 def environment(module: str) -> dict[str, str]:
