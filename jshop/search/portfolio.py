@@ -35,14 +35,13 @@ from typing import TYPE_CHECKING
 
 from htn.jshop.language import syntax as S
 
-from .best_first import WASTAR_WEIGHT, BestFirst, interleaves
-from .goal_cuts import chained
-from .ground_formulas import NotGroundable
 from .planner import Planner
 from .stats import Stats
 
 if TYPE_CHECKING:
     from htn.jshop.plans.plan import Plan
+
+    from .best_first import BestFirst
 
 SLICE = 0.5  # CPU seconds per turn and share
 TIE = SLICE / 4  # CPU seconds per share within which searches count as even
@@ -80,7 +79,10 @@ TDG_SHARE_NO_CUT = 1
 class Portfolio:
     """Interleaves a :class:`Planner`, a :class:`BestFirst` (GBFS) and,
     once GBFS has grounded the problem, a weighted A* on the same model
-    (and a GBFS with TDG_m where the goal-chain cut is on)."""
+    (and a GBFS with TDG_m where the goal-chain cut is on). The heuristic
+    searches are built (and their modules imported) at their first turn:
+    where depth-first search finds a plan within its first slice, which is
+    most small problems, none of them is."""
 
     def __init__(
         self,
@@ -94,98 +96,86 @@ class Portfolio:
         self.dfs = Planner(
             domain, instance, functions, max_memory=max_memory, tree_paths=tree_paths, **options
         )
-        self.gbfs = BestFirst(
-            domain, instance, max_memory=max_memory, tree_paths=tree_paths, label="gbfs"
-        )
-        self.wastar = BestFirst(
-            domain,
-            instance,
-            weight=WASTAR_WEIGHT,
-            max_memory=max_memory,
-            tree_paths=tree_paths,
-            label="wastar",
-        )
-        self.tdg = BestFirst(
-            domain,
-            instance,
-            heuristic="tdg",
-            max_memory=max_memory,
-            tree_paths=tree_paths,
-            label="gbfs-tdg",
-        )
-        self.serial = BestFirst(
-            domain,
-            instance,
-            max_memory=max_memory,
-            tree_paths=tree_paths,
-            label="gbfs-serial",
-            serial=True,
-        )
+        self._problem = (domain, instance)
+        self._max_memory, self._tree_paths = max_memory, tree_paths
+        self._made: dict[str, Planner | BestFirst] = {"dfs": self.dfs}
         self.stats = Stats()
-        self.labels = {
-            id(self.serial): "gbfs-serial",
-            id(self.dfs): "dfs",
-            id(self.gbfs): "gbfs",
-            id(self.wastar): "wastar",
-            id(self.tdg): "gbfs-tdg",
-        }
         self.grounded = False
         self.started = 2  # searches started: dfs, gbfs, then those on its model
-        self.ended: list = []  # the searches that ended, in order
-        self.spent: dict = {}  # id(search) -> CPU seconds it has used
+        self.ended: list[str] = []  # the searches that ended, in order
+        self.spent: dict[str, float] = {}  # label -> CPU seconds it has used
         self.turns: list[str] = []  # who had each turn, in order
 
+    def member(self, label: str):
+        """The search ``label`` (a key of :data:`SHARES`), built at its first need."""
+        search = self._made.get(label)
+        if search is None:
+            from .best_first import WASTAR_WEIGHT, BestFirst
+
+            search = BestFirst(
+                *self._problem,
+                heuristic="tdg" if label == "gbfs-tdg" else "rc",
+                weight=WASTAR_WEIGHT if label == "wastar" else None,
+                max_memory=self._max_memory,
+                tree_paths=self._tree_paths,
+                label=label,
+                serial=label == "gbfs-serial",
+            )
+            self._made[label] = search
+        return search
+
+    gbfs = property(lambda self: self.member("gbfs"))
+    wastar = property(lambda self: self.member("wastar"))
+    tdg = property(lambda self: self.member("gbfs-tdg"))
+    serial = property(lambda self: self.member("gbfs-serial"))
+
     def plans(self, timeout: float | None = None) -> Generator[Plan, None, None]:
-        searches: list[Planner | BestFirst] = [self.dfs, self.gbfs]
-        streams: dict[int, Generator[Plan | None, None, None] | None]
-        streams = {id(s): None for s in searches}
-        live = list(searches)
+        live = ["dfs", "gbfs"]
+        streams: dict[str, Generator[Plan | None, None, None]] = {}
         # CPU seconds each search has used; the next turn goes to the live
         # search that has used the least for its share (stride scheduling),
         # so that one started late, on GBFS's model, joins at once and at
         # the others' pace rather than after their long slices
-        used = {id(s): 0.0 for s in searches}  # what it used, or had when it joined
-        self.spent = {id(s): 0.0 for s in searches}
+        used = dict.fromkeys(live, 0.0)  # what it used, or had when it joined
+        self.spent = dict.fromkeys(live, 0.0)
         self.stats.started = time.perf_counter()
         try:
             while live:
-                if not self.grounded and self.gbfs.h is not None:
+                if not self.grounded and "gbfs" in self._made and self.gbfs.h is not None:
                     # a turn behind the slowest: each has its first turn at once
-                    pace = min(used[id(s)] / self._share(s) for s in live) - SLICE
+                    pace = min(used[s] / self._share(s) for s in live) - SLICE
                     began = time.process_time()
                     for s in self._on_model():
                         live.append(s)
-                        searches.append(s)
-                        streams[id(s)] = None
-                        used[id(s)] = pace * self._share(s)
-                        self.spent[id(s)] = 0.0
+                        used[s] = pace * self._share(s)
+                        self.spent[s] = 0.0
                     # the one heuristic built there is TDG_m's (the others share
                     # GBFS's): its CPU time is its search's (0.55 s on Freecell 04-3)
                     built = time.process_time() - began
-                    used[id(self.tdg)] += built
-                    self.spent[id(self.tdg)] += built
+                    used["gbfs-tdg"] += built
+                    self.spent["gbfs-tdg"] += built
                 # in quarter turns, so that a slice's overshoot of a few
                 # milliseconds does not decide a tie: the earlier search goes
-                search = min(live, key=lambda s: int(used[id(s)] / self._share(s) / TIE))
-                search.slice_s = SLICE * self._share(search)
-                stream = streams[id(search)]
+                label = min(live, key=lambda s: int(used[s] / self._share(s) / TIE))
+                search = self.member(label)
+                search.slice_s = SLICE * self._share(label)
+                stream = streams.get(label)
                 if stream is None:
-                    stream = streams[id(search)] = search.plans(timeout)
-                if search is self.serial and self.spent[id(search)] >= SERIAL_BUDGET:
+                    stream = streams[label] = search.plans(timeout)
+                if label == "gbfs-serial" and self.spent[label] >= SERIAL_BUDGET:
                     stream.close()  # its budget is spent: the others go on
-                    live.remove(search)
-                    self.ended.append(search)
+                    live.remove(label)
+                    self.ended.append(label)
                     continue
-                self.turns.append(self.labels[id(search)])
+                self.turns.append(label)
                 began = time.process_time()
                 try:
                     plan = next(stream)
                 except StopIteration:
-                    live.remove(search)
-                    self.ended.append(search)
+                    live.remove(label)
+                    self.ended.append(label)
                     if (
-                        search is not self.dfs
-                        and search is not self.serial  # it leaves plans out
+                        label not in ("dfs", "gbfs-serial")  # the serial GBFS leaves plans out
                         and not search.stats.timed_out
                         and search.stats.bound is None
                     ):
@@ -193,58 +183,66 @@ class Portfolio:
                     if search.stats.timed_out:
                         return
                     continue
-                except NotGroundable:
-                    live.remove(search)  # depth-first search goes on alone
-                    self.ended.append(search)
+                except Exception as exc:
+                    from .ground_formulas import NotGroundable
+
+                    if not isinstance(exc, NotGroundable):
+                        raise
+                    live.remove(label)  # depth-first search goes on alone
+                    self.ended.append(label)
                     continue
                 finally:
                     cpu = time.process_time() - began
-                    used[id(search)] += cpu
-                    self.spent[id(search)] += cpu
+                    used[label] += cpu
+                    self.spent[label] += cpu
                     self._sum()
                 if plan is None:  # its slice is over: the next one's turn
                     continue
-                self.stats.found_by = self.labels[id(search)]
+                self.stats.found_by = label
                 self.stats.plans_found += 1
                 plan.index = self.stats.plans_found - 1
                 yield plan
         finally:
             for stream in streams.values():
-                if stream is not None:
-                    stream.close()
+                stream.close()
             self._sum()
 
-    def _share(self, search) -> float:
-        if search is self.tdg and not chained(search.cut):
-            return TDG_SHARE_NO_CUT
-        return SHARES[self.labels[id(search)]]
+    def _share(self, label: str) -> float:
+        if label == "gbfs-tdg":
+            from .goal_cuts import chained
 
-    def _on_model(self) -> list:
+            if not chained(self.tdg.cut):
+                return TDG_SHARE_NO_CUT
+        return SHARES[label]
+
+    def _on_model(self) -> list[str]:
         """The searches to start once GBFS has grounded the problem, on its
         model (and its heuristic's costs and goal-chain cut, shared)."""
+        from .best_first import interleaves
+
         self.grounded = True
         g = self.gbfs
         assert g.model is not None  # grounded: its heuristic is built
         more = []
         if interleaves(g.model):  # first: where it works it needs little
             self.serial._prepared(g.model, g.h, g.cut)
-            more.append(self.serial)
+            more.append("gbfs-serial")
         self.wastar._prepared(g.model, g.h, g.cut)
-        more.append(self.wastar)
+        more.append("wastar")
         self.tdg._prepared(g.model, None, g.cut)
-        more.append(self.tdg)
+        more.append("gbfs-tdg")
         self.started += len(more)
         return more
 
     def _sum(self) -> None:
         """The portfolio's statistics: both searches' work added up."""
         total = self.stats
-        parts = [s.stats for s in (self.dfs, self.gbfs, self.wastar, self.tdg, self.serial)]
+        parts = [s.stats for s in self._made.values()]
         for key in ("expansions", "operator_applications", "backtracks", "goal_cuts"):
             setattr(total, key, sum(getattr(p, key) for p in parts))
         total.elapsed = time.perf_counter() - total.started
         total.timed_out = any(p.timed_out for p in parts)
         total.interrupted = any(p.interrupted for p in parts)
         # a bound ends the portfolio only when it stopped the last search left
-        last = self.ended[-1].stats.bound if len(self.ended) >= self.started else None
+        last = self._made[self.ended[-1]].stats.bound if len(self.ended) >= self.started else None
         total.bound = last

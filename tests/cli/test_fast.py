@@ -121,3 +121,29 @@ def test_a_plain_plan_as_a_process_imports_no_click_and_no_lark():
     assert "Plan cost: 8.0" in r.stdout
     # well-formed JSHOP2 input is read without the lark grammar; click and rich stay out
     assert r.stderr.strip().splitlines()[-1] == "[]"
+
+
+def test_auto_on_a_small_hddl_instance_builds_no_heuristic_search():
+    """Towers pfile_05: depth-first search plans it in its first turn, so
+    the portfolio neither builds nor imports the heuristic searches."""
+    if not (TOWERS / "pfile_05.hddl").is_file():
+        pytest.skip(f"{TOWERS} not found")
+    code = (
+        "import sys; sys.argv = ['htn', 'plan', *sys.argv[1:]];"
+        "import htn.cli.main as m\n"
+        "try:\n    m.main()\nexcept SystemExit:\n    pass\n"
+        "print(sorted(x for x in sys.modules if x.startswith('htn.jshop.search')), file=sys.stderr)"
+    )
+    r = subprocess.run(
+        [sys.executable, "-c", code, TOWERS / "domain.hddl", TOWERS / "pfile_05.hddl"]
+        + ["--search", "auto", "-f", "json"],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        timeout=120,
+    )
+    assert '"found_by":"dfs"' in r.stdout.replace(" ", ""), r.stdout[-2000:] + r.stderr[-2000:]
+    loaded = r.stderr.strip().splitlines()[-1]
+    assert "htn.jshop.search.portfolio" in loaded
+    for module in ("best_first", "grounding", "heuristics", "reachability"):
+        assert f"htn.jshop.search.{module}'" not in loaded, loaded

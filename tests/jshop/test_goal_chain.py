@@ -176,16 +176,16 @@ def test_auto_adds_a_tdg_search_with_the_cut_where_the_goal_has_a_chain(domain, 
     auto = Portfolio(dom, prob.instances[0])
     auto.gbfs.prepare()
     more = auto._on_model()
-    assert [auto.labels[id(s)] for s in more] == arms and auto.started == 2 + len(arms)
-    for s in more:
+    assert more == arms and auto.started == 2 + len(arms)
+    for s in map(auto.member, more):
         assert s.model is auto.gbfs.model and s.cut is auto.gbfs.cut
     assert auto.wastar.h is auto.gbfs.h
     assert auto.tdg.heuristic_name == "tdg"
-    assert auto._share(auto.tdg) == (3 if chained(auto.tdg.cut) else 1)
+    assert auto._share("gbfs-tdg") == (3 if chained(auto.tdg.cut) else 1)
     if "gbfs-serial" in arms:
         assert chained(auto.tdg.cut)
     else:
-        assert not chained(auto.tdg.cut) and auto._share(auto.tdg) == 1
+        assert not chained(auto.tdg.cut) and auto._share("gbfs-tdg") == 1
         plan = next(p for p in auto.tdg.plans(timeout=60) if p is not None)
         assert plan.steps
 
@@ -204,10 +204,9 @@ def test_auto_shares_cpu_by_the_shares_and_a_late_search_joins_at_once():
     dom, prob = load_inputs(str(domain / "domain.hddl"), str(domain / "pfile13.hddl"))
     auto = Portfolio(dom, prob.instances[0], guards=False)
     assert next(auto.plans(timeout=6), None) is None
-    members = (auto.dfs, auto.gbfs, auto.wastar, auto.tdg)
-    assert set(auto.spent) == {id(s) for s in members}
+    assert set(auto.spent) == {"dfs", "gbfs", "wastar", "gbfs-tdg"}
     # CPU seconds per share: each turn adds SLICE to one of them
-    pace = {auto.labels[id(s)]: auto.spent[id(s)] / auto._share(s) for s in members}
+    pace = {s: auto.spent[s] / auto._share(s) for s in auto.spent}
     # the late ones had their first turns as soon as GBFS had grounded (in
     # its first turn), and from then on all kept pace: a turn apart at
     # most, and a slice's overshoot
