@@ -41,7 +41,9 @@ from .hddl_model import (
 MAX_DEPTH = 200  # deeper lists go to lark, which does not recurse
 
 # lark's WS is [ \t\f\r\n]+, not \s (which takes Unicode spaces and \v too)
-_TOKEN = re.compile(r"([ \t\f\r\n]+|;[^\n\r]*)|(\()|(\))|([^ \t\f\r\n();]+)")
+# a chunk between spaces, parentheses and comments, a parenthesis, or a comment
+_PIECE = re.compile(r"[^ \t\f\r\n();]+|[()]|;[^\n\r]*")
+_BREAK = re.compile(r"\n")
 _NAME = re.compile(r"[a-z_][a-z0-9_\-]*\Z", re.I)
 _VAR = re.compile(r"\?[a-z_][a-z0-9_\-]*\Z", re.I)
 _NUMBER = re.compile(r"[0-9]+(\.[0-9]+)?\Z")
@@ -75,31 +77,41 @@ def lists(text: str, tokens: Callable[[str, int, int, str], list[Tok]] | None = 
     """The one top-level list of ``text``. ``tokens(chunk, line, col,
     after)``: the tokens a chunk of text between spaces, parentheses and
     comments is (``after``: the character that follows it); HDDL's by
-    default."""
+    default. The pattern skips spaces itself; a chunk's line is found from
+    the offsets of the line breaks, found first."""
     split = tokens or _hddl_tokens
     stack: list[Lst] = [Lst()]
-    line, start = 1, 0  # start: the offset of the line's first character
-    for m in _TOKEN.finditer(text):
-        space, open_, close, atom = m.groups()
-        if space is not None:
-            n = space.count("\n")
-            if n:
-                line += n
-                start = m.start() + space.rindex("\n") + 1
-        elif open_ is not None:
+    top = stack[0]
+    breaks = [m.start() for m in _BREAK.finditer(text)]
+    breaks.append(len(text))
+    line, start, next_break = 1, 0, breaks[0]  # start: the offset of the line's first character
+    for m in _PIECE.finditer(text):
+        at = m.start()
+        while at > next_break:
+            start = next_break + 1
+            next_break = breaks[line]
+            line += 1
+        piece = m.group()
+        first = piece[0]
+        if first == "(":
             lst = Lst()
-            lst.line, lst.col = line, m.start() - start + 1
-            stack[-1].append(lst)
+            lst.line, lst.col = line, at - start + 1
+            top.append(lst)
             stack.append(lst)
+            top = lst
             if len(stack) > MAX_DEPTH:
                 raise Fallback("nested too deep")
-        elif close is not None:
+        elif first == ")":
             if len(stack) == 1:
                 raise Fallback("unbalanced")
             stack.pop()
+            top = stack[-1]
+        elif first == ";":
+            continue  # a comment
+        elif tokens is None and first != "-":
+            top.append(Tok(piece, line, at - start + 1))  # HDDL's one token
         else:
-            after = text[m.end() : m.end() + 1]
-            stack[-1].extend(split(atom, line, m.start() - start + 1, after))
+            top.extend(split(piece, line, at - start + 1, text[m.end() : m.end() + 1]))
     if len(stack) != 1 or len(stack[0]) != 1 or not isinstance(stack[0][0], Lst):
         raise Fallback("not one list")
     return stack[0][0]
