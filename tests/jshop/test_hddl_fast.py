@@ -118,3 +118,14 @@ def test_a_name_defined_twice_goes_to_lark_which_says_where():
         hddl_fast.parse_model(text, "d.hddl")
     with pytest.raises(HtnError, match="defined twice"):
         hddl.parse_model(text, "d.hddl")
+
+
+def test_a_letter_only_case_folding_makes_ascii_goes_to_lark_which_reads_it():
+    # the Kelvin sign: lark's names (case-insensitive patterns) take it for
+    # a k; the fast reader's names are ASCII, so it leaves the text to lark
+    text = """(define (problem p) (:domain d) (:objects \u212aitchen - room)
+      (:init (at \u212aitchen)))"""
+    with pytest.raises(hddl_fast.Fallback):
+        hddl_fast.parse_model(text, "p.hddl")
+    assert _same_or_gives_up(text, "p.hddl") == "fallback"
+    assert "kitchen" in repr(hddl.parse_model(text, "p.hddl"))

@@ -96,6 +96,9 @@ def test_a_mutant_reads_as_lark_reads_it_or_goes_to_lark(name):
         "(defproblem p d ((member a b)) ((t)))",  # a keyword as a name
         "(defproblem p d ((at ?x)) ((t)))",  # a variable in the state: lark says where
         "(defdomain d ((:method (t) ((call undefined ?x)) ())))",
+        # the Kelvin sign, which lark's case-insensitive names take for a k
+        "(defproblem p d ((at \u212aitchen)) ((t)))",
+        "(defproblem p d ((at ?\u212a)) ((t)))",
     ],
 )
 def test_what_it_is_not_sure_of_goes_to_lark(text):
