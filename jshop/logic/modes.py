@@ -108,7 +108,7 @@ def compile_conjunction(
         modes[mode] = f
         return f
 
-    return _entry(names)(state, gen, modes, build)
+    return _entry(len(names))(state, gen, modes, build, *names)
 
 
 def _tester(logic, lits: list):
@@ -202,22 +202,23 @@ def _mode_name(what, e: S.And, known: set, lits: list) -> str:
 _ENTRIES: dict = {}
 
 
-def _entry(names: list):
-    """The function that finds a call's mode and runs that mode's code."""
-    key = tuple(names)
-    make = _ENTRIES.get(key)
+def _entry(n: int):
+    """The function that finds a call's mode and runs that mode's code, for
+    a conjunction over ``n`` variables (their indexes are its arguments
+    ``v0``..: one piece of code per number of variables, not per conjunction)."""
+    make = _ENTRIES.get(n)
     if make is not None:
         return make
     lines = [
-        "def make(state, gen, modes, build):",
+        f"def make(state, gen, modes, build{''.join(f', v{j}' for j in range(n))}):",
         "    def sat(env):",
         "        if state.nonground:",
         "            return gen(env)",
         "        m = 0",
     ]
-    for j, v in enumerate(names):
+    for j in range(n):
         lines += [
-            f"        x = env[{v}]",
+            f"        x = env[v{j}]",
             "        if x is not None:",
             "            if type(x) is str or type(x) is float or is_ground(x):",
             f"                m |= {1 << j}",
@@ -234,10 +235,6 @@ def _entry(names: list):
         "    return sat",
     ]
     ns = {"is_ground": is_ground}
-    define(
-        "\n".join(lines),
-        f"binding mode of a conjunction over variables {', '.join(map(str, names)) or 'none'}",
-        ns,
-    )
-    make = _ENTRIES[key] = ns["make"]
+    define("\n".join(lines), f"binding mode of a conjunction over {n} variables", ns)
+    make = _ENTRIES[n] = ns["make"]
     return make
