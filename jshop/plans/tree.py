@@ -21,6 +21,12 @@ from typing import Any
 from htn.jshop.language.record import Record
 from htn.jshop.language.terms import atom_str, term_str
 
+# A node deeper than this has no path (""): a path spells all its ancestors,
+# so a recursion thousands deep (IPC 2020 Towers: pfile_10's 1,023 moves sit
+# hundreds of levels down) made the paths quadratic in the plan's length
+# (pfile_15 written as JSON: 24 GB); its parent's chain still places it.
+PATH_DEPTH = 64
+
 
 class TaskTree(Record):
     """One node of a task tree; the root is the problem's task list."""
@@ -178,9 +184,8 @@ def _dot_escape(s: str) -> str:
 def snapshot(root: Any, steps: Sequence[Any], paths: bool = True) -> TaskTree:
     """Build the tree of the current task network (a planner ``Node``).
 
-    Without ``paths`` every node's path is left empty: a path spells all its
-    ancestors, so a tail recursion thousands deep (Towers) makes the paths
-    quadratic in the plan's length, and the IPC output does not need them."""
+    Without ``paths`` every node's path is left empty (the IPC output does
+    not need them), and with them every node deeper than :data:`PATH_DEPTH`."""
     # root is Any: a Node of htn.jshop.search.network, a room above this one
     tree = TaskTree(name="", path="")
     tree.children = _children(root, "", paths)
@@ -206,11 +211,12 @@ def _flatten(node: Any) -> list[Any]:
 def _children(node: Any, prefix: str, paths: bool = True) -> list[TaskTree]:
     """The subtrees below a network node, built without recursion."""
     out: list[TaskTree] = []
-    work: list[tuple[Any, str, list[TaskTree]]] = [(node, prefix, out)]
+    work: list[tuple[Any, str, list[TaskTree], int]] = [(node, prefix, out, 1)]
     while work:
-        parent, path, sink = work.pop()
+        parent, path, sink, depth = work.pop()
         kids = _flatten(parent)
-        counts = Counter(k.task.name for k in kids) if paths else None
+        named = paths and depth <= PATH_DEPTH
+        counts = Counter(k.task.name for k in kids) if named else None
         seen: Counter[str] = Counter()
         for k in kids:
             name = k.task.name
@@ -228,6 +234,6 @@ def _children(node: Any, prefix: str, paths: bool = True) -> list[TaskTree]:
                 t.method = method.name
                 t.method_index = index
                 t.branch = method.branches[branch].label
-                work.append((k, kpath, t.children))
+                work.append((k, kpath, t.children, depth + 1))
             sink.append(t)
     return out

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 from htn.jshop.language.errors import HtnError
 from htn.jshop.language.terms import Var, term_str
 
-from .tree import TaskTree
+from .tree import PATH_DEPTH, TaskTree
 
 if TYPE_CHECKING:
     from htn.jshop.language.syntax import Method
@@ -248,10 +248,11 @@ def _atom_end(text: str) -> int | None:
 
 def _set_paths(root: TaskTree) -> None:
     """Node paths as the planner gives them (:func:`htn.jshop.plans.tree.snapshot`):
-    the names from the top, ``:call N`` among siblings of one name."""
-    work = [root]
+    the names from the top, ``:call N`` among siblings of one name, none
+    below :data:`~htn.jshop.plans.tree.PATH_DEPTH`."""
+    work = [(root, 0)]
     while work:
-        node = work.pop()
+        node, depth = work.pop()
         counts = Counter(c.name for c in node.children)
         seen: Counter[str] = Counter()
         for child in node.children:
@@ -259,5 +260,8 @@ def _set_paths(root: TaskTree) -> None:
             label = (
                 child.name if counts[child.name] == 1 else f"{child.name} :call {seen[child.name]}"
             )
-            child.path = f"{node.path}/{label}" if node.path else label
-            work.append(child)
+            if depth < PATH_DEPTH:
+                child.path = f"{node.path}/{label}" if node.path else label
+            else:
+                child.path = ""
+            work.append((child, depth + 1))

@@ -40,7 +40,7 @@ from typing import TYPE_CHECKING
 
 from htn.jshop.language import syntax as S
 from htn.jshop.plans.plan import Plan, Step
-from htn.jshop.plans.tree import TaskTree
+from htn.jshop.plans.tree import PATH_DEPTH, TaskTree
 
 from .goal_cuts import Cut, goal_cuts
 from .ground_formulas import holds, satisfied
@@ -256,15 +256,15 @@ class BestFirst:
         assert self.model is not None  # a plan is found after grounding
         tasks = self.model.tasks
         root = TaskTree(name="", path="")
-        work = [(root, tuple(range(nroots)), "")]
+        work = [(root, tuple(range(nroots)), "", 1)]
         while work:
-            parent, kids, prefix = work.pop()
+            parent, kids, prefix, depth = work.pop()
             kids = self._spliced(kids, inst, how)
             names = [tasks[inst[i]][0] for i in kids]
             seen: dict = {}
             for i, name in zip(kids, names):
                 path = ""
-                if self.tree_paths:
+                if self.tree_paths and depth <= PATH_DEPTH:  # see PATH_DEPTH
                     seen[name] = seen.get(name, 0) + 1
                     label = name if names.count(name) == 1 else f"{name} :call {seen[name]}"
                     path = f"{prefix}/{label}" if prefix else label
@@ -280,7 +280,7 @@ class BestFirst:
                         (j for j, x in enumerate(self.domain.methods.get(m.name, ())) if x is m), 0
                     )
                     node.branch = m.branches[gm.branch].label
-                    work.append((node, sub, path))
+                    work.append((node, sub, path, depth + 1))
                 parent.children.append(node)
         return root
 

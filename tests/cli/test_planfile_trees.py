@@ -15,6 +15,7 @@ from htn.api.run import prepare, read_run_log
 from htn.cli.main import main
 from htn.jshop.language.terms import Var
 from htn.jshop.plans.planfile import read_plan_file
+from htn.jshop.plans.tree import PATH_DEPTH
 from htn.jshop.search.planner import Planner
 
 from conftest import ROOT, run_htn
@@ -284,8 +285,10 @@ def test_a_deep_tree_is_written_in_linear_size(tmp_path):
     nodes = [t for t in pf.lines if re.match(r"; \d", t)]
     assert len(nodes) == 2 * n + 1 and max(map(len, nodes)) < 40  # depths, not indentation
     assert len([x for x in tree.walk() if x.step is not None]) == n
+    # read back, paths stop at PATH_DEPTH levels as the planner's do (tree.py)
     deepest = max(tree.walk(), key=lambda x: x.path.count("/"))
-    assert deepest.path.count("/") == n
+    assert deepest.path.count("/") == PATH_DEPTH - 1
+    assert sum(len(x.path) for x in tree.walk()) < 50 * n  # linear: 720k characters before
 
 
 # ---------------------------------------------------------------- the plan file is read once
