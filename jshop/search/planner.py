@@ -237,6 +237,7 @@ class Planner:
                         return
                     if pause_at is not None and time.process_time() >= pause_at:
                         spent += clock() - t0
+                        stats.expansions = ticks + 1  # what the portfolio sees
                         yield None  # see slice_s: another search's turn
                         assert self.slice_s is not None  # the portfolio sets it before each turn
                         t0, pause_at = clock(), time.process_time() + self.slice_s

@@ -11,7 +11,9 @@ network is partially ordered a GBFS that finishes a started member of an
 unordered group before the others 1 (for 2 s of CPU in all; it leaves out
 plans that need an interleaving, so its running out of moves proves
 nothing). A search started late joins a turn behind the others, so that
-its first turn comes at once, and then keeps their pace. JSHOP2's
+its first turn comes at once, and then keeps their pace. Depth-first
+search that has gone :data:`STRAIGHT` expansions without a backtrack gets
+as much as all the others together while it stays so. JSHOP2's
 depth-first search is fast where the written method order leads to a plan
 (most IPC total-order domains: within a second on the shared sample, so it
 goes first), the greedy best-first search with the relaxed composition
@@ -30,7 +32,7 @@ depend on the machine's load.
 from __future__ import annotations
 
 import time
-from collections.abc import Generator
+from collections.abc import Generator, Sequence
 from typing import TYPE_CHECKING
 
 from htn.jshop.language import syntax as S
@@ -74,6 +76,14 @@ SERIAL_BUDGET = 2.0
 # (splitting.py): 176k actions; GBFS with RC-add made 512 expansions in
 # 30 s, GBFS with TDG_m found a plan after 43k expansions, 1 s)
 TDG_SHARE_NO_CUT = 1
+# Depth-first search that has expanded this many nodes without a backtrack or
+# a loop cut is on a straight path: each decomposition it chose has led on,
+# so it needs CPU time in proportion to the plan's length, not luck. As long
+# as it stays so, its share is that of all the others together (IPC 2020
+# Towers pfile_17, 131,071 moves: 8.6 s alone, past 30 s with a share of 1,
+# where the heuristic searches have no chance; a plan of that length is
+# beyond their expansions)
+STRAIGHT = 10_000
 
 
 class Portfolio:
@@ -143,11 +153,11 @@ class Portfolio:
             while live:
                 if not self.grounded and "gbfs" in self._made and self.gbfs.h is not None:
                     # a turn behind the slowest: each has its first turn at once
-                    pace = min(used[s] / self._share(s) for s in live) - SLICE
+                    pace = min(used[s] / self._share(s, live) for s in live) - SLICE
                     began = time.process_time()
                     for s in self._on_model():
                         live.append(s)
-                        used[s] = pace * self._share(s)
+                        used[s] = pace * self._share(s, live)
                         self.spent[s] = 0.0
                     # the one heuristic built there is TDG_m's (the others share
                     # GBFS's): its CPU time is its search's (0.55 s on Freecell 04-3)
@@ -156,9 +166,9 @@ class Portfolio:
                     self.spent["gbfs-tdg"] += built
                 # in quarter turns, so that a slice's overshoot of a few
                 # milliseconds does not decide a tie: the earlier search goes
-                label = min(live, key=lambda s: int(used[s] / self._share(s) / TIE))
+                label = min(live, key=lambda s: int(used[s] / self._share(s, live) / TIE))
                 search = self.member(label)
-                search.slice_s = SLICE * self._share(label)
+                search.slice_s = SLICE * self._share(label, live)
                 stream = streams.get(label)
                 if stream is None:
                     stream = streams[label] = search.plans(timeout)
@@ -207,13 +217,26 @@ class Portfolio:
                 stream.close()
             self._sum()
 
-    def _share(self, label: str) -> float:
+    def _share(self, label: str, live: Sequence[str] = ()) -> float:
+        """``label``'s share of the CPU time among the ``live`` searches."""
+        if label == "dfs" and self._straight():
+            return max(SHARES["dfs"], sum(self._share(s) for s in live if s != "dfs"))
         if label == "gbfs-tdg":
             from .goal_cuts import chained
 
             if not chained(self.tdg.cut):
                 return TDG_SHARE_NO_CUT
         return SHARES[label]
+
+    def _straight(self) -> bool:
+        """Has depth-first search made :data:`STRAIGHT` expansions without a
+        backtrack or a loop cut?"""
+        stats, loops = self.dfs.stats, self.dfs.loops
+        return (
+            stats.backtracks == 0
+            and (loops is None or loops.cut == 0)
+            and stats.expansions >= STRAIGHT
+        )
 
     def _on_model(self) -> list[str]:
         """The searches to start once GBFS has grounded the problem, on its

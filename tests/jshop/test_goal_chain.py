@@ -212,3 +212,26 @@ def test_auto_shares_cpu_by_the_shares_and_a_late_search_joins_at_once():
     # most, and a slice's overshoot
     assert auto.turns[:4] == ["dfs", "gbfs", "wastar", "gbfs-tdg"], auto.turns
     assert max(pace.values()) - min(pace.values()) < 2 * SLICE, pace
+
+
+@pytest.mark.corpus
+def test_a_depth_first_search_that_never_backtracked_gets_the_others_share():
+    # the rule, on Towers pfile_05's portfolio (pfile_13: 24,590 expansions
+    # without a backtrack; pfile_17, 131,071 moves, planned within 30 s by it)
+    towers = SHARED / "corpus" / "ipc2020-to" / "Towers"
+    if not (towers / "pfile_05.hddl").is_file():
+        pytest.skip(f"{towers} not found")
+    from htn.jshop.search.portfolio import STRAIGHT, Portfolio
+
+    dom, prob = load_inputs(str(towers / "domain.hddl"), str(towers / "pfile_05.hddl"))
+    auto = Portfolio(dom, prob.instances[0])
+    live = ["dfs", "gbfs", "wastar"]
+    stats = auto.dfs.stats
+    stats.expansions = STRAIGHT - 1
+    assert auto._share("dfs", live) == 1  # not far enough yet
+    stats.expansions = STRAIGHT
+    assert auto._share("dfs", live) == 3 + 1  # straight: as much as the others together
+    stats.backtracks = 1
+    assert auto._share("dfs", live) == 1  # once it backtracked, it is one search of four
+    plan = next(auto.plans(timeout=60), None)
+    assert plan is not None and auto.stats.found_by == "dfs"
