@@ -40,13 +40,11 @@ from .hddl_model import (
 
 MAX_DEPTH = 200  # deeper lists go to lark, which does not recurse
 
-# lark's WS is [ \t\f\r\n]+, not \s (which takes Unicode spaces and \v too)
-# a chunk between spaces, parentheses and comments, a parenthesis, or a comment
+# a chunk between spaces (lark's WS: [ \t\f\r\n]+, not \s), a parenthesis, a comment
 _PIECE = re.compile(r"[^ \t\f\r\n();]+|[()]|;[^\n\r]*")
 _BREAK = re.compile(r"\n")
-# the grammar's patterns (hddl.lark), ASCII letters spelled out: compiled with
-# re.I they cost 0.5 ms each at start-up (Unicode case folding of the ranges),
-# and the few non-ASCII letters re.I lets in (the Kelvin sign) go to lark
+# hddl.lark's patterns without re.I (0.5 ms each to compile: Unicode case
+# folding); the non-ASCII letters re.I admits (the Kelvin sign) go to lark
 _NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_\-]*\Z")
 _VAR = re.compile(r"\?[A-Za-z_][A-Za-z0-9_\-]*\Z")
 _NUMBER = re.compile(r"[0-9]+(\.[0-9]+)?\Z")
@@ -80,8 +78,7 @@ def lists(text: str, tokens: Callable[[str, int, int, str], list[Tok]] | None = 
     """The one top-level list of ``text``. ``tokens(chunk, line, col,
     after)``: the tokens a chunk of text between spaces, parentheses and
     comments is (``after``: the character that follows it); HDDL's by
-    default. The pattern skips spaces itself; a chunk's line is found from
-    the offsets of the line breaks, found first."""
+    default. Spaces are skipped by the pattern, lines found by the breaks."""
     split = tokens or _hddl_tokens
     stack: list[Lst] = [Lst()]
     top = stack[0]
