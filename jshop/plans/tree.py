@@ -208,6 +208,23 @@ def _flatten(node: Any) -> list[Any]:
     return out
 
 
+def sibling_paths(parent_path: str, names: Sequence[str], depth: int) -> list[str]:
+    """The paths of the children named ``names`` (in order) of a node whose
+    path is ``parent_path``, the children at ``depth`` (1: the problem's
+    top-level tasks): the parent's path and the child's name, ``:call N``
+    among siblings of one name; "" deeper than :data:`PATH_DEPTH`."""
+    if depth > PATH_DEPTH:
+        return [""] * len(names)
+    counts = Counter(names)
+    seen: Counter[str] = Counter()
+    out = []
+    for name in names:
+        seen[name] += 1
+        label = name if counts[name] == 1 else f"{name} :call {seen[name]}"
+        out.append(f"{parent_path}/{label}" if parent_path else label)
+    return out
+
+
 def _children(node: Any, prefix: str, paths: bool = True) -> list[TaskTree]:
     """The subtrees below a network node, built without recursion."""
     out: list[TaskTree] = []
@@ -215,16 +232,9 @@ def _children(node: Any, prefix: str, paths: bool = True) -> list[TaskTree]:
     while work:
         parent, path, sink, depth = work.pop()
         kids = _flatten(parent)
-        named = paths and depth <= PATH_DEPTH
-        counts = Counter(k.task.name for k in kids) if named else None
-        seen: Counter[str] = Counter()
-        for k in kids:
-            name = k.task.name
-            kpath = ""
-            if counts is not None:  # paths
-                seen[name] += 1
-                label = name if counts[name] == 1 else f"{name} :call {seen[name]}"
-                kpath = f"{path}/{label}" if path else label
+        names = [k.task.name for k in kids]
+        kpaths = sibling_paths(path, names, depth) if paths else [""] * len(kids)
+        for k, name, kpath in zip(kids, names, kpaths):
             t = TaskTree(name=name, args=k.task.args, path=kpath)
             how = k.how
             if isinstance(how, int):

@@ -10,14 +10,13 @@ tree with the ``file:line:col`` of the line that does not fit.
 from __future__ import annotations
 
 import re
-from collections import Counter
 from collections.abc import Iterable, Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 from htn.jshop.language.errors import HtnError
 from htn.jshop.language.terms import Var, term_str
 
-from .tree import PATH_DEPTH, TaskTree
+from .tree import TaskTree, sibling_paths
 
 if TYPE_CHECKING:
     from htn.jshop.language.syntax import Method
@@ -247,21 +246,11 @@ def _atom_end(text: str) -> int | None:
 
 
 def _set_paths(root: TaskTree) -> None:
-    """Node paths as the planner gives them (:func:`htn.jshop.plans.tree.snapshot`):
-    the names from the top, ``:call N`` among siblings of one name, none
-    below :data:`~htn.jshop.plans.tree.PATH_DEPTH`."""
-    work = [(root, 0)]
+    """Node paths as the planner gives them (:func:`htn.jshop.plans.tree.sibling_paths`)."""
+    work = [(root, 1)]
     while work:
         node, depth = work.pop()
-        counts = Counter(c.name for c in node.children)
-        seen: Counter[str] = Counter()
-        for child in node.children:
-            seen[child.name] += 1
-            label = (
-                child.name if counts[child.name] == 1 else f"{child.name} :call {seen[child.name]}"
-            )
-            if depth < PATH_DEPTH:
-                child.path = f"{node.path}/{label}" if node.path else label
-            else:
-                child.path = ""
+        kids = node.children
+        for child, path in zip(kids, sibling_paths(node.path, [c.name for c in kids], depth)):
+            child.path = path
             work.append((child, depth + 1))

@@ -40,7 +40,7 @@ from typing import TYPE_CHECKING
 
 from htn.jshop.language import syntax as S
 from htn.jshop.plans.plan import Plan, Step
-from htn.jshop.plans.tree import PATH_DEPTH, TaskTree
+from htn.jshop.plans.tree import TaskTree, sibling_paths
 
 from .goal_cuts import Cut, goal_cuts
 from .ground_formulas import holds, satisfied
@@ -261,13 +261,8 @@ class BestFirst:
             parent, kids, prefix, depth = work.pop()
             kids = self._spliced(kids, inst, how)
             names = [tasks[inst[i]][0] for i in kids]
-            seen: dict = {}
-            for i, name in zip(kids, names):
-                path = ""
-                if self.tree_paths and depth <= PATH_DEPTH:  # see PATH_DEPTH
-                    seen[name] = seen.get(name, 0) + 1
-                    label = name if names.count(name) == 1 else f"{name} :call {seen[name]}"
-                    path = f"{prefix}/{label}" if prefix else label
+            paths = sibling_paths(prefix, names, depth) if self.tree_paths else [""] * len(kids)
+            for i, name, path in zip(kids, names, paths):
                 node = TaskTree(name=name, args=tasks[inst[i]][1], path=path)
                 h = how.get(i)
                 if type(h) is int:
