@@ -51,7 +51,7 @@ from htn.jshop.language.errors import HtnError
 
 from .goals import Turns
 from .interfaces import import_interfaces
-from .shutdown import end_within
+from .shutdown import end_within, spin
 
 if TYPE_CHECKING:
     from htn.view.live import GoalsView
@@ -308,7 +308,7 @@ def serve(settings: NodeSettings, managed: bool = False, name: str = "htn", on_v
             node.trigger_activate()
         if node.view is not None and on_view is not None:
             on_view(node.view.url)
-        executor.spin()
+        spin(executor)
     except KeyboardInterrupt:
         pass
     finally:

@@ -39,7 +39,7 @@ from htn.jshop.language.terms import source_atom
 from htn.robot.interface import SkillResult
 
 from .interfaces import import_interfaces, import_type
-from .shutdown import end_within
+from .shutdown import end_within, spin
 
 NAVIGATE = "/navigate_to_pose"
 POSE_HZ = 20.0
@@ -284,7 +284,7 @@ def serve(settings: RobotSettings, name: str = "htn_robot_sim", on_ready=None) -
     if on_ready is not None:
         on_ready(node)
     try:
-        executor.spin()
+        spin(executor)
     except KeyboardInterrupt:
         pass
     finally:

@@ -31,3 +31,15 @@ def end_within(what: str, seconds: float = GRACE) -> threading.Timer:
     timer.daemon = True
     timer.start()
     return timer
+
+
+def spin(executor, period: float = 0.2) -> None:
+    """``executor.spin()`` that looks at the context again every ``period``
+    seconds: a shutdown (Ctrl-C, SIGTERM) wakes a waiting executor through a
+    guard condition, and a wake-up missed there left a node's main thread
+    waiting for ever, before the shutdown's own deadline (:func:`end_within`)
+    had started (seen once in CI: ``htn ros node`` still alive 30 s after
+    SIGINT)."""
+    context = executor.context
+    while context.ok():
+        executor.spin_once(timeout_sec=period)
